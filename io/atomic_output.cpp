@@ -1,0 +1,66 @@
+#include "io/atomic_output.h"
+
+#include <cerrno>
+#include <cstdio>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "io/error.h"
+
+namespace vdiso {
+
+namespace {
+
+bool pathExists(const std::string& path) {
+    struct stat st;
+    return ::stat(path.c_str(), &st) == 0;
+}
+
+}  // namespace
+
+AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite)
+    : mPath(std::move(path)), mOverwrite(overwrite) {
+    if (!mOverwrite && pathExists(mPath))
+        throwIoError(mPath, "already exists (pass --force to replace it)");
+    mTempPath = mPath + ".partial." + std::to_string(::getpid());
+    mFd = ::open(mTempPath.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (mFd < 0) throwSystemError(mPath, "cannot write", errno);
+}
+
+AtomicOutputFile::~AtomicOutputFile() {
+    if (mFd >= 0) ::close(mFd);
+    if (!mTempPath.empty()) ::unlink(mTempPath.c_str());
+}
+
+void AtomicOutputFile::writeAt(const void* data, size_t n, uint64_t offset) {
+    const char* p = static_cast<const char*>(data);
+    while (n > 0) {
+        ssize_t w = ::pwrite(mFd, p, n, off_t(offset));
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            throwSystemError(mPath, "write failed", errno);
+        }
+        p += w;
+        n -= size_t(w);
+        offset += uint64_t(w);
+    }
+    mSize = std::max(mSize, offset);
+}
+
+void AtomicOutputFile::append(const void* data, size_t n) { writeAt(data, n, mSize); }
+
+void AtomicOutputFile::commit() {
+    if (::fsync(mFd) != 0) throwSystemError(mPath, "cannot flush", errno);
+    int fd = mFd;
+    mFd = -1;
+    if (::close(fd) != 0) throwSystemError(mPath, "cannot close", errno);
+    if (!mOverwrite && pathExists(mPath))
+        throwIoError(mPath, "appeared while it was being written; not replaced");
+    if (std::rename(mTempPath.c_str(), mPath.c_str()) != 0)
+        throwSystemError(mPath, "cannot rename the finished file into place", errno);
+    mTempPath.clear();
+}
+
+}  // namespace vdiso

@@ -1,0 +1,42 @@
+// An output file that appears under its final name only when complete.
+//
+// The file is written under a temporary name in the same directory; commit() renames it into
+// place. If the object is destroyed without commit() (an exception, an interrupt), the
+// temporary file is removed, so a failed write never leaves a half file nor touches an existing
+// one. Without `overwrite`, an existing destination is refused up front and again at commit.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace vdiso {
+
+class AtomicOutputFile {
+public:
+    // Creates the temporary file; throws IoError naming `path` if it cannot be written.
+    AtomicOutputFile(std::string path, bool overwrite);
+    ~AtomicOutputFile();
+    AtomicOutputFile(const AtomicOutputFile&) = delete;
+    AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
+
+    int fd() const { return mFd; }
+    const std::string& path() const { return mPath; }
+
+    // Writes all of `n` bytes at `offset` of the temporary file; throws on failure (disk full).
+    void writeAt(const void* data, size_t n, uint64_t offset);
+    // Appends at the current end (tracked by the object).
+    void append(const void* data, size_t n);
+    uint64_t size() const { return mSize; }
+
+    // Flushes, closes and renames into place. Throws on failure, leaving no output.
+    void commit();
+
+private:
+    std::string mPath, mTempPath;
+    bool mOverwrite;
+    int mFd = -1;
+    uint64_t mSize = 0;
+};
+
+}  // namespace vdiso

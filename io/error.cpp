@@ -1,0 +1,18 @@
+#include "io/error.h"
+
+#include <cstring>
+
+namespace vdiso {
+
+void throwIoError(const std::string& path, const std::string& message) {
+    std::string text;
+    text.reserve(path.size() + 2 + message.size());
+    text.append(path).append(": ").append(message);
+    throw IoError(text);
+}
+
+void throwSystemError(const std::string& path, const std::string& message, int errnoValue) {
+    throwIoError(path, message + ": " + std::strerror(errnoValue));
+}
+
+}  // namespace vdiso

@@ -1,0 +1,72 @@
+#include "io/json.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace vdiso {
+
+std::string jsonQuote(const std::string& s) {
+    std::string out = "\"";
+    for (unsigned char c : s) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += char(c);
+        } else if (c < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            out += buf;
+        } else {
+            out += char(c);
+        }
+    }
+    return out + "\"";
+}
+
+void JsonObject::addKey(const std::string& key) {
+    if (!mBody.empty()) mBody += ", ";
+    mBody += jsonQuote(key) + ": ";
+}
+
+JsonObject& JsonObject::add(const std::string& key, const std::string& value) {
+    addKey(key);
+    mBody += jsonQuote(value);
+    return *this;
+}
+
+JsonObject& JsonObject::add(const std::string& key, double value) {
+    addKey(key);
+    if (!std::isfinite(value)) {
+        mBody += "null";  // JSON has no NaN or infinity
+    } else {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.9g", value);
+        mBody += buf;
+    }
+    return *this;
+}
+
+JsonObject& JsonObject::add(const std::string& key, int64_t value) {
+    addKey(key);
+    mBody += std::to_string(value);
+    return *this;
+}
+
+JsonObject& JsonObject::add(const std::string& key, uint64_t value) {
+    addKey(key);
+    mBody += std::to_string(value);
+    return *this;
+}
+
+JsonObject& JsonObject::add(const std::string& key, bool value) {
+    addKey(key);
+    mBody += value ? "true" : "false";
+    return *this;
+}
+
+JsonObject& JsonObject::addRaw(const std::string& key, const std::string& json) {
+    addKey(key);
+    mBody += json;
+    return *this;
+}
+
+}  // namespace vdiso
