@@ -1,0 +1,376 @@
+#include "io/nifti_reader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+
+#include "io/byte_stream.h"
+#include "io/error.h"
+#include "io/raw_reader.h"
+#include "io/sample_decode.h"
+
+namespace vdiso {
+namespace {
+
+constexpr size_t kNifti1HeaderSize = 348;
+constexpr int32_t kNifti2HeaderSize = 540;
+
+// Byte offsets of the nifti_1_header fields we read.
+constexpr size_t kOffDim = 40;  // short[8]
+constexpr size_t kOffDatatype = 70;
+constexpr size_t kOffPixdim = 76;  // float[8]
+constexpr size_t kOffVoxOffset = 108;
+constexpr size_t kOffSclSlope = 112;
+constexpr size_t kOffSclInter = 116;
+constexpr size_t kOffQformCode = 252;
+constexpr size_t kOffSformCode = 254;
+constexpr size_t kOffQoffset = 268;  // float x, y, z
+constexpr size_t kOffSrowX = 280;    // float[4] per row; [3] is the translation
+constexpr size_t kSrowStride = 16;
+constexpr size_t kOffMagic = 344;
+
+// The 348 header bytes as stored, read in the file's byte order.
+class NiftiHeaderBytes {
+public:
+    unsigned char bytes[kNifti1HeaderSize];
+    bool bigEndian = false;
+
+    template <class T>
+    T at(size_t offset) const {
+        unsigned char b[sizeof(T)];
+        if (bigEndian != hostIsBigEndian())
+            std::reverse_copy(bytes + offset, bytes + offset + sizeof(T), b);
+        else
+            std::memcpy(b, bytes + offset, sizeof(T));
+        T v;
+        std::memcpy(&v, b, sizeof(T));
+        return v;
+    }
+    int16_t i16(size_t offset) const { return at<int16_t>(offset); }
+    float f32(size_t offset) const { return at<float>(offset); }
+};
+
+struct NiftiHeader {
+    Dims3 dims{0, 0, 0};
+    FileScalar type = FileScalar::U8;
+    bool bigEndian = false;
+    bool singleFile = true;  // "n+1"; "ni1" keeps the samples in a separate .img
+    uint64_t voxOffset = 0;
+    glm::dvec3 spacing{1.0, 1.0, 1.0};
+    glm::dvec3 origin{0.0, 0.0, 0.0};
+    bool scaled = false;
+    double slope = 1.0, intercept = 0.0;
+};
+
+// Case-insensitive, as names from other systems arrive as "BRAIN.HDR" as often as "brain.hdr".
+bool endsWith(const std::string& s, const std::string& suffix) {
+    if (s.size() < suffix.size()) return false;
+    for (size_t i = 0; i < suffix.size(); ++i)
+        if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i])
+            return false;
+    return true;
+}
+
+bool fileExists(const std::string& path) {
+    std::error_code ec;
+    return std::filesystem::is_regular_file(path, ec);
+}
+
+std::string toUpper(std::string s) {
+    for (char& c : s) c = char(std::toupper(static_cast<unsigned char>(c)));
+    return s;
+}
+
+// "x.img" -> "x.hdr": the first of x.hdr, x.hdr.gz, X.HDR, X.HDR.GZ that exists (the spelling
+// matching the given name first), else the matching spelling, for the error that follows.
+std::string companionFile(const std::string& path, const std::string& fromExt,
+                          const std::string& toExt) {
+    const bool gz = endsWith(path, fromExt + ".gz");
+    if (!gz && !endsWith(path, fromExt))
+        throwIoError(path, "has magic 'ni1' (samples in a separate " + toExt +
+                               " file) but is not named *" + fromExt);
+    const size_t extSize = fromExt.size() + (gz ? 3 : 0);
+    const std::string stem = path.substr(0, path.size() - extSize);
+    const bool upper = std::isupper(static_cast<unsigned char>(path.back()));
+    const std::string ext = upper ? toUpper(toExt) : toExt;
+    const std::string otherExt = upper ? toExt : toUpper(toExt);
+    const std::string gzExt = upper ? ".GZ" : ".gz";
+    const std::string candidates[] = {
+        stem + ext + (gz ? gzExt : ""),
+        stem + ext + (gz ? "" : gzExt),
+        stem + otherExt + (gz ? ".gz" : ""),
+        stem + otherExt + (gz ? "" : ".gz"),
+    };
+    for (const std::string& candidate : candidates)
+        if (fileExists(candidate)) return candidate;
+    return candidates[0];
+}
+
+bool isImageFileName(const std::string& path) {
+    return endsWith(path, ".img") || endsWith(path, ".img.gz");
+}
+
+std::unique_ptr<ByteStream> openMaybeGzip(const std::string& path) {
+    return hasGzipMagic(path) ? openGzipStream(path) : openFileStream(path);
+}
+
+int32_t byteSwapped(int32_t v) {
+    uint32_t u;
+    std::memcpy(&u, &v, 4);
+    u = (u >> 24) | ((u >> 8) & 0xff00u) | ((u << 8) & 0xff0000u) | (u << 24);
+    std::memcpy(&v, &u, 4);
+    return v;
+}
+
+// Like ByteStream::readExact, but a short file is reported against the header it should hold.
+size_t readUpTo(ByteStream& in, unsigned char* dst, size_t n) {
+    size_t got = 0;
+    while (got < n) {
+        const size_t r = in.read(dst + got, n - got);
+        if (r == 0) break;
+        got += r;
+    }
+    return got;
+}
+
+NiftiHeaderBytes readNiftiHeaderBytes(const std::string& path) {
+    NiftiHeaderBytes h;
+    auto in = openMaybeGzip(path);
+    const size_t got = readUpTo(*in, h.bytes, kNifti1HeaderSize);
+    if (got < 4)
+        throwIoError(
+            path, "not a NIfTI-1 file (" + std::to_string(got) + " bytes, too short for a header)");
+    int32_t sizeofHdr;
+    std::memcpy(&sizeofHdr, h.bytes, 4);
+    if (hostIsBigEndian()) sizeofHdr = byteSwapped(sizeofHdr);  // now read as little-endian
+    if (sizeofHdr == kNifti2HeaderSize || byteSwapped(sizeofHdr) == kNifti2HeaderSize)
+        throwIoError(path, "NIfTI-2 is not supported (sizeof_hdr is 540); save it as NIfTI-1");
+    if (sizeofHdr == int32_t(kNifti1HeaderSize))
+        h.bigEndian = false;
+    else if (byteSwapped(sizeofHdr) == int32_t(kNifti1HeaderSize))
+        h.bigEndian = true;
+    else
+        throwIoError(
+            path, "not a NIfTI-1 file (sizeof_hdr is " + std::to_string(sizeofHdr) + ", not 348)");
+    if (got < kNifti1HeaderSize)
+        throwIoError(path, "ends after " + std::to_string(got) +
+                               " bytes, inside its 348-byte NIfTI-1 header");
+    return h;
+}
+
+const char* niftiDatatypeName(int code) {
+    switch (code) {
+        case 1:
+            return "binary";
+        case 32:
+            return "complex64";
+        case 128:
+            return "rgb24";
+        case 1024:
+            return "int64";
+        case 1280:
+            return "uint64";
+        case 1536:
+            return "float128";
+        case 1792:
+            return "complex128";
+        case 2048:
+            return "complex256";
+        case 2304:
+            return "rgba32";
+    }
+    return "unknown";
+}
+
+std::optional<FileScalar> niftiDatatypeToFileScalar(int code) {
+    switch (code) {
+        case 2:
+            return FileScalar::U8;
+        case 4:
+            return FileScalar::I16;
+        case 8:
+            return FileScalar::I32;
+        case 16:
+            return FileScalar::F32;
+        case 64:
+            return FileScalar::F64;
+        case 256:
+            return FileScalar::I8;
+        case 512:
+            return FileScalar::U16;
+        case 768:
+            return FileScalar::U32;
+    }
+    return std::nullopt;
+}
+
+std::string dimsText(const Dims3& dims) {
+    return std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]);
+}
+
+Dims3 niftiDims(const std::string& path, const NiftiHeaderBytes& b) {
+    const int rank = b.i16(kOffDim);
+    if (rank < 1 || rank > 7)
+        throwIoError(path, "dim[0] is " + std::to_string(rank) + "; a NIfTI rank is 1 to 7");
+    if (rank < 3)
+        throwIoError(path, "is " + std::to_string(rank) + "-D (dim[0] = " + std::to_string(rank) +
+                               "); only 3-D volumes are supported");
+    int64_t frames = 1;
+    for (int d = 4; d <= rank; ++d) frames *= std::max<int64_t>(b.i16(kOffDim + 2 * d), 0);
+    if (frames != 1)
+        throwIoError(path, "has " + std::to_string(frames) +
+                               " frames; only single 3-D volumes are supported");
+    Dims3 dims;
+    for (int a = 0; a < 3; ++a) dims[a] = b.i16(kOffDim + 2 * (a + 1));
+    for (int64_t d : dims)
+        if (d < 2)
+            throwIoError(path, "dims " + dimsText(dims) + ": every axis needs at least 2 samples");
+    return dims;
+}
+
+uint64_t niftiVoxOffset(const std::string& path, const NiftiHeaderBytes& b, bool singleFile) {
+    const float v = b.f32(kOffVoxOffset);
+    if (!std::isfinite(v) || v < 0.0f || v != std::floor(v) || v > 0x1p40f)
+        throwIoError(path, "vox_offset " + std::to_string(v) + " is not a valid byte offset");
+    if (singleFile && v < float(kNifti1HeaderSize))
+        throwIoError(
+            path, "vox_offset " + std::to_string(int64_t(v)) + " lies inside the 348-byte header");
+    return uint64_t(v);
+}
+
+// NIfTI says: no scaling when the slope is 0. A NaN slope means the same: nibabel writes it for
+// unscaled images and nifti1_io reads it as 0. Slope 1 with intercept 0 is scaling that changes
+// nothing, and skipping it keeps the file's integer type in the store.
+void niftiScaling(const std::string& path, const NiftiHeaderBytes& b, NiftiHeader& h) {
+    const double slope = b.f32(kOffSclSlope);
+    const double intercept = b.f32(kOffSclInter);
+    if (std::isnan(slope) || slope == 0.0) return;
+    if (!std::isfinite(slope))
+        throwIoError(path, "scl_slope is " + std::to_string(slope) + ", not a finite number");
+    if (slope == 1.0 && intercept == 0.0) return;
+    if (!std::isfinite(intercept))
+        throwIoError(path, "scl_inter is " + std::to_string(intercept) + ", not a finite number");
+    h.scaled = true;
+    h.slope = slope;
+    h.intercept = intercept;
+}
+
+// The origin from the qform (or, lacking one, the sform) translation; rotation is ignored, as
+// the store is axis-aligned.
+glm::dvec3 niftiOrigin(const NiftiHeaderBytes& b) {
+    glm::dvec3 origin(0.0);
+    for (int a = 0; a < 3; ++a) {
+        double v = 0.0;
+        if (b.i16(kOffQformCode) > 0)
+            v = b.f32(kOffQoffset + 4 * a);
+        else if (b.i16(kOffSformCode) > 0)
+            v = b.f32(kOffSrowX + kSrowStride * a + 12);
+        origin[a] = std::isfinite(v) ? v : 0.0;
+    }
+    return origin;
+}
+
+NiftiHeader parseNiftiHeader(const std::string& path, const NiftiHeaderBytes& b) {
+    NiftiHeader h;
+    h.bigEndian = b.bigEndian;
+    const char* magic = reinterpret_cast<const char*>(b.bytes + kOffMagic);
+    if (std::memcmp(magic, "n+1", 4) == 0)
+        h.singleFile = true;
+    else if (std::memcmp(magic, "ni1", 4) == 0)
+        h.singleFile = false;
+    else
+        throwIoError(path,
+                     "not a NIfTI-1 file (magic is not 'n+1' or 'ni1'; plain Analyze 7.5 "
+                     "headers are not supported)");
+    h.dims = niftiDims(path, b);
+    const int datatype = b.i16(kOffDatatype);
+    const auto type = niftiDatatypeToFileScalar(datatype);
+    if (!type)
+        throwIoError(path, "unsupported NIfTI datatype " + std::to_string(datatype) + " (" +
+                               niftiDatatypeName(datatype) + ")");
+    h.type = *type;
+    h.voxOffset = niftiVoxOffset(path, b, h.singleFile);
+    for (int a = 0; a < 3; ++a) {
+        const double s = std::abs(double(b.f32(kOffPixdim + 4 * (a + 1))));
+        h.spacing[a] = std::isfinite(s) && s > 0.0 ? s : 1.0;
+    }
+    h.origin = niftiOrigin(b);
+    niftiScaling(path, b, h);
+    return h;
+}
+
+// For uncompressed samples the file size is known, so a mismatch is reported before reading.
+void checkUncompressedSize(const std::string& path, const NiftiHeader& h, uint64_t dataBytes) {
+    const uint64_t need = h.voxOffset + dataBytes;
+    const uint64_t have = fileSize(path);
+    if (have == need) return;
+    const std::string detail = " (dims " + dimsText(h.dims) + ", type " + fileScalarName(h.type) +
+                               ", vox_offset " + std::to_string(h.voxOffset) + " need " +
+                               std::to_string(need) + " bytes)";
+    if (have < need)
+        throwIoError(path, "file is " + std::to_string(need - have) +
+                               " bytes shorter than its header's dimensions" + detail);
+    throwIoError(path, "file is " + std::to_string(have - need) +
+                           " bytes longer than its header's dimensions" + detail);
+}
+
+class NiftiSliceReader final : public SliceReader {
+public:
+    NiftiSliceReader(std::string path, const VolumeInfo& info, std::unique_ptr<ByteStream> in,
+                     const NiftiHeader& h, bool checkTrailingData)
+        : mPath(std::move(path)),
+          mInfo(info),
+          mIn(std::move(in)),
+          mDecoder(h.type, h.bigEndian != hostIsBigEndian(), info.type, h.scaled, h.slope,
+                   h.intercept),
+          mCheckTrailingData(checkTrailingData) {}
+
+    const VolumeInfo& info() const override { return mInfo; }
+    void read(void* dst, int64_t count) override {
+        mDecoder.read(*mIn, mInfo.sliceSamples(), count, dst);
+    }
+    void finish() override {
+        if (mCheckTrailingData && !mIn->atEnd())
+            throwIoError(mIn->path(), "holds more data than its header's dimensions");
+    }
+    std::string name() const override { return mPath; }
+
+private:
+    std::string mPath;
+    VolumeInfo mInfo;
+    std::unique_ptr<ByteStream> mIn;
+    StreamSliceDecoder mDecoder;
+    // Compressed data has no size to check up front; the check waits for the last slice.
+    bool mCheckTrailingData;
+};
+
+}  // namespace
+
+std::unique_ptr<SliceReader> openNiftiVolume(const std::string& path) {
+    const std::string headerPath =
+        isImageFileName(path) ? companionFile(path, ".img", ".hdr") : path;
+    const NiftiHeader h = parseNiftiHeader(headerPath, readNiftiHeaderBytes(headerPath));
+    const std::string imagePath =
+        h.singleFile ? headerPath : companionFile(headerPath, ".hdr", ".img");
+
+    VolumeInfo info;
+    info.dims = h.dims;
+    info.type = storeTypeFor(h.type, h.scaled);
+    info.spacing = h.spacing;
+    info.origin = h.origin;
+    const uint64_t dataBytes = uint64_t(info.sampleCount()) * fileScalarSize(h.type);
+
+    if (hasGzipMagic(imagePath)) {
+        auto in = openGzipStream(imagePath);
+        in->skip(h.voxOffset);
+        return std::make_unique<NiftiSliceReader>(path, info, std::move(in), h, true);
+    }
+    checkUncompressedSize(imagePath, h, dataBytes);
+    return std::make_unique<NiftiSliceReader>(path, info, openFileStream(imagePath, h.voxOffset), h,
+                                              false);
+}
+
+}  // namespace vdiso

@@ -1,0 +1,509 @@
+// NIfTI-1 reader: .nii, .nii.gz and .hdr/.img pairs, either byte order, every datatype the
+// store can hold, scl_slope/scl_inter; and the inputs it must refuse, each with a message that
+// names the file and the problem. Headers are written byte by byte at the standard offsets.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "io/error.h"
+#include "io/nifti_reader.h"
+#include "io/sample_decode.h"
+
+namespace vdiso {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr Dims3 kDims{7, 5, 4};
+constexpr int64_t kSamples = 7 * 5 * 4;
+
+// Distinct values every type holds exactly, including after conversion to its store type.
+double sampleValue(FileScalar t, int64_t i) {
+    switch (t) {
+        case FileScalar::I8:
+            return double(i - 70);
+        case FileScalar::U8:
+            return double(i + 100);
+        case FileScalar::I16:
+            return double(i * 37 - 2000);
+        case FileScalar::U16:
+            return double(60000 - i * 3);
+        case FileScalar::I32:
+            return double(i * 100000 - 7000000);
+        case FileScalar::U32:
+            return double(i * 1000 + 7);
+        case FileScalar::F32:
+            return double(i) * 0.25 - 3.0;
+        case FileScalar::F64:
+            return double(i) * 0.5 + 0.125;
+    }
+    return 0.0;
+}
+
+std::vector<double> testValues(FileScalar t) {
+    std::vector<double> v(kSamples);
+    for (int64_t i = 0; i < kSamples; ++i) v[size_t(i)] = sampleValue(t, i);
+    return v;
+}
+
+template <class T>
+void appendScalar(std::string& out, double v, bool bigEndian) {
+    const T x = T(v);
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &x, sizeof(T));
+    if (bigEndian != hostIsBigEndian()) std::reverse(b, b + sizeof(T));
+    out.append(reinterpret_cast<const char*>(b), sizeof(T));
+}
+
+std::string encodeSamples(const std::vector<double>& values, FileScalar t, bool bigEndian) {
+    std::string out;
+    for (double v : values) {
+        switch (t) {
+            case FileScalar::I8:
+                appendScalar<int8_t>(out, v, bigEndian);
+                break;
+            case FileScalar::U8:
+                appendScalar<uint8_t>(out, v, bigEndian);
+                break;
+            case FileScalar::I16:
+                appendScalar<int16_t>(out, v, bigEndian);
+                break;
+            case FileScalar::U16:
+                appendScalar<uint16_t>(out, v, bigEndian);
+                break;
+            case FileScalar::I32:
+                appendScalar<int32_t>(out, v, bigEndian);
+                break;
+            case FileScalar::U32:
+                appendScalar<uint32_t>(out, v, bigEndian);
+                break;
+            case FileScalar::F32:
+                appendScalar<float>(out, v, bigEndian);
+                break;
+            case FileScalar::F64:
+                appendScalar<double>(out, v, bigEndian);
+                break;
+        }
+    }
+    return out;
+}
+
+std::string gzipBytes(const std::string& data) {
+    z_stream z{};
+    if (deflateInit2(&z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return {};
+    std::string out(deflateBound(&z, uLong(data.size())) + 32, '\0');
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+    z.avail_in = uInt(data.size());
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = uInt(out.size());
+    const int rc = deflate(&z, Z_FINISH);
+    out.resize(z.total_out);
+    deflateEnd(&z);
+    return rc == Z_STREAM_END ? out : std::string();
+}
+
+// Reads every slice in slabs of 1, 2, 3, ... slices (uneven on purpose), then finish().
+std::vector<double> readAllSamples(SliceReader& reader) {
+    const VolumeInfo& info = reader.info();
+    std::vector<double> out;
+    std::vector<unsigned char> slab;
+    int64_t z = 0;
+    for (int64_t count = 1; z < info.dims[2]; ++count) {
+        const int64_t n = std::min(count, info.dims[2] - z);
+        slab.resize(size_t(n * info.sliceSamples()) * scalarSize(info.type));
+        reader.read(slab.data(), n);
+        visitScalarType(info.type, [&](auto tag) {
+            using T = decltype(tag);
+            const T* p = reinterpret_cast<const T*>(slab.data());
+            out.insert(out.end(), p, p + n * info.sliceSamples());
+        });
+        z += n;
+    }
+    reader.finish();
+    return out;
+}
+
+void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
+    try {
+        f();
+        ADD_FAILURE() << "expected an IoError";
+    } catch (const IoError& e) {
+        const std::string what = e.what();
+        for (const std::string& part : parts)
+            EXPECT_NE(what.find(part), std::string::npos)
+                << "message '" << what << "' lacks '" << part << "'";
+    }
+}
+
+void openAndReadAll(const std::string& path) {
+    auto reader = openNiftiVolume(path);
+    readAllSamples(*reader);
+}
+
+struct NiftiType {
+    int16_t code;
+    FileScalar type;
+};
+
+const NiftiType kNiftiTypes[] = {
+    {2, FileScalar::U8},   {4, FileScalar::I16},  {8, FileScalar::I32},   {16, FileScalar::F32},
+    {64, FileScalar::F64}, {256, FileScalar::I8}, {512, FileScalar::U16}, {768, FileScalar::U32},
+};
+
+// A nifti_1_header, filled in at the offsets of nifti1.h.
+class NiftiHeaderBuilder {
+public:
+    explicit NiftiHeaderBuilder(FileScalar type, int16_t datatype, bool bigEndian = false)
+        : mBigEndian(bigEndian) {
+        mBytes.fill(0);
+        setI32(0, 348);
+        const int16_t dims[8] = {3, 7, 5, 4, 1, 1, 1, 1};
+        for (int d = 0; d < 8; ++d) setI16(40 + 2 * d, dims[d]);
+        setI16(70, datatype);
+        setI16(72, int16_t(8 * fileScalarSize(type)));
+        const float pixdim[4] = {1.0f, 0.5f, 0.75f, 2.5f};
+        for (int d = 0; d < 4; ++d) setF32(76 + 4 * d, pixdim[d]);
+        setF32(108, 352.0f);  // vox_offset
+        setF32(112, 1.0f);    // scl_slope: 1 with intercept 0 means unscaled
+        setI16(252, 1);       // qform_code
+        setF32(268, -10.5f);
+        setF32(272, 20.0f);
+        setF32(276, 3.25f);
+        setMagic("n+1");
+    }
+
+    NiftiHeaderBuilder& setI16(size_t offset, int16_t v) { return put(offset, v); }
+    NiftiHeaderBuilder& setI32(size_t offset, int32_t v) { return put(offset, v); }
+    NiftiHeaderBuilder& setF32(size_t offset, float v) { return put(offset, v); }
+    NiftiHeaderBuilder& setDim(int index, int16_t v) { return setI16(40 + 2 * size_t(index), v); }
+    NiftiHeaderBuilder& setMagic(const char* magic) {
+        std::memcpy(mBytes.data() + 344, magic, 4);
+        return *this;
+    }
+    NiftiHeaderBuilder& setScaling(float slope, float intercept) {
+        setF32(112, slope);
+        return setF32(116, intercept);
+    }
+
+    // The header, then vox_offset - 348 bytes (the extension flag, zero: no extensions).
+    std::string bytes(size_t voxOffset = 352) const {
+        std::string out(reinterpret_cast<const char*>(mBytes.data()), mBytes.size());
+        out.resize(voxOffset, '\0');
+        return out;
+    }
+
+private:
+    template <class T>
+    NiftiHeaderBuilder& put(size_t offset, T v) {
+        unsigned char b[sizeof(T)];
+        std::memcpy(b, &v, sizeof(T));
+        if (mBigEndian != hostIsBigEndian()) std::reverse(b, b + sizeof(T));
+        std::memcpy(mBytes.data() + offset, b, sizeof(T));
+        return *this;
+    }
+
+    std::array<unsigned char, 348> mBytes;
+    bool mBigEndian;
+};
+
+class NiftiTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        mDir = fs::temp_directory_path() / ("vdiso_nifti_" + std::to_string(::getpid()) + "_" +
+                                            test->test_suite_name() + "_" + test->name());
+        fs::remove_all(mDir);
+        fs::create_directories(mDir);
+    }
+    void TearDown() override { fs::remove_all(mDir); }
+
+    std::string path(const std::string& name) const { return (mDir / name).string(); }
+
+    std::string write(const std::string& name, const std::string& bytes) const {
+        const std::string p = path(name);
+        std::ofstream out(p, std::ios::binary);
+        out.write(bytes.data(), std::streamsize(bytes.size()));
+        return p;
+    }
+
+    // A .nii (or, gzipped, .nii.gz) holding the test values of `type`.
+    std::string writeNii(const std::string& name, FileScalar type, int16_t code,
+                         bool gzip = false) const {
+        const std::string bytes =
+            NiftiHeaderBuilder(type, code).bytes() + encodeSamples(testValues(type), type, false);
+        return write(name, gzip ? gzipBytes(bytes) : bytes);
+    }
+
+    static void expectValues(SliceReader& reader, const std::vector<double>& want) {
+        const std::vector<double> got = readAllSamples(reader);
+        ASSERT_EQ(got.size(), want.size());
+        for (size_t i = 0; i < want.size(); ++i) ASSERT_EQ(got[i], want[i]) << "sample " << i;
+    }
+
+    fs::path mDir;
+};
+
+using NiftiReader = NiftiTest;
+using NiftiErrors = NiftiTest;
+
+TEST_F(NiftiReader, EveryDatatypeUncompressedAndGzip) {
+    for (const NiftiType& t : kNiftiTypes) {
+        for (bool gzip : {false, true}) {
+            SCOPED_TRACE(std::string(fileScalarName(t.type)) + (gzip ? " gzip" : ""));
+            const std::string p = writeNii(gzip ? "vol.nii.gz" : "vol.nii", t.type, t.code, gzip);
+            auto reader = openNiftiVolume(p);
+            const VolumeInfo& info = reader->info();
+            EXPECT_EQ(info.dims, kDims);
+            EXPECT_EQ(info.type, storeTypeFor(t.type, false));
+            EXPECT_EQ(info.spacing, glm::dvec3(0.5, 0.75, 2.5));
+            EXPECT_EQ(info.origin, glm::dvec3(-10.5, 20.0, 3.25));
+            EXPECT_EQ(reader->name(), p);
+            expectValues(*reader, testValues(t.type));
+        }
+    }
+}
+
+TEST_F(NiftiReader, GzipDetectedByMagicNotExtension) {
+    auto reader = openNiftiVolume(writeNii("misnamed.nii", FileScalar::I16, 4, true));
+    expectValues(*reader, testValues(FileScalar::I16));
+}
+
+TEST_F(NiftiReader, ByteSwappedHeaderAndSamples) {
+    for (const NiftiType& t : kNiftiTypes) {
+        SCOPED_TRACE(fileScalarName(t.type));
+        const std::string bytes = NiftiHeaderBuilder(t.type, t.code, true).bytes() +
+                                  encodeSamples(testValues(t.type), t.type, true);
+        auto reader = openNiftiVolume(write("swapped.nii", bytes));
+        EXPECT_EQ(reader->info().dims, kDims);
+        EXPECT_EQ(reader->info().spacing, glm::dvec3(0.5, 0.75, 2.5));
+        EXPECT_EQ(reader->info().origin, glm::dvec3(-10.5, 20.0, 3.25));
+        expectValues(*reader, testValues(t.type));
+        auto gz = openNiftiVolume(write("swapped.nii.gz", gzipBytes(bytes)));
+        expectValues(*gz, testValues(t.type));
+    }
+}
+
+TEST_F(NiftiReader, SlopeAndInterceptGiveFloat) {
+    const std::string bytes =
+        NiftiHeaderBuilder(FileScalar::I16, 4).setScaling(0.5f, -10.0f).bytes() +
+        encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false);
+    std::vector<double> want = testValues(FileScalar::I16);
+    for (double& v : want) v = double(float(v * 0.5 - 10.0));
+    for (const char* name : {"scaled.nii", "scaled.nii.gz"}) {
+        SCOPED_TRACE(name);
+        const bool gzip = std::string(name).ends_with(".gz");
+        auto reader = openNiftiVolume(write(name, gzip ? gzipBytes(bytes) : bytes));
+        EXPECT_EQ(reader->info().type, ScalarType::F32);
+        expectValues(*reader, want);
+    }
+    // A slope of 1 with a non-zero intercept is still scaling.
+    const std::string shifted =
+        NiftiHeaderBuilder(FileScalar::U8, 2).setScaling(1.0f, 1000.0f).bytes() +
+        encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    auto reader = openNiftiVolume(write("shifted.nii", shifted));
+    EXPECT_EQ(reader->info().type, ScalarType::F32);
+    want = testValues(FileScalar::U8);
+    for (double& v : want) v += 1000.0;
+    expectValues(*reader, want);
+}
+
+TEST_F(NiftiReader, IdentityOrZeroSlopeKeepsFileType) {
+    // nibabel writes a NaN slope (and intercept) for images it does not scale.
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (auto [slope, intercept] :
+         {std::pair{0.0f, 0.0f}, {0.0f, 5.0f}, {1.0f, 0.0f}, {nan, nan}, {nan, 0.0f}}) {
+        SCOPED_TRACE(slope);
+        const std::string bytes =
+            NiftiHeaderBuilder(FileScalar::U16, 512).setScaling(slope, intercept).bytes() +
+            encodeSamples(testValues(FileScalar::U16), FileScalar::U16, false);
+        auto reader = openNiftiVolume(write("u16.nii", bytes));
+        EXPECT_EQ(reader->info().type, ScalarType::U16);
+        expectValues(*reader, testValues(FileScalar::U16));
+    }
+}
+
+TEST_F(NiftiReader, PixdimSignAndZeroAndSformOrigin) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setF32(80, -0.8f).setF32(84, 0.0f).setF32(88, 3.0f);
+    // Without a qform the origin is the sform's translation column.
+    h.setI16(252, 0).setI16(254, 2).setF32(292, 1.5f).setF32(308, -2.5f).setF32(324, 7.0f);
+    auto reader = openNiftiVolume(write(
+        "v.nii", h.bytes() + encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false)));
+    EXPECT_DOUBLE_EQ(reader->info().spacing.x, double(0.8f));
+    EXPECT_DOUBLE_EQ(reader->info().spacing.y, 1.0);
+    EXPECT_DOUBLE_EQ(reader->info().spacing.z, 3.0);
+    EXPECT_EQ(reader->info().origin, glm::dvec3(1.5, -2.5, 7.0));
+}
+
+TEST_F(NiftiReader, VoxOffsetSkipsExtensions) {
+    NiftiHeaderBuilder h(FileScalar::I16, 4);
+    h.setF32(108, 448.0f);
+    std::string bytes = h.bytes(448);
+    // Extension flag 1, then one 96-byte extension (esize, ecode, payload).
+    const unsigned char flag[4] = {1, 0, 0, 0};
+    std::memcpy(bytes.data() + 348, flag, 4);
+    std::memset(bytes.data() + 360, 'E', 88);
+    bytes += encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false);
+    auto reader = openNiftiVolume(write("ext.nii", bytes));
+    expectValues(*reader, testValues(FileScalar::I16));
+    auto gz = openNiftiVolume(write("ext.nii.gz", gzipBytes(bytes)));
+    expectValues(*gz, testValues(FileScalar::I16));
+}
+
+TEST_F(NiftiReader, HeaderImagePair) {
+    NiftiHeaderBuilder h(FileScalar::F32, 16);
+    h.setMagic("ni1").setF32(108, 0.0f);
+    const std::string samples = encodeSamples(testValues(FileScalar::F32), FileScalar::F32, false);
+    const std::string hdr = write("pair.hdr", h.bytes(348));
+    const std::string img = write("pair.img", samples);
+    for (const std::string& p : {hdr, img}) {
+        SCOPED_TRACE(p);
+        auto reader = openNiftiVolume(p);
+        EXPECT_EQ(reader->info().dims, kDims);
+        expectValues(*reader, testValues(FileScalar::F32));
+    }
+    // Names from other systems come in capitals.
+    write("UPPER.HDR", h.bytes(348));
+    write("UPPER.IMG", samples);
+    expectValues(*openNiftiVolume(path("UPPER.HDR")), testValues(FileScalar::F32));
+    expectValues(*openNiftiVolume(path("UPPER.IMG")), testValues(FileScalar::F32));
+    // Compressed pairs, in either half.
+    write("gz.hdr.gz", gzipBytes(h.bytes(348)));
+    write("gz.img.gz", gzipBytes(samples));
+    auto reader = openNiftiVolume(path("gz.hdr.gz"));
+    expectValues(*reader, testValues(FileScalar::F32));
+    reader = openNiftiVolume(path("gz.img.gz"));
+    expectValues(*reader, testValues(FileScalar::F32));
+}
+
+TEST_F(NiftiReader, FourDWithOneFrame) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setDim(0, 5).setDim(4, 1).setDim(5, 1);
+    auto reader = openNiftiVolume(write(
+        "t.nii", h.bytes() + encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false)));
+    EXPECT_EQ(reader->info().dims, kDims);
+    expectValues(*reader, testValues(FileScalar::U8));
+}
+
+TEST_F(NiftiErrors, FourDWithThreeFrames) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setDim(0, 4).setDim(4, 3);
+    const std::string p = write("frames.nii", h.bytes() + std::string(3 * kSamples, '\0'));
+    expectIoError([&] { openNiftiVolume(p); },
+                  {p, "has 3 frames; only single 3-D volumes are supported"});
+}
+
+TEST_F(NiftiErrors, TwoDimensional) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setDim(0, 2).setDim(3, 1);
+    const std::string p = write("flat.nii", h.bytes() + std::string(35, '\0'));
+    expectIoError([&] { openNiftiVolume(p); }, {p, "only 3-D volumes are supported"});
+}
+
+TEST_F(NiftiErrors, UnsupportedDatatypes) {
+    for (int16_t code : {1, 32, 128, 1024, 1280, 1536, 1792, 2048, 2304, 3}) {
+        const std::string p = write("c.nii", NiftiHeaderBuilder(FileScalar::U8, code).bytes() +
+                                                 std::string(kSamples * 8, '\0'));
+        expectIoError([&] { openNiftiVolume(p); },
+                      {p, "unsupported NIfTI datatype " + std::to_string(code)});
+    }
+}
+
+TEST_F(NiftiErrors, Nifti2Refused) {
+    for (bool bigEndian : {false, true}) {
+        NiftiHeaderBuilder h(FileScalar::U8, 2, bigEndian);
+        h.setI32(0, 540).setMagic("n+2");
+        const std::string p = write("two.nii", h.bytes(560) + std::string(kSamples, '\0'));
+        expectIoError([&] { openNiftiVolume(p); }, {p, "NIfTI-2 is not supported"});
+    }
+}
+
+TEST_F(NiftiErrors, BadMagicAndNotNifti) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setMagic("abc");
+    const std::string magic = write("magic.nii", h.bytes() + std::string(kSamples, '\0'));
+    expectIoError([&] { openNiftiVolume(magic); }, {magic, "not a NIfTI-1 file", "magic"});
+    const std::string text = write("text.nii", std::string(400, 'x'));
+    expectIoError([&] { openNiftiVolume(text); }, {text, "not a NIfTI-1 file", "sizeof_hdr"});
+    const std::string tiny = write("tiny.nii", std::string("\x5c\x01\0\0", 4) + "ab");
+    expectIoError([&] { openNiftiVolume(tiny); }, {tiny, "ends after 6 bytes", "348-byte"});
+    const std::string empty = write("empty.nii", "");
+    expectIoError([&] { openNiftiVolume(empty); }, {empty, "not a NIfTI-1 file"});
+    expectIoError([&] { openNiftiVolume(path("absent.nii")); }, {"absent.nii", "cannot open"});
+}
+
+TEST_F(NiftiErrors, DataShorterAndLonger) {
+    const std::string full = NiftiHeaderBuilder(FileScalar::I16, 4).bytes() +
+                             encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false);
+    const std::string shorter = write("short.nii", full.substr(0, full.size() - 6));
+    expectIoError([&] { openNiftiVolume(shorter); }, {shorter, "6 bytes shorter"});
+    const std::string longer = write("long.nii", full + "xyz");
+    expectIoError([&] { openNiftiVolume(longer); }, {longer, "3 bytes longer"});
+    const std::string gzShort = write("short.nii.gz", gzipBytes(full.substr(0, full.size() - 6)));
+    expectIoError([&] { openAndReadAll(gzShort); }, {gzShort, "ends after"});
+    const std::string gzLong = write("long.nii.gz", gzipBytes(full + "xyz"));
+    expectIoError([&] { openAndReadAll(gzLong); }, {gzLong, "holds more data"});
+}
+
+TEST_F(NiftiErrors, CorruptGzip) {
+    std::vector<double> values(kSamples);
+    for (int64_t i = 0; i < kSamples; ++i) values[size_t(i)] = double((i * 7919) % 65536);
+    std::string gz = gzipBytes(NiftiHeaderBuilder(FileScalar::U16, 512).bytes() +
+                               encodeSamples(values, FileScalar::U16, false));
+    for (size_t i = gz.size() / 2 - 4; i < gz.size() / 2 + 4; ++i) gz[i] = char(~gz[i]);
+    const std::string p = write("corrupt.nii.gz", gz);
+    expectIoError([&] { openAndReadAll(p); }, {p, "corrupt gzip data"});
+}
+
+TEST_F(NiftiErrors, TruncatedGzip) {
+    std::string gz = gzipBytes(NiftiHeaderBuilder(FileScalar::F64, 64).bytes() +
+                               encodeSamples(testValues(FileScalar::F64), FileScalar::F64, false));
+    gz.resize(gz.size() * 3 / 4);
+    const std::string p = write("trunc.nii.gz", gz);
+    expectIoError([&] { openAndReadAll(p); }, {p, "truncated"});
+}
+
+TEST_F(NiftiErrors, NonFiniteScaling) {
+    for (float slope :
+         {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}) {
+        const std::string p =
+            write("inf.nii", NiftiHeaderBuilder(FileScalar::U8, 2).setScaling(slope, 0.0f).bytes() +
+                                 std::string(kSamples, '\0'));
+        expectIoError([&] { openNiftiVolume(p); }, {p, "scl_slope"});
+    }
+    const std::string p =
+        write("nan.nii", NiftiHeaderBuilder(FileScalar::U8, 2).setScaling(2.0f, NAN).bytes() +
+                             std::string(kSamples, '\0'));
+    expectIoError([&] { openNiftiVolume(p); }, {p, "scl_inter"});
+}
+
+TEST_F(NiftiErrors, BadVoxOffset) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setF32(108, 100.0f);
+    const std::string p = write("off.nii", h.bytes() + std::string(kSamples, '\0'));
+    expectIoError([&] { openNiftiVolume(p); }, {p, "vox_offset 100", "inside the 348-byte header"});
+}
+
+TEST_F(NiftiErrors, MissingImageOfPair) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setMagic("ni1").setF32(108, 0.0f);
+    const std::string hdr = write("lonely.hdr", h.bytes(348));
+    expectIoError([&] { openNiftiVolume(hdr); }, {"lonely.img", "cannot open"});
+    const std::string nii = write("pair.nii", h.bytes(348));
+    expectIoError([&] { openNiftiVolume(nii); }, {nii, "magic 'ni1'", "not named *.hdr"});
+}
+
+}  // namespace
+}  // namespace vdiso

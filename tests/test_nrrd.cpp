@@ -1,0 +1,590 @@
+// NRRD reader: headers as ITK, 3D Slicer and teem write them, attached and detached data, raw
+// and gzip, every type and its aliases; and the inputs it must refuse, each with a message that
+// names the file and the problem.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+#include "io/error.h"
+#include "io/nrrd_reader.h"
+#include "io/sample_decode.h"
+
+namespace vdiso {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr Dims3 kDims{7, 5, 4};
+constexpr int64_t kSamples = 7 * 5 * 4;
+
+// Distinct values every type holds exactly, including after conversion to its store type.
+double sampleValue(FileScalar t, int64_t i) {
+    switch (t) {
+        case FileScalar::I8:
+            return double(i - 70);
+        case FileScalar::U8:
+            return double(i + 100);
+        case FileScalar::I16:
+            return double(i * 37 - 2000);
+        case FileScalar::U16:
+            return double(60000 - i * 3);
+        case FileScalar::I32:
+            return double(i * 100000 - 7000000);
+        case FileScalar::U32:
+            return double(i * 1000 + 7);
+        case FileScalar::F32:
+            return double(i) * 0.25 - 3.0;
+        case FileScalar::F64:
+            return double(i) * 0.5 + 0.125;
+    }
+    return 0.0;
+}
+
+std::vector<double> testValues(FileScalar t) {
+    std::vector<double> v(kSamples);
+    for (int64_t i = 0; i < kSamples; ++i) v[size_t(i)] = sampleValue(t, i);
+    return v;
+}
+
+template <class T>
+void appendScalar(std::string& out, double v, bool bigEndian) {
+    const T x = T(v);
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &x, sizeof(T));
+    if (bigEndian != hostIsBigEndian()) std::reverse(b, b + sizeof(T));
+    out.append(reinterpret_cast<const char*>(b), sizeof(T));
+}
+
+std::string encodeSamples(const std::vector<double>& values, FileScalar t, bool bigEndian) {
+    std::string out;
+    for (double v : values) {
+        switch (t) {
+            case FileScalar::I8:
+                appendScalar<int8_t>(out, v, bigEndian);
+                break;
+            case FileScalar::U8:
+                appendScalar<uint8_t>(out, v, bigEndian);
+                break;
+            case FileScalar::I16:
+                appendScalar<int16_t>(out, v, bigEndian);
+                break;
+            case FileScalar::U16:
+                appendScalar<uint16_t>(out, v, bigEndian);
+                break;
+            case FileScalar::I32:
+                appendScalar<int32_t>(out, v, bigEndian);
+                break;
+            case FileScalar::U32:
+                appendScalar<uint32_t>(out, v, bigEndian);
+                break;
+            case FileScalar::F32:
+                appendScalar<float>(out, v, bigEndian);
+                break;
+            case FileScalar::F64:
+                appendScalar<double>(out, v, bigEndian);
+                break;
+        }
+    }
+    return out;
+}
+
+std::string gzipBytes(const std::string& data) {
+    z_stream z{};
+    // 15 + 16: a gzip wrapper, as teem and ITK write.
+    if (deflateInit2(&z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return {};
+    std::string out(deflateBound(&z, uLong(data.size())) + 32, '\0');
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+    z.avail_in = uInt(data.size());
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = uInt(out.size());
+    const int rc = deflate(&z, Z_FINISH);
+    out.resize(z.total_out);
+    deflateEnd(&z);
+    return rc == Z_STREAM_END ? out : std::string();
+}
+
+// Reads every slice in slabs of 1, 2, 3, ... slices (uneven on purpose), then finish().
+std::vector<double> readAllSamples(SliceReader& reader) {
+    const VolumeInfo& info = reader.info();
+    std::vector<double> out;
+    std::vector<unsigned char> slab;
+    int64_t z = 0;
+    for (int64_t count = 1; z < info.dims[2]; ++count) {
+        const int64_t n = std::min(count, info.dims[2] - z);
+        slab.resize(size_t(n * info.sliceSamples()) * scalarSize(info.type));
+        reader.read(slab.data(), n);
+        visitScalarType(info.type, [&](auto tag) {
+            using T = decltype(tag);
+            const T* p = reinterpret_cast<const T*>(slab.data());
+            out.insert(out.end(), p, p + n * info.sliceSamples());
+        });
+        z += n;
+    }
+    reader.finish();
+    return out;
+}
+
+void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
+    try {
+        f();
+        ADD_FAILURE() << "expected an IoError";
+    } catch (const IoError& e) {
+        const std::string what = e.what();
+        for (const std::string& part : parts)
+            EXPECT_NE(what.find(part), std::string::npos)
+                << "message '" << what << "' lacks '" << part << "'";
+    }
+}
+
+void openAndReadAll(const std::string& path) {
+    auto reader = openNrrdVolume(path);
+    readAllSamples(*reader);
+}
+
+struct TypeName {
+    const char* nrrd;
+    FileScalar type;
+};
+
+// Every spelling teem accepts for the types the store can hold.
+const TypeName kTypeAliases[] = {
+    {"signed char", FileScalar::I8},
+    {"int8", FileScalar::I8},
+    {"int8_t", FileScalar::I8},
+    {"uchar", FileScalar::U8},
+    {"unsigned char", FileScalar::U8},
+    {"uint8", FileScalar::U8},
+    {"uint8_t", FileScalar::U8},
+    {"short", FileScalar::I16},
+    {"short int", FileScalar::I16},
+    {"signed short", FileScalar::I16},
+    {"signed short int", FileScalar::I16},
+    {"int16", FileScalar::I16},
+    {"int16_t", FileScalar::I16},
+    {"ushort", FileScalar::U16},
+    {"unsigned short", FileScalar::U16},
+    {"unsigned short int", FileScalar::U16},
+    {"uint16", FileScalar::U16},
+    {"uint16_t", FileScalar::U16},
+    {"int", FileScalar::I32},
+    {"signed int", FileScalar::I32},
+    {"int32", FileScalar::I32},
+    {"int32_t", FileScalar::I32},
+    {"uint", FileScalar::U32},
+    {"unsigned int", FileScalar::U32},
+    {"uint32", FileScalar::U32},
+    {"uint32_t", FileScalar::U32},
+    {"float", FileScalar::F32},
+    {"double", FileScalar::F64},
+};
+
+// The canonical teem name of each type.
+const char* nrrdTypeName(FileScalar t) {
+    for (const TypeName& alias : kTypeAliases)
+        if (alias.type == t && std::strchr(alias.nrrd, ' ') == nullptr) return alias.nrrd;
+    return "?";
+}
+
+class NrrdTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        mDir = fs::temp_directory_path() / ("vdiso_nrrd_" + std::to_string(::getpid()) + "_" +
+                                            test->test_suite_name() + "_" + test->name());
+        fs::remove_all(mDir);
+        fs::create_directories(mDir);
+    }
+    void TearDown() override { fs::remove_all(mDir); }
+
+    std::string path(const std::string& name) const { return (mDir / name).string(); }
+
+    std::string write(const std::string& name, const std::string& bytes) const {
+        const std::string p = path(name);
+        fs::create_directories(fs::path(p).parent_path());
+        std::ofstream out(p, std::ios::binary);
+        out.write(bytes.data(), std::streamsize(bytes.size()));
+        return p;
+    }
+
+    // A minimal teem-style header; `extra` lines go before the blank line.
+    static std::string header(const std::string& type, const std::string& encoding,
+                              const std::string& extra = "", const std::string& endian = "little") {
+        return "NRRD0004\ntype: " + type + "\ndimension: 3\nsizes: 7 5 4\nendian: " + endian +
+               "\nencoding: " + encoding + "\n" + extra;
+    }
+
+    static void expectValues(SliceReader& reader, FileScalar type) {
+        const std::vector<double> got = readAllSamples(reader);
+        const std::vector<double> want = testValues(type);
+        ASSERT_EQ(got.size(), want.size());
+        for (size_t i = 0; i < want.size(); ++i) ASSERT_EQ(got[i], want[i]) << "sample " << i;
+    }
+
+    fs::path mDir;
+};
+
+using NrrdReader = NrrdTest;
+using NrrdErrors = NrrdTest;
+
+TEST_F(NrrdReader, AttachedRawEveryTypeAlias) {
+    for (const TypeName& t : kTypeAliases) {
+        SCOPED_TRACE(t.nrrd);
+        const std::string p =
+            write("vol.nrrd",
+                  header(t.nrrd, "raw") + "\n" + encodeSamples(testValues(t.type), t.type, false));
+        auto reader = openNrrdVolume(p);
+        EXPECT_EQ(reader->info().dims, kDims);
+        EXPECT_EQ(reader->info().type, storeTypeFor(t.type, false));
+        EXPECT_EQ(reader->name(), p);
+        expectValues(*reader, t.type);
+    }
+}
+
+TEST_F(NrrdReader, AttachedGzipEveryType) {
+    for (FileScalar type : {FileScalar::I8, FileScalar::U8, FileScalar::I16, FileScalar::U16,
+                            FileScalar::I32, FileScalar::U32, FileScalar::F32, FileScalar::F64}) {
+        SCOPED_TRACE(fileScalarName(type));
+        const std::string p =
+            write("vol.nrrd", header(nrrdTypeName(type), "gzip") + "\n" +
+                                  gzipBytes(encodeSamples(testValues(type), type, false)));
+        auto reader = openNrrdVolume(p);
+        EXPECT_EQ(reader->info().type, storeTypeFor(type, false));
+        expectValues(*reader, type);
+    }
+}
+
+TEST_F(NrrdReader, GzAliasAndZlibStream) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U16), FileScalar::U16, false);
+    std::string zlib(compressBound(uLong(samples.size())), '\0');
+    uLongf zlibSize = uLongf(zlib.size());
+    ASSERT_EQ(compress2(reinterpret_cast<Bytef*>(zlib.data()), &zlibSize,
+                        reinterpret_cast<const Bytef*>(samples.data()), uLong(samples.size()), 9),
+              Z_OK);
+    zlib.resize(zlibSize);
+    auto reader = openNrrdVolume(write("vol.nrrd", header("ushort", "gz") + "\n" + zlib));
+    expectValues(*reader, FileScalar::U16);
+}
+
+TEST_F(NrrdReader, BigEndianEveryMultiByteType) {
+    for (FileScalar type : {FileScalar::I16, FileScalar::U16, FileScalar::I32, FileScalar::U32,
+                            FileScalar::F32, FileScalar::F64}) {
+        SCOPED_TRACE(fileScalarName(type));
+        const std::string samples = encodeSamples(testValues(type), type, true);
+        auto raw = openNrrdVolume(
+            write("raw.nrrd", header(nrrdTypeName(type), "raw", "", "big") + "\n" + samples));
+        expectValues(*raw, type);
+        auto gz = openNrrdVolume(write(
+            "gz.nrrd", header(nrrdTypeName(type), "gzip", "", "big") + "\n" + gzipBytes(samples)));
+        expectValues(*gz, type);
+    }
+}
+
+TEST_F(NrrdReader, DetachedRawWithDataFileForms) {
+    const std::string samples = encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false);
+    write("vol.raw", samples);
+    write("sub/deeper.raw", samples);
+    const std::string absolute = write("abs.raw", samples);
+    const std::pair<const char*, std::string> cases[] = {
+        {"data file", "vol.raw"},
+        {"datafile", "vol.raw"},
+        {"data file", "./sub/deeper.raw"},
+        {"data file", absolute},
+    };
+    for (const auto& [field, file] : cases) {
+        SCOPED_TRACE(file);
+        // Detached headers need not end with a blank line.
+        const std::string p =
+            write("vol.nhdr", header("short", "raw", std::string(field) + ": " + file + "\n"));
+        auto reader = openNrrdVolume(p);
+        EXPECT_EQ(reader->name(), p);
+        expectValues(*reader, FileScalar::I16);
+    }
+}
+
+TEST_F(NrrdReader, DetachedHeaderInAnotherDirectory) {
+    write("data/vol.raw.gz",
+          gzipBytes(encodeSamples(testValues(FileScalar::F32), FileScalar::F32, false)));
+    auto reader = openNrrdVolume(
+        write("headers/vol.nhdr", header("float", "gzip", "data file: ../data/vol.raw.gz\n\n")));
+    expectValues(*reader, FileScalar::F32);
+}
+
+TEST_F(NrrdReader, ItkStyleHeader) {
+    const std::string text =
+        "NRRD0004\n"
+        "# Complete NRRD file format specification at:\n"
+        "# http://teem.sourceforge.net/nrrd/format.html\n"
+        "type: short\n"
+        "dimension: 3\n"
+        "space: left-posterior-superior\n"
+        "sizes: 7 5 4\n"
+        "space directions: (0.5,0,0) (0,0.75,0) (0,0,2.5)\n"
+        "kinds: domain domain domain\n"
+        "endian: little\n"
+        "encoding: gzip\n"
+        "space origin: (-10.5,20,3.25)\n"
+        "ITK_InputFilterName:=NrrdImageIO\n"
+        "\n";
+    auto reader = openNrrdVolume(write(
+        "itk.nrrd",
+        text + gzipBytes(encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false))));
+    const VolumeInfo& info = reader->info();
+    EXPECT_EQ(info.dims, kDims);
+    EXPECT_EQ(info.type, ScalarType::I16);
+    EXPECT_DOUBLE_EQ(info.spacing.x, 0.5);
+    EXPECT_DOUBLE_EQ(info.spacing.y, 0.75);
+    EXPECT_DOUBLE_EQ(info.spacing.z, 2.5);
+    EXPECT_DOUBLE_EQ(info.origin.x, -10.5);
+    EXPECT_DOUBLE_EQ(info.origin.y, 20.0);
+    EXPECT_DOUBLE_EQ(info.origin.z, 3.25);
+    expectValues(*reader, FileScalar::I16);
+}
+
+TEST_F(NrrdReader, SlicerStyleDetachedHeaderWithCrlfAndObliqueDirections) {
+    // Slicer writes oblique directions as they come from DICOM; spacing is their length.
+    const std::string text =
+        "NRRD0004\r\n"
+        "# Complete NRRD file format specification at:\r\n"
+        "# http://teem.sourceforge.net/nrrd/format.html\r\n"
+        "type: unsigned short\r\n"
+        "dimension: 3\r\n"
+        "space: left-posterior-superior\r\n"
+        "sizes: 7 5 4\r\n"
+        "space directions: (0,0.6,0.8) (-2, 0, 0) ( 0 , 0 , -1.5 )\r\n"
+        "kinds: domain domain domain\r\n"
+        "endian: little\r\n"
+        "encoding: raw\r\n"
+        "space units: \"mm\" \"mm\" \"mm\"\r\n"
+        "space origin: (119.5,119.5,-60)\r\n"
+        "measurement frame: (1,0,0) (0,1,0) (0,0,1)\r\n"
+        "data file: slicer.raw\r\n"
+        "DICOM_0008_0060:={\"modality\":\"CT\"}\r\n"
+        "\r\n";
+    write("slicer.raw", encodeSamples(testValues(FileScalar::U16), FileScalar::U16, false));
+    auto reader = openNrrdVolume(write("slicer.nhdr", text));
+    const VolumeInfo& info = reader->info();
+    EXPECT_EQ(info.type, ScalarType::U16);
+    EXPECT_DOUBLE_EQ(info.spacing.x, 1.0);
+    EXPECT_DOUBLE_EQ(info.spacing.y, 2.0);
+    EXPECT_DOUBLE_EQ(info.spacing.z, 1.5);
+    EXPECT_DOUBLE_EQ(info.origin.x, 119.5);
+    EXPECT_DOUBLE_EQ(info.origin.z, -60.0);
+    expectValues(*reader, FileScalar::U16);
+}
+
+TEST_F(NrrdReader, TeemSpacingsAndUnknownFields) {
+    const std::string extra =
+        "content: resample(head)\n"
+        "spacings: -0.5 nan 3\n"
+        "centers: cell cell cell\n"
+        "some future field: 1 2 3\n"
+        "key with spaces:=value: with colon\n";
+    auto reader = openNrrdVolume(
+        write("teem.nrrd", "NRRD0001\n" + header("uchar", "raw", extra).substr(9) + "\n" +
+                               encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false)));
+    const VolumeInfo& info = reader->info();
+    EXPECT_DOUBLE_EQ(info.spacing.x, 0.5);
+    EXPECT_DOUBLE_EQ(info.spacing.y, 1.0);
+    EXPECT_DOUBLE_EQ(info.spacing.z, 3.0);
+    EXPECT_EQ(info.origin, glm::dvec3(0.0));
+    expectValues(*reader, FileScalar::U8);
+}
+
+TEST_F(NrrdReader, FourDimensionsWithSingletonAxis) {
+    const std::string samples = encodeSamples(testValues(FileScalar::F32), FileScalar::F32, false);
+    const std::string leading =
+        "NRRD0005\ntype: float\ndimension: 4\nspace: RAS\nsizes: 1 7 5 4\n"
+        "space directions: none (2,0,0) (0,3,0) (0,0,4)\nkinds: vector domain domain domain\n"
+        "endian: little\nencoding: raw\n\n";
+    auto reader = openNrrdVolume(write("leading.nrrd", leading + samples));
+    EXPECT_EQ(reader->info().dims, kDims);
+    EXPECT_EQ(reader->info().spacing, glm::dvec3(2.0, 3.0, 4.0));
+    expectValues(*reader, FileScalar::F32);
+
+    const std::string trailing =
+        "NRRD0004\ntype: float\ndimension: 4\nsizes: 7 5 4 1\nspacings: 2 3 4 nan\n"
+        "endian: little\nencoding: raw\n\n";
+    reader = openNrrdVolume(write("trailing.nrrd", trailing + samples));
+    EXPECT_EQ(reader->info().dims, kDims);
+    EXPECT_EQ(reader->info().spacing, glm::dvec3(2.0, 3.0, 4.0));
+    expectValues(*reader, FileScalar::F32);
+}
+
+TEST_F(NrrdReader, LineSkipAndByteSkip) {
+    const std::string samples = encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false);
+    write("skip.raw", "first line\nsecond line\n" + std::string(10, 'x') + samples);
+    auto reader = openNrrdVolume(write("skip.nhdr", header("short", "raw",
+                                                           "line skip: 2\nbyte skip: 10\n"
+                                                           "data file: skip.raw\n")));
+    expectValues(*reader, FileScalar::I16);
+
+    // With gzip, line skip counts lines of the file and byte skip decompressed bytes.
+    write("skip.gz", "a line\n" + gzipBytes(std::string(6, 'y') + samples));
+    reader = openNrrdVolume(
+        write("skipgz.nhdr",
+              header("short", "gzip", "line skip: 1\nbyte skip: 6\ndata file: skip.gz\n")));
+    expectValues(*reader, FileScalar::I16);
+}
+
+TEST_F(NrrdReader, ByteSkipMinusOneReadsFromTheEnd) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U16), FileScalar::U16, false);
+    write("tail.raw", std::string(123, '\0') + samples);
+    auto reader = openNrrdVolume(
+        write("tail.nhdr", header("ushort", "raw", "byte skip: -1\ndata file: tail.raw\n")));
+    expectValues(*reader, FileScalar::U16);
+}
+
+TEST_F(NrrdErrors, RawDataShorterThanSizes) {
+    std::string samples = encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false);
+    samples.resize(samples.size() - 3);
+    const std::string p = write("short.nrrd", header("short", "raw") + "\n" + samples);
+    expectIoError([&] { openNrrdVolume(p); }, {p, "3 bytes shorter"});
+}
+
+TEST_F(NrrdErrors, RawDataLongerThanSizes) {
+    const std::string samples =
+        encodeSamples(testValues(FileScalar::I16), FileScalar::I16, false) + "12345";
+    const std::string p = write("long.nrrd", header("short", "raw") + "\n" + samples);
+    expectIoError([&] { openNrrdVolume(p); }, {p, "5 bytes longer"});
+}
+
+TEST_F(NrrdErrors, DetachedDataShorterNamesTheDataFile) {
+    const std::string data = write("d.raw", std::string(100, '\0'));
+    const std::string p = write("d.nhdr", header("uchar", "raw", "data file: d.raw\n"));
+    expectIoError([&] { openNrrdVolume(p); }, {data, "40 bytes shorter", "d.nhdr"});
+}
+
+TEST_F(NrrdErrors, ByteSkipMinusOneWithTooLittleData) {
+    write("t.raw", std::string(100, '\0'));
+    const std::string p =
+        write("t.nhdr", header("uchar", "raw", "byte skip: -1\ndata file: t.raw\n"));
+    expectIoError([&] { openNrrdVolume(p); }, {"t.raw", "40 bytes shorter"});
+}
+
+TEST_F(NrrdErrors, GzipDataShorterThanSizes) {
+    std::string samples = encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    samples.resize(samples.size() - 1);
+    const std::string p = write("short.nrrd", header("uchar", "gzip") + "\n" + gzipBytes(samples));
+    expectIoError([&] { openAndReadAll(p); }, {p, "ends after"});
+}
+
+TEST_F(NrrdErrors, GzipDataLongerThanSizes) {
+    const std::string samples =
+        encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false) + "x";
+    const std::string p = write("long.nrrd", header("uchar", "gzip") + "\n" + gzipBytes(samples));
+    expectIoError([&] { openAndReadAll(p); }, {p, "holds more data than its header's sizes"});
+}
+
+TEST_F(NrrdErrors, CorruptGzip) {
+    // Varied samples, so the deflate stream is long enough to have a middle.
+    std::vector<double> values(kSamples);
+    for (int64_t i = 0; i < kSamples; ++i) values[size_t(i)] = double((i * 7919) % 65536);
+    std::string gz = gzipBytes(encodeSamples(values, FileScalar::U16, false));
+    for (size_t i = gz.size() / 2 - 4; i < gz.size() / 2 + 4; ++i) gz[i] = char(~gz[i]);
+    const std::string p = write("corrupt.nrrd", header("ushort", "gzip") + "\n" + gz);
+    expectIoError([&] { openAndReadAll(p); }, {p, "corrupt gzip data"});
+}
+
+TEST_F(NrrdErrors, TruncatedGzip) {
+    std::string gz = gzipBytes(encodeSamples(testValues(FileScalar::F64), FileScalar::F64, false));
+    gz.resize(gz.size() / 2);
+    const std::string p = write("trunc.nrrd", header("double", "gzip") + "\n" + gz);
+    expectIoError([&] { openAndReadAll(p); }, {p, "truncated"});
+}
+
+TEST_F(NrrdErrors, UnknownType) {
+    const std::string p = write("t.nrrd", header("quad", "raw") + "\n");
+    expectIoError([&] { openNrrdVolume(p); }, {p, "unknown NRRD type 'quad'"});
+}
+
+TEST_F(NrrdErrors, SixtyFourBitAndBlockTypes) {
+    for (const char* type : {"long long", "int64", "unsigned long long", "uint64_t"}) {
+        const std::string p = write("t.nrrd", header(type, "raw") + "\n");
+        expectIoError([&] { openNrrdVolume(p); },
+                      {p, "NRRD type '" + std::string(type) + "' is not supported"});
+    }
+    const std::string p = write("b.nrrd", header("block", "raw", "block size: 4\n") + "\n");
+    expectIoError([&] { openNrrdVolume(p); }, {p, "NRRD type 'block' is not supported"});
+}
+
+TEST_F(NrrdErrors, UnsupportedEncodings) {
+    for (const char* encoding : {"ascii", "text", "txt", "hex", "bzip2", "bz2", "zrl"}) {
+        const std::string p = write("e.nrrd", header("uchar", encoding) + "\n");
+        expectIoError([&] { openNrrdVolume(p); },
+                      {p, "unsupported NRRD encoding '" + std::string(encoding) + "'"});
+    }
+}
+
+TEST_F(NrrdErrors, NotThreeDimensional) {
+    const std::string two =
+        write("two.nrrd", "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 7 5\nencoding: raw\n\n" +
+                              std::string(35, '\0'));
+    expectIoError([&] { openNrrdVolume(two); },
+                  {two, "dimension 2", "only scalar 3-D volumes are supported"});
+    const std::string four = write(
+        "four.nrrd", "NRRD0004\ntype: uchar\ndimension: 4\nsizes: 3 7 5 4\nencoding: raw\n\n" +
+                         std::string(420, '\0'));
+    expectIoError([&] { openNrrdVolume(four); },
+                  {four, "dimension 4", "only scalar 3-D volumes are supported"});
+}
+
+TEST_F(NrrdErrors, BadMagic) {
+    const std::string p = write("bad.nrrd", "NRRX0004\ntype: uchar\n\n");
+    expectIoError([&] { openNrrdVolume(p); }, {p, "not a NRRD file"});
+    const std::string binary = write("binary.nrrd", std::string(100000, '\x01'));
+    expectIoError([&] { openNrrdVolume(binary); }, {binary, "not a NRRD file"});
+    const std::string empty = write("empty.nrrd", "");
+    expectIoError([&] { openNrrdVolume(empty); }, {empty, "not a NRRD file"});
+}
+
+TEST_F(NrrdErrors, MissingFieldsAndFiles) {
+    const std::string noEndian =
+        write("e.nrrd", "NRRD0004\ntype: short\ndimension: 3\nsizes: 7 5 4\nencoding: raw\n\n");
+    expectIoError([&] { openNrrdVolume(noEndian); }, {noEndian, "'endian'"});
+    const std::string noSizes =
+        write("s.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nencoding: raw\n\n");
+    expectIoError([&] { openNrrdVolume(noSizes); }, {noSizes, "no 'sizes' field"});
+    const std::string missing = write("m.nhdr", header("uchar", "raw", "data file: nowhere.raw\n"));
+    expectIoError([&] { openNrrdVolume(missing); }, {"nowhere.raw", "cannot open"});
+    expectIoError([&] { openNrrdVolume(path("absent.nrrd")); }, {"absent.nrrd", "cannot open"});
+    const std::string noBlank = write("nb.nrrd", header("uchar", "raw"));
+    expectIoError([&] { openNrrdVolume(noBlank); }, {noBlank, "has no data"});
+}
+
+TEST_F(NrrdErrors, MultiFileDataRefused) {
+    const std::string list =
+        write("list.nhdr", header("uchar", "raw", "data file: LIST\nslice0.raw\nslice1.raw\n"));
+    expectIoError([&] { openNrrdVolume(list); }, {list, "'data file: LIST'", "not supported"});
+    const std::string format =
+        write("fmt.nhdr", header("uchar", "raw", "data file: slice%03d.raw 1 4 1 2\n"));
+    expectIoError([&] { openNrrdVolume(format); }, {format, "multi-file", "not supported"});
+}
+
+TEST_F(NrrdErrors, AxisTooSmall) {
+    const std::string p =
+        write("flat.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 7 5 1\nencoding: raw\n\n" +
+                               std::string(35, '\0'));
+    expectIoError([&] { openNrrdVolume(p); }, {p, "at least 2 samples"});
+}
+
+TEST_F(NrrdErrors, MalformedHeaderValues) {
+    const std::string sizes =
+        write("s.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 7 x 4\nencoding: raw\n\n");
+    expectIoError([&] { openNrrdVolume(sizes); }, {sizes, "'sizes'", "'x'"});
+    const std::string dirs =
+        write("d.nrrd", header("uchar", "raw", "space directions: (1,0,0) (0,1,0)\n") + "\n" +
+                            std::string(140, '\0'));
+    expectIoError([&] { openNrrdVolume(dirs); }, {dirs, "'space directions' has 2 entries"});
+}
+
+}  // namespace
+}  // namespace vdiso
