@@ -1,0 +1,18 @@
+// OpenVDB grids as dense volumes.
+//
+// A float or double grid chosen by name (empty: the first float or double grid); its
+// active-voxel bounding box becomes the volume's extent, inactive voxels take the grid's
+// background value, the voxel size gives the spacing and the box's world position the origin.
+// OpenVDB's types never leave vdb_reader.cpp.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "io/slice_reader.h"
+
+namespace vdiso {
+
+std::unique_ptr<SliceReader> openVdbVolume(const std::string& path, const std::string& gridName);
+
+}  // namespace vdiso
