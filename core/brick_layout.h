@@ -1,0 +1,61 @@
+// How a volume is cut into bricks, and which samples each brick carries.
+//
+// Brick (i,j,k) owns the cells [iB, (i+1)B) on each axis (fewer in the last brick of an axis).
+// It stores B+3 samples per axis, from iB-1 to iB+B+1: the B+1 corners of its cells plus one
+// ghost before and one after, so central-difference normals at every corner, and so every cell,
+// can be computed without touching a neighbour. Indices outside the volume are clamped to the
+// border, which makes the gradient one-sided there. Every brick has the same (B+3)^3 shape.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+
+#include "core/volume.h"
+
+namespace vdiso {
+
+constexpr int kGhostBefore = 1;
+constexpr int kGhostAfter = 2;
+
+struct BrickLayout {
+    Dims3 dims{0, 0, 0};        // samples per axis
+    int brickSize = 32;         // B: cells per brick side
+    Dims3 brickCounts{0, 0, 0}; // bricks per axis
+
+    BrickLayout() = default;
+    BrickLayout(const Dims3& sampleDims, int cellsPerBrick) : dims(sampleDims), brickSize(cellsPerBrick) {
+        for (int a = 0; a < 3; ++a) brickCounts[a] = (dims[a] - 1 + brickSize - 1) / brickSize;
+    }
+
+    int64_t brickCount() const { return brickCounts[0] * brickCounts[1] * brickCounts[2]; }
+    int side() const { return brickSize + kGhostBefore + kGhostAfter; }
+    int64_t samplesPerBrick() const { return int64_t(side()) * side() * side(); }
+
+    // Bricks are numbered x fastest, then y, then z, which is also their order in the file.
+    int64_t brickId(int64_t i, int64_t j, int64_t k) const {
+        return i + brickCounts[0] * (j + brickCounts[1] * k);
+    }
+    Dims3 brickCoord(int64_t id) const {
+        return {id % brickCounts[0], (id / brickCounts[0]) % brickCounts[1],
+                id / (brickCounts[0] * brickCounts[1])};
+    }
+
+    // Global sample index of a brick's first stored sample on any axis, given its brick
+    // coordinate on that axis (may be -1: clamped to the border).
+    int64_t firstSample(int64_t coord) const { return coord * brickSize - kGhostBefore; }
+
+    // Cells the brick owns on `axis`: B, or fewer in the last brick.
+    int cellsOnAxis(int axis, int64_t coord) const {
+        return int(std::min<int64_t>(brickSize, dims[axis] - 1 - coord * brickSize));
+    }
+
+    // Samples the brick owns on `axis` when each sample is counted once across the volume:
+    // B, except the last brick which also owns the volume's last sample.
+    int ownedSamplesOnAxis(int axis, int64_t coord) const {
+        return coord == brickCounts[axis] - 1 ? cellsOnAxis(axis, coord) + 1 : brickSize;
+    }
+
+    int64_t clampSample(int axis, int64_t s) const { return std::clamp<int64_t>(s, 0, dims[axis] - 1); }
+};
+
+}  // namespace vdiso

@@ -1,0 +1,137 @@
+#include "io/brick_store.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <zstd.h>
+
+#include "io/error.h"
+#include "io/store_format.h"
+
+namespace vdiso {
+
+const char* compressionName(Compression c) {
+    return c == Compression::Zstd ? "zstd" : "none";
+}
+
+double ValueHistogram::quantile(double fraction) const {
+    uint64_t total = 0;
+    for (uint64_t c : counts) total += c;
+    if (total == 0) return lo;
+    const double target = fraction * double(total);
+    const double binWidth = (hi - lo) / kHistogramBins;
+    uint64_t seen = 0;
+    for (int b = 0; b < kHistogramBins; ++b) {
+        if (double(seen + counts[b]) >= target && counts[b] > 0) {
+            // Interpolate inside the bin: samples are assumed spread evenly across it.
+            const double within = (target - double(seen)) / double(counts[b]);
+            return lo + (b + std::clamp(within, 0.0, 1.0)) * binWidth;
+        }
+        seen += counts[b];
+    }
+    return hi;
+}
+
+namespace {
+
+void preadExact(int fd, void* dst, size_t n, uint64_t offset, const std::string& path,
+                const char* what) {
+    auto* p = static_cast<char*>(dst);
+    size_t done = 0;
+    while (done < n) {
+        ssize_t r = ::pread(fd, p + done, n - done, off_t(offset + done));
+        if (r < 0) {
+            if (errno == EINTR) continue;
+            throwSystemError(path, std::string("cannot read ") + what + " at byte offset " +
+                                       std::to_string(offset + done), errno);
+        }
+        if (r == 0)
+            throwIoError(path, std::string("ends inside the ") + what + " (byte offset " +
+                                   std::to_string(offset + done) + "): the file is truncated");
+        done += size_t(r);
+    }
+}
+
+}  // namespace
+
+BrickStoreReader::BrickStoreReader(std::string path) : mPath(std::move(path)) {
+    mFd = ::open(mPath.c_str(), O_RDONLY | O_CLOEXEC);
+    if (mFd < 0) throwSystemError(mPath, "cannot open", errno);
+    try {
+        const off_t end = ::lseek(mFd, 0, SEEK_END);
+        if (end < 0) throwSystemError(mPath, "cannot seek", errno);
+        mFileBytes = uint64_t(end);
+        if (mFileBytes < kStoreHeaderBytes) {
+            unsigned char magic[8] = {};
+            ssize_t got = ::pread(mFd, magic, 8, 0);
+            if (got == 8 && std::equal(magic, magic + 8, store_format::kHeaderMagic))
+                throwIoError(mPath, "is truncated inside its header (" +
+                                        std::to_string(mFileBytes) + " bytes)");
+            throwIoError(mPath, "not a vdiso brick store (wrong magic; convert volumes with "
+                                "'vdiso convert' first)");
+        }
+        std::vector<unsigned char> headerBytes(kStoreHeaderBytes);
+        preadExact(mFd, headerBytes.data(), headerBytes.size(), 0, mPath, "header");
+        mHeader = store_format::decodeHeader(headerBytes.data(), headerBytes.size(), mPath);
+        mLayout = BrickLayout(mHeader.volume.dims, mHeader.brickSize);
+        if (mHeader.indexOffset < kStoreHeaderBytes ||
+            mHeader.indexOffset + mHeader.indexBytes > mFileBytes)
+            throwIoError(mPath, "index is missing or truncated: it needs bytes [" +
+                                    std::to_string(mHeader.indexOffset) + ", " +
+                                    std::to_string(mHeader.indexOffset + mHeader.indexBytes) +
+                                    ") but the file has " + std::to_string(mFileBytes));
+        std::vector<unsigned char> indexBytes(mHeader.indexBytes);
+        preadExact(mFd, indexBytes.data(), indexBytes.size(), mHeader.indexOffset, mPath, "index");
+        store_format::decodeIndex(indexBytes.data(), indexBytes.size(), mHeader, mLayout, mPath,
+                                  mIndex, mHistogram);
+    } catch (...) {
+        ::close(mFd);
+        throw;
+    }
+}
+
+BrickStoreReader::~BrickStoreReader() { ::close(mFd); }
+
+void BrickStoreReader::failBrick(int64_t id, const std::string& what) const {
+    const Dims3 c = mLayout.brickCoord(id);
+    throwIoError(mPath, "brick " + std::to_string(id) + " (" + std::to_string(c[0]) + "," +
+                            std::to_string(c[1]) + "," + std::to_string(c[2]) +
+                            ") at byte offset " + std::to_string(mIndex[size_t(id)].offset) +
+                            ": " + what);
+}
+
+void BrickStoreReader::readStoredBrick(int64_t id, std::vector<unsigned char>& stored) const {
+    if (id < 0 || id >= mLayout.brickCount())
+        throwIoError(mPath, "no brick " + std::to_string(id) + " (the store has " +
+                                std::to_string(mLayout.brickCount()) + ")");
+    const BrickEntry& e = mIndex[size_t(id)];
+    stored.resize(e.storedBytes);
+    preadExact(mFd, stored.data(), stored.size(), e.offset, mPath, "brick data");
+    if (store_format::crc32Of(stored.data(), stored.size()) != e.checksum)
+        failBrick(id, "checksum mismatch (the brick is corrupt)");
+}
+
+void BrickStoreReader::decodeBrick(int64_t id, const std::vector<unsigned char>& stored,
+                                   void* dst) const {
+    const BrickEntry& e = mIndex[size_t(id)];
+    const size_t raw = brickBytes();
+    if (!e.compressed) {
+        if (stored.size() != raw) failBrick(id, "stored size does not match the brick size");
+        std::memcpy(dst, stored.data(), raw);
+        return;
+    }
+    const size_t got = ZSTD_decompress(dst, raw, stored.data(), stored.size());
+    if (ZSTD_isError(got)) failBrick(id, std::string("cannot decompress: ") + ZSTD_getErrorName(got));
+    if (got != raw) failBrick(id, "decompressed to the wrong size");
+}
+
+void BrickStoreReader::readBrick(int64_t id, void* dst) const {
+    thread_local std::vector<unsigned char> stored;
+    readStoredBrick(id, stored);
+    decodeBrick(id, stored, dst);
+}
+
+}  // namespace vdiso

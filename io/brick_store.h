@@ -1,0 +1,106 @@
+// The brick store: one self-describing, versioned file per volume (docs/store-format.md).
+//
+//   [header: 4096 bytes] [brick 0] [brick 1] ... (each at a 4096-byte aligned offset) [index]
+//
+// The header holds dimensions, spacing, origin, scalar type, brick size, ghost layout,
+// compression, checksum algorithm and where the index is. The index holds, per brick, its file
+// offset, stored size, checksum and the min and max of the samples its cells touch, then a
+// histogram of the whole volume. Both are written last: a file whose header or index is
+// incomplete is refused at open.
+//
+// BrickStoreReader opens a store by reading only the header and the index, then returns any
+// brick's (B+3)^3 samples by brick id. It is safe to read bricks from several threads at once.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/brick_layout.h"
+#include "core/volume.h"
+
+namespace vdiso {
+
+constexpr uint32_t kStoreFormatVersion = 1;
+constexpr uint32_t kStoreHeaderBytes = 4096;
+constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
+constexpr int kHistogramBins = 256;
+
+enum class Compression : uint8_t { None = 0, Zstd = 1 };
+const char* compressionName(Compression c);
+
+enum class ChecksumAlgorithm : uint8_t { Crc32 = 1 };  // zlib's CRC-32 of the stored bytes
+
+// One brick's entry in the index.
+struct BrickEntry {
+    uint64_t offset = 0;       // byte offset of the stored brick in the file
+    uint32_t storedBytes = 0;  // bytes on disk (compressed, or raw when compression did not pay)
+    uint32_t checksum = 0;     // CRC-32 of the stored bytes
+    float minValue = 0;        // min and max over the samples of the brick's cells
+    float maxValue = 0;        //   (ghosts excluded: they only feed normals)
+    bool compressed = false;
+};
+
+// A histogram of every sample in the volume, counted once each: bins of equal width over
+// [valueMin, valueMax].
+struct ValueHistogram {
+    double lo = 0, hi = 0;
+    std::array<uint64_t, kHistogramBins> counts{};
+
+    // The value below which `fraction` of the samples lie, to within one bin.
+    double quantile(double fraction) const;
+};
+
+struct StoreHeader {
+    VolumeInfo volume;
+    int brickSize = 32;
+    Compression compression = Compression::Zstd;
+    ChecksumAlgorithm checksum = ChecksumAlgorithm::Crc32;
+    uint64_t indexOffset = 0, indexBytes = 0;
+    double valueMin = 0, valueMax = 0;
+    uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded)
+};
+
+class BrickStoreReader {
+public:
+    // Reads and validates header and index. Throws IoError naming the file and the problem
+    // (wrong magic, newer version, bad header checksum, truncated or corrupt index, ...).
+    explicit BrickStoreReader(std::string path);
+    ~BrickStoreReader();
+    BrickStoreReader(const BrickStoreReader&) = delete;
+    BrickStoreReader& operator=(const BrickStoreReader&) = delete;
+
+    const std::string& path() const { return mPath; }
+    const StoreHeader& header() const { return mHeader; }
+    const VolumeInfo& volume() const { return mHeader.volume; }
+    const BrickLayout& layout() const { return mLayout; }
+    const std::vector<BrickEntry>& index() const { return mIndex; }
+    const ValueHistogram& histogram() const { return mHistogram; }
+    uint64_t fileBytes() const { return mFileBytes; }
+    // Bytes one decoded brick takes: (B+3)^3 samples.
+    size_t brickBytes() const { return size_t(mLayout.samplesPerBrick()) * scalarSize(volume().type); }
+
+    // Reads brick `id` into dst (brickBytes() bytes), checking its checksum and size. Throws
+    // IoError naming the file, the brick and its byte offset on a short read, a checksum
+    // mismatch or a decompression failure.
+    void readBrick(int64_t id, void* dst) const;
+
+    // The two halves of readBrick, for a cache that times them apart: the stored bytes
+    // (checksum verified) into `stored`, then decoding them into dst.
+    void readStoredBrick(int64_t id, std::vector<unsigned char>& stored) const;
+    void decodeBrick(int64_t id, const std::vector<unsigned char>& stored, void* dst) const;
+
+private:
+    [[noreturn]] void failBrick(int64_t id, const std::string& what) const;
+
+    std::string mPath;
+    int mFd = -1;
+    uint64_t mFileBytes = 0;
+    StoreHeader mHeader;
+    BrickLayout mLayout;
+    std::vector<BrickEntry> mIndex;
+    ValueHistogram mHistogram;
+};
+
+}  // namespace vdiso

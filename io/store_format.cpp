@@ -1,0 +1,232 @@
+#include "io/store_format.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <zlib.h>
+#include <zstd.h>
+
+#include "io/error.h"
+
+namespace vdiso::store_format {
+
+namespace {
+
+constexpr size_t kHeaderChecksumAt = 160;  // the header's CRC covers bytes [0, 160)
+
+class ByteWriter {
+public:
+    explicit ByteWriter(unsigned char* out) : mOut(out) {}
+    template <class T>
+    void put(T v) {
+        std::memcpy(mOut + mAt, &v, sizeof v);
+        mAt += sizeof v;
+    }
+    void putBytes(const void* p, size_t n) {
+        std::memcpy(mOut + mAt, p, n);
+        mAt += n;
+    }
+    size_t at() const { return mAt; }
+
+private:
+    unsigned char* mOut;
+    size_t mAt = 0;
+};
+
+class ByteReader {
+public:
+    ByteReader(const unsigned char* in, size_t n) : mIn(in), mSize(n) {}
+    template <class T>
+    T get() {
+        T v;
+        std::memcpy(&v, mIn + mAt, sizeof v);
+        mAt += sizeof v;
+        return v;
+    }
+    void skip(size_t n) { mAt += n; }
+    size_t at() const { return mAt; }
+    size_t size() const { return mSize; }
+
+private:
+    const unsigned char* mIn;
+    size_t mSize;
+    size_t mAt = 0;
+};
+
+}  // namespace
+
+uint32_t crc32Of(const void* data, size_t n) {
+    uLong crc = crc32(0L, Z_NULL, 0);
+    const auto* p = static_cast<const Bytef*>(data);
+    while (n > 0) {
+        uInt chunk = uInt(std::min<size_t>(n, 1u << 30));
+        crc = crc32(crc, p, chunk);
+        p += chunk;
+        n -= chunk;
+    }
+    return uint32_t(crc);
+}
+
+std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) {
+    std::array<unsigned char, kStoreHeaderBytes> bytes{};
+    ByteWriter w(bytes.data());
+    w.putBytes(kHeaderMagic, 8);
+    w.put<uint32_t>(kStoreFormatVersion);
+    w.put<uint32_t>(kStoreHeaderBytes);
+    for (int a = 0; a < 3; ++a) w.put<uint64_t>(uint64_t(h.volume.dims[a]));
+    for (int a = 0; a < 3; ++a) w.put<double>(h.volume.spacing[a]);
+    for (int a = 0; a < 3; ++a) w.put<double>(h.volume.origin[a]);
+    w.put<uint8_t>(uint8_t(h.volume.type));
+    w.put<uint8_t>(uint8_t(h.compression));
+    w.put<uint8_t>(uint8_t(h.checksum));
+    w.put<uint8_t>(0);
+    w.put<uint32_t>(uint32_t(h.brickSize));
+    w.put<uint32_t>(kGhostBefore);
+    w.put<uint32_t>(kGhostAfter);
+    w.put<uint32_t>(kStoreAlignment);
+    w.put<uint32_t>(0);
+    w.put<uint64_t>(uint64_t(BrickLayout(h.volume.dims, h.brickSize).brickCount()));
+    w.put<uint64_t>(h.indexOffset);
+    w.put<uint64_t>(h.indexBytes);
+    w.put<double>(h.valueMin);
+    w.put<double>(h.valueMax);
+    w.put<uint64_t>(h.storedBrickBytes);
+    w.put<uint32_t>(crc32Of(bytes.data(), kHeaderChecksumAt));
+    return bytes;
+}
+
+StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string& path) {
+    if (n < kStoreHeaderBytes || std::memcmp(bytes, kHeaderMagic, 8) != 0)
+        throwIoError(path, "not a vdiso brick store (wrong magic; convert volumes with "
+                           "'vdiso convert' first)");
+    ByteReader r(bytes, n);
+    r.skip(8);
+    const uint32_t version = r.get<uint32_t>();
+    if (version > kStoreFormatVersion)
+        throwIoError(path, "was written by a newer vdiso (store format version " +
+                               std::to_string(version) + "; this build reads up to version " +
+                               std::to_string(kStoreFormatVersion) + ")");
+    if (version == 0) throwIoError(path, "has an invalid format version 0");
+    const uint32_t storedCrc = [&] {
+        uint32_t c;
+        std::memcpy(&c, bytes + kHeaderChecksumAt, 4);
+        return c;
+    }();
+    if (storedCrc != crc32Of(bytes, kHeaderChecksumAt))
+        throwIoError(path, "header checksum mismatch (the header is corrupt)");
+    if (r.get<uint32_t>() != kStoreHeaderBytes) throwIoError(path, "unexpected header size");
+
+    StoreHeader h;
+    for (int a = 0; a < 3; ++a) h.volume.dims[a] = int64_t(r.get<uint64_t>());
+    for (int a = 0; a < 3; ++a) h.volume.spacing[a] = r.get<double>();
+    for (int a = 0; a < 3; ++a) h.volume.origin[a] = r.get<double>();
+    const uint8_t type = r.get<uint8_t>(), compression = r.get<uint8_t>(),
+                  checksum = r.get<uint8_t>();
+    r.skip(1);
+    if (!isValidScalarCode(type))
+        throwIoError(path, "unknown scalar type code " + std::to_string(type));
+    if (compression > uint8_t(Compression::Zstd))
+        throwIoError(path, "unknown compression code " + std::to_string(compression));
+    if (checksum != uint8_t(ChecksumAlgorithm::Crc32))
+        throwIoError(path, "unknown checksum algorithm code " + std::to_string(checksum));
+    h.volume.type = ScalarType(type);
+    h.compression = Compression(compression);
+    h.checksum = ChecksumAlgorithm(checksum);
+    h.brickSize = int(r.get<uint32_t>());
+    const uint32_t ghostBefore = r.get<uint32_t>(), ghostAfter = r.get<uint32_t>();
+    const uint32_t alignment = r.get<uint32_t>();
+    r.skip(4);
+    const uint64_t brickCount = r.get<uint64_t>();
+    h.indexOffset = r.get<uint64_t>();
+    h.indexBytes = r.get<uint64_t>();
+    h.valueMin = r.get<double>();
+    h.valueMax = r.get<double>();
+    h.storedBrickBytes = r.get<uint64_t>();
+
+    for (int a = 0; a < 3; ++a)
+        if (h.volume.dims[a] < 2 || h.volume.dims[a] > (int64_t(1) << 31))
+            throwIoError(path, "header has invalid dimensions");
+    if (h.brickSize < 2 || h.brickSize > 1024)
+        throwIoError(path, "header has invalid brick size " + std::to_string(h.brickSize));
+    if (ghostBefore != kGhostBefore || ghostAfter != kGhostAfter)
+        throwIoError(path, "unsupported ghost layout");
+    if (alignment != kStoreAlignment) throwIoError(path, "unsupported brick alignment");
+    if (brickCount != uint64_t(BrickLayout(h.volume.dims, h.brickSize).brickCount()))
+        throwIoError(path, "header's brick count does not match its dimensions");
+    if (h.indexBytes != indexBytes(brickCount))
+        throwIoError(path, "header's index size does not match its brick count");
+    return h;
+}
+
+uint64_t indexBytes(uint64_t brickCount) {
+    return 16 + brickCount * kEntryBytes + 24 + uint64_t(kHistogramBins) * 8 + 4;
+}
+
+std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
+                                       const ValueHistogram& histogram) {
+    std::vector<unsigned char> bytes(indexBytes(entries.size()));
+    ByteWriter w(bytes.data());
+    w.putBytes(kIndexMagic, 8);
+    w.put<uint64_t>(entries.size());
+    for (const BrickEntry& e : entries) {
+        w.put<uint64_t>(e.offset);
+        w.put<uint32_t>(e.storedBytes);
+        w.put<uint32_t>(e.checksum);
+        w.put<float>(e.minValue);
+        w.put<float>(e.maxValue);
+        w.put<uint32_t>(e.compressed ? 1u : 0u);
+        w.put<uint32_t>(0);
+    }
+    w.put<double>(histogram.lo);
+    w.put<double>(histogram.hi);
+    w.put<uint32_t>(kHistogramBins);
+    w.put<uint32_t>(0);
+    for (uint64_t c : histogram.counts) w.put<uint64_t>(c);
+    w.put<uint32_t>(crc32Of(bytes.data(), w.at()));
+    return bytes;
+}
+
+void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header,
+                 const BrickLayout& layout, const std::string& path,
+                 std::vector<BrickEntry>& entries, ValueHistogram& histogram) {
+    const uint64_t count = uint64_t(layout.brickCount());
+    if (n != indexBytes(count) || std::memcmp(bytes, kIndexMagic, 8) != 0)
+        throwIoError(path, "index is missing or corrupt (wrong magic at byte offset " +
+                               std::to_string(header.indexOffset) + ")");
+    uint32_t storedCrc;
+    std::memcpy(&storedCrc, bytes + n - 4, 4);
+    if (storedCrc != crc32Of(bytes, n - 4))
+        throwIoError(path, "index checksum mismatch (the index is corrupt)");
+    ByteReader r(bytes, n);
+    r.skip(8);
+    if (r.get<uint64_t>() != count) throwIoError(path, "index brick count does not match header");
+
+    const uint64_t rawBytes = uint64_t(layout.samplesPerBrick()) * scalarSize(header.volume.type);
+    const uint64_t maxStored = std::max<uint64_t>(rawBytes, ZSTD_compressBound(rawBytes));
+    entries.resize(count);
+    for (uint64_t id = 0; id < count; ++id) {
+        BrickEntry& e = entries[id];
+        e.offset = r.get<uint64_t>();
+        e.storedBytes = r.get<uint32_t>();
+        e.checksum = r.get<uint32_t>();
+        e.minValue = r.get<float>();
+        e.maxValue = r.get<float>();
+        const uint32_t flags = r.get<uint32_t>();
+        r.skip(4);
+        e.compressed = (flags & 1u) != 0;
+        const bool ok = e.offset >= kStoreHeaderBytes && e.offset % kStoreAlignment == 0 &&
+                        e.storedBytes > 0 && e.storedBytes <= maxStored &&
+                        e.offset + e.storedBytes <= header.indexOffset &&
+                        (e.compressed || e.storedBytes == rawBytes) &&
+                        (e.compressed == false || header.compression != Compression::None) &&
+                        !(e.minValue > e.maxValue);
+        if (!ok) throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
+    }
+    histogram.lo = r.get<double>();
+    histogram.hi = r.get<double>();
+    if (r.get<uint32_t>() != kHistogramBins) throwIoError(path, "index histogram is invalid");
+    r.skip(4);
+    for (uint64_t& c : histogram.counts) c = r.get<uint64_t>();
+}
+
+}  // namespace vdiso::store_format

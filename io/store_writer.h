@@ -1,0 +1,40 @@
+// Conversion into the brick store, streaming.
+//
+// Reads the source a layer of bricks at a time (B+3 z-slices, the last three kept for the next
+// layer), so memory is a few slabs plus one layer of compressed bricks, whatever the volume's
+// depth. Bricks of a layer are gathered, measured (min, max, histogram) and compressed in
+// parallel (TBB), then written in id order at 4 KiB-aligned offsets. The header and index are
+// written last and the file is renamed into place only when complete (AtomicOutputFile).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/progress.h"
+#include "io/brick_store.h"
+#include "io/slice_reader.h"
+
+namespace vdiso {
+
+struct StoreWriteOptions {
+    int brickSize = 32;                       // B, cells per brick side (2..512)
+    Compression compression = Compression::Zstd;
+    int compressionLevel = 1;                 // zstd level; 1 keeps conversion near disk speed
+    bool overwrite = false;                   // replace an existing output file
+};
+
+struct StoreWriteSummary {
+    int64_t bricks = 0;
+    uint64_t inputBytes = 0;   // samples read, at the store's sample size
+    uint64_t fileBytes = 0;    // size of the written store
+    double seconds = 0;
+};
+
+// Converts everything `source` delivers into a store at `outPath`. Throws IoError (from the
+// source or the output) or std::invalid_argument (bad options); on any throw, including one
+// from `progress`, no output file is left and an existing one is untouched.
+StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPath,
+                                  const StoreWriteOptions& options,
+                                  const ProgressFn& progress = {});
+
+}  // namespace vdiso
