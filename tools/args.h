@@ -1,0 +1,43 @@
+// Command-line parsing shared by the subcommands: a cursor over argv and value parsers that
+// throw UsageError with one clear sentence. Each subcommand fills its own options struct.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "core/volume.h"
+
+namespace vdiso::cli {
+
+// Wrong usage: printed with a hint to --help, exit code 2.
+class UsageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+class Args {
+public:
+    Args(int argc, char** argv, int first);
+    bool done() const { return mAt >= mItems.size(); }
+    const std::string& peek() const { return mItems[mAt]; }
+    std::string take() { return mItems[mAt++]; }
+    // The value after `flag`; throws UsageError if there is none.
+    std::string value(const std::string& flag);
+
+private:
+    std::vector<std::string> mItems;
+    size_t mAt = 0;
+};
+
+int64_t parseInt(const std::string& flag, const std::string& text, int64_t lo, int64_t hi);
+double parseDouble(const std::string& flag, const std::string& text);
+// "N" (a cube) or "X,Y,Z".
+Dims3 parseDims(const std::string& flag, const std::string& text);
+// "S" (all axes) or "X,Y,Z", each positive.
+glm::dvec3 parseSpacing(const std::string& flag, const std::string& text);
+
+}  // namespace vdiso::cli

@@ -1,0 +1,128 @@
+#include <cstdio>
+#include <cstring>
+
+#include "io/store_writer.h"
+#include "io/volume_open.h"
+#include "tools/args.h"
+#include "tools/commands.h"
+#include "tools/progress_bar.h"
+
+namespace vdiso::cli {
+
+namespace {
+
+constexpr const char* kHelp =
+    "usage: vdiso convert INPUT OUTPUT.vdiso [options]\n"
+    "\n"
+    "Converts a volume into a brick store, streaming: memory stays a few slabs whatever the\n"
+    "volume's size. The output appears only when complete; a failure leaves none.\n"
+    "\n"
+    "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .vdb (OpenVDB);\n"
+    "anything else is raw and needs --dims and --type.\n"
+    "\n"
+    "raw input:\n"
+    "  --dims X,Y,Z            samples per axis (x fastest in the file)\n"
+    "  --type T                u8, i16, u16, f32 (also i8, i32, u32, f64: stored as i16/f32)\n"
+    "  --spacing S | X,Y,Z     sample spacing (default 1)\n"
+    "  --endian little|big     byte order (default little)\n"
+    "  --header-bytes N        bytes to skip before the samples (default 0)\n"
+    "OpenVDB input:\n"
+    "  --grid NAME             the float grid to convert (default: the first)\n"
+    "store:\n"
+    "  --brick B               cells per brick side (default 32)\n"
+    "  --compress zstd|none    brick compression (default zstd)\n"
+    "  --level N               zstd level (default 1)\n"
+    "  --force                 replace OUTPUT if it exists\n"
+    "  --quiet                 no progress bar or summary\n";
+
+std::optional<FileScalar> parseFileScalar(const std::string& name) {
+    static const std::pair<const char*, FileScalar> kNames[] = {
+        {"u8", FileScalar::U8},   {"i8", FileScalar::I8},   {"i16", FileScalar::I16},
+        {"u16", FileScalar::U16}, {"i32", FileScalar::I32}, {"u32", FileScalar::U32},
+        {"f32", FileScalar::F32}, {"f64", FileScalar::F64}};
+    for (const auto& [n, t] : kNames)
+        if (name == n) return t;
+    return std::nullopt;
+}
+
+}  // namespace
+
+int runConvert(int argc, char** argv) {
+    Args args(argc, argv, 1);
+    std::vector<std::string> positional;
+    InputOptions input;
+    RawOptions raw;
+    bool dimsGiven = false, typeGiven = false, rawOnlyGiven = false, quiet = false;
+    StoreWriteOptions store;
+    while (!args.done()) {
+        const std::string a = args.take();
+        if (a == "--help" || a == "-h") {
+            std::fputs(kHelp, stdout);
+            return 0;
+        } else if (a == "--dims") {
+            raw.dims = parseDims(a, args.value(a));
+            dimsGiven = true;
+        } else if (a == "--type") {
+            const std::string t = args.value(a);
+            const auto type = parseFileScalar(t);
+            if (!type) throw UsageError("unknown type '" + t + "' (expected u8, i16, u16 or f32)");
+            raw.type = *type;
+            typeGiven = true;
+        } else if (a == "--spacing") {
+            raw.spacing = parseSpacing(a, args.value(a));
+            rawOnlyGiven = true;
+        } else if (a == "--endian") {
+            const std::string e = args.value(a);
+            if (e != "little" && e != "big") throw UsageError("--endian expects little or big");
+            raw.bigEndian = e == "big";
+            rawOnlyGiven = true;
+        } else if (a == "--header-bytes") {
+            raw.headerBytes = uint64_t(parseInt(a, args.value(a), 0, int64_t(1) << 50));
+            rawOnlyGiven = true;
+        } else if (a == "--grid") {
+            input.grid = args.value(a);
+        } else if (a == "--brick") {
+            store.brickSize = int(parseInt(a, args.value(a), 2, 512));
+        } else if (a == "--compress") {
+            const std::string c = args.value(a);
+            if (c == "zstd") store.compression = Compression::Zstd;
+            else if (c == "none") store.compression = Compression::None;
+            else throw UsageError("--compress expects zstd or none, not '" + c + "'");
+        } else if (a == "--level") {
+            store.compressionLevel = int(parseInt(a, args.value(a), -7, 19));
+        } else if (a == "--force") {
+            store.overwrite = true;
+        } else if (a == "--quiet") {
+            quiet = true;
+        } else if (!a.empty() && a[0] == '-' && a != "-") {
+            throw UsageError("unknown option '" + a + "'");
+        } else {
+            positional.push_back(a);
+        }
+    }
+    if (positional.size() != 2) throw UsageError("expects INPUT and OUTPUT");
+    if (dimsGiven != typeGiven) throw UsageError("raw input needs both --dims and --type");
+    if (rawOnlyGiven && !dimsGiven)
+        throw UsageError("--spacing, --endian and --header-bytes apply to raw input, which "
+                         "needs --dims and --type");
+    if (dimsGiven) input.raw = raw;
+    const std::string& inPath = positional[0];
+    const std::string& outPath = positional[1];
+    if (inPath == outPath) throw UsageError("INPUT and OUTPUT are the same file");
+
+    auto source = openVolume(inPath, input);
+    const VolumeInfo& info = source->info();
+    const StoreWriteSummary s = writeBrickStore(
+        *source, outPath, store, progressBar("convert", double(info.byteSize()), quiet));
+    if (!quiet)
+        std::printf("wrote %s: %lldx%lldx%lld %s, %lld bricks of %d^3 cells, %.1f MB in, %.1f MB "
+                    "stored (ratio %.2f), %.2f s, %.0f MB/s\n",
+                    outPath.c_str(), (long long)info.dims[0], (long long)info.dims[1],
+                    (long long)info.dims[2], scalarTypeName(info.type), (long long)s.bricks,
+                    store.brickSize, s.inputBytes / 1e6, s.fileBytes / 1e6,
+                    double(s.inputBytes) / double(s.fileBytes), s.seconds,
+                    s.inputBytes / 1e6 / s.seconds);
+    return 0;
+}
+
+}  // namespace vdiso::cli

@@ -1,0 +1,156 @@
+#include <cstdio>
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/span_space.h"
+#include "io/brick_store.h"
+#include "io/json.h"
+#include "tools/args.h"
+#include "tools/commands.h"
+
+namespace vdiso::cli {
+
+namespace {
+
+constexpr const char* kHelp =
+    "usage: vdiso info FILE.vdiso [--iso V] [--json]\n"
+    "\n"
+    "Describes a brick store from its header and index alone (no brick is read):\n"
+    "dimensions, type, spacing, bricks, stored bytes, compression, value range, histogram.\n"
+    "\n"
+    "  --iso V    also count the bricks that can hold isovalue V and the bytes they store\n"
+    "             (a span-space query over the bricks' value ranges)\n"
+    "  --json     one JSON object instead of text\n";
+
+// The histogram as a row of block characters, heights on a log scale so that a few rare
+// values (bone among tissue) still show.
+std::string histogramSparkline(const ValueHistogram& h, int columns) {
+    static const char* kBlocks[] = {" ", "▁", "▂", "▃", "▄", "▅", "▆", "▇", "█"};
+    std::vector<double> col(size_t(columns), 0.0);
+    for (int b = 0; b < kHistogramBins; ++b) col[size_t(b * columns / kHistogramBins)] += double(h.counts[size_t(b)]);
+    double peak = 0;
+    for (double& c : col) {
+        c = std::log1p(c);
+        peak = std::max(peak, c);
+    }
+    std::string out;
+    for (double c : col) out += kBlocks[peak > 0 ? int(c / peak * 8 + 0.5) : 0];
+    return out;
+}
+
+struct ActiveBricks {
+    size_t bricks = 0;
+    uint64_t storedBytes = 0;
+};
+
+ActiveBricks activeBricks(const BrickStoreReader& store, double iso) {
+    const auto& index = store.index();
+    std::vector<float> mins(index.size()), maxs(index.size());
+    for (size_t i = 0; i < index.size(); ++i) {
+        mins[i] = index[i].minValue;
+        maxs[i] = index[i].maxValue;
+    }
+    const SpanSpaceTree tree(mins, maxs);
+    std::vector<uint32_t> ids;
+    tree.query(iso, ids);
+    ActiveBricks a;
+    a.bricks = ids.size();
+    for (uint32_t id : ids) a.storedBytes += index[id].storedBytes;
+    return a;
+}
+
+}  // namespace
+
+int runInfo(int argc, char** argv) {
+    Args args(argc, argv, 1);
+    std::string path;
+    std::optional<double> iso;
+    bool json = false;
+    while (!args.done()) {
+        const std::string a = args.take();
+        if (a == "--help" || a == "-h") {
+            std::fputs(kHelp, stdout);
+            return 0;
+        } else if (a == "--iso") {
+            iso = parseDouble(a, args.value(a));
+        } else if (a == "--json") {
+            json = true;
+        } else if (!a.empty() && a[0] == '-') {
+            throw UsageError("unknown option '" + a + "'");
+        } else if (path.empty()) {
+            path = a;
+        } else {
+            throw UsageError("expects one FILE");
+        }
+    }
+    if (path.empty()) throw UsageError("expects FILE.vdiso");
+
+    const BrickStoreReader store(path);
+    const StoreHeader& h = store.header();
+    const VolumeInfo& v = h.volume;
+    const BrickLayout& l = store.layout();
+    const ValueHistogram& hist = store.histogram();
+    const double ratio = double(v.byteSize()) / double(store.fileBytes());
+    // Integer samples have integer quantiles; the histogram's interpolation would suggest more.
+    auto quantile = [&](double f) {
+        const double q = hist.quantile(f);
+        return v.type == ScalarType::F32 ? q : std::round(q);
+    };
+    std::optional<ActiveBricks> active;
+    if (iso) active = activeBricks(store, *iso);
+
+    if (json) {
+        auto triple = [](const auto& t) {
+            return "[" + std::to_string(t[0]) + ", " + std::to_string(t[1]) + ", " +
+                   std::to_string(t[2]) + "]";
+        };
+        JsonObject o;
+        o.add("file", path).add("format_version", int64_t(kStoreFormatVersion));
+        o.addRaw("dims", triple(v.dims)).add("type", scalarTypeName(v.type));
+        o.addRaw("spacing", "[" + std::to_string(v.spacing.x) + ", " + std::to_string(v.spacing.y) +
+                                ", " + std::to_string(v.spacing.z) + "]");
+        o.addRaw("origin", "[" + std::to_string(v.origin.x) + ", " + std::to_string(v.origin.y) +
+                               ", " + std::to_string(v.origin.z) + "]");
+        o.add("brick_size", h.brickSize).addRaw("brick_counts", triple(l.brickCounts));
+        o.add("bricks", l.brickCount()).add("compression", compressionName(h.compression));
+        o.add("volume_bytes", v.byteSize()).add("file_bytes", store.fileBytes());
+        o.add("compression_ratio", ratio).add("min", h.valueMin).add("max", h.valueMax);
+        o.add("p01", quantile(0.01)).add("p50", quantile(0.5)).add("p99", quantile(0.99));
+        std::string counts = "[";
+        for (int b = 0; b < kHistogramBins; ++b)
+            counts += (b ? "," : "") + std::to_string(hist.counts[size_t(b)]);
+        o.addRaw("histogram", counts + "]");
+        if (active) {
+            o.add("iso", *iso).add("active_bricks", uint64_t(active->bricks));
+            o.add("active_bytes", active->storedBytes);
+        }
+        std::printf("%s\n", o.str().c_str());
+        return 0;
+    }
+    std::printf("%s\n", path.c_str());
+    std::printf("  dimensions   %lld x %lld x %lld  %s\n", (long long)v.dims[0], (long long)v.dims[1],
+                (long long)v.dims[2], scalarTypeName(v.type));
+    std::printf("  spacing      %g x %g x %g   origin (%g, %g, %g)\n", v.spacing.x, v.spacing.y,
+                v.spacing.z, v.origin.x, v.origin.y, v.origin.z);
+    std::printf("  bricks       %lld (%lld x %lld x %lld) of %d^3 cells, stored %d^3 samples\n",
+                (long long)l.brickCount(), (long long)l.brickCounts[0], (long long)l.brickCounts[1],
+                (long long)l.brickCounts[2], h.brickSize, l.side());
+    std::printf("  stored       %.1f MB on disk for %.1f MB of samples (%s, ratio %.2f)\n",
+                store.fileBytes() / 1e6, v.byteSize() / 1e6, compressionName(h.compression), ratio);
+    std::printf("  values       %g .. %g   1%% %.4g  median %.4g  99%% %.4g\n", h.valueMin,
+                h.valueMax, quantile(0.01), quantile(0.5), quantile(0.99));
+    std::printf("  histogram    |%s|  (log scale, %g .. %g)\n",
+                histogramSparkline(hist, 64).c_str(), hist.lo, hist.hi);
+    if (active)
+        std::printf("  iso %-8g %zu of %lld bricks active (%.1f%%), %.1f MB stored (%.1f%%)\n",
+                    *iso, active->bricks, (long long)l.brickCount(),
+                    100.0 * double(active->bricks) / double(l.brickCount()),
+                    active->storedBytes / 1e6,
+                    100.0 * double(active->storedBytes) / double(h.storedBrickBytes));
+    return 0;
+}
+
+}  // namespace vdiso::cli

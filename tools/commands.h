@@ -1,0 +1,11 @@
+// The `vdiso` subcommands. Each parses its arguments into an options struct, calls one library
+// entry point and prints; errors propagate to main() which prints them once.
+#pragma once
+
+namespace vdiso::cli {
+
+int runConvert(int argc, char** argv);  // argv[0] is "convert"
+int runSynth(int argc, char** argv);
+int runInfo(int argc, char** argv);
+
+}  // namespace vdiso::cli

@@ -1,0 +1,48 @@
+// vdiso: view-dependent isosurface extraction from bricked volumes.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "io/error.h"
+#include "tools/args.h"
+#include "tools/commands.h"
+#include "tools/progress_bar.h"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: vdiso <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  convert INPUT OUTPUT.vdiso   convert a raw, NRRD, NIfTI or OpenVDB volume into a brick store\n"
+    "  synth OUTPUT                 generate a test volume (head, turbulence) as raw or a store\n"
+    "  info FILE.vdiso              describe a brick store; with --iso, its active bricks\n"
+    "\n"
+    "'vdiso <command> --help' describes each command.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace vdiso::cli;
+    if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+        std::fputs(kUsage, argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    installInterruptHandler();
+    const std::string command = argv[1];
+    try {
+        if (command == "convert") return runConvert(argc - 1, argv + 1);
+        if (command == "synth") return runSynth(argc - 1, argv + 1);
+        if (command == "info") return runInfo(argc - 1, argv + 1);
+        std::fprintf(stderr, "vdiso: unknown command '%s'\n\n%s", command.c_str(), kUsage);
+        return 2;
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "vdiso %s: %s (see 'vdiso %s --help')\n", command.c_str(), e.what(),
+                     command.c_str());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vdiso %s: error: %s\n", command.c_str(), e.what());
+        return 1;
+    }
+}

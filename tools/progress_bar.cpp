@@ -1,0 +1,67 @@
+#include "tools/progress_bar.h"
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+
+#include <unistd.h>
+
+#include "io/error.h"
+
+namespace vdiso::cli {
+
+namespace {
+
+volatile std::sig_atomic_t gInterrupted = 0;
+
+void onInterrupt(int) { gInterrupted = 1; }
+
+struct BarState {
+    std::string label;
+    double bytesTotal;
+    bool draw;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    std::chrono::steady_clock::time_point lastDraw{};
+};
+
+}  // namespace
+
+void installInterruptHandler() {
+    struct sigaction sa = {};
+    sa.sa_handler = onInterrupt;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+}
+
+ProgressFn progressBar(const std::string& label, double bytesTotal, bool quiet) {
+    auto state = std::make_shared<BarState>();
+    state->label = label;
+    state->bytesTotal = bytesTotal;
+    state->draw = !quiet && ::isatty(STDERR_FILENO);
+    return [state](double fraction) {
+        if (gInterrupted) {
+            if (state->draw) std::fputs("\n", stderr);
+            throw IoError(state->label + ": interrupted; no output written");
+        }
+        if (!state->draw) return;
+        const auto now = std::chrono::steady_clock::now();
+        if (fraction < 1.0 && now - state->lastDraw < std::chrono::milliseconds(100)) return;
+        state->lastDraw = now;
+        constexpr int kWidth = 40;
+        const int filled = int(fraction * kWidth + 0.5);
+        const double seconds = std::chrono::duration<double>(now - state->start).count();
+        char rate[48] = "";
+        if (state->bytesTotal > 0 && seconds > 0)
+            std::snprintf(rate, sizeof rate, "  %.0f MB/s",
+                          fraction * state->bytesTotal / seconds / 1e6);
+        std::fprintf(stderr, "\r%s [%.*s%*s] %3d%%  %.1f s%s", state->label.c_str(), filled,
+                     "########################################", kWidth - filled, "",
+                     int(fraction * 100 + 0.5), seconds, rate);
+        if (fraction >= 1.0) std::fputs("\n", stderr);
+        std::fflush(stderr);
+    };
+}
+
+}  // namespace vdiso::cli
