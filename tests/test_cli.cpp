@@ -1,0 +1,172 @@
+// The command line as a user meets it: exit codes, one clear message naming the file, and no
+// output left behind (or overwritten) when anything goes wrong.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include <zlib.h>
+
+#include "io/brick_store.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+using test::runVdiso;
+using test::ScratchDir;
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+TEST(Cli, ConvertRawAndDescribeIt) {
+    ScratchDir dir;
+    const std::string raw = dir.file("v.raw"), out = dir.file("v.vdiso");
+    std::vector<uint16_t> samples(size_t(20 * 18 * 17));
+    for (size_t i = 0; i < samples.size(); ++i) samples[i] = uint16_t(i % 1000);
+    test::writeFile(raw, samples.data(), samples.size() * 2);
+    auto r = runVdiso("convert " + raw + " " + out + " --dims 20,18,17 --type u16 --brick 8 --spacing 0.5");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = runVdiso("info " + out);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "20 x 18 x 17  u16")) << r.output;
+    EXPECT_TRUE(contains(r.output, "0.5 x 0.5 x 0.5")) << r.output;
+    EXPECT_TRUE(contains(r.output, "0 .. 999")) << r.output;
+
+    // --iso counts exactly the bricks whose range holds the isovalue.
+    const BrickStoreReader store(out);
+    size_t active = 0;
+    for (const BrickEntry& e : store.index()) active += (e.minValue <= 500.5 && 500.5 < e.maxValue);
+    r = runVdiso("info " + out + " --iso 500.5 --json");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "\"active_bricks\": " + std::to_string(active))) << r.output;
+    EXPECT_TRUE(contains(r.output, "\"dims\": [20, 18, 17]")) << r.output;
+}
+
+TEST(Cli, ShortRawInputFailsAndLeavesNothing) {
+    ScratchDir dir;
+    const std::string raw = dir.file("v.raw"), out = dir.file("v.vdiso");
+    test::writeFile(raw, std::string(999, 'x'));
+    auto r = runVdiso("convert " + raw + " " + out + " --dims 10,10,10 --type u8");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, raw + ": file is 1 bytes shorter")) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    test::writeFile(raw, std::string(1001, 'x'));
+    r = runVdiso("convert " + raw + " " + out + " --dims 10,10,10 --type u8");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, "1 bytes longer")) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(Cli, UnknownTypeIsAUsageError) {
+    ScratchDir dir;
+    const std::string raw = dir.file("v.raw");
+    test::writeFile(raw, std::string(8, 'x'));
+    auto r = runVdiso("convert " + raw + " " + dir.file("o.vdiso") + " --dims 2,2,2 --type u12");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_TRUE(contains(r.output, "unknown type 'u12'")) << r.output;
+}
+
+TEST(Cli, ExistingOutputIsNeverTouched) {
+    ScratchDir dir;
+    const std::string raw = dir.file("v.raw"), out = dir.file("v.vdiso");
+    test::writeFile(raw, std::string(8, 'x'));
+    test::writeFile(out, "keep me");
+    auto r = runVdiso("convert " + raw + " " + out + " --dims 2,2,2 --type u8");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, out + ": already exists")) << r.output;
+    EXPECT_EQ(test::readFile(out).size(), 7u);
+    // A failing conversion with --force does not touch it either.
+    r = runVdiso("convert " + raw + " " + out + " --dims 3,3,3 --type u8 --force");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_EQ(test::readFile(out).size(), 7u);
+    // A succeeding one with --force replaces it.
+    r = runVdiso("convert " + raw + " " + out + " --dims 2,2,2 --type u8 --force --quiet");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_GT(test::readFile(out).size(), 4096u);
+}
+
+TEST(Cli, UnwritableOutputIsReported) {
+    ScratchDir dir;
+    const std::string raw = dir.file("v.raw");
+    test::writeFile(raw, std::string(8, 'x'));
+    auto r = runVdiso("convert " + raw + " /nonexistent-dir/o.vdiso --dims 2,2,2 --type u8");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, "/nonexistent-dir/o.vdiso: cannot write")) << r.output;
+}
+
+TEST(Cli, CorruptGzipFailsAndLeavesNothing) {
+    ScratchDir dir;
+    // A valid NIfTI header followed by a gzip stream whose middle is damaged.
+    const std::string nii = dir.file("v.nii"), gz = dir.file("v.nii.gz"), out = dir.file("v.vdiso");
+    std::vector<unsigned char> header(352, 0);
+    auto put16 = [&](size_t at, int16_t v) { std::memcpy(&header[at], &v, 2); };
+    auto put32 = [&](size_t at, int32_t v) { std::memcpy(&header[at], &v, 4); };
+    auto putF = [&](size_t at, float v) { std::memcpy(&header[at], &v, 4); };
+    put32(0, 348);
+    put16(40, 3);
+    put16(42, 64);
+    put16(44, 64);
+    put16(46, 64);
+    put16(70, 2);  // uint8
+    put16(72, 8);
+    putF(76, 1.0f);
+    putF(80, 1.0f);
+    putF(84, 1.0f);
+    putF(88, 1.0f);
+    putF(108, 352.0f);
+    std::memcpy(&header[344], "n+1\0", 4);
+    std::vector<unsigned char> data(header);
+    for (int i = 0; i < 64 * 64 * 64; ++i) data.push_back(uint8_t((i * 7919) >> 5));
+    gzFile f = gzopen(gz.c_str(), "wb");
+    gzwrite(f, data.data(), unsigned(data.size()));
+    gzclose(f);
+    auto bytes = test::readFile(gz);
+    for (size_t i = bytes.size() / 2; i < bytes.size() / 2 + 64; ++i) bytes[i] ^= 0x5a;
+    test::writeFile(gz, bytes.data(), bytes.size());
+    auto r = runVdiso("convert " + gz + " " + out);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_TRUE(contains(r.output, gz)) << r.output;
+    EXPECT_TRUE(contains(r.output, "gzip")) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_FALSE(std::filesystem::exists(nii));
+}
+
+TEST(Cli, InfoRefusesNonStores) {
+    ScratchDir dir;
+    const std::string f = dir.file("x.vdiso");
+    test::writeFile(f, std::string(5000, 'z'));
+    auto r = runVdiso("info " + f);
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, f + ": not a vdiso brick store")) << r.output;
+    r = runVdiso("info " + dir.file("missing.vdiso"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, "missing.vdiso: cannot open")) << r.output;
+}
+
+TEST(Cli, SynthHeadStoreAndRawAgree) {
+    ScratchDir dir;
+    const std::string store = dir.file("h.vdiso"), raw = dir.file("h.raw"), conv = dir.file("c.vdiso");
+    ASSERT_EQ(runVdiso("synth " + store + " --kind head --size 40,36,32 --quiet").exitCode, 0);
+    ASSERT_EQ(runVdiso("synth " + raw + " --kind head --size 40,36,32 --quiet").exitCode, 0);
+    EXPECT_EQ(test::readFile(raw).size(), size_t(40 * 36 * 32 * 2));
+    ASSERT_EQ(runVdiso("convert " + raw + " " + conv + " --dims 40,36,32 --type u16 --quiet").exitCode, 0);
+    // Same samples, same bricks: the two stores are byte-identical.
+    EXPECT_EQ(test::readFile(store), test::readFile(conv));
+    const BrickStoreReader s(store);
+    EXPECT_LT(s.header().valueMin, 600.5);
+    EXPECT_GT(s.header().valueMax, 1224.5);
+}
+
+TEST(Cli, HelpAndUsage) {
+    for (const char* cmd : {"convert", "synth", "info"}) {
+        auto r = runVdiso(std::string(cmd) + " --help");
+        EXPECT_EQ(r.exitCode, 0) << cmd;
+        EXPECT_TRUE(contains(r.output, std::string("usage: vdiso ") + cmd)) << r.output;
+    }
+    EXPECT_EQ(runVdiso("frobnicate").exitCode, 2);
+    EXPECT_EQ(runVdiso("convert a.raw").exitCode, 2);
+    EXPECT_EQ(runVdiso("synth x.raw --kind head --size 8 --type u8").exitCode, 2);
+}
+
+}  // namespace
+}  // namespace vdiso

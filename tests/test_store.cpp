@@ -1,0 +1,240 @@
+// The brick store: round trips of every type with every sample (ghosts included) checked, index
+// statistics against brute force, and refusal of damaged files at every kind of damage.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "core/brick_layout.h"
+#include "io/brick_store.h"
+#include "io/error.h"
+#include "io/store_format.h"
+#include "io/store_writer.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+using test::MemoryVolume;
+using test::ScratchDir;
+
+struct RoundTripCase {
+    ScalarType type;
+    Dims3 dims;
+    int brick;
+    Compression compression;
+};
+
+class StoreRoundTrip : public ::testing::TestWithParam<RoundTripCase> {};
+
+TEST_P(StoreRoundTrip, EverySampleAndGhostSurvives) {
+    const RoundTripCase& rc = GetParam();
+    ScratchDir dir;
+    MemoryVolume volume(rc.dims, rc.type);
+    StoreWriteOptions o;
+    o.brickSize = rc.brick;
+    o.compression = rc.compression;
+    const std::string path = dir.file("v.vdiso");
+    const StoreWriteSummary s = writeBrickStore(volume, path, o);
+
+    const BrickStoreReader store(path);
+    EXPECT_EQ(store.volume().dims, rc.dims);
+    EXPECT_EQ(store.volume().type, rc.type);
+    EXPECT_EQ(store.header().brickSize, rc.brick);
+    EXPECT_EQ(store.layout().brickCount(), s.bricks);
+    EXPECT_EQ(store.fileBytes(), s.fileBytes);
+    for (const BrickEntry& e : store.index()) EXPECT_EQ(e.offset % kStoreAlignment, 0u);
+    EXPECT_EQ(test::compareStoreWithSamples(store, volume.bytes()), "");
+
+    // The histogram counts every sample exactly once.
+    uint64_t total = 0;
+    for (uint64_t c : store.histogram().counts) total += c;
+    EXPECT_EQ(total, uint64_t(volume.info().sampleCount()));
+    double lo = INFINITY, hi = -INFINITY;
+    for (int64_t z = 0; z < rc.dims[2]; ++z)
+        for (int64_t y = 0; y < rc.dims[1]; ++y)
+            for (int64_t x = 0; x < rc.dims[0]; ++x) {
+                lo = std::min(lo, volume.at(x, y, z));
+                hi = std::max(hi, volume.at(x, y, z));
+            }
+    EXPECT_EQ(store.header().valueMin, lo);
+    EXPECT_EQ(store.header().valueMax, hi);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Types, StoreRoundTrip,
+    ::testing::Values(RoundTripCase{ScalarType::U8, {19, 11, 14}, 4, Compression::Zstd},
+                      RoundTripCase{ScalarType::I16, {19, 11, 14}, 4, Compression::Zstd},
+                      RoundTripCase{ScalarType::U16, {19, 11, 14}, 4, Compression::Zstd},
+                      RoundTripCase{ScalarType::F32, {19, 11, 14}, 4, Compression::Zstd},
+                      RoundTripCase{ScalarType::U16, {17, 9, 9}, 8, Compression::None},
+                      RoundTripCase{ScalarType::F32, {2, 2, 2}, 32, Compression::Zstd},
+                      RoundTripCase{ScalarType::U8, {40, 33, 34}, 32, Compression::Zstd},
+                      RoundTripCase{ScalarType::I16, {5, 6, 7}, 2, Compression::None}),
+    [](const ::testing::TestParamInfo<RoundTripCase>& param) {
+        const RoundTripCase& c = param.param;
+        return std::string(scalarTypeName(c.type)) + "_" + std::to_string(c.dims[0]) + "x" +
+               std::to_string(c.dims[1]) + "x" + std::to_string(c.dims[2]) + "_b" +
+               std::to_string(c.brick) + "_" + compressionName(c.compression);
+    });
+
+TEST(StoreLayout, BricksCoverEveryCellOnce) {
+    const BrickLayout l({100, 33, 65}, 32);
+    EXPECT_EQ(l.brickCounts, (Dims3{4, 1, 2}));
+    for (int a = 0; a < 3; ++a) {
+        int64_t cells = 0, owned = 0;
+        for (int64_t c = 0; c < l.brickCounts[a]; ++c) {
+            cells += l.cellsOnAxis(a, c);
+            owned += l.ownedSamplesOnAxis(a, c);
+        }
+        EXPECT_EQ(cells, l.dims[a] - 1);
+        EXPECT_EQ(owned, l.dims[a]);
+    }
+    for (int64_t id = 0; id < l.brickCount(); ++id) {
+        const Dims3 c = l.brickCoord(id);
+        EXPECT_EQ(l.brickId(c[0], c[1], c[2]), id);
+    }
+}
+
+// A small valid store to damage.
+class DamagedStore : public ::testing::Test {
+protected:
+    void SetUp() override {
+        MemoryVolume volume({21, 13, 12}, ScalarType::U16);
+        StoreWriteOptions o;
+        o.brickSize = 8;
+        path = dir.file("good.vdiso");
+        writeBrickStore(volume, path, o);
+        bytes = test::readFile(path);
+        header = BrickStoreReader(path).header();
+    }
+    // Writes `b` as a new file and returns the IoError message opening + reading it gives.
+    std::string openError(const std::vector<unsigned char>& b) {
+        const std::string bad = dir.file("bad.vdiso");
+        test::writeFile(bad, b.data(), b.size());
+        try {
+            BrickStoreReader store(bad);
+            std::vector<unsigned char> brick(store.brickBytes());
+            for (int64_t id = 0; id < store.layout().brickCount(); ++id) store.readBrick(id, brick.data());
+        } catch (const IoError& e) {
+            return e.what();
+        }
+        return "";
+    }
+    ScratchDir dir;
+    std::string path;
+    std::vector<unsigned char> bytes;
+    StoreHeader header;
+};
+
+TEST_F(DamagedStore, WrongMagicIsRefused) {
+    auto b = bytes;
+    b[0] = 'X';
+    const std::string msg = openError(b);
+    EXPECT_NE(msg.find("bad.vdiso"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("not a vdiso brick store"), std::string::npos) << msg;
+    EXPECT_NE(openError({'h', 'e', 'l', 'l', 'o'}).find("not a vdiso brick store"), std::string::npos);
+}
+
+TEST_F(DamagedStore, NewerVersionIsRefused) {
+    auto b = bytes;
+    const uint32_t version = kStoreFormatVersion + 1;
+    std::memcpy(b.data() + 8, &version, 4);
+    const std::string msg = openError(b);
+    EXPECT_NE(msg.find("newer vdiso"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("version 2"), std::string::npos) << msg;
+}
+
+TEST_F(DamagedStore, TruncatedIndexIsRefused) {
+    auto b = bytes;
+    b.resize(b.size() - 10);
+    const std::string msg = openError(b);
+    EXPECT_NE(msg.find("index is missing or truncated"), std::string::npos) << msg;
+}
+
+TEST_F(DamagedStore, EveryTruncationIsRefused) {
+    // Cutting the file anywhere must be detected at open: the index (or header) is last.
+    for (size_t len = 0; len < bytes.size(); len += std::max<size_t>(1, bytes.size() / 97)) {
+        std::vector<unsigned char> b(bytes.begin(), bytes.begin() + std::ptrdiff_t(len));
+        EXPECT_NE(openError(b), "") << "truncated to " << len;
+    }
+}
+
+TEST_F(DamagedStore, CorruptBrickIsReportedWithItsOffset) {
+    BrickStoreReader store(path);
+    const BrickEntry& e = store.index()[5];
+    auto b = bytes;
+    b[e.offset + e.storedBytes / 2] ^= 0x40;
+    const std::string msg = openError(b);
+    EXPECT_NE(msg.find("brick 5"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("byte offset " + std::to_string(e.offset)), std::string::npos) << msg;
+    EXPECT_NE(msg.find("checksum mismatch"), std::string::npos) << msg;
+}
+
+TEST_F(DamagedStore, FlippedHeaderOrIndexByteIsRefused) {
+    // Every header byte the checksum covers, and a sample of index bytes.
+    for (size_t at = 0; at < 164; ++at) {
+        auto b = bytes;
+        b[at] ^= 0x01;
+        EXPECT_NE(openError(b), "") << "header byte " << at;
+    }
+    for (uint64_t at = header.indexOffset; at < bytes.size(); at += 7) {
+        auto b = bytes;
+        b[at] ^= 0x10;
+        EXPECT_NE(openError(b), "") << "index byte " << at;
+    }
+}
+
+TEST(StoreWriter, FailedConversionLeavesNoFileAndKeepsTheOldOne) {
+    ScratchDir dir;
+    const std::string out = dir.file("out.vdiso");
+    test::writeFile(out, "precious");
+    MemoryVolume volume({9, 9, 9}, ScalarType::U8);
+    // Existing output without overwrite: refused, untouched.
+    EXPECT_THROW(writeBrickStore(volume, out, {}), IoError);
+    EXPECT_EQ(test::readFile(out), std::vector<unsigned char>({'p', 'r', 'e', 'c', 'i', 'o', 'u', 's'}));
+    // A progress callback that throws (an interrupt) mid-way: nothing left behind.
+    const std::string fresh = dir.file("fresh.vdiso");
+    StoreWriteOptions o;
+    o.brickSize = 2;
+    MemoryVolume volume2({9, 9, 9}, ScalarType::U8);
+    EXPECT_THROW(writeBrickStore(volume2, fresh, o,
+                                 [](double f) {
+                                     if (f > 0.3) throw IoError("interrupted");
+                                 }),
+                 IoError);
+    EXPECT_FALSE(std::filesystem::exists(fresh));
+    size_t files = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+        (void)entry;
+        ++files;
+    }
+    EXPECT_EQ(files, 1u) << "a temporary file was left behind";
+}
+
+TEST(StoreWriter, UnwritableOutputNamesThePath) {
+    MemoryVolume volume({4, 4, 4}, ScalarType::U8);
+    try {
+        writeBrickStore(volume, "/nonexistent-dir/x.vdiso", {});
+        FAIL() << "no error";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.vdiso: cannot write"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(StoreHistogram, QuantilesOfAKnownDistribution) {
+    ScratchDir dir;
+    // Values 0..255 repeated evenly: the median is about 128.
+    MemoryVolume volume({16, 16, 16}, ScalarType::U8);
+    writeBrickStore(volume, dir.file("h.vdiso"), {});
+    const BrickStoreReader store(dir.file("h.vdiso"));
+    EXPECT_NEAR(store.histogram().quantile(0.5), 128.0, 12.0);
+    EXPECT_NEAR(store.histogram().quantile(0.0), 0.0, 2.0);
+    EXPECT_NEAR(store.histogram().quantile(1.0), 255.0, 2.0);
+}
+
+}  // namespace
+}  // namespace vdiso

@@ -1,0 +1,148 @@
+#include "tests/test_util.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <stdexcept>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace vdiso::test {
+
+ScratchDir::ScratchDir() {
+    static int counter = 0;
+    mPath = std::filesystem::temp_directory_path() /
+            ("vdiso_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    std::filesystem::create_directories(mPath);
+}
+
+ScratchDir::~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(mPath, ec);
+}
+
+void writeFile(const std::string& path, const void* data, size_t n) {
+    std::ofstream f(path, std::ios::binary | std::ios::trunc);
+    f.write(static_cast<const char*>(data), std::streamsize(n));
+    if (!f) throw std::runtime_error("cannot write test file " + path);
+}
+
+std::vector<unsigned char> readFile(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    return std::vector<unsigned char>(std::istreambuf_iterator<char>(f), {});
+}
+
+CommandResult runVdiso(const std::string& args) {
+    const std::string command = std::string(VDISO_BINARY) + " " + args + " 2>&1";
+    CommandResult r;
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (!pipe) throw std::runtime_error("cannot run " + command);
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+    const int status = ::pclose(pipe);
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+double testSampleValue(ScalarType type, uint64_t i) {
+    uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 31;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 29;
+    switch (type) {
+        case ScalarType::U8: return double(h & 0xff);
+        case ScalarType::I16: return double(int16_t(h & 0xffff));
+        case ScalarType::U16: return double(h & 0xffff);
+        case ScalarType::F32: break;
+    }
+    return double(float(int64_t(h % 2000001) - 1000000) / 7.0f);
+}
+
+MemoryVolume::MemoryVolume(const Dims3& dims, ScalarType type) {
+    mInfo.dims = dims;
+    mInfo.type = type;
+    mBytes.resize(mInfo.byteSize());
+    visitScalarType(type, [&](auto zero) {
+        using T = decltype(zero);
+        T* p = reinterpret_cast<T*>(mBytes.data());
+        for (int64_t i = 0; i < mInfo.sampleCount(); ++i) p[i] = T(testSampleValue(type, uint64_t(i)));
+    });
+}
+
+void MemoryVolume::read(void* dst, int64_t count) {
+    const size_t sliceBytes = size_t(mInfo.sliceSamples()) * scalarSize(mInfo.type);
+    if (mNextZ + count > mInfo.dims[2]) throw std::runtime_error("read past the end");
+    std::memcpy(dst, mBytes.data() + size_t(mNextZ) * sliceBytes, size_t(count) * sliceBytes);
+    mNextZ += count;
+}
+
+double MemoryVolume::at(int64_t x, int64_t y, int64_t z) const {
+    const int64_t i = x + mInfo.dims[0] * (y + mInfo.dims[1] * z);
+    return visitScalarType(mInfo.type, [&](auto zero) {
+        using T = decltype(zero);
+        T v;
+        std::memcpy(&v, mBytes.data() + size_t(i) * sizeof(T), sizeof(T));
+        return double(v);
+    });
+}
+
+std::vector<unsigned char> readAllSamples(SliceReader& source, int64_t slab) {
+    const VolumeInfo& info = source.info();
+    std::vector<unsigned char> out(info.byteSize());
+    const size_t sliceBytes = size_t(info.sliceSamples()) * scalarSize(info.type);
+    for (int64_t z = 0; z < info.dims[2]; z += slab)
+        source.read(out.data() + size_t(z) * sliceBytes, std::min(slab, info.dims[2] - z));
+    source.finish();
+    return out;
+}
+
+std::string compareStoreWithSamples(const BrickStoreReader& store,
+                                    const std::vector<unsigned char>& samples) {
+    const BrickLayout& l = store.layout();
+    const Dims3& d = l.dims;
+    std::vector<unsigned char> brick(store.brickBytes());
+    return visitScalarType(store.volume().type, [&](auto zero) -> std::string {
+        using T = decltype(zero);
+        const T* volume = reinterpret_cast<const T*>(samples.data());
+        for (int64_t id = 0; id < l.brickCount(); ++id) {
+            store.readBrick(id, brick.data());
+            const Dims3 c = l.brickCoord(id);
+            const T* s = reinterpret_cast<const T*>(brick.data());
+            double lo = INFINITY, hi = -INFINITY;
+            for (int lz = 0; lz < l.side(); ++lz)
+                for (int ly = 0; ly < l.side(); ++ly)
+                    for (int lx = 0; lx < l.side(); ++lx) {
+                        const int64_t x = l.clampSample(0, l.firstSample(c[0]) + lx);
+                        const int64_t y = l.clampSample(1, l.firstSample(c[1]) + ly);
+                        const int64_t z = l.clampSample(2, l.firstSample(c[2]) + lz);
+                        const T expected = volume[x + d[0] * (y + d[1] * z)];
+                        const T got = s[(size_t(lz) * l.side() + ly) * l.side() + lx];
+                        if (std::memcmp(&got, &expected, sizeof(T)) != 0)
+                            return "brick " + std::to_string(id) + " sample " +
+                                   std::to_string(lx) + "," + std::to_string(ly) + "," +
+                                   std::to_string(lz) + ": " + std::to_string(double(got)) +
+                                   " != " + std::to_string(double(expected));
+                        const bool corner = lx >= 1 && ly >= 1 && lz >= 1 &&
+                                            lx <= 1 + l.cellsOnAxis(0, c[0]) &&
+                                            ly <= 1 + l.cellsOnAxis(1, c[1]) &&
+                                            lz <= 1 + l.cellsOnAxis(2, c[2]);
+                        if (corner) {
+                            lo = std::min(lo, double(expected));
+                            hi = std::max(hi, double(expected));
+                        }
+                    }
+            const BrickEntry& e = store.index()[size_t(id)];
+            if (double(e.minValue) != double(float(lo)) || double(e.maxValue) != double(float(hi)))
+                return "brick " + std::to_string(id) + " index range [" +
+                       std::to_string(e.minValue) + ", " + std::to_string(e.maxValue) +
+                       "] != [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+        }
+        return "";
+    });
+}
+
+}  // namespace vdiso::test

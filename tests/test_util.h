@@ -1,0 +1,73 @@
+// Helpers shared by the tests: a scratch directory, files, running the vdiso binary, and an
+// in-memory volume that plays SliceReader.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "io/brick_store.h"
+#include "io/slice_reader.h"
+
+namespace vdiso::test {
+
+// A fresh directory under the system temp dir, removed with the object.
+class ScratchDir {
+public:
+    ScratchDir();
+    ~ScratchDir();
+    std::string file(const std::string& name) const { return (mPath / name).string(); }
+    const std::filesystem::path& path() const { return mPath; }
+
+private:
+    std::filesystem::path mPath;
+};
+
+void writeFile(const std::string& path, const void* data, size_t n);
+inline void writeFile(const std::string& path, const std::string& text) {
+    writeFile(path, text.data(), text.size());
+}
+std::vector<unsigned char> readFile(const std::string& path);
+
+struct CommandResult {
+    int exitCode = -1;
+    std::string output;  // stdout and stderr together
+};
+// Runs build/bin/vdiso with `args` (a shell-quoted string).
+CommandResult runVdiso(const std::string& args);
+
+// A deterministic pseudo-random value for sample index i: spreads over the type's range so
+// every bit of every sample is exercised.
+double testSampleValue(ScalarType type, uint64_t i);
+
+// A volume held in memory, served slice by slice.
+class MemoryVolume final : public SliceReader {
+public:
+    MemoryVolume(const Dims3& dims, ScalarType type);
+    const VolumeInfo& info() const override { return mInfo; }
+    void read(void* dst, int64_t count) override;
+    std::string name() const override { return "memory"; }
+
+    // Sample (x,y,z) as a double.
+    double at(int64_t x, int64_t y, int64_t z) const;
+    const std::vector<unsigned char>& bytes() const { return mBytes; }
+
+private:
+    VolumeInfo mInfo;
+    std::vector<unsigned char> mBytes;
+    int64_t mNextZ = 0;
+};
+
+// Reads everything a source delivers, in slabs of `slab` slices (uneven on purpose).
+std::vector<unsigned char> readAllSamples(SliceReader& source, int64_t slab = 3);
+
+// Compares every stored sample of every brick (ghosts included, clamped at the borders) with
+// `samples` (the whole volume, x fastest), and each brick's index min/max with brute force.
+// Returns "" when all agree, else a description of the first difference.
+std::string compareStoreWithSamples(const BrickStoreReader& store,
+                                    const std::vector<unsigned char>& samples);
+
+}  // namespace vdiso::test
