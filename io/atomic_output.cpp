@@ -51,6 +51,10 @@ void AtomicOutputFile::writeAt(const void* data, size_t n, uint64_t offset) {
 
 void AtomicOutputFile::append(const void* data, size_t n) { writeAt(data, n, mSize); }
 
+void AtomicOutputFile::startWriteback(uint64_t offset, uint64_t n) {
+    ::sync_file_range(mFd, off_t(offset), off_t(n), SYNC_FILE_RANGE_WRITE);
+}
+
 void AtomicOutputFile::commit() {
     if (::fsync(mFd) != 0) throwSystemError(mPath, "cannot flush", errno);
     int fd = mFd;

@@ -29,6 +29,10 @@ public:
     void append(const void* data, size_t n);
     uint64_t size() const { return mSize; }
 
+    // Starts writing [offset, offset + n) back to disk without waiting, so that commit()'s
+    // flush has little left to do. A hint: failures surface at commit().
+    void startWriteback(uint64_t offset, uint64_t n);
+
     // Flushes, closes and renames into place. Throws on failure, leaving no output.
     void commit();
 

@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <zstd.h>
 
+#include "io/byte_shuffle.h"
 #include "io/error.h"
 #include "io/store_format.h"
 
@@ -15,6 +16,10 @@ namespace vdiso {
 
 const char* compressionName(Compression c) {
     return c == Compression::Zstd ? "zstd" : "none";
+}
+
+const char* brickFilterName(BrickFilter f) {
+    return f == BrickFilter::ByteShuffle ? "byte shuffle" : "none";
 }
 
 double ValueHistogram::quantile(double fraction) const {
@@ -123,9 +128,15 @@ void BrickStoreReader::decodeBrick(int64_t id, const std::vector<unsigned char>&
         std::memcpy(dst, stored.data(), raw);
         return;
     }
-    const size_t got = ZSTD_decompress(dst, raw, stored.data(), stored.size());
+    const size_t sampleBytes = scalarSize(volume().type);
+    const bool shuffled = mHeader.filter == BrickFilter::ByteShuffle && sampleBytes > 1;
+    thread_local std::vector<unsigned char> planes;
+    if (shuffled) planes.resize(raw);
+    const size_t got = ZSTD_decompress(shuffled ? planes.data() : dst, raw, stored.data(), stored.size());
     if (ZSTD_isError(got)) failBrick(id, std::string("cannot decompress: ") + ZSTD_getErrorName(got));
     if (got != raw) failBrick(id, "decompressed to the wrong size");
+    if (shuffled)
+        unshuffleBytes(planes.data(), raw / sampleBytes, sampleBytes, static_cast<unsigned char*>(dst));
 }
 
 void BrickStoreReader::readBrick(int64_t id, void* dst) const {

@@ -7,9 +7,14 @@ namespace vdiso {
 void StreamSliceDecoder::read(ByteStream& in, int64_t sliceSamples, int64_t count, void* dst) {
     const size_t inSize = fileScalarSize(mFileType);
     const size_t outSize = scalarSize(mStoreType);
+    auto* out = static_cast<unsigned char*>(dst);
+    // Samples already in the store's form go straight to dst: no scratch copy.
+    if (!mSwap && !mScaled && mFileType == fileScalarOf(mStoreType)) {
+        in.readExact(out, size_t(count) * size_t(sliceSamples) * outSize, "samples");
+        return;
+    }
     // A slice at a time bounds the scratch buffer by one slice, whatever the slab.
     mScratch.resize(size_t(sliceSamples) * inSize);
-    auto* out = static_cast<unsigned char*>(dst);
     for (int64_t s = 0; s < count; ++s) {
         in.readExact(mScratch.data(), mScratch.size(), "samples");
         decodeSamples(mScratch.data(), mFileType, mSwap, size_t(sliceSamples),

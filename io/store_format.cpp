@@ -79,7 +79,7 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
     w.put<uint8_t>(uint8_t(h.volume.type));
     w.put<uint8_t>(uint8_t(h.compression));
     w.put<uint8_t>(uint8_t(h.checksum));
-    w.put<uint8_t>(0);
+    w.put<uint8_t>(uint8_t(h.filter));
     w.put<uint32_t>(uint32_t(h.brickSize));
     w.put<uint32_t>(kGhostBefore);
     w.put<uint32_t>(kGhostAfter);
@@ -121,15 +121,17 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     for (int a = 0; a < 3; ++a) h.volume.spacing[a] = r.get<double>();
     for (int a = 0; a < 3; ++a) h.volume.origin[a] = r.get<double>();
     const uint8_t type = r.get<uint8_t>(), compression = r.get<uint8_t>(),
-                  checksum = r.get<uint8_t>();
-    r.skip(1);
+                  checksum = r.get<uint8_t>(), filter = r.get<uint8_t>();
     if (!isValidScalarCode(type))
         throwIoError(path, "unknown scalar type code " + std::to_string(type));
     if (compression > uint8_t(Compression::Zstd))
         throwIoError(path, "unknown compression code " + std::to_string(compression));
     if (checksum != uint8_t(ChecksumAlgorithm::Crc32))
         throwIoError(path, "unknown checksum algorithm code " + std::to_string(checksum));
+    if (filter > uint8_t(BrickFilter::ByteShuffle))
+        throwIoError(path, "unknown brick filter code " + std::to_string(filter));
     h.volume.type = ScalarType(type);
+    h.filter = BrickFilter(filter);
     h.compression = Compression(compression);
     h.checksum = ChecksumAlgorithm(checksum);
     h.brickSize = int(r.get<uint32_t>());

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <future>
 #include <limits>
 #include <stdexcept>
 
@@ -14,6 +16,7 @@
 #include <zstd.h>
 
 #include "io/atomic_output.h"
+#include "io/byte_shuffle.h"
 #include "io/error.h"
 #include "io/store_format.h"
 
@@ -46,65 +49,81 @@ double fineKeyValue(ScalarType type, uint32_t key) {
     return double(std::bit_cast<float>(u));
 }
 
-// The samples of the current layer of bricks: slot s holds global slice zFirst + s.
-struct SlabWindow {
+// Slices held in memory: a ring of 2B+3, slice z in slot z mod 2B+3. A layer of bricks needs
+// B+3 consecutive slices; the other B slots receive the next layer's new slices while this
+// layer is encoded, so reading overlaps compression.
+struct SliceRing {
     std::vector<unsigned char> bytes;
-    int64_t zFirst = 0;
     size_t sliceBytes = 0;
-    const unsigned char* slice(int64_t z) const { return bytes.data() + size_t(z - zFirst) * sliceBytes; }
-    unsigned char* slice(int64_t z) { return bytes.data() + size_t(z - zFirst) * sliceBytes; }
+    int64_t slots = 0;
+    const unsigned char* slice(int64_t z) const { return bytes.data() + size_t(z % slots) * sliceBytes; }
+    unsigned char* slice(int64_t z) { return bytes.data() + size_t(z % slots) * sliceBytes; }
 };
+
+// Reads slices [z0, z1) from the source into their ring slots, in runs that do not wrap.
+void readSlices(SliceReader& source, SliceRing& ring, int64_t z0, int64_t z1) {
+    while (z0 < z1) {
+        const int64_t run = std::min(z1 - z0, ring.slots - z0 % ring.slots);
+        source.read(ring.slice(z0), run);
+        z0 += run;
+    }
+}
 
 // Copies brick (bi, bj) of the window's layer into dst, (B+3)^3 samples, clamping at borders.
 template <class T>
-void gatherBrick(const SlabWindow& window, const BrickLayout& layout, int64_t bi, int64_t bj,
+void gatherBrick(const SliceRing& window, const BrickLayout& layout, int64_t bi, int64_t bj,
                  int64_t bk, T* dst) {
     const int side = layout.side();
     const int64_t nx = layout.dims[0];
     const int64_t x0 = layout.firstSample(bi);
-    const bool rowInside = x0 >= 0 && x0 + side <= nx;
+    // The part of each row inside the volume is one copy; only border bricks clamp the ends.
+    const int begin = int(std::max<int64_t>(0, -x0));
+    const int end = int(std::min<int64_t>(side, nx - x0));
     for (int lz = 0; lz < side; ++lz) {
         const int64_t z = layout.clampSample(2, layout.firstSample(bk) + lz);
         const T* slice = reinterpret_cast<const T*>(window.slice(z));
         for (int ly = 0; ly < side; ++ly) {
             const int64_t y = layout.clampSample(1, layout.firstSample(bj) + ly);
             const T* row = slice + y * nx;
-            if (rowInside) {
-                std::memcpy(dst, row + x0, side * sizeof(T));
-            } else {
-                for (int lx = 0; lx < side; ++lx) dst[lx] = row[layout.clampSample(0, x0 + lx)];
-            }
+            std::memcpy(dst + begin, row + x0 + begin, size_t(end - begin) * sizeof(T));
+            for (int lx = 0; lx < begin; ++lx) dst[lx] = row[0];
+            for (int lx = end; lx < side; ++lx) dst[lx] = row[nx - 1];
             dst += side;
         }
     }
 }
 
 // Min and max over the samples of the brick's cells, and the histogram of the samples the
-// brick owns (each volume sample is owned by exactly one brick).
+// brick owns (each volume sample is owned by exactly one brick). Separate loops per row: the
+// min/max reduction vectorises; the histogram alternates two tables so that runs of equal
+// values (smooth data) do not wait on the same counter.
 template <class T>
 void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord, float& minValue,
-                  float& maxValue, uint64_t* fineHistogram) {
+                  float& maxValue, uint64_t* histogramEven, uint64_t* histogramOdd) {
     const int side = layout.side();
     int cells[3], owned[3];
     for (int a = 0; a < 3; ++a) {
         cells[a] = layout.cellsOnAxis(a, coord[a]);
         owned[a] = layout.ownedSamplesOnAxis(a, coord[a]);
     }
-    T lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::lowest();
+    T lo = brick[(size_t(kGhostBefore) * side + kGhostBefore) * side + kGhostBefore], hi = lo;
     for (int lz = kGhostBefore; lz <= kGhostBefore + cells[2]; ++lz) {
         for (int ly = kGhostBefore; ly <= kGhostBefore + cells[1]; ++ly) {
-            const T* row = brick + (size_t(lz) * side + ly) * side;
-            const bool ownedRow = lz < kGhostBefore + owned[2] && ly < kGhostBefore + owned[1];
-            const int ownedEnd = ownedRow ? kGhostBefore + owned[0] : kGhostBefore;
-            for (int lx = kGhostBefore; lx < ownedEnd; ++lx) {
-                lo = std::min(lo, row[lx]);
-                hi = std::max(hi, row[lx]);
-                ++fineHistogram[fineKey(row[lx])];
+            const T* row = brick + (size_t(lz) * side + ly) * side + kGhostBefore;
+            T rowLo = row[0], rowHi = row[0];
+            for (int i = 1; i <= cells[0]; ++i) {
+                rowLo = row[i] < rowLo ? row[i] : rowLo;
+                rowHi = row[i] > rowHi ? row[i] : rowHi;
             }
-            for (int lx = ownedEnd; lx <= kGhostBefore + cells[0]; ++lx) {
-                lo = std::min(lo, row[lx]);
-                hi = std::max(hi, row[lx]);
+            lo = std::min(lo, rowLo);
+            hi = std::max(hi, rowHi);
+            if (lz >= kGhostBefore + owned[2] || ly >= kGhostBefore + owned[1]) continue;
+            int i = 0;
+            for (; i + 1 < owned[0]; i += 2) {
+                ++histogramEven[fineKey(row[i])];
+                ++histogramOdd[fineKey(row[i + 1])];
             }
+            if (i < owned[0]) ++histogramEven[fineKey(row[i])];
         }
     }
     minValue = float(lo);
@@ -112,8 +131,9 @@ void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord,
 }
 
 struct BrickScratch {
-    std::vector<unsigned char> raw;
-    std::vector<uint64_t> fineHistogram = std::vector<uint64_t>(kFineBins, 0);
+    std::vector<unsigned char> raw, shuffled;
+    std::vector<uint64_t> histogramEven = std::vector<uint64_t>(kFineBins, 0);
+    std::vector<uint64_t> histogramOdd = std::vector<uint64_t>(kFineBins, 0);
     ZSTD_CCtx* cctx = nullptr;
     BrickScratch() = default;
     BrickScratch(const BrickScratch&) = delete;
@@ -125,7 +145,13 @@ struct StoredBrick {
     BrickEntry entry;
 };
 
-void encodeBrick(const SlabWindow& window, const BrickLayout& layout, ScalarType type,
+BrickFilter filterFor(ScalarType type, const StoreWriteOptions& options) {
+    return options.compression == Compression::Zstd && options.shuffle && scalarSize(type) > 1
+               ? BrickFilter::ByteShuffle
+               : BrickFilter::None;
+}
+
+void encodeBrick(const SliceRing& window, const BrickLayout& layout, ScalarType type,
                  const StoreWriteOptions& options, int64_t id, BrickScratch& scratch,
                  StoredBrick& out) {
     const Dims3 coord = layout.brickCoord(id);
@@ -136,14 +162,20 @@ void encodeBrick(const SlabWindow& window, const BrickLayout& layout, ScalarType
         T* brick = reinterpret_cast<T*>(scratch.raw.data());
         gatherBrick<T>(window, layout, coord[0], coord[1], coord[2], brick);
         measureBrick<T>(brick, layout, coord, out.entry.minValue, out.entry.maxValue,
-                        scratch.fineHistogram.data());
+                        scratch.histogramEven.data(), scratch.histogramOdd.data());
     });
     out.entry.compressed = false;
     if (options.compression == Compression::Zstd) {
         if (!scratch.cctx) scratch.cctx = ZSTD_createCCtx();
+        const unsigned char* input = scratch.raw.data();
+        if (filterFor(type, options) == BrickFilter::ByteShuffle) {
+            scratch.shuffled.resize(rawBytes);
+            shuffleBytes(input, rawBytes / scalarSize(type), scalarSize(type), scratch.shuffled.data());
+            input = scratch.shuffled.data();
+        }
         out.bytes.resize(ZSTD_compressBound(rawBytes));
         const size_t n = ZSTD_compressCCtx(scratch.cctx, out.bytes.data(), out.bytes.size(),
-                                           scratch.raw.data(), rawBytes, options.compressionLevel);
+                                           input, rawBytes, options.compressionLevel);
         if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
         // Incompressible bricks (noise) are stored raw: reading them is then a plain copy.
         if (n < rawBytes) {
@@ -186,45 +218,48 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     AtomicOutputFile out(outPath, options.overwrite);
     uint64_t fileEnd = kStoreHeaderBytes;  // the header is written last, at offset 0
 
-    SlabWindow window;
-    window.sliceBytes = size_t(info.sliceSamples()) * sampleBytes;
-    window.bytes.resize(size_t(layout.side()) * window.sliceBytes);
-    window.zFirst = -kGhostBefore;
-    int64_t slicesRead = 0;
+    SliceRing ring;
+    ring.sliceBytes = size_t(info.sliceSamples()) * sampleBytes;
+    ring.slots = 2 * int64_t(B) + kGhostBefore + kGhostAfter;
+    ring.bytes.resize(size_t(ring.slots) * ring.sliceBytes);
 
     std::vector<BrickEntry> entries(size_t(layout.brickCount()));
-    const int64_t layerBricks = layout.brickCounts[0] * layout.brickCounts[1];
-    std::vector<StoredBrick> layer(static_cast<size_t>(layerBricks));
+    const int64_t rowBricks = layout.brickCounts[0];
+    // Bricks are encoded a few rows at a time and written in id order: enough work for every
+    // core, while the compressed bytes held stay a few MB whatever the layer's size.
+    const int64_t groupRows = std::max<int64_t>(1, 128 / rowBricks);
+    std::vector<StoredBrick> group(static_cast<size_t>(groupRows * rowBricks));
     tbb::enumerable_thread_specific<BrickScratch> scratch;
 
+    // The last slice a layer needs (the next layer's read starts after it).
+    auto lastSliceOfLayer = [&](int64_t bk) {
+        return std::min(layout.firstSample(bk) + layout.side() - 1, info.dims[2] - 1);
+    };
+    readSlices(source, ring, 0, lastSliceOfLayer(0) + 1);
     for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
-        // Slide the window: the last kGhostBefore + kGhostAfter slices of the previous layer
-        // are the first ones of this layer.
-        const int64_t zFirst = layout.firstSample(bk);
-        if (bk > 0) {
-            const size_t keep = size_t(kGhostBefore + kGhostAfter) * window.sliceBytes;
-            std::memmove(window.bytes.data(), window.bytes.data() + size_t(B) * window.sliceBytes, keep);
-            window.zFirst = zFirst;
+        std::future<void> prefetch;
+        if (bk + 1 < layout.brickCounts[2])
+            prefetch = std::async(std::launch::async, readSlices, std::ref(source), std::ref(ring),
+                                  lastSliceOfLayer(bk) + 1, lastSliceOfLayer(bk + 1) + 1);
+        for (int64_t bj = 0; bj < layout.brickCounts[1]; bj += groupRows) {
+            const int64_t firstId = layout.brickId(0, bj, bk);
+            const int64_t count = std::min(groupRows, layout.brickCounts[1] - bj) * rowBricks;
+            tbb::parallel_for(tbb::blocked_range<int64_t>(0, count, 2), [&](const auto& r) {
+                BrickScratch& s = scratch.local();
+                for (int64_t b = r.begin(); b != r.end(); ++b)
+                    encodeBrick(ring, layout, info.type, options, firstId + b, s, group[size_t(b)]);
+            });
+            const uint64_t groupStart = fileEnd;
+            for (int64_t b = 0; b < count; ++b) {
+                StoredBrick& sb = group[size_t(b)];
+                sb.entry.offset = fileEnd;
+                out.writeAt(sb.bytes.data(), sb.bytes.size(), fileEnd);
+                fileEnd = alignUp(fileEnd + sb.bytes.size());
+                entries[size_t(firstId + b)] = sb.entry;
+            }
+            out.startWriteback(groupStart, fileEnd - groupStart);
         }
-        const int64_t zNeed = std::min(zFirst + layout.side() - 1, info.dims[2] - 1);
-        if (zNeed >= slicesRead) {
-            source.read(window.slice(slicesRead), zNeed - slicesRead + 1);
-            slicesRead = zNeed + 1;
-        }
-
-        const int64_t firstId = bk * layerBricks;
-        tbb::parallel_for(tbb::blocked_range<int64_t>(0, layerBricks, 4), [&](const auto& r) {
-            BrickScratch& s = scratch.local();
-            for (int64_t b = r.begin(); b != r.end(); ++b)
-                encodeBrick(window, layout, info.type, options, firstId + b, s, layer[size_t(b)]);
-        });
-        for (int64_t b = 0; b < layerBricks; ++b) {
-            StoredBrick& sb = layer[size_t(b)];
-            sb.entry.offset = fileEnd;
-            out.writeAt(sb.bytes.data(), sb.bytes.size(), fileEnd);
-            fileEnd = alignUp(fileEnd + sb.bytes.size());
-            entries[size_t(firstId + b)] = sb.entry;
-        }
+        if (prefetch.valid()) prefetch.get();
         if (progress) progress(double(bk + 1) / double(layout.brickCounts[2]));
     }
     source.finish();
@@ -233,6 +268,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     header.volume = info;
     header.brickSize = B;
     header.compression = options.compression;
+    header.filter = filterFor(info.type, options);
     header.valueMin = std::numeric_limits<double>::max();
     header.valueMax = std::numeric_limits<double>::lowest();
     for (const BrickEntry& e : entries) {
@@ -249,12 +285,13 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
                                 : 0.0;
     for (const BrickScratch& s : scratch)
         for (int key = 0; key < kFineBins; ++key) {
-            if (!s.fineHistogram[size_t(key)]) continue;
+            const uint64_t count = s.histogramEven[size_t(key)] + s.histogramOdd[size_t(key)];
+            if (!count) continue;
             const double value = fineKeyValue(info.type, uint32_t(key));
             if (std::isnan(value)) continue;  // NaN samples have no place on the value axis
             const double v = std::clamp(value, header.valueMin, header.valueMax);
             const int bin = std::min(kHistogramBins - 1, int((v - header.valueMin) * binScale));
-            histogram.counts[size_t(bin)] += s.fineHistogram[size_t(key)];
+            histogram.counts[size_t(bin)] += count;
         }
 
     header.indexOffset = fileEnd;

@@ -1,9 +1,10 @@
 // Conversion into the brick store, streaming.
 //
-// Reads the source a layer of bricks at a time (B+3 z-slices, the last three kept for the next
-// layer), so memory is a few slabs plus one layer of compressed bricks, whatever the volume's
-// depth. Bricks of a layer are gathered, measured (min, max, histogram) and compressed in
-// parallel (TBB), then written in id order at 4 KiB-aligned offsets. The header and index are
+// Holds 2B+3 z-slices: the B+3 a layer of bricks needs, and B more that a reader thread fills
+// for the next layer while this one is encoded. Memory is those slices plus a few MB of
+// compressed bricks, whatever the volume's depth. Bricks are gathered, measured (min, max,
+// histogram) and compressed in parallel (TBB), a few rows at a time, and written in id order
+// at 4 KiB-aligned offsets, with writeback started as they go. The header and index are
 // written last and the file is renamed into place only when complete (AtomicOutputFile).
 #pragma once
 
@@ -20,6 +21,7 @@ struct StoreWriteOptions {
     int brickSize = 32;                       // B, cells per brick side (2..512)
     Compression compression = Compression::Zstd;
     int compressionLevel = 1;                 // zstd level; 1 keeps conversion near disk speed
+    bool shuffle = true;                      // byte-shuffle multi-byte samples before zstd
     bool overwrite = false;                   // replace an existing output file
 };
 

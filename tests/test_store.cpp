@@ -8,6 +8,7 @@
 
 #include "core/brick_layout.h"
 #include "io/brick_store.h"
+#include "io/byte_shuffle.h"
 #include "io/error.h"
 #include "io/store_format.h"
 #include "io/store_writer.h"
@@ -234,6 +235,46 @@ TEST(StoreHistogram, QuantilesOfAKnownDistribution) {
     EXPECT_NEAR(store.histogram().quantile(0.5), 128.0, 12.0);
     EXPECT_NEAR(store.histogram().quantile(0.0), 0.0, 2.0);
     EXPECT_NEAR(store.histogram().quantile(1.0), 255.0, 2.0);
+}
+
+}  // namespace
+}  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST(ByteShuffle, UnshuffleInvertsShuffle) {
+    for (size_t sampleBytes : {1u, 2u, 3u, 4u, 8u}) {
+        const size_t n = 1001;
+        std::vector<unsigned char> in(n * sampleBytes), planes(in.size()), back(in.size());
+        for (size_t i = 0; i < in.size(); ++i) in[i] = uint8_t(i * 131 + 7);
+        shuffleBytes(in.data(), n, sampleBytes, planes.data());
+        // Plane k holds byte k of every sample.
+        for (size_t i = 0; i < n; ++i)
+            for (size_t k = 0; k < sampleBytes; ++k)
+                ASSERT_EQ(planes[k * n + i], in[i * sampleBytes + k]);
+        unshuffleBytes(planes.data(), n, sampleBytes, back.data());
+        EXPECT_EQ(back, in) << sampleBytes;
+    }
+}
+
+TEST(StoreWriter, ShuffleFilterIsRecordedAndOptional) {
+    test::ScratchDir dir;
+    for (bool shuffle : {true, false}) {
+        for (ScalarType type : {ScalarType::U8, ScalarType::U16, ScalarType::F32}) {
+            test::MemoryVolume volume({12, 10, 9}, type);
+            StoreWriteOptions o;
+            o.brickSize = 4;
+            o.shuffle = shuffle;
+            o.overwrite = true;
+            writeBrickStore(volume, dir.file("s.vdiso"), o);
+            const BrickStoreReader store(dir.file("s.vdiso"));
+            const bool expectShuffle = shuffle && type != ScalarType::U8;
+            EXPECT_EQ(store.header().filter,
+                      expectShuffle ? BrickFilter::ByteShuffle : BrickFilter::None);
+            EXPECT_EQ(test::compareStoreWithSamples(store, volume.bytes()), "");
+        }
+    }
 }
 
 }  // namespace

@@ -32,6 +32,7 @@ constexpr const char* kHelp =
     "  --brick B               cells per brick side (default 32)\n"
     "  --compress zstd|none    brick compression (default zstd)\n"
     "  --level N               zstd level (default 1)\n"
+    "  --no-shuffle            compress multi-byte samples without the byte-shuffle filter\n"
     "  --force                 replace OUTPUT if it exists\n"
     "  --quiet                 no progress bar or summary\n";
 
@@ -90,6 +91,8 @@ int runConvert(int argc, char** argv) {
             else throw UsageError("--compress expects zstd or none, not '" + c + "'");
         } else if (a == "--level") {
             store.compressionLevel = int(parseInt(a, args.value(a), -7, 19));
+        } else if (a == "--no-shuffle") {
+            store.shuffle = false;
         } else if (a == "--force") {
             store.overwrite = true;
         } else if (a == "--quiet") {
