@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -275,6 +276,52 @@ TEST(StoreWriter, ShuffleFilterIsRecordedAndOptional) {
             EXPECT_EQ(test::compareStoreWithSamples(store, volume.bytes()), "");
         }
     }
+}
+
+}  // namespace
+}  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+// A source that records how far it has been read, to check conversion streams.
+class CountingSource final : public SliceReader {
+public:
+    explicit CountingSource(const Dims3& dims) {
+        mInfo.dims = dims;
+        mInfo.type = ScalarType::U8;
+    }
+    const VolumeInfo& info() const override { return mInfo; }
+    void read(void* dst, int64_t count) override {
+        std::memset(dst, int(mSlicesRead % 251), size_t(count * mInfo.sliceSamples()));
+        mSlicesRead += count;
+    }
+    std::string name() const override { return "counting"; }
+    int64_t slicesRead() const { return mSlicesRead; }
+
+private:
+    VolumeInfo mInfo;
+    std::atomic<int64_t> mSlicesRead{0};
+};
+
+TEST(StoreWriter, ReadsNoMoreThanOneLayerAhead) {
+    // Memory is bounded by what has been read but not yet written: when layer k is done, at
+    // most the slices of layer k+1 may have been read, whatever the volume's depth.
+    test::ScratchDir dir;
+    const int B = 4;
+    CountingSource source({9, 9, 200});
+    StoreWriteOptions o;
+    o.brickSize = B;
+    int64_t layer = 0;
+    bool streamed = true;
+    writeBrickStore(source, dir.file("s.vdiso"), o, [&](double) {
+        const int64_t allowed = std::min<int64_t>((layer + 2) * B + 2, 200);
+        if (source.slicesRead() > allowed) streamed = false;
+        ++layer;
+    });
+    EXPECT_TRUE(streamed);
+    EXPECT_EQ(source.slicesRead(), 200);
+    EXPECT_EQ(layer, (200 - 1 + B - 1) / B);
 }
 
 }  // namespace
