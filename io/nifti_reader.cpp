@@ -9,6 +9,7 @@
 
 #include "io/byte_stream.h"
 #include "io/error.h"
+#include "io/file_names.h"
 #include "io/raw_reader.h"
 #include "io/sample_decode.h"
 
@@ -65,15 +66,6 @@ struct NiftiHeader {
     double slope = 1.0, intercept = 0.0;
 };
 
-// Case-insensitive, as names from other systems arrive as "BRAIN.HDR" as often as "brain.hdr".
-bool endsWith(const std::string& s, const std::string& suffix) {
-    if (s.size() < suffix.size()) return false;
-    for (size_t i = 0; i < suffix.size(); ++i)
-        if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i])
-            return false;
-    return true;
-}
-
 bool fileExists(const std::string& path) {
     std::error_code ec;
     return std::filesystem::is_regular_file(path, ec);
@@ -88,8 +80,8 @@ std::string toUpper(std::string s) {
 // matching the given name first), else the matching spelling, for the error that follows.
 std::string companionFile(const std::string& path, const std::string& fromExt,
                           const std::string& toExt) {
-    const bool gz = endsWith(path, fromExt + ".gz");
-    if (!gz && !endsWith(path, fromExt))
+    const bool gz = endsWithIgnoreCase(path, fromExt + ".gz");
+    if (!gz && !endsWithIgnoreCase(path, fromExt))
         throwIoError(path, "has magic 'ni1' (samples in a separate " + toExt +
                                " file) but is not named *" + fromExt);
     const size_t extSize = fromExt.size() + (gz ? 3 : 0);
@@ -110,7 +102,7 @@ std::string companionFile(const std::string& path, const std::string& fromExt,
 }
 
 bool isImageFileName(const std::string& path) {
-    return endsWith(path, ".img") || endsWith(path, ".img.gz");
+    return endsWithIgnoreCase(path, ".img") || endsWithIgnoreCase(path, ".img.gz");
 }
 
 std::unique_ptr<ByteStream> openMaybeGzip(const std::string& path) {
@@ -310,42 +302,8 @@ void checkUncompressedSize(const std::string& path, const NiftiHeader& h, uint64
     const std::string detail = " (dims " + dimsText(h.dims) + ", type " + fileScalarName(h.type) +
                                ", vox_offset " + std::to_string(h.voxOffset) + " need " +
                                std::to_string(need) + " bytes)";
-    if (have < need)
-        throwIoError(path, "file is " + std::to_string(need - have) +
-                               " bytes shorter than its header's dimensions" + detail);
-    throwIoError(path, "file is " + std::to_string(have - need) +
-                           " bytes longer than its header's dimensions" + detail);
+    throwFileSizeMismatch(path, have, need, "its header's dimensions", detail);
 }
-
-class NiftiSliceReader final : public SliceReader {
-public:
-    NiftiSliceReader(std::string path, const VolumeInfo& info, std::unique_ptr<ByteStream> in,
-                     const NiftiHeader& h, bool checkTrailingData)
-        : mPath(std::move(path)),
-          mInfo(info),
-          mIn(std::move(in)),
-          mDecoder(h.type, h.bigEndian != hostIsBigEndian(), info.type, h.scaled, h.slope,
-                   h.intercept),
-          mCheckTrailingData(checkTrailingData) {}
-
-    const VolumeInfo& info() const override { return mInfo; }
-    void read(void* dst, int64_t count) override {
-        mDecoder.read(*mIn, mInfo.sliceSamples(), count, dst);
-    }
-    void finish() override {
-        if (mCheckTrailingData && !mIn->atEnd())
-            throwIoError(mIn->path(), "holds more data than its header's dimensions");
-    }
-    std::string name() const override { return mPath; }
-
-private:
-    std::string mPath;
-    VolumeInfo mInfo;
-    std::unique_ptr<ByteStream> mIn;
-    StreamSliceDecoder mDecoder;
-    // Compressed data has no size to check up front; the check waits for the last slice.
-    bool mCheckTrailingData;
-};
 
 }  // namespace
 
@@ -362,15 +320,17 @@ std::unique_ptr<SliceReader> openNiftiVolume(const std::string& path) {
     info.spacing = h.spacing;
     info.origin = h.origin;
     const uint64_t dataBytes = uint64_t(info.sampleCount()) * fileScalarSize(h.type);
+    const StreamSliceDecoder decoder(h.type, h.bigEndian != hostIsBigEndian(), info.type, h.scaled,
+                                     h.slope, h.intercept);
 
     if (hasGzipMagic(imagePath)) {
         auto in = openGzipStream(imagePath);
         in->skip(h.voxOffset);
-        return std::make_unique<NiftiSliceReader>(path, info, std::move(in), h, true);
+        return openStreamSliceReader(path, info, std::move(in), decoder, true);
     }
     checkUncompressedSize(imagePath, h, dataBytes);
-    return std::make_unique<NiftiSliceReader>(path, info, openFileStream(imagePath, h.voxOffset), h,
-                                              false);
+    return openStreamSliceReader(path, info, openFileStream(imagePath, h.voxOffset), decoder,
+                                 false);
 }
 
 }  // namespace vdiso

@@ -441,44 +441,10 @@ uint64_t rawDataOffset(const std::string& dataPath, const std::string& headerPat
     const std::string detail = " (sizes " + sizesText(dims) + ", type " + fileScalarName(type) +
                                ", data from byte " + std::to_string(offset) + " needs " +
                                std::to_string(need) + " bytes)";
-    if (have < need)
-        throwIoError(dataPath, "file is " + std::to_string(need - have) + " bytes shorter than " +
-                                   whose + detail);
-    if (byteSkip == -1)
-        throwIoError(dataPath, "file is " + std::to_string(start + dataBytes - have) +
-                                   " bytes shorter than " + whose + detail);
-    throwIoError(dataPath,
-                 "file is " + std::to_string(have - need) + " bytes longer than " + whose + detail);
+    // With byte skip -1 the data must fit between `start` and the end of the file.
+    if (byteSkip == -1) throwFileSizeMismatch(dataPath, have, start + dataBytes, whose, detail);
+    throwFileSizeMismatch(dataPath, have, need, whose, detail);
 }
-
-class NrrdSliceReader final : public SliceReader {
-public:
-    NrrdSliceReader(std::string path, const VolumeInfo& info, std::unique_ptr<ByteStream> in,
-                    FileScalar fileType, bool swapBytes, bool checkTrailingData)
-        : mPath(std::move(path)),
-          mInfo(info),
-          mIn(std::move(in)),
-          mDecoder(fileType, swapBytes, info.type, false, 1.0, 0.0),
-          mCheckTrailingData(checkTrailingData) {}
-
-    const VolumeInfo& info() const override { return mInfo; }
-    void read(void* dst, int64_t count) override {
-        mDecoder.read(*mIn, mInfo.sliceSamples(), count, dst);
-    }
-    void finish() override {
-        if (mCheckTrailingData && !mIn->atEnd())
-            throwIoError(mIn->path(), "holds more data than its header's sizes");
-    }
-    std::string name() const override { return mPath; }
-
-private:
-    std::string mPath;
-    VolumeInfo mInfo;
-    std::unique_ptr<ByteStream> mIn;
-    StreamSliceDecoder mDecoder;
-    // Compressed data has no size to check up front; the check waits for the last slice.
-    bool mCheckTrailingData;
-};
 
 }  // namespace
 
@@ -497,11 +463,11 @@ std::unique_ptr<SliceReader> openNrrdVolume(const std::string& path) {
     const FileScalar fileType = *h.type;
     const bool swapBytes = h.bigEndian.value_or(false) != hostIsBigEndian();
     const uint64_t dataBytes = uint64_t(info.sampleCount()) * fileScalarSize(fileType);
+    const StreamSliceDecoder decoder(fileType, swapBytes, info.type, false, 1.0, 0.0);
     if (*h.encoding == NrrdEncoding::Raw) {
         const uint64_t offset =
             rawDataOffset(dataPath, path, start, h.byteSkip, dataBytes, info.dims, fileType);
-        return std::make_unique<NrrdSliceReader>(path, info, openFileStream(dataPath, offset),
-                                                 fileType, swapBytes, false);
+        return openStreamSliceReader(path, info, openFileStream(dataPath, offset), decoder, false);
     }
     if (h.byteSkip == -1)
         throwIoError(path,
@@ -510,7 +476,7 @@ std::unique_ptr<SliceReader> openNrrdVolume(const std::string& path) {
     auto in = openGzipStream(dataPath, start);
     // With gzip, byte skip counts decompressed bytes (as teem reads it).
     in->skip(uint64_t(h.byteSkip));
-    return std::make_unique<NrrdSliceReader>(path, info, std::move(in), fileType, swapBytes, true);
+    return openStreamSliceReader(path, info, std::move(in), decoder, true);
 }
 
 }  // namespace vdiso

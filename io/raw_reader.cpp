@@ -1,5 +1,7 @@
 #include "io/raw_reader.h"
 
+#include <utility>
+
 #include "io/error.h"
 
 namespace vdiso {
@@ -23,54 +25,88 @@ void StreamSliceDecoder::read(ByteStream& in, int64_t sliceSamples, int64_t coun
     }
 }
 
+void throwFileSizeMismatch(const std::string& path, uint64_t have, uint64_t need,
+                           const std::string& describedBy, const std::string& detail) {
+    if (have < need)
+        throwIoError(path, "file is " + std::to_string(need - have) + " bytes shorter than " +
+                               describedBy + detail);
+    throwIoError(path, "file is " + std::to_string(have - need) + " bytes longer than " +
+                           describedBy + detail);
+}
+
 namespace {
 
-class RawSliceReader final : public SliceReader {
+class StreamSliceReader final : public SliceReader {
 public:
-    RawSliceReader(const std::string& path, const RawOptions& o)
-        : mPath(path),
-          mDecoder(o.type, o.bigEndian != hostIsBigEndian(), storeTypeFor(o.type, false), false,
-                   1.0, 0.0) {
-        for (int a = 0; a < 3; ++a)
-            if (o.dims[a] < 2)
-                throwIoError(path, "dimension " + std::to_string(o.dims[a]) +
-                                       " is too small: every axis needs at least 2 samples");
-        mInfo.dims = o.dims;
-        mInfo.type = storeTypeFor(o.type, false);
-        mInfo.spacing = o.spacing;
-        const uint64_t need = o.headerBytes + uint64_t(mInfo.sampleCount()) * fileScalarSize(o.type);
-        const uint64_t have = fileSize(path);
-        if (have != need) {
-            const std::string dims = std::to_string(o.dims[0]) + "," + std::to_string(o.dims[1]) +
-                                     "," + std::to_string(o.dims[2]);
-            const std::string detail =
-                " (dims " + dims + ", type " + fileScalarName(o.type) + ", header " +
-                std::to_string(o.headerBytes) + " bytes need " + std::to_string(need) + ")";
-            if (have < need)
-                throwIoError(path, "file is " + std::to_string(need - have) +
-                                       " bytes shorter than its dimensions" + detail);
-            throwIoError(path, "file is " + std::to_string(have - need) +
-                                   " bytes longer than its dimensions" + detail);
-        }
-        mIn = openFileStream(path, o.headerBytes);
-    }
+    StreamSliceReader(std::string name, const VolumeInfo& info, std::unique_ptr<ByteStream> in,
+                      const StreamSliceDecoder& decoder, bool checkTrailingData)
+        : mName(std::move(name)),
+          mInfo(info),
+          mIn(std::move(in)),
+          mDecoder(decoder),
+          mCheckTrailingData(checkTrailingData) {}
+
     const VolumeInfo& info() const override { return mInfo; }
     void read(void* dst, int64_t count) override {
         mDecoder.read(*mIn, mInfo.sliceSamples(), count, dst);
     }
-    std::string name() const override { return mPath; }
+    void finish() override {
+        if (mCheckTrailingData && !mIn->atEnd())
+            throwIoError(mIn->path(), "holds more data than its header describes");
+    }
+    std::string name() const override { return mName; }
 
 private:
-    std::string mPath;
+    std::string mName;
     VolumeInfo mInfo;
-    StreamSliceDecoder mDecoder;
     std::unique_ptr<ByteStream> mIn;
+    StreamSliceDecoder mDecoder;
+    bool mCheckTrailingData;
 };
+
+VolumeInfo rawVolumeInfo(const std::string& path, const RawOptions& o) {
+    for (int a = 0; a < 3; ++a)
+        if (o.dims[a] < 2)
+            throwIoError(path, "dimension " + std::to_string(o.dims[a]) +
+                                   " is too small: every axis needs at least 2 samples");
+    VolumeInfo info;
+    info.dims = o.dims;
+    info.type = storeTypeFor(o.type, false);
+    info.spacing = o.spacing;
+    return info;
+}
+
+// The file size is known up front, so a mismatch is reported before reading.
+void checkRawFileSize(const std::string& path, const RawOptions& o, const VolumeInfo& info) {
+    const uint64_t need = o.headerBytes + uint64_t(info.sampleCount()) * fileScalarSize(o.type);
+    const uint64_t have = fileSize(path);
+    if (have == need) return;
+    const std::string dims = std::to_string(o.dims[0]) + "," + std::to_string(o.dims[1]) + "," +
+                             std::to_string(o.dims[2]);
+    const std::string detail = " (dims " + dims + ", type " + fileScalarName(o.type) + ", header " +
+                               std::to_string(o.headerBytes) + " bytes need " +
+                               std::to_string(need) + ")";
+    throwFileSizeMismatch(path, have, need, "its dimensions", detail);
+}
 
 }  // namespace
 
+std::unique_ptr<SliceReader> openStreamSliceReader(std::string name, const VolumeInfo& info,
+                                                   std::unique_ptr<ByteStream> in,
+                                                   const StreamSliceDecoder& decoder,
+                                                   bool checkTrailingData) {
+    return std::make_unique<StreamSliceReader>(std::move(name), info, std::move(in), decoder,
+                                               checkTrailingData);
+}
+
 std::unique_ptr<SliceReader> openRawVolume(const std::string& path, const RawOptions& options) {
-    return std::make_unique<RawSliceReader>(path, options);
+    const VolumeInfo info = rawVolumeInfo(path, options);
+    checkRawFileSize(path, options, info);
+    const StreamSliceDecoder decoder(options.type, options.bigEndian != hostIsBigEndian(),
+                                     info.type, false, 1.0, 0.0);
+    // The size was checked above, so there is no trailing data to look for.
+    return openStreamSliceReader(path, info, openFileStream(path, options.headerBytes), decoder,
+                                 false);
 }
 
 }  // namespace vdiso

@@ -24,6 +24,12 @@ struct RawOptions {
 // dimensions call for: a shorter or longer file throws IoError saying by how many bytes.
 std::unique_ptr<SliceReader> openRawVolume(const std::string& path, const RawOptions& options);
 
+// Throws "<path>: file is N bytes shorter than <describedBy><detail>" (or "longer") for a file
+// of `have` bytes that should hold `need` (have != need); shared by the raw, NRRD and NIfTI
+// readers so their size errors read alike.
+[[noreturn]] void throwFileSizeMismatch(const std::string& path, uint64_t have, uint64_t need,
+                                        const std::string& describedBy, const std::string& detail);
+
 // Reads `count` slices of `sliceSamples` samples from a byte stream and decodes them; shared by
 // the raw, NRRD and NIfTI readers so the three convert samples one way.
 class StreamSliceDecoder {
@@ -42,5 +48,13 @@ private:
     double mSlope, mIntercept;
     std::vector<unsigned char> mScratch;
 };
+
+// A SliceReader over `in`, decoding with `decoder`; `name` is what name() reports. With
+// checkTrailingData, finish() throws if `in` holds more bytes: compressed input has no size to
+// check up front, so only the last slice can tell it was longer than its header describes.
+std::unique_ptr<SliceReader> openStreamSliceReader(std::string name, const VolumeInfo& info,
+                                                   std::unique_ptr<ByteStream> in,
+                                                   const StreamSliceDecoder& decoder,
+                                                   bool checkTrailingData);
 
 }  // namespace vdiso

@@ -1,9 +1,9 @@
 #include "io/volume_open.h"
 
-#include <cctype>
 #include <stdexcept>
 
 #include "io/error.h"
+#include "io/file_names.h"
 #include "io/nifti_reader.h"
 #include "io/nrrd_reader.h"
 #include "io/vdb_reader.h"
@@ -11,14 +11,6 @@
 namespace vdiso {
 
 namespace {
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-    if (s.size() < suffix.size()) return false;
-    for (size_t i = 0; i < suffix.size(); ++i)
-        if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i])
-            return false;
-    return true;
-}
 
 class SynthSliceReader final : public SliceReader {
 public:
@@ -45,10 +37,11 @@ private:
 
 InputFormat detectInputFormat(const std::string& path, const InputOptions& options) {
     if (options.raw) return InputFormat::Raw;
-    if (endsWith(path, ".nrrd") || endsWith(path, ".nhdr")) return InputFormat::Nrrd;
+    if (endsWithIgnoreCase(path, ".nrrd") || endsWithIgnoreCase(path, ".nhdr"))
+        return InputFormat::Nrrd;
     for (const char* suffix : {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"})
-        if (endsWith(path, suffix)) return InputFormat::Nifti;
-    if (endsWith(path, ".vdb")) return InputFormat::Vdb;
+        if (endsWithIgnoreCase(path, suffix)) return InputFormat::Nifti;
+    if (endsWithIgnoreCase(path, ".vdb")) return InputFormat::Vdb;
     throwIoError(path, "unknown input format (expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img "
                        "or .vdb; for a raw file give --dims and --type)");
 }

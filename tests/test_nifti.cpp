@@ -2,154 +2,34 @@
 // store can hold, scl_slope/scl_inter; and the inputs it must refuse, each with a message that
 // names the file and the problem. Headers are written byte by byte at the standard offsets.
 #include <gtest/gtest.h>
-#include <unistd.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <functional>
-#include <initializer_list>
 #include <limits>
 #include <string>
 #include <vector>
 
-#include "io/error.h"
 #include "io/nifti_reader.h"
 #include "io/sample_decode.h"
+#include "tests/reader_test_util.h"
 
 namespace vdiso {
 namespace {
 
-namespace fs = std::filesystem;
-
-constexpr Dims3 kDims{7, 5, 4};
-constexpr int64_t kSamples = 7 * 5 * 4;
-
-// Distinct values every type holds exactly, including after conversion to its store type.
-double sampleValue(FileScalar t, int64_t i) {
-    switch (t) {
-        case FileScalar::I8:
-            return double(i - 70);
-        case FileScalar::U8:
-            return double(i + 100);
-        case FileScalar::I16:
-            return double(i * 37 - 2000);
-        case FileScalar::U16:
-            return double(60000 - i * 3);
-        case FileScalar::I32:
-            return double(i * 100000 - 7000000);
-        case FileScalar::U32:
-            return double(i * 1000 + 7);
-        case FileScalar::F32:
-            return double(i) * 0.25 - 3.0;
-        case FileScalar::F64:
-            return double(i) * 0.5 + 0.125;
-    }
-    return 0.0;
-}
-
-std::vector<double> testValues(FileScalar t) {
-    std::vector<double> v(kSamples);
-    for (int64_t i = 0; i < kSamples; ++i) v[size_t(i)] = sampleValue(t, i);
-    return v;
-}
-
-template <class T>
-void appendScalar(std::string& out, double v, bool bigEndian) {
-    const T x = T(v);
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, &x, sizeof(T));
-    if (bigEndian != hostIsBigEndian()) std::reverse(b, b + sizeof(T));
-    out.append(reinterpret_cast<const char*>(b), sizeof(T));
-}
-
-std::string encodeSamples(const std::vector<double>& values, FileScalar t, bool bigEndian) {
-    std::string out;
-    for (double v : values) {
-        switch (t) {
-            case FileScalar::I8:
-                appendScalar<int8_t>(out, v, bigEndian);
-                break;
-            case FileScalar::U8:
-                appendScalar<uint8_t>(out, v, bigEndian);
-                break;
-            case FileScalar::I16:
-                appendScalar<int16_t>(out, v, bigEndian);
-                break;
-            case FileScalar::U16:
-                appendScalar<uint16_t>(out, v, bigEndian);
-                break;
-            case FileScalar::I32:
-                appendScalar<int32_t>(out, v, bigEndian);
-                break;
-            case FileScalar::U32:
-                appendScalar<uint32_t>(out, v, bigEndian);
-                break;
-            case FileScalar::F32:
-                appendScalar<float>(out, v, bigEndian);
-                break;
-            case FileScalar::F64:
-                appendScalar<double>(out, v, bigEndian);
-                break;
-        }
-    }
-    return out;
-}
-
-std::string gzipBytes(const std::string& data) {
-    z_stream z{};
-    if (deflateInit2(&z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return {};
-    std::string out(deflateBound(&z, uLong(data.size())) + 32, '\0');
-    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
-    z.avail_in = uInt(data.size());
-    z.next_out = reinterpret_cast<Bytef*>(out.data());
-    z.avail_out = uInt(out.size());
-    const int rc = deflate(&z, Z_FINISH);
-    out.resize(z.total_out);
-    deflateEnd(&z);
-    return rc == Z_STREAM_END ? out : std::string();
-}
-
-// Reads every slice in slabs of 1, 2, 3, ... slices (uneven on purpose), then finish().
-std::vector<double> readAllSamples(SliceReader& reader) {
-    const VolumeInfo& info = reader.info();
-    std::vector<double> out;
-    std::vector<unsigned char> slab;
-    int64_t z = 0;
-    for (int64_t count = 1; z < info.dims[2]; ++count) {
-        const int64_t n = std::min(count, info.dims[2] - z);
-        slab.resize(size_t(n * info.sliceSamples()) * scalarSize(info.type));
-        reader.read(slab.data(), n);
-        visitScalarType(info.type, [&](auto tag) {
-            using T = decltype(tag);
-            const T* p = reinterpret_cast<const T*>(slab.data());
-            out.insert(out.end(), p, p + n * info.sliceSamples());
-        });
-        z += n;
-    }
-    reader.finish();
-    return out;
-}
-
-void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "expected an IoError";
-    } catch (const IoError& e) {
-        const std::string what = e.what();
-        for (const std::string& part : parts)
-            EXPECT_NE(what.find(part), std::string::npos)
-                << "message '" << what << "' lacks '" << part << "'";
-    }
-}
+using test::encodeSamples;
+using test::expectDoubleEq;
+using test::expectIoError;
+using test::expectValues;
+using test::gzipBytes;
+using test::kDims;
+using test::kSamples;
+using test::testValues;
 
 void openAndReadAll(const std::string& path) {
     auto reader = openNiftiVolume(path);
-    readAllSamples(*reader);
+    test::readAllValues(*reader);
 }
 
 struct NiftiType {
@@ -218,26 +98,8 @@ private:
     bool mBigEndian;
 };
 
-class NiftiTest : public ::testing::Test {
+class NiftiTest : public test::ReaderFileTest {
 protected:
-    void SetUp() override {
-        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-        mDir = fs::temp_directory_path() / ("vdiso_nifti_" + std::to_string(::getpid()) + "_" +
-                                            test->test_suite_name() + "_" + test->name());
-        fs::remove_all(mDir);
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
-
-    std::string path(const std::string& name) const { return (mDir / name).string(); }
-
-    std::string write(const std::string& name, const std::string& bytes) const {
-        const std::string p = path(name);
-        std::ofstream out(p, std::ios::binary);
-        out.write(bytes.data(), std::streamsize(bytes.size()));
-        return p;
-    }
-
     // A .nii (or, gzipped, .nii.gz) holding the test values of `type`.
     std::string writeNii(const std::string& name, FileScalar type, int16_t code,
                          bool gzip = false) const {
@@ -245,14 +107,6 @@ protected:
             NiftiHeaderBuilder(type, code).bytes() + encodeSamples(testValues(type), type, false);
         return write(name, gzip ? gzipBytes(bytes) : bytes);
     }
-
-    static void expectValues(SliceReader& reader, const std::vector<double>& want) {
-        const std::vector<double> got = readAllSamples(reader);
-        ASSERT_EQ(got.size(), want.size());
-        for (size_t i = 0; i < want.size(); ++i) ASSERT_EQ(got[i], want[i]) << "sample " << i;
-    }
-
-    fs::path mDir;
 };
 
 using NiftiReader = NiftiTest;
@@ -341,9 +195,7 @@ TEST_F(NiftiReader, PixdimSignAndZeroAndSformOrigin) {
     h.setI16(252, 0).setI16(254, 2).setF32(292, 1.5f).setF32(308, -2.5f).setF32(324, 7.0f);
     auto reader = openNiftiVolume(write(
         "v.nii", h.bytes() + encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false)));
-    EXPECT_DOUBLE_EQ(reader->info().spacing.x, double(0.8f));
-    EXPECT_DOUBLE_EQ(reader->info().spacing.y, 1.0);
-    EXPECT_DOUBLE_EQ(reader->info().spacing.z, 3.0);
+    expectDoubleEq(reader->info().spacing, {double(0.8f), 1.0, 3.0});
     EXPECT_EQ(reader->info().origin, glm::dvec3(1.5, -2.5, 7.0));
 }
 
@@ -458,10 +310,9 @@ TEST_F(NiftiErrors, DataShorterAndLonger) {
 }
 
 TEST_F(NiftiErrors, CorruptGzip) {
-    std::vector<double> values(kSamples);
-    for (int64_t i = 0; i < kSamples; ++i) values[size_t(i)] = double((i * 7919) % 65536);
-    std::string gz = gzipBytes(NiftiHeaderBuilder(FileScalar::U16, 512).bytes() +
-                               encodeSamples(values, FileScalar::U16, false));
+    std::string gz =
+        gzipBytes(NiftiHeaderBuilder(FileScalar::U16, 512).bytes() +
+                  encodeSamples(test::incompressibleU16Values(), FileScalar::U16, false));
     for (size_t i = gz.size() / 2 - 4; i < gz.size() / 2 + 4; ++i) gz[i] = char(~gz[i]);
     const std::string p = write("corrupt.nii.gz", gz);
     expectIoError([&] { openAndReadAll(p); }, {p, "corrupt gzip data"});

@@ -2,219 +2,58 @@
 // and gzip, every type and its aliases; and the inputs it must refuse, each with a message that
 // names the file and the problem.
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <zlib.h>
 
-#include <algorithm>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <functional>
-#include <initializer_list>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "io/error.h"
 #include "io/nrrd_reader.h"
 #include "io/sample_decode.h"
+#include "tests/reader_test_util.h"
 
 namespace vdiso {
 namespace {
 
-namespace fs = std::filesystem;
-
-constexpr Dims3 kDims{7, 5, 4};
-constexpr int64_t kSamples = 7 * 5 * 4;
-
-// Distinct values every type holds exactly, including after conversion to its store type.
-double sampleValue(FileScalar t, int64_t i) {
-    switch (t) {
-        case FileScalar::I8:
-            return double(i - 70);
-        case FileScalar::U8:
-            return double(i + 100);
-        case FileScalar::I16:
-            return double(i * 37 - 2000);
-        case FileScalar::U16:
-            return double(60000 - i * 3);
-        case FileScalar::I32:
-            return double(i * 100000 - 7000000);
-        case FileScalar::U32:
-            return double(i * 1000 + 7);
-        case FileScalar::F32:
-            return double(i) * 0.25 - 3.0;
-        case FileScalar::F64:
-            return double(i) * 0.5 + 0.125;
-    }
-    return 0.0;
-}
-
-std::vector<double> testValues(FileScalar t) {
-    std::vector<double> v(kSamples);
-    for (int64_t i = 0; i < kSamples; ++i) v[size_t(i)] = sampleValue(t, i);
-    return v;
-}
-
-template <class T>
-void appendScalar(std::string& out, double v, bool bigEndian) {
-    const T x = T(v);
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, &x, sizeof(T));
-    if (bigEndian != hostIsBigEndian()) std::reverse(b, b + sizeof(T));
-    out.append(reinterpret_cast<const char*>(b), sizeof(T));
-}
-
-std::string encodeSamples(const std::vector<double>& values, FileScalar t, bool bigEndian) {
-    std::string out;
-    for (double v : values) {
-        switch (t) {
-            case FileScalar::I8:
-                appendScalar<int8_t>(out, v, bigEndian);
-                break;
-            case FileScalar::U8:
-                appendScalar<uint8_t>(out, v, bigEndian);
-                break;
-            case FileScalar::I16:
-                appendScalar<int16_t>(out, v, bigEndian);
-                break;
-            case FileScalar::U16:
-                appendScalar<uint16_t>(out, v, bigEndian);
-                break;
-            case FileScalar::I32:
-                appendScalar<int32_t>(out, v, bigEndian);
-                break;
-            case FileScalar::U32:
-                appendScalar<uint32_t>(out, v, bigEndian);
-                break;
-            case FileScalar::F32:
-                appendScalar<float>(out, v, bigEndian);
-                break;
-            case FileScalar::F64:
-                appendScalar<double>(out, v, bigEndian);
-                break;
-        }
-    }
-    return out;
-}
-
-std::string gzipBytes(const std::string& data) {
-    z_stream z{};
-    // 15 + 16: a gzip wrapper, as teem and ITK write.
-    if (deflateInit2(&z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) return {};
-    std::string out(deflateBound(&z, uLong(data.size())) + 32, '\0');
-    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
-    z.avail_in = uInt(data.size());
-    z.next_out = reinterpret_cast<Bytef*>(out.data());
-    z.avail_out = uInt(out.size());
-    const int rc = deflate(&z, Z_FINISH);
-    out.resize(z.total_out);
-    deflateEnd(&z);
-    return rc == Z_STREAM_END ? out : std::string();
-}
-
-// Reads every slice in slabs of 1, 2, 3, ... slices (uneven on purpose), then finish().
-std::vector<double> readAllSamples(SliceReader& reader) {
-    const VolumeInfo& info = reader.info();
-    std::vector<double> out;
-    std::vector<unsigned char> slab;
-    int64_t z = 0;
-    for (int64_t count = 1; z < info.dims[2]; ++count) {
-        const int64_t n = std::min(count, info.dims[2] - z);
-        slab.resize(size_t(n * info.sliceSamples()) * scalarSize(info.type));
-        reader.read(slab.data(), n);
-        visitScalarType(info.type, [&](auto tag) {
-            using T = decltype(tag);
-            const T* p = reinterpret_cast<const T*>(slab.data());
-            out.insert(out.end(), p, p + n * info.sliceSamples());
-        });
-        z += n;
-    }
-    reader.finish();
-    return out;
-}
-
-void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "expected an IoError";
-    } catch (const IoError& e) {
-        const std::string what = e.what();
-        for (const std::string& part : parts)
-            EXPECT_NE(what.find(part), std::string::npos)
-                << "message '" << what << "' lacks '" << part << "'";
-    }
-}
+using test::encodeSamples;
+using test::expectDoubleEq;
+using test::expectIoError;
+using test::gzipBytes;
+using test::kDims;
+using test::testValues;
 
 void openAndReadAll(const std::string& path) {
     auto reader = openNrrdVolume(path);
-    readAllSamples(*reader);
+    test::readAllValues(*reader);
 }
 
-struct TypeName {
-    const char* nrrd;
+struct TypeSpellings {
     FileScalar type;
+    std::vector<std::string> names;  // the first is the one the other tests write
 };
 
-// Every spelling teem accepts for the types the store can hold.
-const TypeName kTypeAliases[] = {
-    {"signed char", FileScalar::I8},
-    {"int8", FileScalar::I8},
-    {"int8_t", FileScalar::I8},
-    {"uchar", FileScalar::U8},
-    {"unsigned char", FileScalar::U8},
-    {"uint8", FileScalar::U8},
-    {"uint8_t", FileScalar::U8},
-    {"short", FileScalar::I16},
-    {"short int", FileScalar::I16},
-    {"signed short", FileScalar::I16},
-    {"signed short int", FileScalar::I16},
-    {"int16", FileScalar::I16},
-    {"int16_t", FileScalar::I16},
-    {"ushort", FileScalar::U16},
-    {"unsigned short", FileScalar::U16},
-    {"unsigned short int", FileScalar::U16},
-    {"uint16", FileScalar::U16},
-    {"uint16_t", FileScalar::U16},
-    {"int", FileScalar::I32},
-    {"signed int", FileScalar::I32},
-    {"int32", FileScalar::I32},
-    {"int32_t", FileScalar::I32},
-    {"uint", FileScalar::U32},
-    {"unsigned int", FileScalar::U32},
-    {"uint32", FileScalar::U32},
-    {"uint32_t", FileScalar::U32},
-    {"float", FileScalar::F32},
-    {"double", FileScalar::F64},
+// Every spelling teem accepts for the types the store can hold, written out here rather than
+// taken from the reader, so a spelling the reader drops fails the test.
+const TypeSpellings kTypeSpellings[] = {
+    {FileScalar::I8, {"int8", "int8_t", "signed char"}},
+    {FileScalar::U8, {"uchar", "unsigned char", "uint8", "uint8_t"}},
+    {FileScalar::I16,
+     {"short", "short int", "signed short", "signed short int", "int16", "int16_t"}},
+    {FileScalar::U16, {"ushort", "unsigned short", "unsigned short int", "uint16", "uint16_t"}},
+    {FileScalar::I32, {"int", "signed int", "int32", "int32_t"}},
+    {FileScalar::U32, {"uint", "unsigned int", "uint32", "uint32_t"}},
+    {FileScalar::F32, {"float"}},
+    {FileScalar::F64, {"double"}},
 };
 
-// The canonical teem name of each type.
-const char* nrrdTypeName(FileScalar t) {
-    for (const TypeName& alias : kTypeAliases)
-        if (alias.type == t && std::strchr(alias.nrrd, ' ') == nullptr) return alias.nrrd;
-    return "?";
+const std::string& nrrdTypeName(FileScalar type) {
+    for (const TypeSpellings& t : kTypeSpellings)
+        if (t.type == type) return t.names.front();
+    throw std::logic_error("no NRRD spelling for a file type");
 }
 
-class NrrdTest : public ::testing::Test {
+class NrrdTest : public test::ReaderFileTest {
 protected:
-    void SetUp() override {
-        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-        mDir = fs::temp_directory_path() / ("vdiso_nrrd_" + std::to_string(::getpid()) + "_" +
-                                            test->test_suite_name() + "_" + test->name());
-        fs::remove_all(mDir);
-        fs::create_directories(mDir);
-    }
-    void TearDown() override { fs::remove_all(mDir); }
-
-    std::string path(const std::string& name) const { return (mDir / name).string(); }
-
-    std::string write(const std::string& name, const std::string& bytes) const {
-        const std::string p = path(name);
-        fs::create_directories(fs::path(p).parent_path());
-        std::ofstream out(p, std::ios::binary);
-        out.write(bytes.data(), std::streamsize(bytes.size()));
-        return p;
-    }
-
     // A minimal teem-style header; `extra` lines go before the blank line.
     static std::string header(const std::string& type, const std::string& encoding,
                               const std::string& extra = "", const std::string& endian = "little") {
@@ -223,29 +62,26 @@ protected:
     }
 
     static void expectValues(SliceReader& reader, FileScalar type) {
-        const std::vector<double> got = readAllSamples(reader);
-        const std::vector<double> want = testValues(type);
-        ASSERT_EQ(got.size(), want.size());
-        for (size_t i = 0; i < want.size(); ++i) ASSERT_EQ(got[i], want[i]) << "sample " << i;
+        test::expectValues(reader, testValues(type));
     }
-
-    fs::path mDir;
 };
 
 using NrrdReader = NrrdTest;
 using NrrdErrors = NrrdTest;
 
 TEST_F(NrrdReader, AttachedRawEveryTypeAlias) {
-    for (const TypeName& t : kTypeAliases) {
-        SCOPED_TRACE(t.nrrd);
-        const std::string p =
-            write("vol.nrrd",
-                  header(t.nrrd, "raw") + "\n" + encodeSamples(testValues(t.type), t.type, false));
-        auto reader = openNrrdVolume(p);
-        EXPECT_EQ(reader->info().dims, kDims);
-        EXPECT_EQ(reader->info().type, storeTypeFor(t.type, false));
-        EXPECT_EQ(reader->name(), p);
-        expectValues(*reader, t.type);
+    for (const TypeSpellings& t : kTypeSpellings) {
+        for (const std::string& name : t.names) {
+            SCOPED_TRACE(name);
+            const std::string p =
+                write("vol.nrrd", header(name, "raw") + "\n" +
+                                      encodeSamples(testValues(t.type), t.type, false));
+            auto reader = openNrrdVolume(p);
+            EXPECT_EQ(reader->info().dims, kDims);
+            EXPECT_EQ(reader->info().type, storeTypeFor(t.type, false));
+            EXPECT_EQ(reader->name(), p);
+            expectValues(*reader, t.type);
+        }
     }
 }
 
@@ -340,12 +176,8 @@ TEST_F(NrrdReader, ItkStyleHeader) {
     const VolumeInfo& info = reader->info();
     EXPECT_EQ(info.dims, kDims);
     EXPECT_EQ(info.type, ScalarType::I16);
-    EXPECT_DOUBLE_EQ(info.spacing.x, 0.5);
-    EXPECT_DOUBLE_EQ(info.spacing.y, 0.75);
-    EXPECT_DOUBLE_EQ(info.spacing.z, 2.5);
-    EXPECT_DOUBLE_EQ(info.origin.x, -10.5);
-    EXPECT_DOUBLE_EQ(info.origin.y, 20.0);
-    EXPECT_DOUBLE_EQ(info.origin.z, 3.25);
+    expectDoubleEq(info.spacing, {0.5, 0.75, 2.5});
+    expectDoubleEq(info.origin, {-10.5, 20.0, 3.25});
     expectValues(*reader, FileScalar::I16);
 }
 
@@ -373,11 +205,8 @@ TEST_F(NrrdReader, SlicerStyleDetachedHeaderWithCrlfAndObliqueDirections) {
     auto reader = openNrrdVolume(write("slicer.nhdr", text));
     const VolumeInfo& info = reader->info();
     EXPECT_EQ(info.type, ScalarType::U16);
-    EXPECT_DOUBLE_EQ(info.spacing.x, 1.0);
-    EXPECT_DOUBLE_EQ(info.spacing.y, 2.0);
-    EXPECT_DOUBLE_EQ(info.spacing.z, 1.5);
-    EXPECT_DOUBLE_EQ(info.origin.x, 119.5);
-    EXPECT_DOUBLE_EQ(info.origin.z, -60.0);
+    expectDoubleEq(info.spacing, {1.0, 2.0, 1.5});
+    expectDoubleEq(info.origin, {119.5, 119.5, -60.0});
     expectValues(*reader, FileScalar::U16);
 }
 
@@ -392,9 +221,7 @@ TEST_F(NrrdReader, TeemSpacingsAndUnknownFields) {
         write("teem.nrrd", "NRRD0001\n" + header("uchar", "raw", extra).substr(9) + "\n" +
                                encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false)));
     const VolumeInfo& info = reader->info();
-    EXPECT_DOUBLE_EQ(info.spacing.x, 0.5);
-    EXPECT_DOUBLE_EQ(info.spacing.y, 1.0);
-    EXPECT_DOUBLE_EQ(info.spacing.z, 3.0);
+    expectDoubleEq(info.spacing, {0.5, 1.0, 3.0});
     EXPECT_EQ(info.origin, glm::dvec3(0.0));
     expectValues(*reader, FileScalar::U8);
 }
@@ -481,14 +308,12 @@ TEST_F(NrrdErrors, GzipDataLongerThanSizes) {
     const std::string samples =
         encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false) + "x";
     const std::string p = write("long.nrrd", header("uchar", "gzip") + "\n" + gzipBytes(samples));
-    expectIoError([&] { openAndReadAll(p); }, {p, "holds more data than its header's sizes"});
+    expectIoError([&] { openAndReadAll(p); }, {p, "holds more data than its header describes"});
 }
 
 TEST_F(NrrdErrors, CorruptGzip) {
-    // Varied samples, so the deflate stream is long enough to have a middle.
-    std::vector<double> values(kSamples);
-    for (int64_t i = 0; i < kSamples; ++i) values[size_t(i)] = double((i * 7919) % 65536);
-    std::string gz = gzipBytes(encodeSamples(values, FileScalar::U16, false));
+    std::string gz =
+        gzipBytes(encodeSamples(test::incompressibleU16Values(), FileScalar::U16, false));
     for (size_t i = gz.size() / 2 - 4; i < gz.size() / 2 + 4; ++i) gz[i] = char(~gz[i]);
     const std::string p = write("corrupt.nrrd", header("ushort", "gzip") + "\n" + gz);
     expectIoError([&] { openAndReadAll(p); }, {p, "corrupt gzip data"});
