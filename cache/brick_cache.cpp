@@ -1,0 +1,120 @@
+#include "cache/brick_cache.h"
+
+#include <algorithm>
+#include <chrono>
+#include <new>
+
+#include <sys/mman.h>
+#include <stdexcept>
+#include <string>
+
+namespace vdiso {
+
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+BrickCache::Chunk::Chunk(size_t n) : size(n) {
+    void* p = ::mmap(nullptr, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) throw std::bad_alloc();
+    ::madvise(p, n, MADV_HUGEPAGE);  // a hint; without THP the chunk still works
+    bytes = static_cast<unsigned char*>(p);
+}
+
+BrickCache::Chunk::~Chunk() { ::munmap(bytes, size); }
+
+BrickCache::BrickCache(const BrickStoreReader& store, uint64_t budgetBytes)
+    : mStore(store), mBrickBytes(store.brickBytes()) {
+    mSlotCount = size_t(budgetBytes / mBrickBytes);
+    if (mSlotCount < 2)
+        throw std::invalid_argument("cache budget of " + std::to_string(budgetBytes >> 20) +
+                                    " MB cannot hold two bricks of " +
+                                    std::to_string(mBrickBytes >> 10) + " KB");
+    // Never more slots than bricks: a budget larger than the volume allocates only what it uses.
+    mSlotCount = std::min<size_t>(mSlotCount, size_t(store.layout().brickCount()));
+    mSlots.resize(mSlotCount);
+    mSlotsPerChunk = std::max<size_t>(1, (32u << 20) / mBrickBytes);
+    mRanges.reserve(store.index().size());
+    for (const BrickEntry& e : store.index()) mRanges.push_back({e.minValue, e.maxValue});
+}
+
+size_t BrickCache::takeFreeSlot() {
+    if (mSlotsAllocated < mSlotCount) {
+        const size_t within = mSlotsAllocated % mSlotsPerChunk;
+        if (within == 0) {
+            const size_t slots = std::min(mSlotsPerChunk, mSlotCount - mSlotsAllocated);
+            mChunks.push_back(std::make_unique<Chunk>(slots * mBrickBytes));
+        }
+        mSlots[mSlotsAllocated].samples = mChunks.back()->bytes + within * mBrickBytes;
+        return mSlotsAllocated++;
+    }
+    if (mLru.empty())
+        throw std::runtime_error("brick cache: all " + std::to_string(mSlotCount) +
+                                 " bricks of the budget are in use; raise --cache-mb");
+    const size_t slot = mLru.back();
+    mLru.pop_back();
+    mSlotOfBrick.erase(mSlots[slot].id);
+    mSlots[slot].id = -1;
+    ++mCounters.evictions;
+    return slot;
+}
+
+BrickHandle BrickCache::acquire(int64_t id) {
+    std::lock_guard lock(mMutex);
+    ++mCounters.requests;
+    auto found = mSlotOfBrick.find(id);
+    if (found != mSlotOfBrick.end()) {
+        Slot& s = mSlots[found->second];
+        if (s.pins++ == 0) mLru.erase(s.lruPosition);
+        ++mCounters.hits;
+        return BrickHandle(this, id, s.samples);
+    }
+    ++mCounters.misses;
+    const size_t slot = takeFreeSlot();
+    Slot& s = mSlots[slot];
+    try {
+        auto start = std::chrono::steady_clock::now();
+        mStore.readStoredBrick(id, mStoredScratch);
+        mCounters.readSeconds += secondsSince(start);
+        mCounters.bytesRead += mStoredScratch.size();
+        start = std::chrono::steady_clock::now();
+        mStore.decodeBrick(id, mStoredScratch, s.samples);
+        mCounters.decodeSeconds += secondsSince(start);
+    } catch (...) {
+        // The slot holds nothing valid: keep it free (at the LRU's cold end) for the next miss.
+        s.id = -1;
+        mLru.push_back(slot);
+        s.lruPosition = std::prev(mLru.end());
+        throw;
+    }
+    s.id = id;
+    s.pins = 1;
+    mSlotOfBrick[id] = slot;
+    return BrickHandle(this, id, s.samples);
+}
+
+void BrickCache::release(int64_t id) {
+    std::lock_guard lock(mMutex);
+    const size_t slot = mSlotOfBrick.at(id);
+    Slot& s = mSlots[slot];
+    if (--s.pins == 0) {
+        mLru.push_front(slot);
+        s.lruPosition = mLru.begin();
+    }
+}
+
+CacheCounters BrickCache::counters() const {
+    std::lock_guard lock(mMutex);
+    return mCounters;
+}
+
+uint64_t BrickCache::residentBytes() const {
+    std::lock_guard lock(mMutex);
+    return uint64_t(mSlotsAllocated) * mBrickBytes;
+}
+
+}  // namespace vdiso

@@ -1,0 +1,85 @@
+// The brick cache: BrickSource over a store reader, holding decoded bricks in an LRU under a
+// byte budget.
+//
+// acquire() returns a brick pinned until its handle is released; pinned bricks are never
+// evicted. The cache never holds more decoded bytes than the budget: if every slot is pinned
+// when another brick is needed, acquire() throws (the budget is too small for the caller's
+// working set). Counters record requests, hits, misses, evictions, bytes read from disk and
+// the seconds spent reading and decoding. Thread-safe: acquire/release take a lock (once per
+// brick, never per cell); reads happen under the lock.
+#pragma once
+
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+#include <vector>
+
+#include "core/brick_source.h"
+#include "io/brick_store.h"
+
+namespace vdiso {
+
+struct CacheCounters {
+    uint64_t requests = 0, hits = 0, misses = 0, evictions = 0;
+    uint64_t bytesRead = 0;      // stored (compressed) bytes read from the file
+    double readSeconds = 0;      // in pread
+    double decodeSeconds = 0;    // checksum, decompression, unshuffle
+};
+
+class BrickCache final : public BrickSource {
+public:
+    // `budgetBytes` bounds the decoded bricks held; it must fit at least two bricks.
+    BrickCache(const BrickStoreReader& store, uint64_t budgetBytes);
+
+    const VolumeInfo& volume() const override { return mStore.volume(); }
+    const BrickLayout& layout() const override { return mStore.layout(); }
+    std::span<const BrickRange> brickRanges() const override { return mRanges; }
+    BrickHandle acquire(int64_t id) override;
+
+    CacheCounters counters() const;
+    uint64_t budgetBytes() const { return mSlotCount * mBrickBytes; }
+    uint64_t residentBytes() const;
+    const BrickStoreReader& store() const { return mStore; }
+
+protected:
+    void release(int64_t id) override;
+
+private:
+    // Slot memory comes in chunks of about 32 MiB mapped with transparent huge pages: a
+    // cold extraction otherwise spends a good part of its time faulting in 4 KiB pages.
+    struct Chunk {
+        unsigned char* bytes = nullptr;
+        size_t size = 0;
+        Chunk(size_t n);
+        ~Chunk();
+        Chunk(const Chunk&) = delete;
+        Chunk& operator=(const Chunk&) = delete;
+    };
+
+    struct Slot {
+        int64_t id = -1;
+        int pins = 0;
+        unsigned char* samples = nullptr;
+        std::list<size_t>::iterator lruPosition;  // valid while unpinned and holding a brick
+    };
+
+    size_t takeFreeSlot();
+
+    const BrickStoreReader& mStore;
+    std::vector<BrickRange> mRanges;
+    size_t mBrickBytes;
+    size_t mSlotCount;
+    std::vector<Slot> mSlots;
+    std::vector<std::unique_ptr<Chunk>> mChunks;
+    size_t mSlotsPerChunk;
+    size_t mSlotsAllocated = 0;
+    std::unordered_map<int64_t, size_t> mSlotOfBrick;
+    std::list<size_t> mLru;  // unpinned slots holding a brick, most recently used first
+    std::vector<unsigned char> mStoredScratch;
+    CacheCounters mCounters;
+    mutable std::mutex mMutex;
+};
+
+}  // namespace vdiso

@@ -1,0 +1,284 @@
+#include "core/brick_extractor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include "core/iso.h"
+#include "core/mc_tables.h"
+
+namespace vdiso {
+
+namespace {
+
+// Comparisons against the isovalue in the samples' own type: for integers, s > iso exactly
+// when s > floor(iso), so the cell loop compares integers.
+template <class T>
+struct IsoThreshold {
+    using Compare = std::conditional_t<std::is_integral_v<T>, int64_t, double>;
+    Compare value;
+    explicit IsoThreshold(double iso) {
+        if constexpr (std::is_integral_v<T>)
+            value = int64_t(std::clamp(std::floor(iso), -1e18, 1e18));
+        else
+            value = iso;
+    }
+    bool above(T s) const { return Compare(s) > value; }
+};
+
+}  // namespace
+
+// The cell loop for one brick of sample type T.
+template <class T>
+struct BrickKernel {
+    BrickExtractor& x;
+    const T* s;          // the brick's (B+3)^3 samples
+    int side;            // B + 3
+    int cells[3];        // cells of this brick per axis
+    int64_t corner0[3];  // global coordinates of the brick's first cell corner
+    double iso;
+    IsoThreshold<T> threshold;
+    TriangleMesh& mesh;
+    EdgeVertexMap& seams;
+    int cornerStride[8];  // offset of each cell corner from the cell's first corner
+
+    BrickKernel(BrickExtractor& extractor, int64_t id, const void* samples, double isovalue,
+                TriangleMesh& out, EdgeVertexMap& seamMap)
+        : x(extractor), s(static_cast<const T*>(samples)), side(extractor.mLayout.side()),
+          iso(isovalue), threshold(isovalue), mesh(out), seams(seamMap) {
+        const Dims3 c = x.mLayout.brickCoord(id);
+        for (int a = 0; a < 3; ++a) {
+            cells[a] = x.mLayout.cellsOnAxis(a, c[a]);
+            corner0[a] = c[a] * x.mLayout.brickSize;
+        }
+        for (int k = 0; k < 8; ++k)
+            cornerStride[k] = (kCornerOffset[k][2] * side + kCornerOffset[k][1]) * side +
+                              kCornerOffset[k][0];
+    }
+
+    // Index of local cell corner (cx, cy, cz) in the sample array (ghost offset included).
+    size_t sampleIndex(int cx, int cy, int cz) const {
+        return (size_t(cz + kGhostBefore) * side + size_t(cy + kGhostBefore)) * side +
+               size_t(cx + kGhostBefore);
+    }
+
+    void metaCellBox(int m, int lo[3], int hi[3]) const {
+        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
+        const int mc[3] = {m % n, (m / n) % n, m / (n * n)};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(mc[a] * M, cells[a]);
+            hi[a] = std::min(lo[a] + M, cells[a]);
+        }
+    }
+
+    // Ranges of all meta-cells at once, separably: min/max over each meta-cell's x-run of
+    // corners in every row, then over y, then over z. About two passes over the samples,
+    // where a box per meta-cell would read each shared face twice and vectorise poorly.
+    void metaCellRanges(std::vector<BrickRange>& out) const {
+        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
+        const int rowsY = cells[1] + 1, rowsZ = cells[2] + 1;
+        std::vector<T>& lo = scratchLo();
+        std::vector<T>& hi = scratchHi();
+        lo.resize(size_t(rowsZ) * rowsY * n);
+        hi.resize(lo.size());
+        for (int z = 0; z < rowsZ; ++z)
+            for (int y = 0; y < rowsY; ++y) {
+                const T* row = s + sampleIndex(0, y, z);
+                for (int m = 0; m < n; ++m) {
+                    const int x0 = std::min(m * M, cells[0]), x1 = std::min(x0 + M, cells[0]);
+                    T a = row[x0], b = row[x0];
+                    for (int i = x0 + 1; i <= x1; ++i) {
+                        a = row[i] < a ? row[i] : a;
+                        b = row[i] > b ? row[i] : b;
+                    }
+                    lo[(size_t(z) * rowsY + y) * n + m] = a;
+                    hi[(size_t(z) * rowsY + y) * n + m] = b;
+                }
+            }
+        out.resize(size_t(n) * n * n);
+        for (int mz = 0; mz < n; ++mz)
+            for (int my = 0; my < n; ++my)
+                for (int mx = 0; mx < n; ++mx) {
+                    const int y0 = my * M, z0 = mz * M;
+                    BrickRange& r = out[(size_t(mz) * n + my) * n + mx];
+                    if (mx * M >= cells[0] || y0 >= cells[1] || z0 >= cells[2]) {
+                        r = {std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
+                        continue;
+                    }
+                    const int y1 = std::min(y0 + M, cells[1]), z1 = std::min(z0 + M, cells[2]);
+                    T a = lo[(size_t(z0) * rowsY + y0) * n + mx], b = hi[(size_t(z0) * rowsY + y0) * n + mx];
+                    for (int z = z0; z <= z1; ++z)
+                        for (int y = y0; y <= y1; ++y) {
+                            const size_t i = (size_t(z) * rowsY + y) * n + mx;
+                            a = lo[i] < a ? lo[i] : a;
+                            b = hi[i] > b ? hi[i] : b;
+                        }
+                    r = {float(a), float(b)};
+                }
+    }
+
+    static std::vector<T>& scratchLo() {
+        thread_local std::vector<T> v;
+        return v;
+    }
+    static std::vector<T>& scratchHi() {
+        thread_local std::vector<T> v;
+        return v;
+    }
+
+    glm::dvec3 gradientAt(size_t i) const {
+        const glm::dvec3& h = x.mVolume.spacing;
+        const size_t sy = size_t(side), sz = size_t(side) * side;
+        return {(double(s[i + 1]) - double(s[i - 1])) / (2 * h.x),
+                (double(s[i + sy]) - double(s[i - sy])) / (2 * h.y),
+                (double(s[i + sz]) - double(s[i - sz])) / (2 * h.z)};
+    }
+
+    // The vertex on edge `e` of cell (cx, cy, cz), computed the first time it is asked for.
+    uint32_t edgeVertex(int cx, int cy, int cz, int e) {
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        const int px = cx + o[0], py = cy + o[1], pz = cz + o[2], axis = mcEdgeAxis(e);
+        const int n = x.mLayout.brickSize + 1;
+        const size_t local = ((size_t(pz) * n + py) * n + px) * 3 + axis;
+        if (x.mEdgeStamp[local] == x.mStamp) return x.mEdgeVertex[local];
+
+        // Edges on the brick's faces are shared with a neighbour brick: weld through the map.
+        const int p[3] = {px, py, pz};
+        bool onFace = false;
+        for (int a = 0; a < 3; ++a)
+            if (a != axis && (p[a] == 0 || p[a] == cells[a])) onFace = true;
+        uint64_t key = 0;
+        if (onFace) {
+            const Dims3& d = x.mVolume.dims;
+            key = ((uint64_t(corner0[2] + pz) * uint64_t(d[1]) + uint64_t(corner0[1] + py)) *
+                       uint64_t(d[0]) + uint64_t(corner0[0] + px)) * 3 + uint64_t(axis);
+            const uint32_t v = seams.find(key);
+            if (v != UINT32_MAX) {
+                x.mEdgeStamp[local] = x.mStamp;
+                x.mEdgeVertex[local] = v;
+                return v;
+            }
+        }
+
+        const size_t i0 = sampleIndex(px, py, pz);
+        const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
+        const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
+        const double t = (iso - s0) / (s1 - s0);
+        glm::dvec3 local3(px, py, pz);
+        local3[axis] += t;
+        const glm::dvec3 position =
+            x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
+                                   x.mVolume.spacing;
+        const glm::dvec3 gradient = glm::mix(gradientAt(i0), gradientAt(i0 + step), t);
+        const double length = glm::length(gradient);
+        glm::dvec3 normal;
+        if (length > 0) {
+            normal = -gradient / length;
+        } else {
+            // Flat gradient (clamped border, plateau): the edge itself says which way is up.
+            normal = glm::dvec3(0.0);
+            normal[axis] = s1 > s0 ? -1.0 : 1.0;
+        }
+        const uint32_t v = uint32_t(mesh.positions.size());
+        mesh.positions.push_back(glm::vec3(position));
+        mesh.normals.push_back(glm::vec3(normal));
+        x.mEdgeStamp[local] = x.mStamp;
+        x.mEdgeVertex[local] = v;
+        if (onFace) seams.insert(key, v);
+        return v;
+    }
+
+    void extractMetaCell(int m) {
+        int lo[3], hi[3];
+        metaCellBox(m, lo, hi);
+        KernelCounters& counters = x.mCounters;
+        for (int cz = lo[2]; cz < hi[2]; ++cz)
+            for (int cy = lo[1]; cy < hi[1]; ++cy) {
+                const T* cell = s + sampleIndex(lo[0], cy, cz);
+                for (int cx = lo[0]; cx < hi[0]; ++cx, ++cell) {
+                    int caseIndex = 0;
+                    for (int k = 0; k < 8; ++k)
+                        caseIndex |= int(threshold.above(cell[cornerStride[k]])) << k;
+                    if (caseIndex == 0 || caseIndex == 255) continue;
+                    ++counters.cellsActive;
+                    const McPolygonCase& pc = mcPolygonCase(caseIndex);
+                    int at = 0;
+                    for (int p = 0; p < pc.polygonCount; ++p) {
+                        const int count = pc.vertexCount[p];
+                        const uint32_t first = edgeVertex(cx, cy, cz, pc.edges[at]);
+                        uint32_t previous = edgeVertex(cx, cy, cz, pc.edges[at + 1]);
+                        for (int k = 2; k < count; ++k) {
+                            const uint32_t next = edgeVertex(cx, cy, cz, pc.edges[at + k]);
+                            mesh.indices.insert(mesh.indices.end(), {first, previous, next});
+                            previous = next;
+                        }
+                        at += count;
+                    }
+                }
+                counters.cellsVisited += hi[0] - lo[0];
+            }
+    }
+
+    void beginBrick() {
+        if (++x.mStamp == 0) {  // wrapped: old stamps could collide, so clear once
+            std::fill(x.mEdgeStamp.begin(), x.mEdgeStamp.end(), 0u);
+            x.mStamp = 1;
+        }
+    }
+};
+
+BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout,
+                               int metaCellSize)
+    : mVolume(volume), mLayout(layout), mMetaCellSize(std::max(1, metaCellSize)) {
+    mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
+    const size_t corners = size_t(layout.brickSize + 1);
+    mEdgeVertex.resize(corners * corners * corners * 3);
+    mEdgeStamp.assign(mEdgeVertex.size(), 0u);
+}
+
+void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out) {
+    TriangleMesh unused;
+    EdgeVertexMap unusedSeams;
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        BrickKernel<T> k(*this, id, samples, 0.0, unused, unusedSeams);
+        k.metaCellRanges(out);
+    });
+}
+
+void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
+                                  EdgeVertexMap& seams) {
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        BrickKernel<T> k(*this, id, samples, iso, mesh, seams);
+        k.beginBrick();
+        k.metaCellRanges(mRanges);
+        for (int m = 0; m < metaCellsPerBrick(); ++m) {
+            const BrickRange r = mRanges[size_t(m)];
+            ++mCounters.metaCellsTested;
+            if (!rangeHoldsIso(r.minValue, r.maxValue, iso)) continue;
+            ++mCounters.metaCellsActive;
+            k.extractMetaCell(m);
+        }
+    });
+}
+
+void BrickExtractor::extractMetaCells(int64_t id, const void* samples, double iso,
+                                      std::span<const uint32_t> metaCells, TriangleMesh& mesh,
+                                      EdgeVertexMap& seams) {
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        BrickKernel<T> k(*this, id, samples, iso, mesh, seams);
+        k.beginBrick();
+        for (uint32_t m : metaCells) {
+            ++mCounters.metaCellsActive;
+            k.extractMetaCell(int(m));
+        }
+    });
+}
+
+}  // namespace vdiso

@@ -1,0 +1,119 @@
+// Marching-cubes extraction of the cells of one brick, meta-cell by meta-cell.
+//
+// A brick's cells are grouped into meta-cells of M^3 cells (the last ones on an axis may be
+// smaller or empty). The range of a meta-cell is the min and max of its corner samples; only
+// meta-cells whose range holds the isovalue are visited (the min/max tree idea continued
+// inside the brick). In a visited cell, the case index selects the polygons of the polygon
+// form (core/mc_tables.h); each crossed edge's vertex is computed once, by linear
+// interpolation, with a normal interpolated from central-difference gradients at the edge's
+// corners. The brick's ghost samples make those gradients exact at brick borders, so shading
+// has no seams; vertices on brick faces are welded across bricks through an EdgeVertexMap,
+// so an edge shared by two bricks yields one vertex.
+//
+// The sample type is dispatched once per brick; the cell loop is a template over it.
+// One BrickExtractor per thread (it owns scratch arrays reused across bricks).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/brick_layout.h"
+#include "core/brick_source.h"
+#include "core/mesh.h"
+#include "core/volume.h"
+
+namespace vdiso {
+
+constexpr int kDefaultMetaCellSize = 4;
+
+// Vertices of edges on brick faces, by global edge key, so neighbouring bricks share them.
+// Open addressing with linear probing on a power-of-two table (keys are stored plus one, so
+// zero marks an empty slot); it grows at half full.
+class EdgeVertexMap {
+public:
+    EdgeVertexMap() { mSlots.resize(1u << 12); }
+    // Returns the vertex of `edgeKey`, or UINT32_MAX.
+    uint32_t find(uint64_t edgeKey) const {
+        const uint64_t stored = edgeKey + 1;
+        for (size_t i = slotOf(stored);; i = (i + 1) & (mSlots.size() - 1)) {
+            if (mSlots[i].key == stored) return mSlots[i].vertex;
+            if (mSlots[i].key == 0) return UINT32_MAX;
+        }
+    }
+    // Adds a key that is not present.
+    void insert(uint64_t edgeKey, uint32_t vertex) {
+        if (2 * (mSize + 1) > mSlots.size()) grow();
+        place(edgeKey + 1, vertex);
+        ++mSize;
+    }
+    size_t size() const { return mSize; }
+
+private:
+    struct Slot {
+        uint64_t key = 0;
+        uint32_t vertex = 0;
+    };
+    size_t slotOf(uint64_t stored) const {
+        return size_t((stored * 0x9E3779B97F4A7C15ull) >> 20) & (mSlots.size() - 1);
+    }
+    void place(uint64_t stored, uint32_t vertex) {
+        size_t i = slotOf(stored);
+        while (mSlots[i].key != 0) i = (i + 1) & (mSlots.size() - 1);
+        mSlots[i] = {stored, vertex};
+    }
+    void grow() {
+        std::vector<Slot> old(mSlots.size() * 2);
+        old.swap(mSlots);
+        for (const Slot& slot : old)
+            if (slot.key != 0) place(slot.key, slot.vertex);
+    }
+    std::vector<Slot> mSlots;
+    size_t mSize = 0;
+};
+
+struct KernelCounters {
+    int64_t metaCellsTested = 0, metaCellsActive = 0, cellsVisited = 0, cellsActive = 0;
+};
+
+class BrickExtractor {
+public:
+    BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout, int metaCellSize);
+
+    int metaCellSize() const { return mMetaCellSize; }
+    // Meta-cells per brick (ceil(B/M)^3), numbered x fastest.
+    int metaCellsPerBrick() const { return mMetaPerAxis * mMetaPerAxis * mMetaPerAxis; }
+
+    // The range of every meta-cell of brick `id` ((B+3)^3 samples of the volume's type), in
+    // meta-cell order; empty meta-cells (beyond a partial brick's cells) get an empty range.
+    void metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out);
+
+    // Appends the surface of every cell of brick `id` whose meta-cell range holds iso.
+    void extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
+                      EdgeVertexMap& seams);
+
+    // Appends the surface of the listed meta-cells of brick `id` (their ranges already known
+    // to hold iso, e.g. from a span-space query).
+    void extractMetaCells(int64_t id, const void* samples, double iso,
+                          std::span<const uint32_t> metaCells, TriangleMesh& mesh,
+                          EdgeVertexMap& seams);
+
+    const KernelCounters& counters() const { return mCounters; }
+
+private:
+    template <class T>
+    friend struct BrickKernel;
+
+    VolumeInfo mVolume;
+    BrickLayout mLayout;
+    int mMetaCellSize;
+    int mMetaPerAxis;
+    // Vertex of each local edge of the current brick, valid where mEdgeStamp == mStamp:
+    // stamping avoids clearing (B+1)^3 * 3 entries per brick.
+    std::vector<uint32_t> mEdgeVertex, mEdgeStamp;
+    uint32_t mStamp = 0;
+    std::vector<BrickRange> mRanges;
+    KernelCounters mCounters;
+};
+
+}  // namespace vdiso

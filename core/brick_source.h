@@ -1,0 +1,80 @@
+// The seam between algorithms and storage: "give me the samples of brick b".
+//
+// core never opens a file. Extractors see a volume as its brick layout, each brick's value
+// range (from the store's index, known without reading the brick), and bricks acquired on
+// demand: (B+3)^3 samples of volume().type in the layout of core/brick_layout.h. The cache
+// (cache/brick_cache.h) implements it over the store reader; tests implement it in memory.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "core/brick_layout.h"
+#include "core/volume.h"
+
+namespace vdiso {
+
+struct BrickRange {
+    float minValue, maxValue;
+};
+
+class BrickSource;
+
+// A brick's samples, valid while the handle lives (the source keeps the brick pinned).
+class BrickHandle {
+public:
+    BrickHandle() = default;
+    BrickHandle(BrickSource* source, int64_t id, const void* samples)
+        : mSource(source), mId(id), mSamples(samples) {}
+    BrickHandle(BrickHandle&& o) noexcept { *this = std::move(o); }
+    BrickHandle& operator=(BrickHandle&& o) noexcept;
+    BrickHandle(const BrickHandle&) = delete;
+    BrickHandle& operator=(const BrickHandle&) = delete;
+    ~BrickHandle() { release(); }
+
+    const void* samples() const { return mSamples; }
+    template <class T>
+    const T* samplesAs() const { return static_cast<const T*>(mSamples); }
+    int64_t id() const { return mId; }
+    void release();
+
+private:
+    BrickSource* mSource = nullptr;
+    int64_t mId = -1;
+    const void* mSamples = nullptr;
+};
+
+class BrickSource {
+public:
+    virtual ~BrickSource() = default;
+    virtual const VolumeInfo& volume() const = 0;
+    virtual const BrickLayout& layout() const = 0;
+    // Min and max of each brick's cell samples, indexed by brick id.
+    virtual std::span<const BrickRange> brickRanges() const = 0;
+    // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
+    virtual BrickHandle acquire(int64_t id) = 0;
+
+protected:
+    friend class BrickHandle;
+    virtual void release(int64_t id) = 0;
+};
+
+inline BrickHandle& BrickHandle::operator=(BrickHandle&& o) noexcept {
+    if (this != &o) {
+        release();
+        mSource = o.mSource;
+        mId = o.mId;
+        mSamples = o.mSamples;
+        o.mSource = nullptr;
+        o.mSamples = nullptr;
+    }
+    return *this;
+}
+
+inline void BrickHandle::release() {
+    if (mSource) mSource->release(mId);
+    mSource = nullptr;
+    mSamples = nullptr;
+}
+
+}  // namespace vdiso

@@ -1,0 +1,43 @@
+// Full isosurface extraction over a BrickSource: the comparison methods of the SAGE paper
+// (Tables 1-2, rows "Octree" and "NOISE").
+//
+// octree: the min/max tree (Wilhelms & Van Gelder) over bricks, from the store's index, then
+//   meta-cells inside each active brick. Only bricks whose range holds iso are acquired.
+// noise: span space (Livnat, Shen & Johnson 1996) over all meta-cells of the volume: a
+//   preprocessing pass acquires every brick once to compute the meta-cell ranges and build the
+//   kd-tree (timed apart as preprocessSeconds); the query returns exactly the active
+//   meta-cells, which are then extracted brick by brick.
+// Both produce the same triangles (vertex order aside) through the same kernel
+// (core/brick_extractor.h), with vertices welded across bricks.
+#pragma once
+
+#include <cstdint>
+
+#include "core/brick_extractor.h"
+#include "core/brick_source.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+
+namespace vdiso {
+
+struct FullExtractOptions {
+    double iso = 0;
+    int metaCellSize = kDefaultMetaCellSize;
+};
+
+struct FullExtractStats {
+    int64_t nodesVisited = 0;     // octree: min/max tree nodes; noise: span-space answers
+    int64_t bricksActive = 0;     // bricks acquired for extraction
+    int64_t metaCellsActive = 0;
+    int64_t cellsActive = 0;
+    double preprocessSeconds = 0;  // noise: building the meta-cell span space
+    double extractSeconds = 0;     // everything else, brick reads included
+};
+
+FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
+                               TriangleMesh& mesh, const ProgressFn& progress = {});
+
+FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options,
+                              TriangleMesh& mesh, const ProgressFn& progress = {});
+
+}  // namespace vdiso

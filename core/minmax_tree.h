@@ -1,0 +1,73 @@
+// The min/max tree over bricks (Wilhelms & Van Gelder's octree, as a kd-tree with axis-aligned
+// splits): each node holds a box of bricks and the [min, max] of all samples below it, so a
+// traversal skips every subtree whose range excludes the isovalue without touching its bricks.
+//
+// Flat array of 32-byte nodes in depth-first order (pbrt's LinearBVHNode): the first child of
+// an interior node is the next node, the second is at `secondChild`. Splits halve the longest
+// axis of the box in brick units, so visiting the child on the eye's side of the split plane
+// first is an exact front-to-back order (used by the view-dependent traversal).
+// Immutable after construction; traversals are thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/brick_layout.h"
+#include "core/brick_source.h"
+#include "core/iso.h"
+
+namespace vdiso {
+
+struct MinMaxNode {
+    float minValue, maxValue;
+    uint16_t lo[3], hi[3];   // brick coordinates, [lo, hi) on each axis
+    uint32_t secondChild;    // 0 for a leaf (one brick)
+    uint8_t splitAxis;       // interior nodes: axis of the split plane
+    uint8_t pad[7];
+
+    bool isLeaf() const { return secondChild == 0; }
+};
+static_assert(sizeof(MinMaxNode) == 32);
+
+class MinMaxTree {
+public:
+    MinMaxTree(const BrickLayout& layout, std::span<const BrickRange> ranges);
+
+    const std::vector<MinMaxNode>& nodes() const { return mNodes; }
+    const BrickLayout& layout() const { return mLayout; }
+    int64_t brickOf(const MinMaxNode& leaf) const {
+        return mLayout.brickId(leaf.lo[0], leaf.lo[1], leaf.lo[2]);
+    }
+
+    // Calls visit(brickId) for each brick whose range holds iso, depth first; counts the nodes
+    // visited. Returns the number of nodes visited.
+    template <class Visit>
+    int64_t forEachActiveBrick(double iso, Visit&& visit) const {
+        int64_t visited = 0;
+        uint32_t stack[64];
+        int top = 0;
+        if (!mNodes.empty()) stack[top++] = 0;
+        while (top > 0) {
+            const uint32_t n = stack[--top];
+            const MinMaxNode& node = mNodes[n];
+            ++visited;
+            if (!rangeHoldsIso(node.minValue, node.maxValue, iso)) continue;
+            if (node.isLeaf()) {
+                visit(brickOf(node));
+                continue;
+            }
+            stack[top++] = node.secondChild;
+            stack[top++] = n + 1;
+        }
+        return visited;
+    }
+
+private:
+    uint32_t build(const uint16_t lo[3], const uint16_t hi[3], std::span<const BrickRange> ranges);
+
+    BrickLayout mLayout;
+    std::vector<MinMaxNode> mNodes;
+};
+
+}  // namespace vdiso

@@ -1,0 +1,91 @@
+// The brick cache: budget never exceeded, least recently used evicted first, pinned bricks
+// kept, corrupt bricks reported and not cached.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "cache/brick_cache.h"
+#include "io/error.h"
+#include "io/store_writer.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+class BrickCacheTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        test::MemoryVolume volume({33, 17, 9}, ScalarType::U16);  // 4 x 2 x 1 bricks of 8
+        StoreWriteOptions o;
+        o.brickSize = 8;
+        path = dir.file("c.vdiso");
+        writeBrickStore(volume, path, o);
+    }
+    test::ScratchDir dir;
+    std::string path;
+};
+
+TEST_F(BrickCacheTest, EvictsLeastRecentlyUsedWithinBudget) {
+    const BrickStoreReader store(path);
+    BrickCache cache(store, 3 * store.brickBytes());
+    for (int64_t id : {0, 1, 2}) cache.acquire(id);  // released at once
+    cache.acquire(0);                                  // 0 is now the most recent
+    cache.acquire(3);                                  // evicts 1, the least recent
+    EXPECT_EQ(cache.counters().evictions, 1u);
+    const uint64_t missesBefore = cache.counters().misses;
+    cache.acquire(0);
+    cache.acquire(2);
+    EXPECT_EQ(cache.counters().misses, missesBefore);  // 0 and 2 stayed
+    cache.acquire(1);
+    EXPECT_EQ(cache.counters().misses, missesBefore + 1);  // 1 was the one evicted
+    EXPECT_LE(cache.residentBytes(), cache.budgetBytes());
+}
+
+TEST_F(BrickCacheTest, PinnedBricksAreNeverEvictedAndTheBudgetHolds) {
+    const BrickStoreReader store(path);
+    BrickCache cache(store, 2 * store.brickBytes());
+    BrickHandle a = cache.acquire(0), b = cache.acquire(1);
+    EXPECT_THROW(cache.acquire(2), std::runtime_error);  // both slots pinned
+    b.release();
+    BrickHandle c = cache.acquire(2);
+    EXPECT_EQ(c.samples() != nullptr, true);
+    EXPECT_LE(cache.residentBytes(), cache.budgetBytes());
+    EXPECT_THROW(BrickCache(store, store.brickBytes()), std::invalid_argument);
+}
+
+TEST_F(BrickCacheTest, SamplesMatchTheReaderAndCountersAddUp) {
+    const BrickStoreReader store(path);
+    BrickCache cache(store, 64u << 20);
+    std::vector<unsigned char> expected(store.brickBytes());
+    for (int round = 0; round < 2; ++round)
+        for (int64_t id = 0; id < store.layout().brickCount(); ++id) {
+            store.readBrick(id, expected.data());
+            const BrickHandle h = cache.acquire(id);
+            EXPECT_EQ(std::memcmp(h.samples(), expected.data(), expected.size()), 0);
+        }
+    const CacheCounters c = cache.counters();
+    EXPECT_EQ(c.requests, uint64_t(2 * store.layout().brickCount()));
+    EXPECT_EQ(c.misses, uint64_t(store.layout().brickCount()));
+    EXPECT_EQ(c.hits, c.misses);
+    EXPECT_EQ(c.bytesRead, store.header().storedBrickBytes);
+}
+
+TEST_F(BrickCacheTest, CorruptBrickIsReportedNotReturned) {
+    auto bytes = test::readFile(path);
+    const uint64_t offset = BrickStoreReader(path).index()[2].offset;
+    bytes[offset + 10] ^= 0xff;
+    test::writeFile(path, bytes.data(), bytes.size());
+    const BrickStoreReader store(path);
+    BrickCache cache(store, 8 * store.brickBytes());
+    try {
+        cache.acquire(2);
+        FAIL() << "corrupt brick returned";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("brick 2"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(cache.acquire(2), IoError);  // not cached as if good
+    EXPECT_NO_THROW(cache.acquire(1));
+}
+
+}  // namespace
+}  // namespace vdiso

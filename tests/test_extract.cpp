@@ -1,0 +1,128 @@
+// Full extraction (octree, noise) through the kernel: closed surfaces across bricks, the same
+// triangles from both methods and from memory or the store, analytic areas and volumes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include <glm/geometric.hpp>
+
+#include "cache/brick_cache.h"
+#include "core/extract_full.h"
+#include "core/synth.h"
+#include "io/brick_store.h"
+#include "io/store_writer.h"
+#include "io/volume_open.h"
+#include "tests/extract_test_util.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+using test::MemoryBrickSource;
+
+// A ball of density 100 inside radius 13 falling off linearly: dense inside, as in CT, so
+// normals point outwards and the enclosed volume is positive.
+double ballDensity(const Dims3& d, int64_t x, int64_t y, int64_t z) {
+    return 100.0 * (13.0 - test::sphereDistance(d, x, y, z)) / 13.0 + 100.0;
+}
+
+TEST(ExtractOctree, BallIsClosedAcrossBricksWithAnalyticAreaAndVolume) {
+    const Dims3 dims{37, 35, 33};
+    for (ScalarType type : {ScalarType::F32, ScalarType::I16}) {
+        MemoryBrickSource source(dims, type, 8, [&](int64_t x, int64_t y, int64_t z) {
+            return ballDensity(dims, x, y, z) * (type == ScalarType::F32 ? 1.0 : 50.0);
+        });
+        TriangleMesh mesh;
+        const double iso = (type == ScalarType::F32 ? 100.0 : 5000.0) + 0.5;
+        const FullExtractStats stats = extractOctree(source, {iso, 4}, mesh);
+        ASSERT_GT(mesh.triangleCount(), 1000u);
+        EXPECT_EQ(test::checkClosedOriented(mesh), "") << scalarTypeName(type);
+        // The surface is the sphere of radius ~13 (linear interpolation error is small).
+        const double r = 13.0 * (1.0 - (iso / (type == ScalarType::F32 ? 1.0 : 50.0) - 100.0) / 100.0);
+        EXPECT_NEAR(test::surfaceArea(mesh) / (4 * std::numbers::pi * r * r), 1.0, 0.01);
+        EXPECT_NEAR(test::enclosedVolume(mesh) / (4.0 / 3.0 * std::numbers::pi * r * r * r), 1.0, 0.01);
+        // Normals point outwards (along minus the gradient of a dense ball).
+        const glm::vec3 centre((dims[0] - 1) / 2.0f, (dims[1] - 1) / 2.0f, (dims[2] - 1) / 2.0f);
+        for (size_t v = 0; v < mesh.vertexCount(); ++v)
+            ASSERT_GT(glm::dot(mesh.normals[v], glm::normalize(mesh.positions[v] - centre)), 0.9f);
+        // Welded: no two vertices at the same place.
+        std::set<std::tuple<float, float, float>> unique;
+        for (const glm::vec3& p : mesh.positions) unique.insert({p.x, p.y, p.z});
+        EXPECT_EQ(unique.size(), mesh.vertexCount());
+        // Only bricks whose range holds the isovalue were read.
+        int64_t activeBricks = 0;
+        for (const BrickRange& b : source.brickRanges())
+            activeBricks += (b.minValue <= iso && iso < b.maxValue);
+        EXPECT_EQ(source.acquired(), activeBricks);
+        EXPECT_EQ(stats.bricksActive, activeBricks);
+        EXPECT_EQ(source.pinned(), 0);
+    }
+}
+
+TEST(ExtractOctree, NoiseGivesTheSameTriangles) {
+    SynthParams p;
+    p.kind = SynthKind::Head;
+    p.dims = {48, 44, 40};
+    auto head = openSynthVolume(p);
+    const std::vector<unsigned char> samples = test::readAllSamples(*head, 5);
+    const auto* s = reinterpret_cast<const uint16_t*>(samples.data());
+    MemoryBrickSource source(p.dims, ScalarType::U16, 8, [&](int64_t x, int64_t y, int64_t z) {
+        return double(s[x + p.dims[0] * (y + p.dims[1] * z)]);
+    });
+    for (double iso : {kHeadSkinIso, kHeadBoneIso}) {
+        for (int metaCell : {2, 4, 8}) {
+            TriangleMesh octree, noise;
+            extractOctree(source, {iso, metaCell}, octree);
+            const FullExtractStats ns = extractNoise(source, {iso, metaCell}, noise);
+            ASSERT_GT(octree.triangleCount(), 100u);
+            EXPECT_EQ(octree.triangleCount(), noise.triangleCount()) << iso << " M=" << metaCell;
+            EXPECT_EQ(octree.vertexCount(), noise.vertexCount());
+            EXPECT_EQ(test::canonicalTriangles(octree), test::canonicalTriangles(noise));
+            EXPECT_EQ(test::checkClosedOriented(octree, &source.volume()), "") << iso;
+            EXPECT_GT(ns.metaCellsActive, 0);
+        }
+    }
+}
+
+TEST(ExtractOctree, StoreThroughTheCacheEqualsMemory) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {40, 36, 30};
+    auto turbulence = openSynthVolume(p);
+    const std::vector<unsigned char> samples = test::readAllSamples(*turbulence, 4);
+    const auto* s = reinterpret_cast<const uint16_t*>(samples.data());
+    MemoryBrickSource memory(p.dims, ScalarType::U16, 16, [&](int64_t x, int64_t y, int64_t z) {
+        return double(s[x + p.dims[0] * (y + p.dims[1] * z)]);
+    });
+    test::ScratchDir dir;
+    auto again = openSynthVolume(p);
+    StoreWriteOptions o;
+    o.brickSize = 16;
+    writeBrickStore(*again, dir.file("t.vdiso"), o);
+    const BrickStoreReader store(dir.file("t.vdiso"));
+    // A budget of two bricks: the extraction must work inside it.
+    BrickCache cache(store, 2 * store.brickBytes());
+    const double iso = turbulenceIso(ScalarType::U16);
+    TriangleMesh fromMemory, fromStore;
+    extractOctree(memory, {iso, 4}, fromMemory);
+    extractOctree(cache, {iso, 4}, fromStore);
+    EXPECT_EQ(fromMemory.positions, fromStore.positions);
+    EXPECT_EQ(fromMemory.indices, fromStore.indices);
+    EXPECT_EQ(test::checkClosedOriented(fromStore, &cache.volume()), "");
+    EXPECT_LE(cache.residentBytes(), cache.budgetBytes());
+    EXPECT_GT(cache.counters().misses, 0u);
+}
+
+TEST(ExtractOctree, EmptyWhenNoBrickHoldsTheIsovalue) {
+    const Dims3 dims{20, 20, 20};
+    MemoryBrickSource source(dims, ScalarType::U8, 8, [](int64_t, int64_t, int64_t) { return 7.0; });
+    TriangleMesh mesh;
+    extractOctree(source, {7.0, 4}, mesh);  // all samples equal: nothing is above, nothing below
+    EXPECT_EQ(mesh.triangleCount(), 0u);
+    EXPECT_EQ(source.acquired(), 0);
+}
+
+}  // namespace
+}  // namespace vdiso
