@@ -34,6 +34,10 @@ struct PointSet {
     std::vector<glm::vec3> normals;
 
     size_t size() const { return positions.size(); }
+    void clear() {
+        positions.clear();
+        normals.clear();
+    }
 };
 
 }  // namespace vdiso

@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config
   libglm-dev libtbb-dev zlib1g-dev libzstd-dev libpng-dev
   libopenvdb-dev libboost-iostreams-dev   # OpenVDB's Find module needs boost-iostreams and TBB
-  libosmesa6-dev
+  libosmesa6-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
 )
 

@@ -1,0 +1,137 @@
+#include "core/camera.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/trigonometric.hpp>
+
+namespace vdiso {
+
+namespace {
+
+const glm::dvec3 kPresetViewDirection = glm::normalize(glm::dvec3(0.35, 1.0, 0.3));
+const glm::dvec3 kPresetUp{0.0, 0.0, 1.0};
+constexpr double kPresetFovYDegrees = 30.0;
+constexpr double kDistantImageFraction = 0.1;  // sphere diameter / image height
+constexpr double kCloseupLookAtFront = 0.35;   // of e.y in front of the centre
+constexpr double kCloseupFraction = 1.0 / 6.0; // of max(e), the view height at the target
+constexpr double kClipMargin = 0.01;
+constexpr double kMaxFarOverNear = 1000.0;
+
+}  // namespace
+
+glm::dvec3 Camera::forward() const { return glm::normalize(target - eye); }
+
+glm::dmat4 Camera::viewMatrix() const { return glm::lookAt(eye, target, up); }
+
+glm::dmat4 Camera::projectionMatrix() const {
+    double n = zNear, f = zFar;
+    if (!hasClipPlanes()) {
+        const double d = glm::length(target - eye);
+        n = d / kMaxFarOverNear;
+        f = d * kMaxFarOverNear;
+    }
+    return glm::perspective(glm::radians(fovYDegrees), aspect(), n, f);
+}
+
+glm::dvec3 Camera::project(const glm::dvec3& world) const {
+    const glm::dvec4 clip = viewProjection() * glm::dvec4(world, 1.0);
+    if (!(clip.w > 0.0)) return glm::dvec3(std::numeric_limits<double>::quiet_NaN());
+    const glm::dvec3 ndc = glm::dvec3(clip) / clip.w;
+    // The y flip turns OpenGL's bottom-up window coordinates into top-down image rows.
+    return {(ndc.x * 0.5 + 0.5) * width, (0.5 - ndc.y * 0.5) * height, ndc.z * 0.5 + 0.5};
+}
+
+glm::dvec3 Camera::unproject(const glm::dvec3& pixelAndDepth) const {
+    const glm::dvec4 ndc{pixelAndDepth.x / width * 2.0 - 1.0,
+                         1.0 - pixelAndDepth.y / height * 2.0,
+                         pixelAndDepth.z * 2.0 - 1.0, 1.0};
+    const glm::dvec4 world = glm::inverse(viewProjection()) * ndc;
+    return glm::dvec3(world) / world.w;
+}
+
+void fitClipPlanes(Camera& camera, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax) {
+    const glm::dvec3 f = camera.forward();
+    double nearest = std::numeric_limits<double>::infinity();
+    double farthest = -std::numeric_limits<double>::infinity();
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 p{corner & 1 ? boundsMax.x : boundsMin.x,
+                           corner & 2 ? boundsMax.y : boundsMin.y,
+                           corner & 4 ? boundsMax.z : boundsMin.z};
+        const double depth = glm::dot(p - camera.eye, f);
+        nearest = std::min(nearest, depth);
+        farthest = std::max(farthest, depth);
+    }
+    // A box wholly behind the eye (or a degenerate one at it) still gets valid planes.
+    const double scale = std::max(glm::length(boundsMax - boundsMin),
+                                  glm::length(camera.target - camera.eye));
+    camera.zFar = std::max(farthest * (1.0 + kClipMargin), scale * kClipMargin);
+    camera.zNear = std::max(nearest * (1.0 - kClipMargin), camera.zFar / kMaxFarOverNear);
+}
+
+Camera presetCamera(ViewPreset preset, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax,
+                    int width, int height) {
+    if (width <= 0 || height <= 0)
+        throw std::invalid_argument("presetCamera: image size must be positive");
+    Camera camera;
+    camera.width = width;
+    camera.height = height;
+    camera.up = kPresetUp;
+    camera.fovYDegrees = kPresetFovYDegrees;
+
+    const glm::dvec3 centre = (boundsMin + boundsMax) * 0.5;
+    const glm::dvec3 extent = boundsMax - boundsMin;
+    // A flat or empty volume still gets a camera at a sensible distance.
+    const double radius = std::max(0.5 * glm::length(extent), 1e-6);
+    const double tanHalfFovY = std::tan(glm::radians(camera.fovYDegrees) * 0.5);
+    // The narrower of the two half-angles bounds what fits in the image.
+    const double halfFit = std::atan(tanHalfFovY * std::min(1.0, camera.aspect()));
+
+    double distance = 0.0;
+    camera.target = centre;
+    switch (preset) {
+    case ViewPreset::Normal:
+        distance = radius / std::sin(halfFit);
+        break;
+    case ViewPreset::Distant:
+        // The sphere's silhouette has angular radius asin(r / d); its image radius in NDC is
+        // tan of that over tanHalfFovY.
+        distance = radius / std::sin(std::atan(kDistantImageFraction * tanHalfFovY));
+        break;
+    case ViewPreset::Closeup: {
+        camera.target = centre + glm::dvec3(0.0, kCloseupLookAtFront * extent.y, 0.0);
+        const double largest = std::max({extent.x, extent.y, extent.z, 1e-6});
+        distance = 0.5 * kCloseupFraction * largest / tanHalfFovY;
+        break;
+    }
+    }
+    camera.eye = camera.target + kPresetViewDirection * distance;
+    fitClipPlanes(camera, boundsMin, boundsMax);
+    return camera;
+}
+
+ViewPreset parseViewPreset(const std::string& name) {
+    std::string lower;
+    for (char c : name) lower += char(std::tolower(static_cast<unsigned char>(c)));
+    if (lower == "distant") return ViewPreset::Distant;
+    if (lower == "normal") return ViewPreset::Normal;
+    if (lower == "closeup" || lower == "close-up") return ViewPreset::Closeup;
+    throw std::invalid_argument("unknown view '" + name +
+                                "' (expected distant, normal or closeup)");
+}
+
+const char* viewPresetName(ViewPreset preset) {
+    switch (preset) {
+    case ViewPreset::Distant: return "distant";
+    case ViewPreset::Normal: return "normal";
+    case ViewPreset::Closeup: return "closeup";
+    }
+    return "?";
+}
+
+}  // namespace vdiso

@@ -1,0 +1,81 @@
+// A pinhole camera: where it looks from, the image it makes, and how world points map to pixels.
+//
+// Pixel convention (the renderer, the PNG writer and the occlusion pyramid all share it):
+//   x grows to the right and y DOWN, from the top-left corner of the image, in pixel units, as
+//   images are stored (top row first). Pixel (i, j) is column i, row j and covers
+//   [i, i+1) x [j, j+1); its centre is (i + 0.5, j + 0.5). The whole image is [0,w] x [0,h].
+//   Depth is OpenGL window depth: 0 at the near plane, 1 at the far plane (non-linear in
+//   distance), exactly what the renderer reads back from its depth buffer.
+//
+// Matrices are OpenGL-style (GLM, right-handed eye space looking down -z, clip z in [-w, w]).
+// A camera whose zNear <= 0 or zFar <= zNear has no clip planes yet: fitClipPlanes() derives
+// them from the bounds of what is drawn; until then projectionMatrix() uses a fallback of
+// [d/1000, d*1000] around the eye-to-target distance d.
+// Everything here is pure: safe to call from any thread.
+#pragma once
+
+#include <string>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+namespace vdiso {
+
+struct Camera {
+    glm::dvec3 eye{0.0, 1.0, 0.0};
+    glm::dvec3 target{0.0, 0.0, 0.0};
+    glm::dvec3 up{0.0, 0.0, 1.0};  // need not be orthogonal to the view direction, not parallel
+    double fovYDegrees = 30.0;     // full vertical field of view
+    int width = 800;               // image size in pixels
+    int height = 600;
+    double zNear = 0.0;  // distances from the eye along the view direction; <= 0: not set
+    double zFar = 0.0;
+
+    double aspect() const { return double(width) / double(height); }
+    bool hasClipPlanes() const { return zNear > 0.0 && zFar > zNear; }
+    // Unit vector from the eye towards the target.
+    glm::dvec3 forward() const;
+
+    glm::dmat4 viewMatrix() const;
+    glm::dmat4 projectionMatrix() const;
+    glm::dmat4 viewProjection() const { return projectionMatrix() * viewMatrix(); }
+
+    // (x, y, depth) in the pixel convention above. Points on or behind the eye plane have no
+    // image: all three components are NaN (comparisons with them are false, so they are never
+    // "inside the image"). Points outside the view volume get coordinates outside [0,w]x[0,h]
+    // or a depth outside [0,1].
+    glm::dvec3 project(const glm::dvec3& world) const;
+    // The inverse: the world point at pixel position (x, y) and window depth.
+    glm::dvec3 unproject(const glm::dvec3& pixelAndDepth) const;
+};
+
+// Sets zNear and zFar so that the box [boundsMin, boundsMax] lies between them with a 1% margin.
+// When the eye is inside the box or close to it, zNear is clamped to zFar / 1000 to keep depth
+// precision (24-bit buffers); geometry nearer than that is clipped.
+void fitClipPlanes(Camera& camera, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax);
+
+// The three views of the SAGE paper (§4.1, Fig. 7), framed from the volume's world bounds.
+// All look at the front of the volume: the eye lies from the look-at point along
+//   kPresetViewDirection = normalize(0.35, 1, 0.3)
+// (in front: +y is the face for our generated heads and anterior for RAS-oriented MRI; a little
+// to the side (+x) and above (+z)), with up = +z and a 30 degree vertical field of view.
+// With c the centre of the bounds, r the radius of their bounding sphere, e = max - min:
+//   Normal:  looks at c from the distance at which the sphere just fills the view, i.e. touches
+//            the image's shorter side: every part of the volume is in view.
+//   Distant: looks at c from so far that the sphere's image is 1/10 of the image height across
+//            (the whole volume in view and small, as in the paper's distant view).
+//   Closeup: looks at c + (0, 0.35 * e.y, 0), a point inside the volume near its front face
+//            where the surfaces are, from the distance at which the view is max(e) / 6 high
+//            at that point. The eye is always outside the bounds (in front of the +y face).
+// Clip planes are fitted to the bounds (fitClipPlanes).
+enum class ViewPreset { Distant, Normal, Closeup };
+
+Camera presetCamera(ViewPreset preset, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax,
+                    int width, int height);
+
+// "distant", "normal", "closeup" (also "close-up"), case-insensitive; throws
+// std::invalid_argument naming the accepted names otherwise.
+ViewPreset parseViewPreset(const std::string& name);
+const char* viewPresetName(ViewPreset preset);
+
+}  // namespace vdiso

@@ -1,0 +1,36 @@
+// Cameras in JSON files.
+//
+// One camera is an object:
+//   {"eye": [x,y,z], "target": [x,y,z], "up": [x,y,z], "fov": 30,
+//    "width": 800, "height": 600, "near": 0.1, "far": 1000}
+// eye, target, up (world units) and fov (vertical, degrees, in (0, 180)) are required; width
+// and height (1..16384) default to the caller's values; near and far are optional (0 < near <
+// far, both or neither; without them the clip planes are derived later, see core/camera.h).
+// Unknown fields are errors, so that a misspelt "fovy" does not silently do nothing.
+// A camera path is a JSON array of such objects, or {"cameras": [...]}, with at least one.
+//
+// Errors throw IoError naming the file, where in it, and what is wrong
+// ("cam.json: 'eye' must be an array of 3 numbers", "path.json: cameras[2]: 'fov' missing").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+
+namespace vdiso {
+
+Camera readCameraJson(const std::string& path, int defaultWidth, int defaultHeight);
+std::vector<Camera> readCameraPath(const std::string& path, int defaultWidth, int defaultHeight);
+
+// The same, from JSON text; `name` stands for the file in error messages.
+Camera parseCameraJson(const std::string& text, const std::string& name, int defaultWidth,
+                       int defaultHeight);
+std::vector<Camera> parseCameraPath(const std::string& text, const std::string& name,
+                                    int defaultWidth, int defaultHeight);
+
+// One camera as a one-line JSON object that the readers accept, with every double written so
+// that it reads back bit-exactly. near and far are written only when set (hasClipPlanes()).
+std::string cameraToJson(const Camera& camera);
+
+}  // namespace vdiso
