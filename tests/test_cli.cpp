@@ -170,3 +170,48 @@ TEST(Cli, HelpAndUsage) {
 
 }  // namespace
 }  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST(CliExtract, WritesMeshPictureAndStats) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso"), ply = dir.file("h.ply"), obj = dir.file("h.obj"),
+                      png = dir.file("h.png"), stats = dir.file("s.json");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 40 --brick 8 --quiet").exitCode, 0);
+    auto r = test::runVdiso("extract " + store + " --iso 600.5 -o " + ply + " --png " + png +
+                            " --view distant --size 64x48 --stats " + stats);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto json = test::readFile(stats);
+    const std::string text(json.begin(), json.end());
+    for (const char* key : {"\"method\": \"octree\"", "\"triangles\": ", "\"vertices\": ",
+                            "\"extract_s\": ", "\"io_s\": ", "\"bricks_loaded\": ",
+                            "\"bytes_read\": ", "\"peak_rss_mb\": ", "\"draw_s\": "})
+        EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
+    const auto plyBytes = test::readFile(ply);
+    EXPECT_EQ(std::string(plyBytes.begin(), plyBytes.begin() + 3), "ply");
+    EXPECT_GT(test::readFile(png).size(), 100u);
+    // Existing outputs are refused before any work; OBJ output works too.
+    r = test::runVdiso("extract " + store + " --iso 600.5 -o " + ply);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
+    r = test::runVdiso("extract " + store + " --iso 600.5 --method noise -o " + obj + " --quiet");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(test::readFile(obj)[0], '#');
+}
+
+TEST(CliExtract, BadArgumentsAreUsageErrors) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 24 --quiet").exitCode, 0);
+    EXPECT_EQ(test::runVdiso("extract " + store).exitCode, 2);  // no --iso
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --method marching").exitCode, 2);
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 -o x.stl").exitCode, 1);
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --view sideways --png " + dir.file("a.png")).exitCode, 2);
+    const auto r = test::runVdiso("extract " + dir.file("missing.vdiso") + " --iso 1");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("missing.vdiso: cannot open"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace vdiso

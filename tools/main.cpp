@@ -18,6 +18,7 @@ constexpr const char* kUsage =
     "  convert INPUT OUTPUT.vdiso   convert a raw, NRRD, NIfTI or OpenVDB volume into a brick store\n"
     "  synth OUTPUT                 generate a test volume (head, turbulence) as raw or a store\n"
     "  info FILE.vdiso              describe a brick store; with --iso, its active bricks\n"
+    "  extract FILE.vdiso --iso V   extract an isosurface: mesh, picture, statistics\n"
     "\n"
     "'vdiso <command> --help' describes each command.\n";
 
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
         if (command == "convert") return runConvert(argc - 1, argv + 1);
         if (command == "synth") return runSynth(argc - 1, argv + 1);
         if (command == "info") return runInfo(argc - 1, argv + 1);
+        if (command == "extract") return runExtract(argc - 1, argv + 1);
         std::fprintf(stderr, "vdiso: unknown command '%s'\n\n%s", command.c_str(), kUsage);
         return 2;
     } catch (const UsageError& e) {

@@ -1,0 +1,207 @@
+#include <cstdio>
+#include <optional>
+#include <string>
+
+#include "cache/brick_cache.h"
+#include "core/camera.h"
+#include "core/extract_full.h"
+#include "io/atomic_output.h"
+#include "io/camera_json.h"
+#include "io/json.h"
+#include "io/mesh_writer.h"
+#include "io/png_image.h"
+#include "io/process_stats.h"
+#include "io/renderer.h"
+#include "tools/args.h"
+#include "tools/commands.h"
+#include "tools/progress_bar.h"
+
+namespace vdiso::cli {
+
+namespace {
+
+constexpr const char* kHelp =
+    "usage: vdiso extract FILE.vdiso --iso V [options]\n"
+    "\n"
+    "Extracts the isosurface at V from a brick store, reading only the bricks that can hold\n"
+    "it, and writes the mesh, a picture and statistics.\n"
+    "\n"
+    "  --iso V                   isovalue (a sample is above the surface when > V)\n"
+    "  --method octree|noise     octree: min/max tree over bricks, then meta-cells (default);\n"
+    "                            noise: span space over all meta-cells (reads every brick once\n"
+    "                            to build it, reported as preprocess_s)\n"
+    "  -o, --output MESH         write the mesh: .ply (binary, normals) or .obj\n"
+    "  --png IMAGE.png           render the mesh with OSMesa and write a picture\n"
+    "  --view distant|normal|closeup   camera preset framed from the volume (default normal)\n"
+    "  --camera CAM.json         camera from a file: {\"eye\":[..],\"target\":[..],\"up\":[..],\n"
+    "                            \"fov\":30,\"width\":800,\"height\":600}\n"
+    "  --size WxH                image size (default 800x800)\n"
+    "  --stats STATS.json        write one JSON object of statistics ('-' for stdout)\n"
+    "  --metacell M              meta-cell size in cells (default 4)\n"
+    "  --threads N               extraction threads (default 1)\n"
+    "  --cache-mb N              brick cache budget in MB (default 1024)\n"
+    "  --force                   replace existing output files\n"
+    "  --quiet                   no progress bar or summary\n";
+
+struct ExtractOptions {
+    std::string input;
+    std::optional<double> iso;
+    std::string method = "octree";
+    std::string meshPath, pngPath, statsPath, cameraPath;
+    ViewPreset view = ViewPreset::Normal;
+    bool viewGiven = false;
+    int width = 800, height = 800;
+    int metaCellSize = kDefaultMetaCellSize;
+    int threads = 1;
+    uint64_t cacheMb = 1024;
+    bool overwrite = false, quiet = false;
+};
+
+void parseSize(const std::string& text, int& width, int& height) {
+    const size_t x = text.find('x');
+    if (x == std::string::npos) throw UsageError("--size expects WxH, not '" + text + "'");
+    width = int(parseInt("--size", text.substr(0, x), 16, 8192));
+    height = int(parseInt("--size", text.substr(x + 1), 16, 8192));
+}
+
+ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
+    Args args(argc, argv, 1);
+    ExtractOptions o;
+    while (!args.done()) {
+        const std::string a = args.take();
+        if (a == "--help" || a == "-h") {
+            std::fputs(kHelp, stdout);
+            helpShown = true;
+            return o;
+        } else if (a == "--iso") {
+            o.iso = parseDouble(a, args.value(a));
+        } else if (a == "--method") {
+            o.method = args.value(a);
+            if (o.method != "octree" && o.method != "noise")
+                throw UsageError("--method expects octree or noise, not '" + o.method + "'");
+        } else if (a == "-o" || a == "--output") {
+            o.meshPath = args.value(a);
+        } else if (a == "--png") {
+            o.pngPath = args.value(a);
+        } else if (a == "--view") {
+            const std::string v = args.value(a);
+            try {
+                o.view = parseViewPreset(v);
+            } catch (const std::invalid_argument& e) {
+                throw UsageError(e.what());
+            }
+            o.viewGiven = true;
+        } else if (a == "--camera") {
+            o.cameraPath = args.value(a);
+        } else if (a == "--size") {
+            parseSize(args.value(a), o.width, o.height);
+        } else if (a == "--stats") {
+            o.statsPath = args.value(a);
+        } else if (a == "--metacell") {
+            o.metaCellSize = int(parseInt(a, args.value(a), 1, 64));
+        } else if (a == "--threads") {
+            o.threads = int(parseInt(a, args.value(a), 1, 256));
+        } else if (a == "--cache-mb") {
+            o.cacheMb = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30));
+        } else if (a == "--force") {
+            o.overwrite = true;
+        } else if (a == "--quiet") {
+            o.quiet = true;
+        } else if (!a.empty() && a[0] == '-') {
+            throw UsageError("unknown option '" + a + "'");
+        } else if (o.input.empty()) {
+            o.input = a;
+        } else {
+            throw UsageError("expects one FILE");
+        }
+    }
+    if (o.input.empty()) throw UsageError("expects FILE.vdiso");
+    if (!o.iso) throw UsageError("needs --iso V");
+    if (o.viewGiven && !o.cameraPath.empty()) throw UsageError("give --view or --camera, not both");
+    if (o.pngPath.empty() && (o.viewGiven || !o.cameraPath.empty()))
+        throw UsageError("--view and --camera frame the picture: they need --png");
+    if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
+    return o;
+}
+
+// Refuses existing outputs before the work starts, not after minutes of extraction.
+void checkOutputsWritable(const ExtractOptions& o) {
+    for (const std::string* p : {&o.meshPath, &o.pngPath, &o.statsPath})
+        if (!p->empty() && *p != "-" && !o.overwrite) {
+            if (FILE* f = std::fopen(p->c_str(), "r")) {
+                std::fclose(f);
+                throw UsageError(*p + " already exists (pass --force to replace it)");
+            }
+        }
+}
+
+}  // namespace
+
+int runExtract(int argc, char** argv) {
+    bool helpShown = false;
+    const ExtractOptions o = parseExtractOptions(argc, argv, helpShown);
+    if (helpShown) return 0;
+    checkOutputsWritable(o);
+
+    const BrickStoreReader store(o.input);
+    BrickCache cache(store, o.cacheMb << 20);
+    const VolumeInfo& volume = store.volume();
+    const glm::dvec3 boundsMin = volume.origin;
+    const glm::dvec3 boundsMax =
+        volume.origin + glm::dvec3(volume.dims[0] - 1, volume.dims[1] - 1, volume.dims[2] - 1) *
+                            volume.spacing;
+    std::optional<Camera> camera;
+    if (!o.cameraPath.empty())
+        camera = readCameraJson(o.cameraPath, o.width, o.height);
+    else if (!o.pngPath.empty())
+        camera = presetCamera(o.view, boundsMin, boundsMax, o.width, o.height);
+
+    TriangleMesh mesh;
+    const FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
+    const ProgressFn progress = progressBar("extract", 0, o.quiet);
+    const FullExtractStats stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
+                                                       : extractOctree(cache, extract, mesh, progress);
+    const CacheCounters io = cache.counters();
+
+    if (!o.meshPath.empty()) writeMesh(o.meshPath, mesh, o.overwrite);
+    std::optional<double> drawSeconds;
+    if (camera) {
+        const RenderResult r = renderSurface(mesh, PointSet{}, *camera);
+        writePng(o.pngPath, r.image, o.overwrite);
+        drawSeconds = r.drawSeconds;
+    }
+
+    JsonObject s;
+    s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
+    s.add("metacell", o.metaCellSize).add("threads", o.threads);
+    s.add("triangles", uint64_t(mesh.triangleCount())).add("points", uint64_t(0));
+    s.add("vertices", uint64_t(mesh.vertexCount()));
+    s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
+    s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
+    s.add("bricks_loaded", io.misses).add("bricks_requested", io.requests);
+    s.add("bricks_active", stats.bricksActive).add("bytes_read", io.bytesRead);
+    s.add("nodes_visited", stats.nodesVisited).add("meta_cells_active", stats.metaCellsActive);
+    s.add("cells_active", stats.cellsActive);
+    s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
+    if (drawSeconds) s.add("draw_s", *drawSeconds);
+    if (camera) s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());
+    s.add("peak_rss_mb", peakRssMb());
+    const std::string json = s.str() + "\n";
+    if (o.statsPath == "-") {
+        std::fputs(json.c_str(), stdout);
+    } else if (!o.statsPath.empty()) {
+        AtomicOutputFile out(o.statsPath, o.overwrite);
+        out.append(json.data(), json.size());
+        out.commit();
+    }
+    if (!o.quiet && o.statsPath != "-")
+        std::printf("%s iso %g: %zu triangles, %zu vertices, %.3f s extract (%.3f s read, "
+                    "%.3f s decode), %llu bricks read (%.1f MB)%s\n",
+                    o.method.c_str(), *o.iso, mesh.triangleCount(), mesh.vertexCount(),
+                    stats.extractSeconds, io.readSeconds, io.decodeSeconds,
+                    (unsigned long long)io.misses, io.bytesRead / 1e6,
+                    drawSeconds ? (", drawn in " + std::to_string(*drawSeconds) + " s").c_str() : "");
+    return 0;
+}
+
+}  // namespace vdiso::cli
