@@ -64,36 +64,64 @@ size_t BrickCache::takeFreeSlot() {
 }
 
 BrickHandle BrickCache::acquire(int64_t id) {
-    std::lock_guard lock(mMutex);
+    std::unique_lock lock(mMutex);
     ++mCounters.requests;
     auto found = mSlotOfBrick.find(id);
     if (found != mSlotOfBrick.end()) {
-        Slot& s = mSlots[found->second];
+        const size_t slot = found->second;
+        Slot& s = mSlots[slot];
         if (s.pins++ == 0) mLru.erase(s.lruPosition);
         ++mCounters.hits;
-        return BrickHandle(this, id, s.samples);
+        mLoaded.wait(lock, [&] { return !mSlots[slot].loading; });
+        if (mSlots[slot].id != id) {
+            // Another thread's load of this brick failed: give the slot back and try the read
+            // ourselves, so this caller gets the error (or the brick) first-hand.
+            if (--mSlots[slot].pins == 0) {
+                mLru.push_back(slot);
+                mSlots[slot].lruPosition = std::prev(mLru.end());
+            }
+            lock.unlock();
+            return acquire(id);
+        }
+        return BrickHandle(this, id, mSlots[slot].samples);
     }
     ++mCounters.misses;
     const size_t slot = takeFreeSlot();
     Slot& s = mSlots[slot];
-    try {
-        auto start = std::chrono::steady_clock::now();
-        mStore.readStoredBrick(id, mStoredScratch);
-        mCounters.readSeconds += secondsSince(start);
-        mCounters.bytesRead += mStoredScratch.size();
-        start = std::chrono::steady_clock::now();
-        mStore.decodeBrick(id, mStoredScratch, s.samples);
-        mCounters.decodeSeconds += secondsSince(start);
-    } catch (...) {
-        // The slot holds nothing valid: keep it free (at the LRU's cold end) for the next miss.
-        s.id = -1;
-        mLru.push_back(slot);
-        s.lruPosition = std::prev(mLru.end());
-        throw;
-    }
     s.id = id;
     s.pins = 1;
+    s.loading = true;
     mSlotOfBrick[id] = slot;
+    lock.unlock();
+
+    thread_local std::vector<unsigned char> stored;
+    double readSeconds = 0, decodeSeconds = 0;
+    try {
+        auto start = std::chrono::steady_clock::now();
+        mStore.readStoredBrick(id, stored);
+        readSeconds = secondsSince(start);
+        start = std::chrono::steady_clock::now();
+        mStore.decodeBrick(id, stored, s.samples);
+        decodeSeconds = secondsSince(start);
+    } catch (...) {
+        // The slot holds nothing valid: forget the brick, free the slot for the next miss.
+        lock.lock();
+        mSlotOfBrick.erase(id);
+        s.id = -1;
+        s.loading = false;
+        if (--s.pins == 0) {
+            mLru.push_back(slot);
+            s.lruPosition = std::prev(mLru.end());
+        }
+        mLoaded.notify_all();
+        throw;
+    }
+    lock.lock();
+    s.loading = false;
+    mCounters.readSeconds += readSeconds;
+    mCounters.decodeSeconds += decodeSeconds;
+    mCounters.bytesRead += stored.size();
+    mLoaded.notify_all();
     return BrickHandle(this, id, s.samples);
 }
 

@@ -5,13 +5,16 @@
 // evicted. The cache never holds more decoded bytes than the budget: if every slot is pinned
 // when another brick is needed, acquire() throws (the budget is too small for the caller's
 // working set). Counters record requests, hits, misses, evictions, bytes read from disk and
-// the seconds spent reading and decoding. Thread-safe: acquire/release take a lock (once per
-// brick, never per cell); reads happen under the lock.
+// the seconds spent reading and decoding (summed over threads). Thread-safe: acquire/release
+// take a lock once per brick, never per cell; reading and decoding happen outside it, so
+// threads load different bricks in parallel, and a thread asking for a brick another is
+// loading waits for it instead of reading it twice.
 #pragma once
 
 #include <cstdint>
 #include <list>
 #include <memory>
+#include <condition_variable>
 #include <mutex>
 #include <unordered_map>
 #include <vector>
@@ -61,6 +64,7 @@ private:
     struct Slot {
         int64_t id = -1;
         int pins = 0;
+        bool loading = false;
         unsigned char* samples = nullptr;
         std::list<size_t>::iterator lruPosition;  // valid while unpinned and holding a brick
     };
@@ -77,9 +81,9 @@ private:
     size_t mSlotsAllocated = 0;
     std::unordered_map<int64_t, size_t> mSlotOfBrick;
     std::list<size_t> mLru;  // unpinned slots holding a brick, most recently used first
-    std::vector<unsigned char> mStoredScratch;
     CacheCounters mCounters;
     mutable std::mutex mMutex;
+    std::condition_variable mLoaded;
 };
 
 }  // namespace vdiso

@@ -49,6 +49,13 @@ public:
     }
     size_t size() const { return mSize; }
 
+    // Calls f(edgeKey, vertex) for every entry, in no particular order.
+    template <class F>
+    void forEach(F&& f) const {
+        for (const Slot& slot : mSlots)
+            if (slot.key != 0) f(slot.key - 1, slot.vertex);
+    }
+
 private:
     struct Slot {
         uint64_t key = 0;

@@ -1,7 +1,12 @@
 #include "core/extract_full.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <mutex>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "core/minmax_tree.h"
 #include "core/span_space.h"
@@ -19,6 +24,88 @@ double secondsSince(Clock::time_point start) {
 // Progress every few dozen bricks: often enough for a bar, rare enough to cost nothing.
 constexpr int64_t kProgressEvery = 32;
 
+// Chunks per thread when extracting in parallel: enough to balance uneven bricks.
+constexpr size_t kChunksPerThread = 8;
+
+struct ChunkOutput {
+    TriangleMesh mesh;
+    EdgeVertexMap seams;
+    KernelCounters counters;
+};
+
+// Appends a chunk's mesh to `out`, merging its brick-face vertices with those already there.
+void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) {
+    constexpr uint32_t kNew = UINT32_MAX;
+    std::vector<uint32_t> remap(chunk.mesh.vertexCount(), kNew);
+    chunk.seams.forEach([&](uint64_t key, uint32_t v) {
+        const uint32_t existing = outSeams.find(key);
+        if (existing != UINT32_MAX) remap[v] = existing;
+    });
+    for (size_t v = 0; v < remap.size(); ++v) {
+        if (remap[v] != kNew) continue;
+        remap[v] = uint32_t(out.positions.size());
+        out.positions.push_back(chunk.mesh.positions[v]);
+        out.normals.push_back(chunk.mesh.normals[v]);
+    }
+    chunk.seams.forEach([&](uint64_t key, uint32_t v) {
+        if (outSeams.find(key) == UINT32_MAX) outSeams.insert(key, remap[v]);
+    });
+    out.indices.reserve(out.indices.size() + chunk.mesh.indices.size());
+    for (uint32_t i : chunk.mesh.indices) out.indices.push_back(remap[i]);
+}
+
+// Runs extractItem(extractor, item, mesh, seams) over `items`, on `threads` threads, into `mesh`.
+template <class Item, class ExtractItem>
+KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
+                            const FullExtractOptions& options, TriangleMesh& mesh,
+                            const ProgressFn& progress, double progressStart,
+                            ExtractItem&& extractItem) {
+    auto report = [&](size_t done) {
+        if (progress) progress(progressStart + (1.0 - progressStart) * double(done) / double(items.size()));
+    };
+    if (options.threads <= 1) {
+        BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
+        EdgeVertexMap seams;
+        for (size_t i = 0; i < items.size(); ++i) {
+            extractItem(extractor, items[i], mesh, seams);
+            if (i % kProgressEvery == 0 || i + 1 == items.size()) report(i + 1);
+        }
+        return extractor.counters();
+    }
+    const size_t chunkCount = std::min(items.size(), size_t(options.threads) * kChunksPerThread);
+    std::vector<ChunkOutput> chunks(chunkCount);
+    std::atomic<size_t> done{0};
+    std::mutex progressMutex;
+    tbb::task_arena arena(options.threads);
+    arena.execute([&] {
+        tbb::parallel_for(size_t(0), chunkCount, [&](size_t c) {
+            BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
+            const size_t begin = items.size() * c / chunkCount, end = items.size() * (c + 1) / chunkCount;
+            for (size_t i = begin; i < end; ++i) {
+                extractItem(extractor, items[i], chunks[c].mesh, chunks[c].seams);
+                const size_t n = ++done;
+                if (n % kProgressEvery == 0) {
+                    std::lock_guard lock(progressMutex);  // the callback is not thread-safe
+                    report(n);
+                }
+            }
+            chunks[c].counters = extractor.counters();
+        });
+    });
+    KernelCounters total;
+    EdgeVertexMap seams;
+    for (ChunkOutput& chunk : chunks) {
+        total.metaCellsTested += chunk.counters.metaCellsTested;
+        total.metaCellsActive += chunk.counters.metaCellsActive;
+        total.cellsVisited += chunk.counters.cellsVisited;
+        total.cellsActive += chunk.counters.cellsActive;
+        mergeChunk(chunk, mesh, seams);
+        chunk = ChunkOutput();  // free the chunk's memory as soon as it is merged
+    }
+    report(items.size());
+    return total;
+}
+
 }  // namespace
 
 FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
@@ -29,17 +116,15 @@ FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& op
     std::vector<int64_t> bricks;
     stats.nodesVisited =
         tree.forEachActiveBrick(options.iso, [&](int64_t id) { bricks.push_back(id); });
-    BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
-    EdgeVertexMap seams;
-    for (size_t i = 0; i < bricks.size(); ++i) {
-        const BrickHandle brick = source.acquire(bricks[i]);
-        extractor.extractBrick(bricks[i], brick.samples(), options.iso, mesh, seams);
-        if (progress && (i % kProgressEvery == 0 || i + 1 == bricks.size()))
-            progress(double(i + 1) / double(bricks.size()));
-    }
+    const KernelCounters counters = extractItems(
+        bricks, source, options, mesh, progress, 0.0,
+        [&](BrickExtractor& extractor, int64_t id, TriangleMesh& out, EdgeVertexMap& seams) {
+            const BrickHandle brick = source.acquire(id);
+            extractor.extractBrick(id, brick.samples(), options.iso, out, seams);
+        });
     stats.bricksActive = int64_t(bricks.size());
-    stats.metaCellsActive = extractor.counters().metaCellsActive;
-    stats.cellsActive = extractor.counters().cellsActive;
+    stats.metaCellsActive = counters.metaCellsActive;
+    stats.cellsActive = counters.cellsActive;
     stats.extractSeconds = secondsSince(start);
     return stats;
 }
@@ -48,8 +133,8 @@ FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& opt
                               TriangleMesh& mesh, const ProgressFn& progress) {
     FullExtractStats stats;
     const BrickLayout& layout = source.layout();
-    BrickExtractor extractor(source.volume(), layout, options.metaCellSize);
-    const uint32_t perBrick = uint32_t(extractor.metaCellsPerBrick());
+    BrickExtractor rangeExtractor(source.volume(), layout, options.metaCellSize);
+    const uint32_t perBrick = uint32_t(rangeExtractor.metaCellsPerBrick());
 
     // Preprocessing, independent of the isovalue: the range of every meta-cell.
     auto start = Clock::now();
@@ -59,12 +144,13 @@ FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& opt
     std::vector<BrickRange> ranges;
     for (int64_t id = 0; id < layout.brickCount(); ++id) {
         const BrickHandle brick = source.acquire(id);
-        extractor.metaCellRanges(id, brick.samples(), ranges);
+        rangeExtractor.metaCellRanges(id, brick.samples(), ranges);
         for (const BrickRange& r : ranges) {
             mins.push_back(r.minValue);
             maxs.push_back(r.maxValue);
         }
-        if (progress && id % kProgressEvery == 0) progress(0.5 * double(id) / double(layout.brickCount()));
+        if (progress && id % kProgressEvery == 0)
+            progress(0.5 * double(id) / double(layout.brickCount()));
     }
     const SpanSpaceTree tree(mins, maxs);
     stats.preprocessSeconds = secondsSince(start);
@@ -75,20 +161,29 @@ FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& opt
     tree.query(options.iso, active);
     std::sort(active.begin(), active.end());
     stats.nodesVisited = int64_t(active.size());
-    EdgeVertexMap seams;
-    std::vector<uint32_t> local;
-    for (size_t i = 0; i < active.size();) {
+    struct BrickWork {
+        int64_t id;
+        size_t begin, end;  // its meta-cells in `local`
+    };
+    std::vector<BrickWork> work;
+    std::vector<uint32_t> local(active.size());
+    for (size_t i = 0; i < active.size(); ++i) {
         const int64_t id = active[i] / perBrick;
-        local.clear();
-        for (; i < active.size() && active[i] / perBrick == uint32_t(id); ++i)
-            local.push_back(active[i] % perBrick);
-        const BrickHandle brick = source.acquire(id);
-        extractor.extractMetaCells(id, brick.samples(), options.iso, local, mesh, seams);
-        ++stats.bricksActive;
-        if (progress) progress(0.5 + 0.5 * double(i) / double(active.size()));
+        local[i] = active[i] % perBrick;
+        if (work.empty() || work.back().id != id) work.push_back({id, i, i});
+        work.back().end = i + 1;
     }
-    stats.metaCellsActive = extractor.counters().metaCellsActive;
-    stats.cellsActive = extractor.counters().cellsActive;
+    const KernelCounters counters = extractItems(
+        work, source, options, mesh, progress, 0.5,
+        [&](BrickExtractor& extractor, const BrickWork& w, TriangleMesh& out, EdgeVertexMap& seams) {
+            const BrickHandle brick = source.acquire(w.id);
+            extractor.extractMetaCells(
+                w.id, brick.samples(), options.iso,
+                std::span<const uint32_t>(local.data() + w.begin, w.end - w.begin), out, seams);
+        });
+    stats.bricksActive = int64_t(work.size());
+    stats.metaCellsActive = counters.metaCellsActive;
+    stats.cellsActive = counters.cellsActive;
     stats.extractSeconds = secondsSince(start);
     return stats;
 }

@@ -7,7 +7,7 @@
 //   preprocessing pass acquires every brick once to compute the meta-cell ranges and build the
 //   kd-tree (timed apart as preprocessSeconds); the query returns exactly the active
 //   meta-cells, which are then extracted brick by brick.
-// Both produce the same triangles (vertex order aside) through the same kernel
+// Both produce the same triangles (vertex numbering aside) through the same kernel
 // (core/brick_extractor.h), with vertices welded across bricks.
 #pragma once
 
@@ -23,6 +23,11 @@ namespace vdiso {
 struct FullExtractOptions {
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
+    // Threads extracting bricks. 1 runs on the calling thread alone. More split the active
+    // bricks into contiguous chunks (the same chunks for any thread count above 1, so the
+    // output does not depend on scheduling), each with its own mesh, merged in order with
+    // vertices on chunk borders welded.
+    int threads = 1;
 };
 
 struct FullExtractStats {

@@ -1,5 +1,7 @@
 #include "io/atomic_output.h"
 
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 
@@ -24,7 +26,9 @@ AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite)
     : mPath(std::move(path)), mOverwrite(overwrite) {
     if (!mOverwrite && pathExists(mPath))
         throwIoError(mPath, "already exists (pass --force to replace it)");
-    mTempPath = mPath + ".partial." + std::to_string(::getpid());
+    // Unique per process and per object: two writers of one path never share a temporary.
+    static std::atomic<unsigned> counter{0};
+    mTempPath = mPath + ".partial." + std::to_string(::getpid()) + "." + std::to_string(counter++);
     mFd = ::open(mTempPath.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (mFd < 0) throwSystemError(mPath, "cannot write", errno);
 }
@@ -60,10 +64,13 @@ void AtomicOutputFile::commit() {
     int fd = mFd;
     mFd = -1;
     if (::close(fd) != 0) throwSystemError(mPath, "cannot close", errno);
-    if (!mOverwrite && pathExists(mPath))
-        throwIoError(mPath, "appeared while it was being written; not replaced");
-    if (std::rename(mTempPath.c_str(), mPath.c_str()) != 0)
+    // Without overwrite, the rename itself refuses an existing file: no window between a
+    // check and the rename in which another writer's file could be replaced.
+    const unsigned flags = mOverwrite ? 0 : RENAME_NOREPLACE;
+    if (::renameat2(AT_FDCWD, mTempPath.c_str(), AT_FDCWD, mPath.c_str(), flags) != 0) {
+        if (errno == EEXIST) throwIoError(mPath, "appeared while it was being written; not replaced");
         throwSystemError(mPath, "cannot rename the finished file into place", errno);
+    }
     mTempPath.clear();
 }
 

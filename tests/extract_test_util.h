@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -35,8 +36,8 @@ private:
     std::vector<unsigned char> mSamples;
     std::vector<std::vector<unsigned char>> mBricks;
     std::vector<BrickRange> mRanges;
-    int64_t mAcquired = 0;
-    int mPinned = 0;
+    std::atomic<int64_t> mAcquired{0};  // acquire may be called from several threads
+    std::atomic<int> mPinned{0};
 };
 
 // Distance from the centre of a dims^3 grid, for spheres: the isosurface r is a sphere.

@@ -126,3 +126,38 @@ TEST(ExtractOctree, EmptyWhenNoBrickHoldsTheIsovalue) {
 
 }  // namespace
 }  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {45, 41, 37};
+    auto turbulence = openSynthVolume(p);
+    const std::vector<unsigned char> samples = test::readAllSamples(*turbulence, 6);
+    const auto* s = reinterpret_cast<const uint16_t*>(samples.data());
+    test::MemoryBrickSource source(p.dims, ScalarType::U16, 8, [&](int64_t x, int64_t y, int64_t z) {
+        return double(s[x + p.dims[0] * (y + p.dims[1] * z)]);
+    });
+    const double iso = turbulenceIso(ScalarType::U16);
+    TriangleMesh serial;
+    extractOctree(source, {iso, 4, 1}, serial);
+    for (int threads : {2, 3}) {
+        for (bool noise : {false, true}) {
+            TriangleMesh parallel;
+            const FullExtractOptions o{iso, 4, threads};
+            if (noise)
+                extractNoise(source, o, parallel);
+            else
+                extractOctree(source, o, parallel);
+            EXPECT_EQ(parallel.vertexCount(), serial.vertexCount()) << threads << noise;
+            EXPECT_EQ(test::canonicalTriangles(parallel), test::canonicalTriangles(serial));
+            EXPECT_EQ(test::checkClosedOriented(parallel, &source.volume()), "");
+        }
+    }
+    EXPECT_EQ(source.pinned(), 0);
+}
+
+}  // namespace
+}  // namespace vdiso
