@@ -144,7 +144,8 @@ struct BrickKernel {
         const int px = cx + o[0], py = cy + o[1], pz = cz + o[2], axis = mcEdgeAxis(e);
         const int n = x.mLayout.brickSize + 1;
         const size_t local = ((size_t(pz) * n + py) * n + px) * 3 + axis;
-        if (x.mEdgeStamp[local] == x.mStamp) return x.mEdgeVertex[local];
+        BrickExtractor::EdgeSlot& slot = x.mEdges[local];
+        if (slot.stamp == x.mStamp) return slot.vertex;
 
         // Edges on the brick's faces are shared with a neighbour brick: weld through the map.
         const int p[3] = {px, py, pz};
@@ -158,8 +159,7 @@ struct BrickKernel {
                        uint64_t(d[0]) + uint64_t(corner0[0] + px)) * 3 + uint64_t(axis);
             const uint32_t v = seams.find(key);
             if (v != UINT32_MAX) {
-                x.mEdgeStamp[local] = x.mStamp;
-                x.mEdgeVertex[local] = v;
+                slot = {x.mStamp, v};
                 return v;
             }
         }
@@ -186,8 +186,7 @@ struct BrickKernel {
         const uint32_t v = uint32_t(mesh.positions.size());
         mesh.positions.push_back(glm::vec3(position));
         mesh.normals.push_back(glm::vec3(normal));
-        x.mEdgeStamp[local] = x.mStamp;
-        x.mEdgeVertex[local] = v;
+        slot = {x.mStamp, v};
         if (onFace) seams.insert(key, v);
         return v;
     }
@@ -225,7 +224,7 @@ struct BrickKernel {
 
     void beginBrick() {
         if (++x.mStamp == 0) {  // wrapped: old stamps could collide, so clear once
-            std::fill(x.mEdgeStamp.begin(), x.mEdgeStamp.end(), 0u);
+            std::fill(x.mEdges.begin(), x.mEdges.end(), BrickExtractor::EdgeSlot{});
             x.mStamp = 1;
         }
     }
@@ -236,8 +235,7 @@ BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layo
     : mVolume(volume), mLayout(layout), mMetaCellSize(std::max(1, metaCellSize)) {
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);
-    mEdgeVertex.resize(corners * corners * corners * 3);
-    mEdgeStamp.assign(mEdgeVertex.size(), 0u);
+    mEdges.resize(corners * corners * corners * 3);
 }
 
 void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out) {

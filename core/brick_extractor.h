@@ -115,9 +115,13 @@ private:
     BrickLayout mLayout;
     int mMetaCellSize;
     int mMetaPerAxis;
-    // Vertex of each local edge of the current brick, valid where mEdgeStamp == mStamp:
-    // stamping avoids clearing (B+1)^3 * 3 entries per brick.
-    std::vector<uint32_t> mEdgeVertex, mEdgeStamp;
+    // Vertex of each local edge of the current brick, valid where its stamp == mStamp:
+    // stamping avoids clearing (B+1)^3 * 3 entries per brick; stamp and vertex side by side
+    // cost one cache access per lookup.
+    struct EdgeSlot {
+        uint32_t stamp = 0, vertex = 0;
+    };
+    std::vector<EdgeSlot> mEdges;
     uint32_t mStamp = 0;
     std::vector<BrickRange> mRanges;
     KernelCounters mCounters;

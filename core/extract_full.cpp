@@ -60,6 +60,13 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             const FullExtractOptions& options, TriangleMesh& mesh,
                             const ProgressFn& progress, double progressStart,
                             ExtractItem&& extractItem) {
+    // A surface crossing a brick has on the order of B^2 active cells, two triangles and one
+    // vertex each: reserving that up front saves the copies of repeated regrowth (reserved
+    // pages that are never touched cost nothing).
+    const size_t perBrick = size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
+    mesh.indices.reserve(mesh.indices.size() + items.size() * perBrick * 6);
+    mesh.positions.reserve(mesh.positions.size() + items.size() * perBrick);
+    mesh.normals.reserve(mesh.positions.capacity());
     auto report = [&](size_t done) {
         if (progress) progress(progressStart + (1.0 - progressStart) * double(done) / double(items.size()));
     };
