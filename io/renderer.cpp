@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <dlfcn.h>
+
 #include <GL/gl.h>
 #include <GL/osmesa.h>
 #include <glm/geometric.hpp>
@@ -26,6 +28,68 @@ constexpr size_t kPointsPerDraw = size_t(1) << 20;
 constexpr float kSpecular = 0.2f;
 constexpr float kShininess = 40.0f;
 
+// OSMesa pulls in llvmpipe and LLVM: about 50 MB resident and tens of milliseconds of
+// relocation at start-up. It is loaded on the first render instead of linked, so every command
+// that does not draw stays small and starts fast. The entry points keep their GL names.
+#define VDISO_GL_ENTRY_POINTS(X) \
+    X(OSMesaCreateContextExt) \
+    X(OSMesaMakeCurrent) \
+    X(glClear) \
+    X(glClearColor) \
+    X(glClearDepth) \
+    X(glDepthFunc) \
+    X(glDepthRange) \
+    X(glDisable) \
+    X(glDisableClientState) \
+    X(glDrawArrays) \
+    X(glDrawElements) \
+    X(glEnable) \
+    X(glEnableClientState) \
+    X(glFinish) \
+    X(glGetError) \
+    X(glLightModelfv) \
+    X(glLightModeli) \
+    X(glLightf) \
+    X(glLightfv) \
+    X(glLoadIdentity) \
+    X(glLoadMatrixd) \
+    X(glMaterialf) \
+    X(glMaterialfv) \
+    X(glMatrixMode) \
+    X(glNormalPointer) \
+    X(glPixelStorei) \
+    X(glPointSize) \
+    X(glReadPixels) \
+    X(glShadeModel) \
+    X(glVertexPointer) \
+    X(glViewport) \
+
+struct GlApi {
+#define VDISO_GL_MEMBER(name) decltype(&::name) name = nullptr;
+    VDISO_GL_ENTRY_POINTS(VDISO_GL_MEMBER)
+#undef VDISO_GL_MEMBER
+};
+
+constexpr const char* kOsMesaLibrary = "libOSMesa.so.8";
+
+const GlApi& gl() {
+    static const GlApi api = [] {
+        void* library = ::dlopen(kOsMesaLibrary, RTLD_NOW | RTLD_LOCAL);
+        if (!library)
+            throw std::runtime_error(std::string("cannot load ") + kOsMesaLibrary +
+                                     " for rendering (Debian package libosmesa6): " + ::dlerror());
+        GlApi loaded;
+#define VDISO_GL_LOAD(name)                                                                  \
+    loaded.name = reinterpret_cast<decltype(loaded.name)>(::dlsym(library, #name));          \
+    if (!loaded.name)                                                                        \
+        throw std::runtime_error(std::string(kOsMesaLibrary) + " has no " #name);
+        VDISO_GL_ENTRY_POINTS(VDISO_GL_LOAD)
+#undef VDISO_GL_LOAD
+        return loaded;
+    }();
+    return api;
+}
+
 std::mutex gContextMutex;
 
 // The one context, made on first use and kept for the life of the process: contexts are
@@ -33,7 +97,7 @@ std::mutex gContextMutex;
 // destructor would race Mesa's own teardown at exit.
 OSMesaContext sharedContext() {
     static OSMesaContext context = [] {
-        OSMesaContext c = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
+        OSMesaContext c = gl().OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
         if (!c)
             throw std::runtime_error(
                 "OSMesa: cannot create an off-screen GL context (RGBA, 24-bit depth)");
@@ -45,11 +109,11 @@ OSMesaContext sharedContext() {
 // Unbinds the caller's colour buffer from the context, on every path out of renderSurface.
 struct CurrentContext {
     CurrentContext(OSMesaContext context, void* buffer, int width, int height) {
-        if (!OSMesaMakeCurrent(context, buffer, GL_UNSIGNED_BYTE, width, height))
+        if (!gl().OSMesaMakeCurrent(context, buffer, GL_UNSIGNED_BYTE, width, height))
             throw std::runtime_error("OSMesa: cannot bind a " + std::to_string(width) + "x" +
                                      std::to_string(height) + " colour buffer");
     }
-    ~CurrentContext() { OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0); }
+    ~CurrentContext() { gl().OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0); }
     CurrentContext(const CurrentContext&) = delete;
     CurrentContext& operator=(const CurrentContext&) = delete;
 };
@@ -62,64 +126,64 @@ void boundsOf(const std::vector<glm::vec3>& positions, glm::dvec3& lo, glm::dvec
 }
 
 void setUpState(const Camera& camera, const RenderStyle& style) {
-    glViewport(0, 0, camera.width, camera.height);
-    glClearColor(style.background.r, style.background.g, style.background.b, 1.0f);
-    glClearDepth(1.0);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthRange(0.0, 1.0);
-    glDisable(GL_CULL_FACE);
-    glDisable(GL_BLEND);
-    glDisable(GL_POINT_SMOOTH);
-    glShadeModel(GL_SMOOTH);
-    glEnable(GL_NORMALIZE);
-    glPointSize(style.pointSize);
+    gl().glViewport(0, 0, camera.width, camera.height);
+    gl().glClearColor(style.background.r, style.background.g, style.background.b, 1.0f);
+    gl().glClearDepth(1.0);
+    gl().glEnable(GL_DEPTH_TEST);
+    gl().glDepthFunc(GL_LESS);
+    gl().glDepthRange(0.0, 1.0);
+    gl().glDisable(GL_CULL_FACE);
+    gl().glDisable(GL_BLEND);
+    gl().glDisable(GL_POINT_SMOOTH);
+    gl().glShadeModel(GL_SMOOTH);
+    gl().glEnable(GL_NORMALIZE);
+    gl().glPointSize(style.pointSize);
 
-    glMatrixMode(GL_PROJECTION);
-    glLoadMatrixd(glm::value_ptr(camera.projectionMatrix()));
-    glMatrixMode(GL_MODELVIEW);
+    gl().glMatrixMode(GL_PROJECTION);
+    gl().glLoadMatrixd(glm::value_ptr(camera.projectionMatrix()));
+    gl().glMatrixMode(GL_MODELVIEW);
     // The light's position is taken in eye space when set: at the origin, it rides on the eye.
-    glLoadIdentity();
+    gl().glLoadIdentity();
     const GLfloat atEye[] = {0.0f, 0.0f, 0.0f, 1.0f};
     const GLfloat white[] = {1.0f, 1.0f, 1.0f, 1.0f};
     const GLfloat direct[] = {1.0f - style.ambient, 1.0f - style.ambient, 1.0f - style.ambient,
                               1.0f};
     const GLfloat none[] = {0.0f, 0.0f, 0.0f, 1.0f};
-    glLightfv(GL_LIGHT0, GL_POSITION, atEye);
-    glLightfv(GL_LIGHT0, GL_AMBIENT, none);
-    glLightfv(GL_LIGHT0, GL_DIFFUSE, direct);
-    glLightfv(GL_LIGHT0, GL_SPECULAR, white);
-    glLightf(GL_LIGHT0, GL_CONSTANT_ATTENUATION, 1.0f);
-    glLightf(GL_LIGHT0, GL_LINEAR_ATTENUATION, 0.0f);
-    glLightf(GL_LIGHT0, GL_QUADRATIC_ATTENUATION, 0.0f);
-    glEnable(GL_LIGHT0);
-    glEnable(GL_LIGHTING);
+    gl().glLightfv(GL_LIGHT0, GL_POSITION, atEye);
+    gl().glLightfv(GL_LIGHT0, GL_AMBIENT, none);
+    gl().glLightfv(GL_LIGHT0, GL_DIFFUSE, direct);
+    gl().glLightfv(GL_LIGHT0, GL_SPECULAR, white);
+    gl().glLightf(GL_LIGHT0, GL_CONSTANT_ATTENUATION, 1.0f);
+    gl().glLightf(GL_LIGHT0, GL_LINEAR_ATTENUATION, 0.0f);
+    gl().glLightf(GL_LIGHT0, GL_QUADRATIC_ATTENUATION, 0.0f);
+    gl().glEnable(GL_LIGHT0);
+    gl().glEnable(GL_LIGHTING);
     const GLfloat ambient[] = {style.ambient, style.ambient, style.ambient, 1.0f};
-    glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
-    glLightModeli(GL_LIGHT_MODEL_TWO_SIDE, GL_TRUE);
-    glLightModeli(GL_LIGHT_MODEL_LOCAL_VIEWER, GL_TRUE);
-    glDisable(GL_COLOR_MATERIAL);
+    gl().glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
+    gl().glLightModeli(GL_LIGHT_MODEL_TWO_SIDE, GL_TRUE);
+    gl().glLightModeli(GL_LIGHT_MODEL_LOCAL_VIEWER, GL_TRUE);
+    gl().glDisable(GL_COLOR_MATERIAL);
 
     const GLfloat color[] = {style.surfaceColor.r, style.surfaceColor.g, style.surfaceColor.b,
                              1.0f};
     const GLfloat specular[] = {kSpecular, kSpecular, kSpecular, 1.0f};
-    glMaterialfv(GL_FRONT_AND_BACK, GL_AMBIENT, color);
-    glMaterialfv(GL_FRONT_AND_BACK, GL_DIFFUSE, color);
-    glMaterialfv(GL_FRONT_AND_BACK, GL_SPECULAR, specular);
-    glMaterialfv(GL_FRONT_AND_BACK, GL_EMISSION, none);
-    glMaterialf(GL_FRONT_AND_BACK, GL_SHININESS, kShininess);
+    gl().glMaterialfv(GL_FRONT_AND_BACK, GL_AMBIENT, color);
+    gl().glMaterialfv(GL_FRONT_AND_BACK, GL_DIFFUSE, color);
+    gl().glMaterialfv(GL_FRONT_AND_BACK, GL_SPECULAR, specular);
+    gl().glMaterialfv(GL_FRONT_AND_BACK, GL_EMISSION, none);
+    gl().glMaterialf(GL_FRONT_AND_BACK, GL_SHININESS, kShininess);
 
-    glLoadMatrixd(glm::value_ptr(camera.viewMatrix()));
+    gl().glLoadMatrixd(glm::value_ptr(camera.viewMatrix()));
 }
 
 void drawTriangles(const TriangleMesh& mesh) {
     if (mesh.indices.empty()) return;
-    glVertexPointer(3, GL_FLOAT, 0, mesh.positions.data());
-    glNormalPointer(GL_FLOAT, 0, mesh.normals.data());
+    gl().glVertexPointer(3, GL_FLOAT, 0, mesh.positions.data());
+    gl().glNormalPointer(GL_FLOAT, 0, mesh.normals.data());
     const size_t triangles = mesh.triangleCount();
     for (size_t first = 0; first < triangles; first += kTrianglesPerDraw) {
         const size_t count = std::min(kTrianglesPerDraw, triangles - first);
-        glDrawElements(GL_TRIANGLES, GLsizei(count * 3), GL_UNSIGNED_INT,
+        gl().glDrawElements(GL_TRIANGLES, GLsizei(count * 3), GL_UNSIGNED_INT,
                        mesh.indices.data() + first * 3);
     }
 }
@@ -131,15 +195,15 @@ void drawPoints(const PointSet& points, const glm::dvec3& eye) {
     if (points.positions.empty()) return;
     std::vector<glm::vec3> facing(std::min(kPointsPerDraw, points.size()));
     const glm::vec3 eyef(eye);
-    glVertexPointer(3, GL_FLOAT, 0, points.positions.data());
-    glNormalPointer(GL_FLOAT, 0, facing.data());
+    gl().glVertexPointer(3, GL_FLOAT, 0, points.positions.data());
+    gl().glNormalPointer(GL_FLOAT, 0, facing.data());
     for (size_t first = 0; first < points.size(); first += kPointsPerDraw) {
         const size_t count = std::min(kPointsPerDraw, points.size() - first);
         for (size_t i = 0; i < count; ++i) {
             const glm::vec3& n = points.normals[first + i];
             facing[i] = glm::dot(n, eyef - points.positions[first + i]) < 0.0f ? -n : n;
         }
-        glDrawArrays(GL_POINTS, GLint(first), GLsizei(count));
+        gl().glDrawArrays(GL_POINTS, GLint(first), GLsizei(count));
     }
 }
 
@@ -174,31 +238,31 @@ RenderResult renderSurface(const TriangleMesh& mesh, const PointSet& points, con
     std::lock_guard<std::mutex> lock(gContextMutex);
     std::vector<uint8_t> colorBuffer(pixels * 4);
     CurrentContext current(sharedContext(), colorBuffer.data(), w, h);
-    while (glGetError() != GL_NO_ERROR) {
+    while (gl().glGetError() != GL_NO_ERROR) {
     }
 
     setUpState(cam, style);
-    glEnableClientState(GL_VERTEX_ARRAY);
-    glEnableClientState(GL_NORMAL_ARRAY);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    glFinish();
+    gl().glEnableClientState(GL_VERTEX_ARRAY);
+    gl().glEnableClientState(GL_NORMAL_ARRAY);
+    gl().glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    gl().glFinish();
 
     const auto start = std::chrono::steady_clock::now();
     drawTriangles(mesh);
     drawPoints(points, cam.eye);
-    glFinish();
+    gl().glFinish();
     result.drawSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    glDisableClientState(GL_VERTEX_ARRAY);
-    glDisableClientState(GL_NORMAL_ARRAY);
+    gl().glDisableClientState(GL_VERTEX_ARRAY);
+    gl().glDisableClientState(GL_NORMAL_ARRAY);
 
     // GL's rows run bottom-up; ours top-down.
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    gl().glPixelStorei(GL_PACK_ALIGNMENT, 1);
     std::vector<uint8_t> rgba(pixels * 4);
     std::vector<float> depth(pixels);
-    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-    glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
-    if (GLenum error = glGetError(); error != GL_NO_ERROR) {
+    gl().glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+    gl().glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+    if (GLenum error = gl().glGetError(); error != GL_NO_ERROR) {
         if (error == GL_OUT_OF_MEMORY)
             throw std::runtime_error("OpenGL: out of memory while rendering");
         throw std::runtime_error("OpenGL error " + std::to_string(error) + " while rendering");
