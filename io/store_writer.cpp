@@ -228,7 +228,11 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     // Bricks are encoded a few rows at a time and written in id order: enough work for every
     // core, while the compressed bytes held stay a few MB whatever the layer's size.
     const int64_t groupRows = std::max<int64_t>(1, 128 / rowBricks);
-    std::vector<StoredBrick> group(static_cast<size_t>(groupRows * rowBricks));
+    // Two groups: one is encoded while the other is written, so neither core waits on the
+    // copy into the page cache. One write is in flight at a time.
+    std::vector<StoredBrick> groups[2];
+    for (auto& g : groups) g.resize(static_cast<size_t>(groupRows * rowBricks));
+    std::future<void> pendingWrite;
     tbb::enumerable_thread_specific<BrickScratch> scratch;
 
     // The last slice a layer needs (the next layer's read starts after it).
@@ -236,12 +240,14 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         return std::min(layout.firstSample(bk) + layout.side() - 1, info.dims[2] - 1);
     };
     readSlices(source, ring, 0, lastSliceOfLayer(0) + 1);
+    int64_t groupIndex = 0;
     for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
         std::future<void> prefetch;
         if (bk + 1 < layout.brickCounts[2])
             prefetch = std::async(std::launch::async, readSlices, std::ref(source), std::ref(ring),
                                   lastSliceOfLayer(bk) + 1, lastSliceOfLayer(bk + 1) + 1);
-        for (int64_t bj = 0; bj < layout.brickCounts[1]; bj += groupRows) {
+        for (int64_t bj = 0; bj < layout.brickCounts[1]; bj += groupRows, ++groupIndex) {
+            std::vector<StoredBrick>& group = groups[groupIndex % 2];
             const int64_t firstId = layout.brickId(0, bj, bk);
             const int64_t count = std::min(groupRows, layout.brickCounts[1] - bj) * rowBricks;
             tbb::parallel_for(tbb::blocked_range<int64_t>(0, count, 2), [&](const auto& r) {
@@ -253,15 +259,21 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             for (int64_t b = 0; b < count; ++b) {
                 StoredBrick& sb = group[size_t(b)];
                 sb.entry.offset = fileEnd;
-                out.writeAt(sb.bytes.data(), sb.bytes.size(), fileEnd);
                 fileEnd = alignUp(fileEnd + sb.bytes.size());
                 entries[size_t(firstId + b)] = sb.entry;
             }
-            out.startWriteback(groupStart, fileEnd - groupStart);
+            if (pendingWrite.valid()) pendingWrite.get();
+            pendingWrite = std::async(std::launch::async, [&out, &group, count, groupStart, fileEnd] {
+                for (int64_t b = 0; b < count; ++b)
+                    out.writeAt(group[size_t(b)].bytes.data(), group[size_t(b)].bytes.size(),
+                                group[size_t(b)].entry.offset);
+                out.startWriteback(groupStart, fileEnd - groupStart);
+            });
         }
         if (prefetch.valid()) prefetch.get();
         if (progress) progress(double(bk + 1) / double(layout.brickCounts[2]));
     }
+    if (pendingWrite.valid()) pendingWrite.get();
     source.finish();
 
     StoreHeader header;

@@ -4,7 +4,8 @@
 // for the next layer while this one is encoded. Memory is those slices plus a few MB of
 // compressed bricks, whatever the volume's depth. Bricks are gathered, measured (min, max,
 // histogram) and compressed in parallel (TBB), a few rows at a time, and written in id order
-// at 4 KiB-aligned offsets, with writeback started as they go. The header and index are
+// at 4 KiB-aligned offsets by a writer thread while the next rows are encoded, with writeback
+// to disk started as they go. The header and index are
 // written last and the file is renamed into place only when complete (AtomicOutputFile).
 #pragma once
 
