@@ -59,6 +59,19 @@ BrickHandle MemoryBrickSource::acquire(int64_t id) {
     return BrickHandle(this, id, mBricks[size_t(id)].data());
 }
 
+std::unique_ptr<MemoryBrickSource> synthBrickSource(const SynthParams& params, int brickSize) {
+    std::vector<unsigned char> samples(VolumeInfo{params.dims, params.type}.byteSize());
+    synthesizeSlices(params, 0, params.dims[2], samples.data());
+    return visitScalarType(params.type, [&](auto zero) {
+        using T = decltype(zero);
+        const T* s = reinterpret_cast<const T*>(samples.data());
+        return std::make_unique<MemoryBrickSource>(
+            params.dims, params.type, brickSize, [&](int64_t x, int64_t y, int64_t z) {
+                return double(s[x + params.dims[0] * (y + params.dims[1] * z)]);
+            });
+    });
+}
+
 double sphereDistance(const Dims3& dims, int64_t x, int64_t y, int64_t z) {
     const double cx = (dims[0] - 1) / 2.0, cy = (dims[1] - 1) / 2.0, cz = (dims[2] - 1) / 2.0;
     return std::sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy) + (z - cz) * (z - cz));

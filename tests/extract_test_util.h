@@ -5,10 +5,12 @@
 #include <array>
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/brick_source.h"
+#include "core/synth.h"
 #include "core/mesh.h"
 
 namespace vdiso::test {
@@ -39,6 +41,9 @@ private:
     std::atomic<int64_t> mAcquired{0};  // acquire may be called from several threads
     std::atomic<int> mPinned{0};
 };
+
+// A generated volume (core/synth.h) served from memory in bricks of `brickSize` cells.
+std::unique_ptr<MemoryBrickSource> synthBrickSource(const SynthParams& params, int brickSize);
 
 // Distance from the centre of a dims^3 grid, for spheres: the isosurface r is a sphere.
 double sphereDistance(const Dims3& dims, int64_t x, int64_t y, int64_t z);

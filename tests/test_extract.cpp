@@ -65,12 +65,8 @@ TEST(ExtractOctree, NoiseGivesTheSameTriangles) {
     SynthParams p;
     p.kind = SynthKind::Head;
     p.dims = {48, 44, 40};
-    auto head = openSynthVolume(p);
-    const std::vector<unsigned char> samples = test::readAllSamples(*head, 5);
-    const auto* s = reinterpret_cast<const uint16_t*>(samples.data());
-    MemoryBrickSource source(p.dims, ScalarType::U16, 8, [&](int64_t x, int64_t y, int64_t z) {
-        return double(s[x + p.dims[0] * (y + p.dims[1] * z)]);
-    });
+    auto head = test::synthBrickSource(p, 8);
+    MemoryBrickSource& source = *head;
     for (double iso : {kHeadSkinIso, kHeadBoneIso}) {
         for (int metaCell : {2, 4, 8}) {
             TriangleMesh octree, noise;
@@ -90,12 +86,8 @@ TEST(ExtractOctree, StoreThroughTheCacheEqualsMemory) {
     SynthParams p;
     p.kind = SynthKind::Turbulence;
     p.dims = {40, 36, 30};
-    auto turbulence = openSynthVolume(p);
-    const std::vector<unsigned char> samples = test::readAllSamples(*turbulence, 4);
-    const auto* s = reinterpret_cast<const uint16_t*>(samples.data());
-    MemoryBrickSource memory(p.dims, ScalarType::U16, 16, [&](int64_t x, int64_t y, int64_t z) {
-        return double(s[x + p.dims[0] * (y + p.dims[1] * z)]);
-    });
+    auto turbulence = test::synthBrickSource(p, 16);
+    MemoryBrickSource& memory = *turbulence;
     test::ScratchDir dir;
     auto again = openSynthVolume(p);
     StoreWriteOptions o;
@@ -134,12 +126,8 @@ TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
     SynthParams p;
     p.kind = SynthKind::Turbulence;
     p.dims = {45, 41, 37};
-    auto turbulence = openSynthVolume(p);
-    const std::vector<unsigned char> samples = test::readAllSamples(*turbulence, 6);
-    const auto* s = reinterpret_cast<const uint16_t*>(samples.data());
-    test::MemoryBrickSource source(p.dims, ScalarType::U16, 8, [&](int64_t x, int64_t y, int64_t z) {
-        return double(s[x + p.dims[0] * (y + p.dims[1] * z)]);
-    });
+    auto turbulence = test::synthBrickSource(p, 8);
+    test::MemoryBrickSource& source = *turbulence;
     const double iso = turbulenceIso(ScalarType::U16);
     TriangleMesh serial;
     extractOctree(source, {iso, 4, 1}, serial);

@@ -69,4 +69,34 @@ glm::dvec3 parseSpacing(const std::string& flag, const std::string& text) {
     return s;
 }
 
+const char* const kStoreWriteOptionsHelp =
+    "  --brick B               cells per brick side (default 32)\n"
+    "  --compress zstd|none    brick compression (default zstd)\n"
+    "  --level N               zstd level (default 1)\n"
+    "  --no-shuffle            compress multi-byte samples without the byte-shuffle filter\n"
+    "  --force                 replace OUTPUT if it exists\n";
+
+bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions& options) {
+    if (flag == "--brick") {
+        options.brickSize = int(parseInt(flag, args.value(flag), 2, 512));
+    } else if (flag == "--compress") {
+        const std::string c = args.value(flag);
+        if (c == "zstd")
+            options.compression = Compression::Zstd;
+        else if (c == "none")
+            options.compression = Compression::None;
+        else
+            throw UsageError("--compress expects zstd or none, not '" + c + "'");
+    } else if (flag == "--level") {
+        options.compressionLevel = int(parseInt(flag, args.value(flag), -7, 19));
+    } else if (flag == "--no-shuffle") {
+        options.shuffle = false;
+    } else if (flag == "--force") {
+        options.overwrite = true;
+    } else {
+        return false;
+    }
+    return true;
+}
+
 }  // namespace vdiso::cli

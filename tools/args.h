@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 
 #include "core/volume.h"
+#include "io/store_writer.h"
 
 namespace vdiso::cli {
 
@@ -39,5 +40,12 @@ double parseDouble(const std::string& flag, const std::string& text);
 Dims3 parseDims(const std::string& flag, const std::string& text);
 // "S" (all axes) or "X,Y,Z", each positive.
 glm::dvec3 parseSpacing(const std::string& flag, const std::string& text);
+
+// The options every command that writes a brick store takes: --brick, --compress, --level,
+// --no-shuffle, --force. Consumes `flag` (and its value) and returns true if it is one.
+bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions& options);
+
+// Help lines for those options.
+extern const char* const kStoreWriteOptionsHelp;
 
 }  // namespace vdiso::cli

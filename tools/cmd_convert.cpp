@@ -28,13 +28,9 @@ constexpr const char* kHelp =
     "  --header-bytes N        bytes to skip before the samples (default 0)\n"
     "OpenVDB input:\n"
     "  --grid NAME             the float grid to convert (default: the first)\n"
-    "store:\n"
-    "  --brick B               cells per brick side (default 32)\n"
-    "  --compress zstd|none    brick compression (default zstd)\n"
-    "  --level N               zstd level (default 1)\n"
-    "  --no-shuffle            compress multi-byte samples without the byte-shuffle filter\n"
-    "  --force                 replace OUTPUT if it exists\n"
-    "  --quiet                 no progress bar or summary\n";
+    "other:\n"
+    "  --quiet                 no progress bar or summary\n"
+    "store:\n";
 
 std::optional<FileScalar> parseFileScalar(const std::string& name) {
     static const std::pair<const char*, FileScalar> kNames[] = {
@@ -59,6 +55,7 @@ int runConvert(int argc, char** argv) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {
             std::fputs(kHelp, stdout);
+            std::fputs(kStoreWriteOptionsHelp, stdout);
             return 0;
         } else if (a == "--dims") {
             raw.dims = parseDims(a, args.value(a));
@@ -82,19 +79,7 @@ int runConvert(int argc, char** argv) {
             rawOnlyGiven = true;
         } else if (a == "--grid") {
             input.grid = args.value(a);
-        } else if (a == "--brick") {
-            store.brickSize = int(parseInt(a, args.value(a), 2, 512));
-        } else if (a == "--compress") {
-            const std::string c = args.value(a);
-            if (c == "zstd") store.compression = Compression::Zstd;
-            else if (c == "none") store.compression = Compression::None;
-            else throw UsageError("--compress expects zstd or none, not '" + c + "'");
-        } else if (a == "--level") {
-            store.compressionLevel = int(parseInt(a, args.value(a), -7, 19));
-        } else if (a == "--no-shuffle") {
-            store.shuffle = false;
-        } else if (a == "--force") {
-            store.overwrite = true;
+        } else if (takeStoreWriteOption(a, args, store)) {
         } else if (a == "--quiet") {
             quiet = true;
         } else if (!a.empty() && a[0] == '-' && a != "-") {

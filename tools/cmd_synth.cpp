@@ -22,10 +22,8 @@ constexpr const char* kHelp =
     "  --size N | X,Y,Z        samples per axis\n"
     "  --type T                u8, i16, u16, f32 (default u16; head needs i16, u16 or f32)\n"
     "  --seed S                random seed (default 1)\n"
-    "  --brick B               store output: cells per brick side (default 32)\n"
-    "  --compress zstd|none    store output: brick compression (default zstd)\n"
-    "  --force                 replace OUTPUT if it exists\n"
-    "  --quiet                 no progress bar or summary\n";
+    "  --quiet                 no progress bar or summary\n"
+    "store output (and --force for both):\n";
 
 bool endsWithVdiso(const std::string& s) {
     return s.size() >= 6 && s.compare(s.size() - 6, 6, ".vdiso") == 0;
@@ -43,6 +41,7 @@ int runSynth(int argc, char** argv) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {
             std::fputs(kHelp, stdout);
+            std::fputs(kStoreWriteOptionsHelp, stdout);
             return 0;
         } else if (a == "--kind") {
             const std::string k = args.value(a);
@@ -60,15 +59,7 @@ int runSynth(int argc, char** argv) {
             params.type = *type;
         } else if (a == "--seed") {
             params.seed = uint64_t(parseInt(a, args.value(a), 0, INT64_MAX));
-        } else if (a == "--brick") {
-            store.brickSize = int(parseInt(a, args.value(a), 2, 512));
-        } else if (a == "--compress") {
-            const std::string c = args.value(a);
-            if (c == "zstd") store.compression = Compression::Zstd;
-            else if (c == "none") store.compression = Compression::None;
-            else throw UsageError("--compress expects zstd or none, not '" + c + "'");
-        } else if (a == "--force") {
-            store.overwrite = true;
+        } else if (takeStoreWriteOption(a, args, store)) {
         } else if (a == "--quiet") {
             quiet = true;
         } else if (!a.empty() && a[0] == '-') {
