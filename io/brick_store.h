@@ -69,11 +69,18 @@ struct StoreHeader {
     uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded)
 };
 
+// How bricks are read. Buffered: through the page cache (repeated runs hit memory). Cold: the
+// file's pages are dropped at open and every brick is read from the disk, so I/O times mean
+// what they say. Cold reads use O_DIRECT (aligned reads of whole 4 KiB blocks; the format
+// aligns every brick for it); where the file system refuses O_DIRECT (tmpfs), each brick's
+// pages are dropped after it is read instead (posix_fadvise DONTNEED). coldMethod() says which.
+enum class ReadMode { Buffered, Cold };
+
 class BrickStoreReader {
 public:
     // Reads and validates header and index. Throws IoError naming the file and the problem
     // (wrong magic, newer version, bad header checksum, truncated or corrupt index, ...).
-    explicit BrickStoreReader(std::string path);
+    explicit BrickStoreReader(std::string path, ReadMode mode = ReadMode::Buffered);
     ~BrickStoreReader();
     BrickStoreReader(const BrickStoreReader&) = delete;
     BrickStoreReader& operator=(const BrickStoreReader&) = delete;
@@ -85,6 +92,9 @@ public:
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
     uint64_t fileBytes() const { return mFileBytes; }
+    ReadMode readMode() const { return mMode; }
+    // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read).
+    const char* readMethod() const;
     // Bytes one decoded brick takes: (B+3)^3 samples.
     size_t brickBytes() const { return size_t(mLayout.samplesPerBrick()) * scalarSize(volume().type); }
 
@@ -103,6 +113,8 @@ private:
 
     std::string mPath;
     int mFd = -1;
+    int mDirectFd = -1;  // O_DIRECT descriptor in cold mode, when the file system allows it
+    ReadMode mMode = ReadMode::Buffered;
     uint64_t mFileBytes = 0;
     StoreHeader mHeader;
     BrickLayout mLayout;

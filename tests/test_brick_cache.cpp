@@ -89,3 +89,36 @@ TEST_F(BrickCacheTest, CorruptBrickIsReportedNotReturned) {
 
 }  // namespace
 }  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST_F(BrickCacheTest, ColdReadsReturnTheSameBricksFromDisk) {
+    const BrickStoreReader buffered(path);
+    const BrickStoreReader cold(path, ReadMode::Cold);
+    EXPECT_STREQ(buffered.readMethod(), "buffered");
+    // ext4 and most disk file systems take O_DIRECT; tmpfs does not, and then pages are
+    // dropped after each read instead. Either way the method is reported, never hidden.
+    EXPECT_TRUE(std::string(cold.readMethod()) == "direct" ||
+                std::string(cold.readMethod()) == "fadvise")
+        << cold.readMethod();
+    std::vector<unsigned char> a(buffered.brickBytes()), b(cold.brickBytes());
+    for (int64_t id = 0; id < buffered.layout().brickCount(); ++id) {
+        buffered.readBrick(id, a.data());
+        cold.readBrick(id, b.data());
+        EXPECT_EQ(a, b) << "brick " << id;
+    }
+    BrickCache cache(cold, 64u << 20);
+    for (int64_t id = 0; id < cold.layout().brickCount(); ++id) cache.acquire(id);
+    EXPECT_EQ(cache.counters().bytesRead, cold.header().storedBrickBytes);
+}
+
+TEST_F(BrickCacheTest, ColdReadOfATruncatedStoreFailsAtOpen) {
+    auto bytes = test::readFile(path);
+    bytes.resize(bytes.size() - 100);
+    test::writeFile(path, bytes.data(), bytes.size());
+    EXPECT_THROW(BrickStoreReader(path, ReadMode::Cold), IoError);
+}
+
+}  // namespace
+}  // namespace vdiso
