@@ -183,7 +183,7 @@ struct BrickKernel {
             normal = glm::dvec3(0.0);
             normal[axis] = s1 > s0 ? -1.0 : 1.0;
         }
-        const uint32_t v = uint32_t(mesh.positions.size());
+        const uint32_t v = mesh.nextVertex();
         mesh.positions.push_back(glm::vec3(position));
         mesh.normals.push_back(glm::vec3(normal));
         slot = {x.mStamp, v};

@@ -27,6 +27,7 @@ constexpr int64_t kProgressEvery = 32;
 // Chunks per thread when extracting in parallel: enough to balance uneven bricks.
 constexpr size_t kChunksPerThread = 8;
 
+
 struct ChunkOutput {
     TriangleMesh mesh;
     EdgeVertexMap seams;
@@ -34,6 +35,7 @@ struct ChunkOutput {
 };
 
 // Appends a chunk's mesh to `out`, merging its brick-face vertices with those already there.
+// (Chunk meshes number their vertices from 0; `out` may have streamed earlier ones away.)
 void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) {
     constexpr uint32_t kNew = UINT32_MAX;
     std::vector<uint32_t> remap(chunk.mesh.vertexCount(), kNew);
@@ -43,7 +45,7 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) 
     });
     for (size_t v = 0; v < remap.size(); ++v) {
         if (remap[v] != kNew) continue;
-        remap[v] = uint32_t(out.positions.size());
+        remap[v] = out.nextVertex();
         out.positions.push_back(chunk.mesh.positions[v]);
         out.normals.push_back(chunk.mesh.normals[v]);
     }
@@ -58,14 +60,28 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) 
 template <class Item, class ExtractItem>
 KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             const FullExtractOptions& options, TriangleMesh& mesh,
-                            const ProgressFn& progress, double progressStart,
-                            ExtractItem&& extractItem) {
+                            FullExtractStats& stats, const ProgressFn& progress,
+                            double progressStart, ExtractItem&& extractItem) {
+    const uint32_t firstVertex = mesh.nextVertex();
+    uint64_t trianglesStreamed = 0;
+    auto stream = [&](bool last) {
+        if (!options.sink || (!last && mesh.vertexCount() < options.streamPieceVertices)) return;
+        trianglesStreamed += mesh.triangleCount();
+        drainInto(*options.sink, mesh);
+    };
+    auto finish = [&] {
+        stream(true);
+        stats.triangles = trianglesStreamed + mesh.triangleCount();
+        stats.vertices = mesh.nextVertex() - firstVertex;
+    };
     // A surface crossing a brick has on the order of B^2 active cells, two triangles and one
     // vertex each: reserving that up front saves the copies of repeated regrowth (reserved
     // pages that are never touched cost nothing).
     const size_t perBrick = size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
-    mesh.indices.reserve(mesh.indices.size() + items.size() * perBrick * 6);
-    mesh.positions.reserve(mesh.positions.size() + items.size() * perBrick);
+    const size_t expectVertices =
+        options.sink ? options.streamPieceVertices + perBrick * 4 : items.size() * perBrick;
+    mesh.indices.reserve(mesh.indices.size() + expectVertices * 6);
+    mesh.positions.reserve(mesh.positions.size() + expectVertices);
     mesh.normals.reserve(mesh.positions.capacity());
     auto report = [&](size_t done) {
         if (progress) progress(progressStart + (1.0 - progressStart) * double(done) / double(items.size()));
@@ -75,8 +91,10 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         EdgeVertexMap seams;
         for (size_t i = 0; i < items.size(); ++i) {
             extractItem(extractor, items[i], mesh, seams);
+            stream(false);
             if (i % kProgressEvery == 0 || i + 1 == items.size()) report(i + 1);
         }
+        finish();
         return extractor.counters();
     }
     const size_t chunkCount = std::min(items.size(), size_t(options.threads) * kChunksPerThread);
@@ -108,7 +126,9 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         total.cellsActive += chunk.counters.cellsActive;
         mergeChunk(chunk, mesh, seams);
         chunk = ChunkOutput();  // free the chunk's memory as soon as it is merged
+        stream(false);
     }
+    finish();
     report(items.size());
     return total;
 }
@@ -124,7 +144,7 @@ FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& op
     stats.nodesVisited =
         tree.forEachActiveBrick(options.iso, [&](int64_t id) { bricks.push_back(id); });
     const KernelCounters counters = extractItems(
-        bricks, source, options, mesh, progress, 0.0,
+        bricks, source, options, mesh, stats, progress, 0.0,
         [&](BrickExtractor& extractor, int64_t id, TriangleMesh& out, EdgeVertexMap& seams) {
             const BrickHandle brick = source.acquire(id);
             extractor.extractBrick(id, brick.samples(), options.iso, out, seams);
@@ -181,7 +201,7 @@ FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& opt
         work.back().end = i + 1;
     }
     const KernelCounters counters = extractItems(
-        work, source, options, mesh, progress, 0.5,
+        work, source, options, mesh, stats, progress, 0.5,
         [&](BrickExtractor& extractor, const BrickWork& w, TriangleMesh& out, EdgeVertexMap& seams) {
             const BrickHandle brick = source.acquire(w.id);
             extractor.extractMetaCells(

@@ -28,9 +28,15 @@ struct FullExtractOptions {
     // output does not depend on scheduling), each with its own mesh, merged in order with
     // vertices on chunk borders welded.
     int threads = 1;
+    // When set, the surface is streamed: every streamPieceVertices vertices, what the mesh holds is
+    // handed to the sink and dropped (drainInto), and at the end the mesh is empty. Memory then
+    // holds a bounded part of the output instead of all of it.
+    MeshSink* sink = nullptr;
+    size_t streamPieceVertices = size_t(1) << 20;  // vertices per piece handed to the sink
 };
 
 struct FullExtractStats {
+    uint64_t triangles = 0, vertices = 0;  // produced in all (streamed or held)
     int64_t nodesVisited = 0;     // octree: min/max tree nodes; noise: span-space answers
     int64_t bricksActive = 0;     // bricks acquired for extraction
     int64_t metaCellsActive = 0;

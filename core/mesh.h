@@ -18,16 +18,36 @@ namespace vdiso {
 struct TriangleMesh {
     std::vector<glm::vec3> positions;
     std::vector<glm::vec3> normals;
-    std::vector<uint32_t> indices;  // 3 per triangle
+    std::vector<uint32_t> indices;  // 3 per triangle, global vertex numbers
+    // Global number of positions[0]: non-zero when earlier vertices were handed to a MeshSink
+    // and dropped (indices still count them), so welded references stay valid while streaming.
+    uint32_t firstVertex = 0;
 
-    size_t vertexCount() const { return positions.size(); }
+    size_t vertexCount() const { return positions.size(); }  // vertices held
     size_t triangleCount() const { return indices.size() / 3; }
+    uint32_t nextVertex() const { return firstVertex + uint32_t(positions.size()); }
     void clear() {
         positions.clear();
         normals.clear();
         indices.clear();
     }
 };
+
+// Where streamed extraction output goes (a file writer in io/, a test's collector). append()
+// receives the vertices numbered part.firstVertex onwards and triangles that may refer to any
+// vertex appended so far or in this part; the caller then drops them (see drainInto).
+class MeshSink {
+public:
+    virtual ~MeshSink() = default;
+    virtual void append(const TriangleMesh& part) = 0;
+};
+
+// Hands what `mesh` holds to the sink and drops it, keeping the global vertex numbering.
+inline void drainInto(MeshSink& sink, TriangleMesh& mesh) {
+    sink.append(mesh);
+    mesh.firstVertex = mesh.nextVertex();
+    mesh.clear();
+}
 
 struct PointSet {
     std::vector<glm::vec3> positions;

@@ -29,7 +29,7 @@ AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite)
     // Unique per process and per object: two writers of one path never share a temporary.
     static std::atomic<unsigned> counter{0};
     mTempPath = mPath + ".partial." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    mFd = ::open(mTempPath.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    mFd = ::open(mTempPath.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (mFd < 0) throwSystemError(mPath, "cannot write", errno);
 }
 

@@ -160,14 +160,22 @@ int runExtract(int argc, char** argv) {
     else if (!o.pngPath.empty())
         camera = presetCamera(o.view, boundsMin, boundsMax, o.width, o.height);
 
+    // Without a picture to draw, the mesh goes to its file as it is extracted: memory holds a
+    // bounded part of it. A picture needs the whole mesh, so then it is held.
     TriangleMesh mesh;
-    const FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
+    std::optional<MeshFileWriter> streamed;
+    if (!o.meshPath.empty() && !camera) streamed.emplace(o.meshPath, o.overwrite);
+    FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
+    if (streamed) extract.sink = &*streamed;
     const ProgressFn progress = progressBar("extract", 0, o.quiet);
     const FullExtractStats stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
                                                        : extractOctree(cache, extract, mesh, progress);
     const CacheCounters io = cache.counters();
 
-    if (!o.meshPath.empty()) writeMesh(o.meshPath, mesh, o.overwrite);
+    if (streamed)
+        streamed->finish();
+    else if (!o.meshPath.empty())
+        writeMesh(o.meshPath, mesh, o.overwrite);
     std::optional<double> drawSeconds;
     if (camera) {
         const RenderResult r = renderSurface(mesh, PointSet{}, *camera);
@@ -178,8 +186,8 @@ int runExtract(int argc, char** argv) {
     JsonObject s;
     s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", o.threads);
-    s.add("triangles", uint64_t(mesh.triangleCount())).add("points", uint64_t(0));
-    s.add("vertices", uint64_t(mesh.vertexCount()));
+    s.add("triangles", stats.triangles).add("points", uint64_t(0));
+    s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
@@ -200,9 +208,10 @@ int runExtract(int argc, char** argv) {
         out.commit();
     }
     if (!o.quiet && o.statsPath != "-")
-        std::printf("%s iso %g: %zu triangles, %zu vertices, %.3f s extract (%.3f s read, "
+        std::printf("%s iso %g: %llu triangles, %llu vertices, %.3f s extract (%.3f s read, "
                     "%.3f s decode), %llu bricks read (%.1f MB)%s\n",
-                    o.method.c_str(), *o.iso, mesh.triangleCount(), mesh.vertexCount(),
+                    o.method.c_str(), *o.iso, (unsigned long long)stats.triangles,
+                    (unsigned long long)stats.vertices,
                     stats.extractSeconds, io.readSeconds, io.decodeSeconds,
                     (unsigned long long)io.misses, io.bytesRead / 1e6,
                     drawSeconds ? (", drawn in " + std::to_string(*drawSeconds) + " s").c_str() : "");
