@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <thread>
 #include <mutex>
 
 #include <tbb/parallel_for.h>
@@ -56,7 +59,84 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) 
     for (uint32_t i : chunk.mesh.indices) out.indices.push_back(remap[i]);
 }
 
-// Runs extractItem(extractor, item, mesh, seams) over `items`, on `threads` threads, into `mesh`.
+int64_t brickOf(int64_t id) { return id; }
+
+// NOISE's unit of work: one brick and the range of its active meta-cells in a shared list.
+struct BrickWork {
+    int64_t id;
+    size_t begin, end;
+};
+int64_t brickOf(const BrickWork& w) { return w.id; }
+
+// Loads the bricks of `items` into the source's cache a bounded distance ahead of the
+// extraction, on its own thread, so reading and decoding overlap extraction. It only touches
+// bricks on the list (those that passed every test), in the order they will be used, never
+// more than `lookahead` ahead, and keeps each one pinned until the extraction has reached it:
+// a prefetched brick is never evicted before its use, so none is read twice. (The cache must
+// hold more than `lookahead` bricks; if it fills with pins, prefetching stops.)
+template <class Item>
+class BrickPrefetcher {
+public:
+    BrickPrefetcher(BrickSource& source, const std::vector<Item>& items, size_t lookahead)
+        : mSource(source), mItems(items), mLookahead(lookahead) {
+        if (lookahead > 0) mThread = std::thread([this] { run(); });
+    }
+    ~BrickPrefetcher() {
+        {
+            std::lock_guard lock(mMutex);
+            mStop = true;
+        }
+        mAdvanced.notify_all();
+        if (mThread.joinable()) mThread.join();
+        mPinned.clear();
+    }
+    // The extraction is about to use item i: earlier items' pins are no longer needed.
+    void consumed(size_t i) {
+        std::deque<std::pair<size_t, BrickHandle>> done;
+        {
+            std::lock_guard lock(mMutex);
+            mConsumed = i;
+            while (!mPinned.empty() && mPinned.front().first < i) {
+                done.push_back(std::move(mPinned.front()));
+                mPinned.pop_front();
+            }
+        }
+        mAdvanced.notify_all();
+    }  // `done` releases its pins here, outside the lock
+
+private:
+    void run() {
+        for (size_t i = 0;; ++i) {
+            std::unique_lock lock(mMutex);
+            mAdvanced.wait(lock, [&] { return mStop || i < mConsumed + mLookahead; });
+            // Fallen behind (the extraction outran us): skip what it already has or is
+            // loading itself; fetching those could only read them a second time.
+            if (i <= mConsumed) i = mConsumed + 1;
+            if (mStop || i >= mItems.size()) return;
+            lock.unlock();
+            BrickHandle brick;
+            try {
+                brick = mSource.acquire(brickOf(mItems[i]));
+            } catch (...) {
+                return;  // the extraction's own acquire meets the error and reports it
+            }
+            lock.lock();
+            mPinned.emplace_back(i, std::move(brick));
+        }
+    }
+    BrickSource& mSource;
+    const std::vector<Item>& mItems;
+    size_t mLookahead;
+    size_t mConsumed = 0;
+    bool mStop = false;
+    std::deque<std::pair<size_t, BrickHandle>> mPinned;  // by item index, ascending
+    std::mutex mMutex;
+    std::condition_variable mAdvanced;
+    std::thread mThread;
+};
+
+// Runs extractItem(extractor, item, samples, mesh, seams) over `items`, on `threads` threads,
+// into `mesh`, acquiring each item's brick first (the time waited for it is counted).
 template <class Item, class ExtractItem>
 KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             const FullExtractOptions& options, TriangleMesh& mesh,
@@ -64,6 +144,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             double progressStart, ExtractItem&& extractItem) {
     const uint32_t firstVertex = mesh.nextVertex();
     uint64_t trianglesStreamed = 0;
+    std::atomic<int64_t> waitNanoseconds{0};
     auto stream = [&](bool last) {
         if (!options.sink || (!last && mesh.vertexCount() < options.streamPieceVertices)) return;
         trianglesStreamed += mesh.triangleCount();
@@ -73,6 +154,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         stream(true);
         stats.triangles = trianglesStreamed + mesh.triangleCount();
         stats.vertices = mesh.nextVertex() - firstVertex;
+        stats.brickWaitSeconds = double(waitNanoseconds) * 1e-9;
     };
     // A surface crossing a brick has on the order of B^2 active cells, two triangles and one
     // vertex each: reserving that up front saves the copies of repeated regrowth (reserved
@@ -86,11 +168,20 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     auto report = [&](size_t done) {
         if (progress) progress(progressStart + (1.0 - progressStart) * double(done) / double(items.size()));
     };
+    auto acquireTimed = [&](const Item& item) {
+        const auto start = Clock::now();
+        BrickHandle brick = source.acquire(brickOf(item));
+        waitNanoseconds += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start).count();
+        return brick;
+    };
     if (options.threads <= 1) {
         BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
         EdgeVertexMap seams;
+        BrickPrefetcher<Item> prefetcher(source, items, size_t(options.prefetchBricks));
         for (size_t i = 0; i < items.size(); ++i) {
-            extractItem(extractor, items[i], mesh, seams);
+            prefetcher.consumed(i);
+            const BrickHandle brick = acquireTimed(items[i]);
+            extractItem(extractor, items[i], brick.samples(), mesh, seams);
             stream(false);
             if (i % kProgressEvery == 0 || i + 1 == items.size()) report(i + 1);
         }
@@ -107,7 +198,8 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
             const size_t begin = items.size() * c / chunkCount, end = items.size() * (c + 1) / chunkCount;
             for (size_t i = begin; i < end; ++i) {
-                extractItem(extractor, items[i], chunks[c].mesh, chunks[c].seams);
+                const BrickHandle brick = acquireTimed(items[i]);
+                extractItem(extractor, items[i], brick.samples(), chunks[c].mesh, chunks[c].seams);
                 const size_t n = ++done;
                 if (n % kProgressEvery == 0) {
                     std::lock_guard lock(progressMutex);  // the callback is not thread-safe
@@ -145,10 +237,8 @@ FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& op
         tree.forEachActiveBrick(options.iso, [&](int64_t id) { bricks.push_back(id); });
     const KernelCounters counters = extractItems(
         bricks, source, options, mesh, stats, progress, 0.0,
-        [&](BrickExtractor& extractor, int64_t id, TriangleMesh& out, EdgeVertexMap& seams) {
-            const BrickHandle brick = source.acquire(id);
-            extractor.extractBrick(id, brick.samples(), options.iso, out, seams);
-        });
+        [&](BrickExtractor& extractor, int64_t id, const void* samples, TriangleMesh& out,
+            EdgeVertexMap& seams) { extractor.extractBrick(id, samples, options.iso, out, seams); });
     stats.bricksActive = int64_t(bricks.size());
     stats.metaCellsActive = counters.metaCellsActive;
     stats.cellsActive = counters.cellsActive;
@@ -188,10 +278,6 @@ FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& opt
     tree.query(options.iso, active);
     std::sort(active.begin(), active.end());
     stats.nodesVisited = int64_t(active.size());
-    struct BrickWork {
-        int64_t id;
-        size_t begin, end;  // its meta-cells in `local`
-    };
     std::vector<BrickWork> work;
     std::vector<uint32_t> local(active.size());
     for (size_t i = 0; i < active.size(); ++i) {
@@ -202,10 +288,10 @@ FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& opt
     }
     const KernelCounters counters = extractItems(
         work, source, options, mesh, stats, progress, 0.5,
-        [&](BrickExtractor& extractor, const BrickWork& w, TriangleMesh& out, EdgeVertexMap& seams) {
-            const BrickHandle brick = source.acquire(w.id);
+        [&](BrickExtractor& extractor, const BrickWork& w, const void* samples, TriangleMesh& out,
+            EdgeVertexMap& seams) {
             extractor.extractMetaCells(
-                w.id, brick.samples(), options.iso,
+                w.id, samples, options.iso,
                 std::span<const uint32_t>(local.data() + w.begin, w.end - w.begin), out, seams);
         });
     stats.bricksActive = int64_t(work.size());

@@ -33,6 +33,11 @@ struct FullExtractOptions {
     // holds a bounded part of the output instead of all of it.
     MeshSink* sink = nullptr;
     size_t streamPieceVertices = size_t(1) << 20;  // vertices per piece handed to the sink
+    // Bricks a prefetch thread loads ahead of the extraction (threads == 1), from the list of
+    // bricks the traversal already decided to visit: reads overlap extraction and no other
+    // brick is read. 0: none. Prefetched bricks stay pinned until used, so the source's cache
+    // must hold more than this many bricks (vdiso extract uses at most half the cache).
+    int prefetchBricks = 0;
 };
 
 struct FullExtractStats {
@@ -43,6 +48,7 @@ struct FullExtractStats {
     int64_t cellsActive = 0;
     double preprocessSeconds = 0;  // noise: building the meta-cell span space
     double extractSeconds = 0;     // everything else, brick reads included
+    double brickWaitSeconds = 0;   // of which waiting for bricks (reads and decodes not hidden)
 };
 
 FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,

@@ -10,6 +10,7 @@
 
 #include "cache/brick_cache.h"
 #include "core/extract_full.h"
+#include "core/iso.h"
 #include "core/synth.h"
 #include "io/brick_store.h"
 #include "io/store_writer.h"
@@ -187,6 +188,45 @@ TEST(ExtractStreaming, StreamedPiecesRebuildTheHeldMesh) {
         EXPECT_EQ(sink.all.positions, held.positions) << threads;
         EXPECT_EQ(sink.all.indices, held.indices) << threads;
     }
+}
+
+}  // namespace
+}  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST(ExtractPrefetch, ReadsEachListedBrickOnceAndNothingElse) {
+    SynthParams p;
+    p.kind = SynthKind::Head;
+    p.dims = {70, 66, 60};
+    test::ScratchDir dir;
+    auto head = openSynthVolume(p);
+    StoreWriteOptions o;
+    o.brickSize = 8;
+    writeBrickStore(*head, dir.file("h.vdiso"), o);
+    const BrickStoreReader store(dir.file("h.vdiso"));
+    size_t activeBricks = 0;
+    for (const BrickEntry& e : store.index())
+        activeBricks += rangeHoldsIso(e.minValue, e.maxValue, kHeadSkinIso);
+    TriangleMesh without, with;
+    {
+        BrickCache cache(store, 16 * store.brickBytes());
+        extractOctree(cache, {kHeadSkinIso, 4}, without);
+    }
+    BrickCache cache(store, 16 * store.brickBytes());  // small: lookahead 8 must not thrash it
+    FullExtractOptions withPrefetch{kHeadSkinIso, 4};
+    withPrefetch.prefetchBricks = 8;
+    const FullExtractStats stats = extractOctree(cache, withPrefetch, with);
+    EXPECT_EQ(with.positions, without.positions);
+    EXPECT_EQ(with.indices, without.indices);
+    // Each listed brick is read once and no other, except that a prefetch thread descheduled
+    // for many bricks' time can come back to fetch one the extraction has just used and
+    // evicted: rare (1 extra read in 40 runs of 40 concurrent copies), bounded here at 5%.
+    // Prefetching behind the extraction read 1.9x the bricks; this catches it.
+    EXPECT_GE(cache.counters().misses, activeBricks);
+    EXPECT_LE(double(cache.counters().misses), 1.05 * double(activeBricks));
+    EXPECT_GE(stats.brickWaitSeconds, 0.0);
 }
 
 }  // namespace
