@@ -191,7 +191,7 @@ struct BrickKernel {
         return v;
     }
 
-    void extractMetaCell(int m) {
+    void extractMetaCell(int m, PolygonCallback onPolygon = nullptr, void* context = nullptr) {
         int lo[3], hi[3];
         metaCellBox(m, lo, hi);
         KernelCounters& counters = x.mCounters;
@@ -208,13 +208,13 @@ struct BrickKernel {
                     int at = 0;
                     for (int p = 0; p < pc.polygonCount; ++p) {
                         const int count = pc.vertexCount[p];
-                        const uint32_t first = edgeVertex(cx, cy, cz, pc.edges[at]);
-                        uint32_t previous = edgeVertex(cx, cy, cz, pc.edges[at + 1]);
-                        for (int k = 2; k < count; ++k) {
-                            const uint32_t next = edgeVertex(cx, cy, cz, pc.edges[at + k]);
-                            mesh.indices.insert(mesh.indices.end(), {first, previous, next});
-                            previous = next;
-                        }
+                        uint32_t outline[kMcMaxPolygonVertices];
+                        for (int k = 0; k < count; ++k)
+                            outline[k] = edgeVertex(cx, cy, cz, pc.edges[at + k]);
+                        for (int k = 2; k < count; ++k)
+                            mesh.indices.insert(mesh.indices.end(),
+                                                {outline[0], outline[k - 1], outline[k]});
+                        if (onPolygon) onPolygon(context, outline, count);
                         at += count;
                     }
                 }
@@ -245,6 +245,66 @@ void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector
         using T = decltype(zero);
         BrickKernel<T> k(*this, id, samples, 0.0, unused, unusedSeams);
         k.metaCellRanges(out);
+    });
+}
+
+void BrickExtractor::beginBrick(int64_t id, const void* samples) {
+    mCurrentBrick = id;
+    mCurrentSamples = samples;
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        TriangleMesh unused;
+        EdgeVertexMap unusedSeams;
+        BrickKernel<T> k(*this, id, samples, 0.0, unused, unusedSeams);
+        k.beginBrick();
+        k.metaCellRanges(mRanges);
+    });
+}
+
+glm::vec3 BrickExtractor::metaCellNormal(uint32_t metaCell) const {
+    // The least-squares linear fit of the meta-cell's corner samples: its slope is a gradient
+    // over the whole meta-cell, steady where a single central difference would be noise.
+    glm::dvec3 gradient(0.0);
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        TriangleMesh unused;
+        EdgeVertexMap unusedSeams;
+        BrickKernel<T> k(const_cast<BrickExtractor&>(*this), mCurrentBrick, mCurrentSamples, 0.0,
+                         unused, unusedSeams);
+        int lo[3], hi[3];
+        k.metaCellBox(int(metaCell), lo, hi);
+        const glm::dvec3 centre = glm::dvec3(lo[0] + hi[0], lo[1] + hi[1], lo[2] + hi[2]) * 0.5;
+        glm::dvec3 covariance(0.0), variance(0.0);
+        double sum = 0, count = 0;
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    sum += double(k.s[k.sampleIndex(x, y, z)]);
+                    ++count;
+                }
+        const double mean = sum / count;
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    const glm::dvec3 d = glm::dvec3(x, y, z) - centre;
+                    covariance += d * (double(k.s[k.sampleIndex(x, y, z)]) - mean);
+                    variance += d * d;
+                }
+        for (int a = 0; a < 3; ++a)
+            gradient[a] = variance[a] > 0 ? covariance[a] / variance[a] / mVolume.spacing[a] : 0.0;
+    });
+    const double length = glm::length(gradient);
+    return length > 0 ? glm::vec3(-gradient / length) : glm::vec3(0.0f);
+}
+
+void BrickExtractor::extractMetaCell(uint32_t metaCell, double iso, TriangleMesh& mesh,
+                                     EdgeVertexMap& seams, PolygonCallback onPolygon,
+                                     void* context) {
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        BrickKernel<T> k(*this, mCurrentBrick, mCurrentSamples, iso, mesh, seams);
+        ++mCounters.metaCellsActive;
+        k.extractMetaCell(int(metaCell), onPolygon, context);
     });
 }
 

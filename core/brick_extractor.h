@@ -79,6 +79,10 @@ private:
     size_t mSize = 0;
 };
 
+// Called with each polygon's outline (global vertex numbers into the mesh, in order) after its
+// fan triangles are appended: the view-dependent traversal scan-converts it (SAGE §3.2).
+using PolygonCallback = void (*)(void* context, const uint32_t* vertices, int count);
+
 struct KernelCounters {
     int64_t metaCellsTested = 0, metaCellsActive = 0, cellsVisited = 0, cellsActive = 0;
 };
@@ -105,6 +109,18 @@ public:
                           std::span<const uint32_t> metaCells, TriangleMesh& mesh,
                           EdgeVertexMap& seams);
 
+    // One meta-cell at a time, for traversals that decide per meta-cell (SAGE): beginBrick
+    // makes `samples` the current brick (its vertices are shared across its meta-cells) and
+    // computes its meta-cell ranges; extractMetaCell appends one meta-cell's surface.
+    void beginBrick(int64_t id, const void* samples);
+    const std::vector<BrickRange>& currentRanges() const { return mRanges; }
+    void extractMetaCell(uint32_t metaCell, double iso, TriangleMesh& mesh, EdgeVertexMap& seams,
+                         PolygonCallback onPolygon = nullptr, void* context = nullptr);
+    int metaCellsPerAxis() const { return mMetaPerAxis; }
+    // Minus the normalised gradient at the sample nearest the meta-cell's centre (zero where
+    // the gradient vanishes): the normal of a point standing for a sub-pixel meta-cell.
+    glm::vec3 metaCellNormal(uint32_t metaCell) const;
+
     const KernelCounters& counters() const { return mCounters; }
 
 private:
@@ -124,6 +140,8 @@ private:
     std::vector<EdgeSlot> mEdges;
     uint32_t mStamp = 0;
     std::vector<BrickRange> mRanges;
+    int64_t mCurrentBrick = -1;
+    const void* mCurrentSamples = nullptr;
     KernelCounters mCounters;
 };
 

@@ -6,6 +6,7 @@
 #include "cache/brick_cache.h"
 #include "core/camera.h"
 #include "core/extract_full.h"
+#include "core/extract_view.h"
 #include "io/atomic_output.h"
 #include "io/camera_json.h"
 #include "io/json.h"
@@ -28,12 +29,21 @@ constexpr const char* kHelp =
     "it, and writes the mesh, a picture and statistics.\n"
     "\n"
     "  --iso V                   isovalue (a sample is above the surface when > V)\n"
-    "  --method octree|noise     octree: min/max tree over bricks, then meta-cells (default);\n"
+    "  --method octree|noise|sage|wise\n"
+    "                            octree: min/max tree over bricks, then meta-cells (default);\n"
     "                            noise: span space over all meta-cells (reads every brick once\n"
-    "                            to build it, reported as preprocess_s)\n"
+    "                            to build it, reported as preprocess_s);\n"
+    "                            sage: only what the camera sees (view-dependent, SAGE);\n"
+    "                            wise: the same with WISE's choices (the switches below off)\n"
+    "  --scan polygons|triangles     sage/wise: scan-convert whole polygons or each triangle\n"
+    "  --box estimate|exact          sage/wise: screen box by the SAGE estimate or 8 corners\n"
+    "  --points on|off               sage/wise: sub-pixel parts as points\n"
+    "  --update bottom-up|top-down   sage/wise: occlusion pyramid update\n"
+    "  --points-out POINTS.ply   write the points (with normals)\n"
     "  -o, --output MESH         write the mesh: .ply (binary, normals) or .obj\n"
     "  --png IMAGE.png           render the mesh with OSMesa and write a picture\n"
-    "  --view distant|normal|closeup   camera preset framed from the volume (default normal)\n"
+    "  --view distant|normal|closeup   camera preset framed from the volume (default normal);\n"
+    "                            the picture's camera, and the extraction's for sage/wise\n"
     "  --camera CAM.json         camera from a file: {\"eye\":[..],\"target\":[..],\"up\":[..],\n"
     "                            \"fov\":30,\"width\":800,\"height\":600}\n"
     "  --size WxH                image size (default 800x800)\n"
@@ -50,6 +60,8 @@ constexpr const char* kHelp =
 
 struct ExtractOptions {
     std::string input;
+    std::optional<bool> scanPolygons, estimateBox, points, bottomUp;  // sage/wise switches
+    std::string pointsPath;
     std::optional<double> iso;
     std::string method = "octree";
     std::string meshPath, pngPath, statsPath, cameraPath;
@@ -70,6 +82,14 @@ void parseSize(const std::string& text, int& width, int& height) {
     height = int(parseInt("--size", text.substr(x + 1), 16, 8192));
 }
 
+bool parseSwitch(const std::string& flag, const std::string& value, const char* on, const char* off) {
+    if (value == on) return true;
+    if (value == off) return false;
+    throw UsageError(flag + " expects " + on + " or " + off + ", not '" + value + "'");
+}
+
+bool isViewDependent(const std::string& method) { return method == "sage" || method == "wise"; }
+
 ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     Args args(argc, argv, 1);
     ExtractOptions o;
@@ -83,8 +103,18 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.iso = parseDouble(a, args.value(a));
         } else if (a == "--method") {
             o.method = args.value(a);
-            if (o.method != "octree" && o.method != "noise")
-                throw UsageError("--method expects octree or noise, not '" + o.method + "'");
+            if (o.method != "octree" && o.method != "noise" && o.method != "sage" && o.method != "wise")
+                throw UsageError("--method expects octree, noise, sage or wise, not '" + o.method + "'");
+        } else if (a == "--scan") {
+            o.scanPolygons = parseSwitch(a, args.value(a), "polygons", "triangles");
+        } else if (a == "--box") {
+            o.estimateBox = parseSwitch(a, args.value(a), "estimate", "exact");
+        } else if (a == "--points") {
+            o.points = parseSwitch(a, args.value(a), "on", "off");
+        } else if (a == "--update") {
+            o.bottomUp = parseSwitch(a, args.value(a), "bottom-up", "top-down");
+        } else if (a == "--points-out") {
+            o.pointsPath = args.value(a);
         } else if (a == "-o" || a == "--output") {
             o.meshPath = args.value(a);
         } else if (a == "--png") {
@@ -128,15 +158,21 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (o.input.empty()) throw UsageError("expects FILE.vdiso");
     if (!o.iso) throw UsageError("needs --iso V");
     if (o.viewGiven && !o.cameraPath.empty()) throw UsageError("give --view or --camera, not both");
-    if (o.pngPath.empty() && (o.viewGiven || !o.cameraPath.empty()))
-        throw UsageError("--view and --camera frame the picture: they need --png");
+    const bool viewDependent = isViewDependent(o.method);
+    if (o.pngPath.empty() && !viewDependent && (o.viewGiven || !o.cameraPath.empty()))
+        throw UsageError("--view and --camera frame the picture: they need --png (or a "
+                         "view-dependent --method)");
+    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp))
+        throw UsageError("--scan, --box, --points and --update apply to --method sage or wise");
+    if (!o.pointsPath.empty() && !viewDependent)
+        throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
     return o;
 }
 
 // Refuses existing outputs before the work starts, not after minutes of extraction.
 void checkOutputsWritable(const ExtractOptions& o) {
-    for (const std::string* p : {&o.meshPath, &o.pngPath, &o.statsPath})
+    for (const std::string* p : {&o.meshPath, &o.pngPath, &o.statsPath, &o.pointsPath})
         if (!p->empty() && *p != "-" && !o.overwrite) {
             if (FILE* f = std::fopen(p->c_str(), "r")) {
                 std::fclose(f);
@@ -163,22 +199,44 @@ int runExtract(int argc, char** argv) {
     std::optional<Camera> camera;
     if (!o.cameraPath.empty())
         camera = readCameraJson(o.cameraPath, o.width, o.height);
-    else if (!o.pngPath.empty())
+    else if (!o.pngPath.empty() || isViewDependent(o.method))
         camera = presetCamera(o.view, boundsMin, boundsMax, o.width, o.height);
+    if (camera && !camera->hasClipPlanes()) fitClipPlanes(*camera, boundsMin, boundsMax);
 
     // Without a picture to draw, the mesh goes to its file as it is extracted: memory holds a
     // bounded part of it. A picture needs the whole mesh, so then it is held.
     TriangleMesh mesh;
     std::optional<MeshFileWriter> streamed;
-    if (!o.meshPath.empty() && !camera) streamed.emplace(o.meshPath, o.overwrite);
+    if (!o.meshPath.empty() && o.pngPath.empty() && !isViewDependent(o.method))
+        streamed.emplace(o.meshPath, o.overwrite);
     FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
-    if (streamed) extract.sink = &*streamed;
+    if (streamed && !isViewDependent(o.method)) extract.sink = &*streamed;
     // The prefetcher must not evict what it loaded before use: half the cache at most.
     extract.prefetchBricks = int(std::min<uint64_t>(uint64_t(o.prefetch),
                                                     cache.budgetBytes() / store.brickBytes() / 2));
     const ProgressFn progress = progressBar("extract", 0, o.quiet);
-    const FullExtractStats stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
-                                                       : extractOctree(cache, extract, mesh, progress);
+    PointSet points;
+    FullExtractStats stats;
+    std::optional<ViewExtractStats> view;
+    if (isViewDependent(o.method)) {
+        ViewExtractOptions v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso)
+                                                  : ViewExtractOptions::wise(*o.iso);
+        v.metaCellSize = o.metaCellSize;
+        if (o.scanPolygons) v.scanPolygons = *o.scanPolygons;
+        if (o.estimateBox) v.estimateBox = *o.estimateBox;
+        if (o.points) v.points = *o.points;
+        if (o.bottomUp) v.bottomUp = *o.bottomUp;
+        view = extractViewDependent(cache, *camera, v, mesh, points, progress);
+        stats.triangles = view->triangles;
+        stats.vertices = mesh.vertexCount();
+        stats.extractSeconds = view->extractSeconds;
+        stats.bricksActive = view->bricksAcquired;
+        stats.nodesVisited = view->nodesVisited;
+        stats.metaCellsActive = view->metaCellsExtracted;
+    } else {
+        stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
+                                    : extractOctree(cache, extract, mesh, progress);
+    }
     const CacheCounters io = cache.counters();
 
     if (streamed)
@@ -186,8 +244,9 @@ int runExtract(int argc, char** argv) {
     else if (!o.meshPath.empty())
         writeMesh(o.meshPath, mesh, o.overwrite);
     std::optional<double> drawSeconds;
-    if (camera) {
-        const RenderResult r = renderSurface(mesh, PointSet{}, *camera);
+    if (!o.pointsPath.empty()) writePointsPly(o.pointsPath, points, o.overwrite);
+    if (!o.pngPath.empty()) {
+        const RenderResult r = renderSurface(mesh, points, *camera);
         writePng(o.pngPath, r.image, o.overwrite);
         drawSeconds = r.drawSeconds;
     }
@@ -195,7 +254,7 @@ int runExtract(int argc, char** argv) {
     JsonObject s;
     s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", o.threads);
-    s.add("triangles", stats.triangles).add("points", uint64_t(0));
+    s.add("triangles", stats.triangles).add("points", uint64_t(points.size()));
     s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
@@ -207,6 +266,12 @@ int runExtract(int argc, char** argv) {
     s.add("bricks_active", stats.bricksActive).add("bytes_read", io.bytesRead);
     s.add("nodes_visited", stats.nodesVisited).add("meta_cells_active", stats.metaCellsActive);
     s.add("cells_active", stats.cellsActive);
+    if (view) {
+        s.add("culled_range", view->culledByRange).add("culled_frustum", view->culledByFrustum);
+        s.add("culled_occlusion", view->culledByOcclusion);
+        s.add("dropped_subpixel", view->droppedSubPixel);
+        s.add("meta_cells_extracted", view->metaCellsExtracted).add("scan_s", view->scanSeconds);
+    }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
     if (camera) s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());

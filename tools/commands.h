@@ -8,5 +8,6 @@ int runConvert(int argc, char** argv);  // argv[0] is "convert"
 int runSynth(int argc, char** argv);
 int runInfo(int argc, char** argv);
 int runExtract(int argc, char** argv);
+int runCompare(int argc, char** argv);
 
 }  // namespace vdiso::cli

@@ -1,0 +1,249 @@
+#include "core/extract_view.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "core/iso.h"
+#include "core/mc_tables.h"
+#include "core/minmax_tree.h"
+#include "core/occlusion_pyramid.h"
+#include "core/scan_convert.h"
+#include "core/screen_box.h"
+
+namespace vdiso {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Traversal {
+    BrickSource& source;
+    const Camera& camera;
+    const ViewExtractOptions& options;
+    TriangleMesh& mesh;
+    PointSet& points;
+    ViewExtractStats& stats;
+    const VolumeInfo& volume;
+    const BrickLayout& layout;
+    BoxProjector projector;
+    OcclusionPyramid pyramid;
+    BrickExtractor extractor;
+    EdgeVertexMap seams;
+    double scanSeconds = 0;
+
+    Traversal(BrickSource& s, const Camera& c, const ViewExtractOptions& o, TriangleMesh& m,
+              PointSet& p, ViewExtractStats& st)
+        : source(s), camera(c), options(o), mesh(m), points(p), stats(st), volume(s.volume()),
+          layout(s.layout()), projector(c), pyramid(c.width, c.height),
+          extractor(s.volume(), s.layout(), o.metaCellSize) {}
+
+    // World box of the cells [lo, hi) (cell coordinates; clamped to the volume's cells).
+    void worldBox(const int64_t lo[3], const int64_t hi[3], glm::dvec3& a, glm::dvec3& b) const {
+        for (int k = 0; k < 3; ++k) {
+            a[k] = volume.origin[k] + double(lo[k]) * volume.spacing[k];
+            b[k] = volume.origin[k] + double(std::min(hi[k], volume.dims[k] - 1)) * volume.spacing[k];
+        }
+    }
+
+    enum class Verdict { Culled, Done, Visible };
+
+    // Tests 1-4 of the header for a box whose range is [lo, hi]; a point, if emitted, takes
+    // its normal from normalOf() (called only then).
+    template <class NormalOf>
+    Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b,
+                 NormalOf&& normalOf) {
+        ++stats.nodesVisited;
+        if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) {
+            ++stats.culledByRange;
+            return Verdict::Culled;
+        }
+        const ScreenBox box = options.estimateBox ? projector.estimateBox(a, b) : projector.exactBox(a, b);
+        if (box.crossesNearPlane) return Verdict::Visible;  // refined, never culled
+        if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
+            box.top > camera.height - 0.5) {
+            ++stats.culledByFrustum;
+            return Verdict::Culled;
+        }
+        // Pixel centres i + 0.5 inside the box.
+        const int x0 = int(std::ceil(box.left - 0.5)), x1 = int(std::floor(box.right - 0.5));
+        const int y0 = int(std::ceil(box.top - 0.5)), y1 = int(std::floor(box.bottom - 0.5));
+        if (x0 > x1 || y0 > y1) {  // covers no pixel centre: nothing of it can show
+            ++stats.droppedSubPixel;
+            return Verdict::Culled;
+        }
+        if (pyramid.isOccluded(x0, y0, x1, y1)) {
+            ++stats.culledByOcclusion;
+            return Verdict::Culled;
+        }
+        // Fig. 4: a box under two pixels each way covering exactly one pixel centre is one
+        // point; one covering two centres is refined like any other box.
+        if (options.points && isSubPixel(box)) {
+            if (const std::optional<glm::ivec2> p = subPixelPoint(box)) {
+                if (p->x < 0 || p->y < 0 || p->x >= camera.width || p->y >= camera.height ||
+                    pyramid.isCovered(p->x, p->y)) {
+                    ++stats.droppedSubPixel;
+                    return Verdict::Culled;
+                }
+                // On the ray through the chosen pixel's centre, at the box centre's depth, so the
+                // point draws exactly on the pixel the pyramid marks.
+                const double depth = camera.project((a + b) * 0.5).z;
+                points.positions.push_back(
+                    glm::vec3(camera.unproject(glm::dvec3(p->x + 0.5, p->y + 0.5, depth))));
+                points.normals.push_back(normalOf());
+                pyramid.coverSpan(p->y, p->x, p->x);
+                pyramid.propagate();
+                ++stats.points;
+                return Verdict::Done;
+            }
+        }
+        return Verdict::Visible;
+    }
+
+    // Scan-converts a polygon just appended (SAGE §3.2), each vertex projected once.
+    static void onPolygon(void* context, const uint32_t* vertices, int count) {
+        auto& t = *static_cast<Traversal*>(context);
+        const auto start = Clock::now();
+        glm::dvec2 projected[kMcMaxPolygonVertices];
+        for (int k = 0; k < count; ++k) {
+            const glm::vec3& p = t.mesh.positions[vertices[k] - t.mesh.firstVertex];
+            const glm::dvec3 s = t.camera.project(glm::dvec3(p));
+            if (!(s.z >= 0.0 && s.z <= 1.0)) return;  // behind the eye or clipped: mark nothing
+            projected[k] = glm::dvec2(s.x, s.y);
+        }
+        if (!t.options.bottomUp) {
+            for (int k = 2; k < count; ++k) {
+                const glm::dvec2 triangle[3] = {projected[0], projected[k - 1], projected[k]};
+                t.pyramid.insertTriangleTopDown(triangle);
+            }
+        } else if (t.options.scanPolygons) {
+            scanConvertPolygon(std::span<const glm::dvec2>(projected, size_t(count)), t.pyramid);
+        } else {
+            for (int k = 2; k < count; ++k) {
+                const glm::dvec2 triangle[3] = {projected[0], projected[k - 1], projected[k]};
+                scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
+            }
+        }
+        t.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
+    }
+
+    // The meta-cells [lo, hi) of the current brick, front to back by halving (the same exact
+    // order as the tree's), each tested and extracted when visible.
+    void visitMetaCells(int64_t brick, const int lo[3], const int hi[3]) {
+        const int n = extractor.metaCellsPerAxis(), M = extractor.metaCellSize();
+        const std::vector<BrickRange>& ranges = extractor.currentRanges();
+        BrickRange range{ranges[0].minValue, ranges[0].maxValue};
+        bool first = true;
+        for (int z = lo[2]; z < hi[2]; ++z)
+            for (int y = lo[1]; y < hi[1]; ++y)
+                for (int x = lo[0]; x < hi[0]; ++x) {
+                    const BrickRange& r = ranges[size_t((z * n + y) * n + x)];
+                    range = first ? r : BrickRange{std::min(range.minValue, r.minValue),
+                                                   std::max(range.maxValue, r.maxValue)};
+                    first = false;
+                }
+        const Dims3 c = layout.brickCoord(brick);
+        int64_t cellLo[3], cellHi[3];
+        for (int k = 0; k < 3; ++k) {
+            cellLo[k] = c[k] * layout.brickSize + int64_t(lo[k]) * M;
+            cellHi[k] = std::min<int64_t>(c[k] * layout.brickSize + int64_t(hi[k]) * M,
+                                          c[k] * layout.brickSize + layout.cellsOnAxis(k, c[k]));
+        }
+        if (cellLo[0] >= cellHi[0] || cellLo[1] >= cellHi[1] || cellLo[2] >= cellHi[2]) return;
+        glm::dvec3 a, b;
+        worldBox(cellLo, cellHi, a, b);
+        const bool single = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
+        const uint32_t metaCell = uint32_t((lo[2] * n + lo[1]) * n + lo[0]);
+        const Verdict v = test(range, a, b, [&] {
+            return single ? extractor.metaCellNormal(metaCell) : towardEye(a, b);
+        });
+        if (v != Verdict::Visible) return;
+        if (single) {
+            extractor.extractMetaCell(metaCell, options.iso, mesh, seams, &Traversal::onPolygon, this);
+            ++stats.metaCellsExtracted;
+            if (options.bottomUp) pyramid.propagate();
+            return;
+        }
+        int axis = 0;
+        for (int k = 1; k < 3; ++k)
+            if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+        const int mid = (lo[axis] + hi[axis]) / 2;
+        int firstHi[3] = {hi[0], hi[1], hi[2]}, secondLo[3] = {lo[0], lo[1], lo[2]};
+        firstHi[axis] = mid;
+        secondLo[axis] = mid;
+        const double split = volume.origin[axis] +
+                             double(c[axis] * layout.brickSize + int64_t(mid) * M) * volume.spacing[axis];
+        if (camera.eye[axis] < split) {
+            visitMetaCells(brick, lo, firstHi);
+            visitMetaCells(brick, secondLo, hi);
+        } else {
+            visitMetaCells(brick, secondLo, hi);
+            visitMetaCells(brick, lo, firstHi);
+        }
+    }
+
+    // A point standing for a part not loaded has no gradient at hand: it faces the eye.
+    glm::vec3 towardEye(const glm::dvec3& a, const glm::dvec3& b) const {
+        return glm::vec3(glm::normalize(camera.eye - (a + b) * 0.5));
+    }
+
+    void run() {
+        const MinMaxTree tree(layout, source.brickRanges());
+        const std::vector<MinMaxNode>& nodes = tree.nodes();
+        std::vector<uint32_t> stack;
+        if (!nodes.empty()) stack.push_back(0);
+        while (!stack.empty()) {
+            const uint32_t index = stack.back();
+            stack.pop_back();
+            const MinMaxNode& node = nodes[index];
+            int64_t cellLo[3], cellHi[3];
+            for (int k = 0; k < 3; ++k) {
+                cellLo[k] = int64_t(node.lo[k]) * layout.brickSize;
+                cellHi[k] = int64_t(node.hi[k]) * layout.brickSize;
+            }
+            glm::dvec3 a, b;
+            worldBox(cellLo, cellHi, a, b);
+            const Verdict v = test({node.minValue, node.maxValue}, a, b, [&] { return towardEye(a, b); });
+            if (v != Verdict::Visible) continue;
+            if (node.isLeaf()) {
+                const int64_t brick = tree.brickOf(node);
+                const BrickHandle handle = source.acquire(brick);  // only now: it passed 1-3
+                ++stats.bricksAcquired;
+                extractor.beginBrick(brick, handle.samples());
+                const int n = extractor.metaCellsPerAxis();
+                const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
+                visitMetaCells(brick, lo, hi);
+                continue;
+            }
+            // Far child first on the stack, so the near one is visited first.
+            const int axis = node.splitAxis;
+            const int64_t mid = int64_t(nodes[index + 1].hi[axis]);
+            const double split =
+                volume.origin[axis] + double(mid * layout.brickSize) * volume.spacing[axis];
+            const bool lowerIsNear = camera.eye[axis] < split;
+            stack.push_back(lowerIsNear ? node.secondChild : index + 1);
+            stack.push_back(lowerIsNear ? index + 1 : node.secondChild);
+        }
+    }
+};
+
+}  // namespace
+
+ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
+                                      const ViewExtractOptions& options, TriangleMesh& mesh,
+                                      PointSet& points, const ProgressFn& progress) {
+    const auto start = Clock::now();
+    ViewExtractStats stats;
+    const uint64_t trianglesBefore = mesh.triangleCount();
+    Traversal t(source, camera, options, mesh, points, stats);
+    t.run();
+    stats.triangles = mesh.triangleCount() - trianglesBefore;
+    stats.scanSeconds = t.scanSeconds;
+    stats.extractSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (progress) progress(1.0);
+    return stats;
+}
+
+}  // namespace vdiso

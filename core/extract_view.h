@@ -1,0 +1,69 @@
+// View-dependent isosurface extraction: SAGE (Livnat & Hansen) and WISE, its predecessor.
+//
+// For one camera, the min/max tree over bricks is walked front to back (children on the
+// eye's side of each split first: exact for axis-aligned splits), and inside each loaded brick
+// its meta-cells likewise. Each node or meta-cell is tested in turn:
+//   1. range: skipped if its [min, max] cannot hold the isovalue;
+//   2. frustum: skipped if its screen box (SAGE §3.4 estimate, or the exact 8-corner box)
+//      misses the image; a box crossing the near plane counts as visible and is refined;
+//   3. occlusion: skipped if every pixel centre in its screen box is already covered in the
+//      occlusion pyramid — bricks are acquired only after passing 1-3, which is how the
+//      pyramid culls disk reads;
+//   4. points (SAGE §3.3): a box under two pixels each way becomes one point with a normal
+//      if the Fig. 4 rule finds the pixel centre it covers (and that pixel is marked), or is
+//      dropped;
+//   5. otherwise a node descends, and a meta-cell is extracted: its triangles are appended,
+//      and its polygons are projected (each vertex once) and scan-converted into the bottom
+//      of the pyramid, changed tiles propagated upward after the meta-cell (SAGE §3.1-3.2).
+// WISE = exact boxes, no points, one triangle at a time inserted top-down (Greene's masks).
+// Every SAGE feature is a switch, for the ablations of the paper's Tables 3-4.
+#pragma once
+
+#include <cstdint>
+
+#include "core/brick_extractor.h"
+#include "core/brick_source.h"
+#include "core/camera.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+
+namespace vdiso {
+
+struct ViewExtractOptions {
+    double iso = 0;
+    int metaCellSize = kDefaultMetaCellSize;
+    bool scanPolygons = true;  // false: scan-convert each fan triangle on its own
+    bool estimateBox = true;   // false: the exact 8-corner box
+    bool points = true;        // sub-pixel nodes become points
+    bool bottomUp = true;      // false: top-down insertion of each triangle (WISE)
+
+    static ViewExtractOptions sage(double iso) { return {iso}; }
+    static ViewExtractOptions wise(double iso) {
+        ViewExtractOptions o{iso};
+        o.scanPolygons = false;
+        o.estimateBox = false;
+        o.points = false;
+        o.bottomUp = false;
+        return o;
+    }
+};
+
+struct ViewExtractStats {
+    int64_t nodesVisited = 0;  // tree nodes and meta-cells tested
+    int64_t culledByRange = 0, culledByFrustum = 0, culledByOcclusion = 0;
+    int64_t droppedSubPixel = 0;  // sub-pixel nodes covering no free pixel centre
+    int64_t metaCellsExtracted = 0;
+    int64_t bricksAcquired = 0;
+    uint64_t triangles = 0, points = 0;
+    double scanSeconds = 0;     // projection and scan conversion into the pyramid
+    double extractSeconds = 0;  // everything, brick reads included
+};
+
+// Appends the surface visible from `camera` to `mesh` and sub-pixel points to `points`.
+// Culling is conservative: rendered from the same camera, the result looks like the full
+// surface. Single-threaded.
+ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
+                                      const ViewExtractOptions& options, TriangleMesh& mesh,
+                                      PointSet& points, const ProgressFn& progress = {});
+
+}  // namespace vdiso
