@@ -261,40 +261,85 @@ void BrickExtractor::beginBrick(int64_t id, const void* samples) {
     });
 }
 
-glm::vec3 BrickExtractor::metaCellNormal(uint32_t metaCell) const {
-    // The least-squares linear fit of the meta-cell's corner samples: its slope is a gradient
-    // over the whole meta-cell, steady where a single central difference would be noise.
-    glm::dvec3 gradient(0.0);
+bool BrickExtractor::firstHit(const glm::dvec3& origin, const glm::dvec3& direction,
+                              double tEnter, double tExit, double iso, glm::vec3& position,
+                              glm::vec3& normal) const {
+    bool hit = false;
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
-        TriangleMesh unused;
-        EdgeVertexMap unusedSeams;
-        BrickKernel<T> k(const_cast<BrickExtractor&>(*this), mCurrentBrick, mCurrentSamples, 0.0,
-                         unused, unusedSeams);
-        int lo[3], hi[3];
-        k.metaCellBox(int(metaCell), lo, hi);
-        const glm::dvec3 centre = glm::dvec3(lo[0] + hi[0], lo[1] + hi[1], lo[2] + hi[2]) * 0.5;
-        glm::dvec3 covariance(0.0), variance(0.0);
-        double sum = 0, count = 0;
-        for (int z = lo[2]; z <= hi[2]; ++z)
-            for (int y = lo[1]; y <= hi[1]; ++y)
-                for (int x = lo[0]; x <= hi[0]; ++x) {
-                    sum += double(k.s[k.sampleIndex(x, y, z)]);
-                    ++count;
+        const T* s = static_cast<const T*>(mCurrentSamples);
+        const int side = mLayout.side();
+        const Dims3 c = mLayout.brickCoord(mCurrentBrick);
+        // Sample-array coordinates of a world point (ghost offset included).
+        auto toLocal = [&](const glm::dvec3& w) {
+            glm::dvec3 l;
+            for (int a = 0; a < 3; ++a)
+                l[a] = (w[a] - mVolume.origin[a]) / mVolume.spacing[a] -
+                       double(c[a] * mLayout.brickSize) + kGhostBefore;
+            return l;
+        };
+        auto field = [&](const glm::dvec3& l) {
+            int i[3];
+            double f[3];
+            for (int a = 0; a < 3; ++a) {
+                const double x = std::clamp(l[a], 0.0, double(side - 1) - 1e-9);
+                i[a] = std::min(int(x), side - 2);
+                f[a] = x - i[a];
+            }
+            const size_t base = (size_t(i[2]) * side + size_t(i[1])) * side + size_t(i[0]);
+            const size_t dy = size_t(side), dz = size_t(side) * side;
+            auto at = [&](size_t o) { return double(s[base + o]); };
+            const double x00 = at(0) + f[0] * (at(1) - at(0));
+            const double x10 = at(dy) + f[0] * (at(dy + 1) - at(dy));
+            const double x01 = at(dz) + f[0] * (at(dz + 1) - at(dz));
+            const double x11 = at(dz + dy) + f[0] * (at(dz + dy + 1) - at(dz + dy));
+            const double y0 = x00 + f[1] * (x10 - x00), y1 = x01 + f[1] * (x11 - x01);
+            return y0 + f[2] * (y1 - y0);
+        };
+        const double samples = glm::length(toLocal(origin + direction * tExit) -
+                                           toLocal(origin + direction * tEnter));
+        const int steps = std::max(2, int(std::ceil(samples * 4)));
+        double tPrevious = tEnter;
+        double previous = field(toLocal(origin + direction * tEnter));
+        for (int k = 1; k <= steps && !hit; ++k) {
+            const double t = tEnter + (tExit - tEnter) * k / steps;
+            const double value = field(toLocal(origin + direction * t));
+            if (isAbove(previous, iso) != isAbove(value, iso)) {
+                const double u = (iso - previous) / (value - previous);
+                const glm::dvec3 w = origin + direction * (tPrevious + u * (t - tPrevious));
+                const glm::dvec3 l = toLocal(w);
+                // Central-difference gradients at the cell's corners, interpolated: the
+                // estimator of the triangles' vertex normals, so the point shades as they do.
+                int i[3];
+                double f[3];
+                for (int a = 0; a < 3; ++a) {
+                    const double x = std::clamp(l[a], 1.0, double(side - 2) - 1e-9);
+                    i[a] = std::min(int(x), side - 3);
+                    f[a] = x - i[a];
                 }
-        const double mean = sum / count;
-        for (int z = lo[2]; z <= hi[2]; ++z)
-            for (int y = lo[1]; y <= hi[1]; ++y)
-                for (int x = lo[0]; x <= hi[0]; ++x) {
-                    const glm::dvec3 d = glm::dvec3(x, y, z) - centre;
-                    covariance += d * (double(k.s[k.sampleIndex(x, y, z)]) - mean);
-                    variance += d * d;
+                glm::dvec3 gradient(0.0);
+                for (int corner = 0; corner < 8; ++corner) {
+                    const int o[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
+                    const size_t at = (size_t(i[2] + o[2]) * side + size_t(i[1] + o[1])) * side +
+                                      size_t(i[0] + o[0]);
+                    const size_t dy = size_t(side), dz = size_t(side) * side;
+                    const glm::dvec3 g((double(s[at + 1]) - double(s[at - 1])) / mVolume.spacing.x,
+                                       (double(s[at + dy]) - double(s[at - dy])) / mVolume.spacing.y,
+                                       (double(s[at + dz]) - double(s[at - dz])) / mVolume.spacing.z);
+                    const double weight = (o[0] ? f[0] : 1 - f[0]) * (o[1] ? f[1] : 1 - f[1]) *
+                                          (o[2] ? f[2] : 1 - f[2]);
+                    gradient += weight * g;
                 }
-        for (int a = 0; a < 3; ++a)
-            gradient[a] = variance[a] > 0 ? covariance[a] / variance[a] / mVolume.spacing[a] : 0.0;
+                const double length = glm::length(gradient);
+                position = glm::vec3(w);
+                normal = length > 0 ? glm::vec3(-gradient / length) : glm::vec3(0.0f);
+                hit = true;
+            }
+            previous = value;
+            tPrevious = t;
+        }
     });
-    const double length = glm::length(gradient);
-    return length > 0 ? glm::vec3(-gradient / length) : glm::vec3(0.0f);
+    return hit;
 }
 
 void BrickExtractor::extractMetaCell(uint32_t metaCell, double iso, TriangleMesh& mesh,

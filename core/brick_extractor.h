@@ -117,9 +117,14 @@ public:
     void extractMetaCell(uint32_t metaCell, double iso, TriangleMesh& mesh, EdgeVertexMap& seams,
                          PolygonCallback onPolygon = nullptr, void* context = nullptr);
     int metaCellsPerAxis() const { return mMetaPerAxis; }
-    // Minus the normalised gradient at the sample nearest the meta-cell's centre (zero where
-    // the gradient vanishes): the normal of a point standing for a sub-pixel meta-cell.
-    glm::vec3 metaCellNormal(uint32_t metaCell) const;
+    // The first crossing of the isovalue along the ray origin + t * direction, t in
+    // [tEnter, tExit], through the current brick's trilinear interpolant (world units; the
+    // segment must lie within the brick's cells). Marched in quarter-sample steps, refined by
+    // linear interpolation; the normal is minus the gradient there (central differences at the
+    // cell's corners, interpolated: the vertex normals' estimator). Returns
+    // false when the segment does not cross the surface.
+    bool firstHit(const glm::dvec3& origin, const glm::dvec3& direction, double tEnter,
+                  double tExit, double iso, glm::vec3& position, glm::vec3& normal) const;
 
     const KernelCounters& counters() const { return mCounters; }
 

@@ -50,11 +50,11 @@ struct Traversal {
 
     enum class Verdict { Culled, Done, Visible };
 
-    // Tests 1-4 of the header for a box whose range is [lo, hi]; a point, if emitted, takes
-    // its normal from normalOf() (called only then).
-    template <class NormalOf>
+    // Tests 1-4 of the header for the box [a, b] whose range is `range`. `samplesLoaded`: the
+    // box lies in the current brick, so a point can be placed on the surface itself; above
+    // the bricks a sub-pixel node is refined down to one instead.
     Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b,
-                 NormalOf&& normalOf) {
+                 bool samplesLoaded) {
         ++stats.nodesVisited;
         if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) {
             ++stats.culledByRange;
@@ -80,19 +80,20 @@ struct Traversal {
         }
         // Fig. 4: a box under two pixels each way covering exactly one pixel centre is one
         // point; one covering two centres is refined like any other box.
-        if (options.points && isSubPixel(box)) {
+        if (options.points && samplesLoaded && isSubPixel(box)) {
             if (const std::optional<glm::ivec2> p = subPixelPoint(box)) {
+                // The point goes where the pixel centre's ray first meets the surface in the
+                // box, with the field's normal there: it draws on the pixel the pyramid marks,
+                // shaded as the triangles it stands for. No meeting: the surface covers no
+                // pixel centre, and the box is dropped.
+                glm::vec3 position, normal;
                 if (p->x < 0 || p->y < 0 || p->x >= camera.width || p->y >= camera.height ||
-                    pyramid.isCovered(p->x, p->y)) {
+                    pyramid.isCovered(p->x, p->y) || !rayHit(*p, a, b, position, normal)) {
                     ++stats.droppedSubPixel;
                     return Verdict::Culled;
                 }
-                // On the ray through the chosen pixel's centre, at the box centre's depth, so the
-                // point draws exactly on the pixel the pyramid marks.
-                const double depth = camera.project((a + b) * 0.5).z;
-                points.positions.push_back(
-                    glm::vec3(camera.unproject(glm::dvec3(p->x + 0.5, p->y + 0.5, depth))));
-                points.normals.push_back(normalOf());
+                points.positions.push_back(position);
+                points.normals.push_back(normal);
                 pyramid.coverSpan(p->y, p->x, p->x);
                 pyramid.propagate();
                 ++stats.points;
@@ -100,6 +101,26 @@ struct Traversal {
             }
         }
         return Verdict::Visible;
+    }
+
+    bool rayHit(const glm::ivec2& pixel, const glm::dvec3& a, const glm::dvec3& b,
+                glm::vec3& position, glm::vec3& normal) const {
+        const glm::dvec3 nearPoint = camera.unproject({pixel.x + 0.5, pixel.y + 0.5, 0.0});
+        const glm::dvec3 farPoint = camera.unproject({pixel.x + 0.5, pixel.y + 0.5, 1.0});
+        const glm::dvec3 direction = farPoint - nearPoint;
+        double t0 = 0.0, t1 = 1.0;  // slab intersection with the box
+        for (int k = 0; k < 3; ++k) {
+            if (direction[k] == 0.0) {
+                if (nearPoint[k] < a[k] || nearPoint[k] > b[k]) return false;
+                continue;
+            }
+            double ta = (a[k] - nearPoint[k]) / direction[k], tb = (b[k] - nearPoint[k]) / direction[k];
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+        }
+        return t0 <= t1 &&
+               extractor.firstHit(nearPoint, direction, t0, t1, options.iso, position, normal);
     }
 
     // Scan-converts a polygon just appended (SAGE §3.2), each vertex projected once.
@@ -156,9 +177,7 @@ struct Traversal {
         worldBox(cellLo, cellHi, a, b);
         const bool single = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
         const uint32_t metaCell = uint32_t((lo[2] * n + lo[1]) * n + lo[0]);
-        const Verdict v = test(range, a, b, [&] {
-            return single ? extractor.metaCellNormal(metaCell) : towardEye(a, b);
-        });
+        const Verdict v = test(range, a, b, true);
         if (v != Verdict::Visible) return;
         if (single) {
             extractor.extractMetaCell(metaCell, options.iso, mesh, seams, &Traversal::onPolygon, this);
@@ -184,11 +203,6 @@ struct Traversal {
         }
     }
 
-    // A point standing for a part not loaded has no gradient at hand: it faces the eye.
-    glm::vec3 towardEye(const glm::dvec3& a, const glm::dvec3& b) const {
-        return glm::vec3(glm::normalize(camera.eye - (a + b) * 0.5));
-    }
-
     void run() {
         const MinMaxTree tree(layout, source.brickRanges());
         const std::vector<MinMaxNode>& nodes = tree.nodes();
@@ -205,7 +219,7 @@ struct Traversal {
             }
             glm::dvec3 a, b;
             worldBox(cellLo, cellHi, a, b);
-            const Verdict v = test({node.minValue, node.maxValue}, a, b, [&] { return towardEye(a, b); });
+            const Verdict v = test({node.minValue, node.maxValue}, a, b, false);
             if (v != Verdict::Visible) continue;
             if (node.isLeaf()) {
                 const int64_t brick = tree.brickOf(node);

@@ -33,7 +33,7 @@ FidelityResult compareWithFull(BrickSource& source, double iso, ViewPreset prese
     const VolumeInfo& v = source.volume();
     const glm::dvec3 lo = v.origin;
     const glm::dvec3 hi = v.origin + glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1) * v.spacing;
-    Camera camera = presetCamera(preset, lo, hi, 256, 256);
+    Camera camera = presetCamera(preset, lo, hi, 800, 800);  // vdiso extract's default size
     fitClipPlanes(camera, lo, hi);
     TriangleMesh full, view;
     PointSet points;
@@ -52,18 +52,9 @@ void expectFaithful(BrickSource& source, double iso, const char* what) {
             const FidelityResult r = compareWithFull(source, iso, preset, o);
             const std::string label = std::string(what) + " " + viewPresetName(preset) +
                                       (sage ? " sage" : " wise");
-            if (preset == ViewPreset::Distant) {
-                // Distant views are drawn mostly with points (SAGE) or sub-pixel triangles:
-                // culling must still lose no surface (pixels missing), but a point's shading
-                // and its one-pixel footprint only approximate the triangles it stands for,
-                // so colours are not held to the 99.5% yet (issue: view-dependent extraction).
-                EXPECT_LE(double(r.image.missing), 0.02 * double(r.image.referenceCovered))
-                    << label << ": agreement " << r.image.agreement();
-            } else {
-                EXPECT_GE(r.image.agreement(), 0.995)
-                    << label << ": " << r.image.missing << " missing, " << r.image.differentColour
-                    << " of another colour, of " << r.image.referenceCovered;
-            }
+            EXPECT_GE(r.image.agreement(), 0.995)
+                << label << ": " << r.image.missing << " missing, " << r.image.differentColour
+                << " of another colour, of " << r.image.referenceCovered;
             EXPECT_LE(r.viewTriangles, r.fullTriangles) << label;
             EXPECT_LE(r.viewBricks, r.fullBricks) << label;
             if (preset == ViewPreset::Normal) {  // the back of a closed surface is hidden
