@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# The paper's Table 1 in our terms, plus the ablation of Tables 3-4, measured in one run:
+# octree, noise, wise and sage on distant, normal and closeup views, skin and bone of the
+# 512^3 generated head and the skin of the real MRI (ch2, which has skin). Each row renders
+# its surface (draw_s) and compares the picture with octree's (vdiso compare).
+#
+#   bench/views.sh [SIZE]     image size, default 800
+set -euo pipefail
+cd "$(dirname "$0")/.."
+size=${1:-800}
+vdiso=build/bin/vdiso
+[ -x $vdiso ] || scripts/build.sh
+mkdir -p data/views
+[ -f data/head512.vdiso ] || $vdiso synth data/head512.vdiso --kind head --size 512 --quiet
+if [ ! -f data/ch2.vdiso ]; then
+  scripts/fetch_data.sh
+  $vdiso convert data/ch2.nii.gz data/ch2.vdiso --quiet
+fi
+
+row() {  # store iso view method label extra-args...
+  local store=$1 iso=$2 view=$3 method=$4 label=$5; shift 5
+  local png=data/views/$(basename "$store" .vdiso)_${iso}_${view}_${label}.png
+  local stats
+  stats=$($vdiso extract "$store" --iso "$iso" --method "$method" --view "$view" \
+          --size ${size}x${size} --png "$png" --stats - --force --quiet "$@")
+  local agreement="1"
+  if [ "$label" != octree ]; then
+    agreement=$($vdiso compare "data/views/$(basename "$store" .vdiso)_${iso}_${view}_octree.png" "$png" |
+                awk '{print $2}' | tr -d :)
+  fi
+  python3 -c '
+import json, sys
+d = json.loads(sys.argv[1])
+print("| %s | %s | %s | %s | %.3f | %d | %d | %.3f | %d | %.1f | %s |" % (
+    sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], d["extract_s"], d["triangles"], d["points"],
+    d.get("draw_s", 0), d["bricks_loaded"], d["bytes_read"] / 1e6, sys.argv[6]))' \
+    "$stats" "$(basename "$store")" "$iso" "$view" "$label" "$agreement"
+}
+
+echo "| volume | iso | view | method | extract s | triangles | points | draw s | bricks read | MB read | agreement with octree |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for spec in "data/head512.vdiso 600.5" "data/head512.vdiso 1224.5" "data/ch2.vdiso 40.5"; do
+  set -- $spec
+  for view in distant normal closeup; do
+    row "$1" "$2" $view octree octree
+    row "$1" "$2" $view noise noise
+    row "$1" "$2" $view wise wise
+    row "$1" "$2" $view sage sage
+  done
+done
+
+echo
+echo "Ablation (Tables 3-4): SAGE with one feature at a time switched to WISE's choice."
+echo
+echo "| volume | iso | view | variant | extract s | triangles | points | draw s | bricks read | MB read | agreement with octree |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for view in distant normal closeup; do
+  row data/head512.vdiso 600.5 $view sage sage
+  row data/head512.vdiso 600.5 $view sage "triangles-scan" --scan triangles
+  row data/head512.vdiso 600.5 $view sage "exact-box" --box exact
+  row data/head512.vdiso 600.5 $view sage "no-points" --points off
+  row data/head512.vdiso 600.5 $view sage "top-down" --update top-down
+done
