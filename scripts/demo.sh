@@ -19,8 +19,18 @@ $vdiso extract data/ch2better.vdiso --iso 40.5 --method octree -o data/ch2better
   --png data/ch2better_octree.png --view normal --stats data/ch2better_octree.json --force
 cat data/ch2better_octree.json
 echo
-echo "== the head with its skin (data/ch2.nii.gz, iso 40.5)"
+echo "== only what the camera sees: SAGE on the same view, and how much of the picture it keeps"
+$vdiso extract data/ch2better.vdiso --iso 40.5 --method sage --view normal \
+  --png data/ch2better_sage.png --stats data/ch2better_sage.json --force
+cat data/ch2better_sage.json
+$vdiso compare data/ch2better_octree.png data/ch2better_sage.png
+echo
+echo "== the head with its skin (data/ch2.nii.gz, iso 40.5): full surface and SAGE, distant view"
 $vdiso convert data/ch2.nii.gz data/ch2.vdiso --force
 $vdiso extract data/ch2.vdiso --iso 40.5 --png data/ch2_skin.png --stats - --force
+$vdiso extract data/ch2.vdiso --iso 40.5 --method octree --view distant --png data/ch2_distant_octree.png --force --quiet
+$vdiso extract data/ch2.vdiso --iso 40.5 --method sage --view distant --png data/ch2_distant_sage.png --stats - --force
+$vdiso compare data/ch2_distant_octree.png data/ch2_distant_sage.png
 echo
-echo "pictures: data/ch2better_octree.png data/ch2_skin.png   mesh: data/ch2better.ply"
+echo "pictures: data/ch2better_octree.png data/ch2better_sage.png data/ch2_skin.png"
+echo "          data/ch2_distant_octree.png data/ch2_distant_sage.png   mesh: data/ch2better.ply"

@@ -258,7 +258,8 @@ int runExtract(int argc, char** argv) {
     s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
-    s.add("read_method", store.readMethod()).add("prefetch", extract.prefetchBricks);
+    s.add("read_method", store.readMethod());
+    s.add("prefetch", isViewDependent(o.method) ? 0 : extract.prefetchBricks);  // full methods only
     // I/O the extraction did not wait for: read and decode time spent ahead of it.
     s.add("brick_wait_s", stats.brickWaitSeconds);
     s.add("io_hidden_s", std::max(0.0, io.readSeconds + io.decodeSeconds - stats.brickWaitSeconds));
