@@ -134,4 +134,21 @@ const char* viewPresetName(ViewPreset preset) {
     return "?";
 }
 
+std::vector<Camera> orbitCameras(ViewPreset preset, const glm::dvec3& boundsMin,
+                                 const glm::dvec3& boundsMax, int width, int height, int frames) {
+    const Camera base = presetCamera(preset, boundsMin, boundsMax, width, height);
+    std::vector<Camera> cameras;
+    for (int k = 0; k < frames; ++k) {
+        const double angle = 2.0 * 3.14159265358979323846 * double(k) / double(frames);
+        const double c = std::cos(angle), s = std::sin(angle);
+        Camera camera = base;
+        const glm::dvec3 offset = base.eye - base.target;
+        camera.eye = base.target + glm::dvec3(c * offset.x - s * offset.y, s * offset.x + c * offset.y,
+                                              offset.z);
+        fitClipPlanes(camera, boundsMin, boundsMax);
+        cameras.push_back(camera);
+    }
+    return cameras;
+}
+
 }  // namespace vdiso

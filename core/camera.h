@@ -15,6 +15,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
@@ -72,6 +73,12 @@ enum class ViewPreset { Distant, Normal, Closeup };
 
 Camera presetCamera(ViewPreset preset, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax,
                     int width, int height);
+
+// `frames` cameras orbiting the bounds' centre about +z: the preset's camera turned by
+// 360 * k / frames degrees around the vertical axis through its target (k = 0 is the preset
+// itself). The "dynamic" case of SAGE: a moving camera over one volume.
+std::vector<Camera> orbitCameras(ViewPreset preset, const glm::dvec3& boundsMin,
+                                 const glm::dvec3& boundsMax, int width, int height, int frames);
 
 // "distant", "normal", "closeup" (also "close-up"), case-insensitive; throws
 // std::invalid_argument naming the accepted names otherwise.

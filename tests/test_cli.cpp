@@ -2,6 +2,7 @@
 // output left behind (or overwritten) when anything goes wrong.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 
@@ -211,6 +212,41 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     const auto r = test::runVdiso("extract " + dir.file("missing.vdiso") + " --iso 1");
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("missing.vdiso: cannot open"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST(CliExtract, OrbitPathWritesAStatsLineAndAPicturePerFrame) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso"), stats = dir.file("path.jsonl");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 48 --brick 8 --quiet").exitCode, 0);
+    auto r = test::runVdiso("extract " + store + " --iso 600.5 --method sage --path orbit:3 --size 64x64 --png " +
+                            dir.file("f_%02d.png") + " --stats " + stats + " --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto bytes = test::readFile(stats);
+    const std::string text(bytes.begin(), bytes.end());
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3);
+    for (int f = 0; f < 3; ++f) {
+        EXPECT_NE(text.find("\"frame\": " + std::to_string(f)), std::string::npos) << text;
+        EXPECT_TRUE(std::filesystem::exists(dir.file("f_0" + std::to_string(f) + ".png")));
+    }
+    // The cache is kept: the first frame reads bricks; the path as a whole reads each at most once.
+    std::vector<long> loaded;
+    for (size_t at = text.find("\"bricks_loaded\": "); at != std::string::npos;
+         at = text.find("\"bricks_loaded\": ", at + 1))
+        loaded.push_back(std::stol(text.substr(at + 17)));
+    ASSERT_EQ(loaded.size(), 3u);
+    EXPECT_GT(loaded[0], 0);
+    EXPECT_LE(loaded[0] + loaded[1] + loaded[2], long(BrickStoreReader(store).layout().brickCount()));
+    r = test::runVdiso("extract " + store + " --iso 600.5 --method sage --path orbit:3 --png " + dir.file("f.png"));
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("%d"), std::string::npos) << r.output;
+    r = test::runVdiso("extract " + store + " --iso 600.5 --method sage --path orbit:3 -o " + dir.file("m.ply"));
+    EXPECT_EQ(r.exitCode, 2);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -40,6 +41,10 @@ constexpr const char* kHelp =
     "  --points on|off               sage/wise: sub-pixel parts as points\n"
     "  --update bottom-up|top-down   sage/wise: occlusion pyramid update\n"
     "  --points-out POINTS.ply   write the points (with normals)\n"
+    "  --path orbit:N | CAMS.json    a moving camera: N frames around the volume (from the\n"
+    "                            --view preset), or a JSON list of cameras; one cache is kept\n"
+    "                            across frames; --stats gets one JSON line per frame, --png\n"
+    "                            a pattern (frame_%04d.png)\n"
     "  -o, --output MESH         write the mesh: .ply (binary, normals) or .obj\n"
     "  --png IMAGE.png           render the mesh with OSMesa and write a picture\n"
     "  --view distant|normal|closeup   camera preset framed from the volume (default normal);\n"
@@ -62,6 +67,8 @@ struct ExtractOptions {
     std::string input;
     std::optional<bool> scanPolygons, estimateBox, points, bottomUp;  // sage/wise switches
     std::string pointsPath;
+    int orbitFrames = 0;   // --path orbit:N
+    std::string pathFile;  // --path FILE.json
     std::optional<double> iso;
     std::string method = "octree";
     std::string meshPath, pngPath, statsPath, cameraPath;
@@ -80,6 +87,24 @@ void parseSize(const std::string& text, int& width, int& height) {
     if (x == std::string::npos) throw UsageError("--size expects WxH, not '" + text + "'");
     width = int(parseInt("--size", text.substr(0, x), 16, 8192));
     height = int(parseInt("--size", text.substr(x + 1), 16, 8192));
+}
+
+// True for a name with exactly one integer conversion (frame_%04d.png).
+bool isFramePattern(const std::string& pattern) {
+    size_t conversions = 0;
+    for (size_t i = 0; i < pattern.size(); ++i) {
+        if (pattern[i] != '%') continue;
+        if (i + 1 < pattern.size() && pattern[i + 1] == '%') {
+            ++i;
+            continue;
+        }
+        size_t j = i + 1;
+        while (j < pattern.size() && (std::isdigit(static_cast<unsigned char>(pattern[j])))) ++j;
+        if (j >= pattern.size() || pattern[j] != 'd') return false;
+        ++conversions;
+        i = j;
+    }
+    return conversions == 1;
 }
 
 bool parseSwitch(const std::string& flag, const std::string& value, const char* on, const char* off) {
@@ -113,6 +138,12 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.points = parseSwitch(a, args.value(a), "on", "off");
         } else if (a == "--update") {
             o.bottomUp = parseSwitch(a, args.value(a), "bottom-up", "top-down");
+        } else if (a == "--path") {
+            const std::string p = args.value(a);
+            if (p.rfind("orbit:", 0) == 0)
+                o.orbitFrames = int(parseInt(a, p.substr(6), 1, 100000));
+            else
+                o.pathFile = p;
         } else if (a == "--points-out") {
             o.pointsPath = args.value(a);
         } else if (a == "-o" || a == "--output") {
@@ -159,7 +190,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (!o.iso) throw UsageError("needs --iso V");
     if (o.viewGiven && !o.cameraPath.empty()) throw UsageError("give --view or --camera, not both");
     const bool viewDependent = isViewDependent(o.method);
-    if (o.pngPath.empty() && !viewDependent && (o.viewGiven || !o.cameraPath.empty()))
+    if (o.pngPath.empty() && !viewDependent && o.orbitFrames == 0 && o.pathFile.empty() &&
+        (o.viewGiven || !o.cameraPath.empty()))
         throw UsageError("--view and --camera frame the picture: they need --png (or a "
                          "view-dependent --method)");
     if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp))
@@ -167,6 +199,17 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (!o.pointsPath.empty() && !viewDependent)
         throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
+    if (o.orbitFrames > 0 || !o.pathFile.empty()) {
+        if (!o.cameraPath.empty()) throw UsageError("give --path or --camera, not both");
+        if (!o.meshPath.empty() || !o.pointsPath.empty())
+            throw UsageError("a --path writes pictures (--png frame_%04d.png) and statistics, "
+                             "not meshes");
+        if (!o.pngPath.empty() && !isFramePattern(o.pngPath))
+            throw UsageError("with --path, --png needs one %d in its name (frame_%04d.png)");
+        if (!isViewDependent(o.method) && o.pngPath.empty())
+            throw UsageError("a --path with a full method extracts the same surface each "
+                             "frame: use --method sage or wise, or ask for --png pictures");
+    }
     return o;
 }
 
@@ -183,38 +226,46 @@ void checkOutputsWritable(const ExtractOptions& o) {
 
 }  // namespace
 
-int runExtract(int argc, char** argv) {
-    bool helpShown = false;
-    const ExtractOptions o = parseExtractOptions(argc, argv, helpShown);
-    if (helpShown) return 0;
-    checkOutputsWritable(o);
+namespace {
 
-    const BrickStoreReader store(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
-    BrickCache cache(store, o.cacheMb << 20);
-    const VolumeInfo& volume = store.volume();
-    const glm::dvec3 boundsMin = volume.origin;
-    const glm::dvec3 boundsMax =
-        volume.origin + glm::dvec3(volume.dims[0] - 1, volume.dims[1] - 1, volume.dims[2] - 1) *
-                            volume.spacing;
-    std::optional<Camera> camera;
-    if (!o.cameraPath.empty())
-        camera = readCameraJson(o.cameraPath, o.width, o.height);
-    else if (!o.pngPath.empty() || isViewDependent(o.method))
-        camera = presetCamera(o.view, boundsMin, boundsMax, o.width, o.height);
-    if (camera && !camera->hasClipPlanes()) fitClipPlanes(*camera, boundsMin, boundsMax);
+CacheCounters minus(const CacheCounters& a, const CacheCounters& b) {
+    CacheCounters d;
+    d.requests = a.requests - b.requests;
+    d.hits = a.hits - b.hits;
+    d.misses = a.misses - b.misses;
+    d.evictions = a.evictions - b.evictions;
+    d.bytesRead = a.bytesRead - b.bytesRead;
+    d.readSeconds = a.readSeconds - b.readSeconds;
+    d.decodeSeconds = a.decodeSeconds - b.decodeSeconds;
+    return d;
+}
 
+// "frame_%04d.png" with frame k; refuses names without exactly one integer conversion.
+std::string framePath(const std::string& pattern, int frame) {
+    char buffer[4096];
+    std::snprintf(buffer, sizeof buffer, pattern.c_str(), frame);
+    return buffer;
+}
+
+// One extraction from one camera (or none, for the full methods without a picture), with its
+// outputs; returns its statistics. `before`: the cache's counters before this frame, so a
+// frame's I/O figures are its own while the cache is kept across frames.
+JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, BrickCache& cache,
+                        const std::optional<Camera>& camera, const std::string& meshPath,
+                        const std::string& pngPath, const std::string& pointsPath,
+                        const ProgressFn& progress, std::string& summary) {
+    const CacheCounters before = cache.counters();
     // Without a picture to draw, the mesh goes to its file as it is extracted: memory holds a
     // bounded part of it. A picture needs the whole mesh, so then it is held.
     TriangleMesh mesh;
     std::optional<MeshFileWriter> streamed;
-    if (!o.meshPath.empty() && o.pngPath.empty() && !isViewDependent(o.method))
-        streamed.emplace(o.meshPath, o.overwrite);
+    if (!meshPath.empty() && pngPath.empty() && !isViewDependent(o.method))
+        streamed.emplace(meshPath, o.overwrite);
     FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
-    if (streamed && !isViewDependent(o.method)) extract.sink = &*streamed;
+    if (streamed) extract.sink = &*streamed;
     // The prefetcher must not evict what it loaded before use: half the cache at most.
     extract.prefetchBricks = int(std::min<uint64_t>(uint64_t(o.prefetch),
                                                     cache.budgetBytes() / store.brickBytes() / 2));
-    const ProgressFn progress = progressBar("extract", 0, o.quiet);
     PointSet points;
     FullExtractStats stats;
     std::optional<ViewExtractStats> view;
@@ -237,20 +288,21 @@ int runExtract(int argc, char** argv) {
         stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
                                     : extractOctree(cache, extract, mesh, progress);
     }
-    const CacheCounters io = cache.counters();
+    const CacheCounters io = minus(cache.counters(), before);
 
     if (streamed)
         streamed->finish();
-    else if (!o.meshPath.empty())
-        writeMesh(o.meshPath, mesh, o.overwrite);
+    else if (!meshPath.empty())
+        writeMesh(meshPath, mesh, o.overwrite);
     std::optional<double> drawSeconds;
-    if (!o.pointsPath.empty()) writePointsPly(o.pointsPath, points, o.overwrite);
-    if (!o.pngPath.empty()) {
+    if (!pointsPath.empty()) writePointsPly(pointsPath, points, o.overwrite);
+    if (!pngPath.empty()) {
         const RenderResult r = renderSurface(mesh, points, *camera);
-        writePng(o.pngPath, r.image, o.overwrite);
+        writePng(pngPath, r.image, o.overwrite);
         drawSeconds = r.drawSeconds;
     }
 
+    const VolumeInfo& volume = store.volume();
     JsonObject s;
     s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", o.threads);
@@ -275,24 +327,71 @@ int runExtract(int argc, char** argv) {
     }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
-    if (camera) s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());
     s.add("peak_rss_mb", peakRssMb());
-    const std::string json = s.str() + "\n";
-    if (o.statsPath == "-") {
-        std::fputs(json.c_str(), stdout);
-    } else if (!o.statsPath.empty()) {
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "%s iso %g: %llu triangles, %zu points, %.3f s extract (%.3f s read, %.3f s "
+                  "decode), %llu bricks read (%.1f MB)%s",
+                  o.method.c_str(), *o.iso, (unsigned long long)stats.triangles, points.size(),
+                  stats.extractSeconds, io.readSeconds, io.decodeSeconds,
+                  (unsigned long long)io.misses, io.bytesRead / 1e6,
+                  drawSeconds ? (", drawn in " + std::to_string(*drawSeconds) + " s").c_str() : "");
+    summary = line;
+    return s;
+}
+
+}  // namespace
+
+int runExtract(int argc, char** argv) {
+    bool helpShown = false;
+    const ExtractOptions o = parseExtractOptions(argc, argv, helpShown);
+    if (helpShown) return 0;
+    checkOutputsWritable(o);
+
+    const BrickStoreReader store(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
+    BrickCache cache(store, o.cacheMb << 20);
+    const VolumeInfo& volume = store.volume();
+    const glm::dvec3 boundsMin = volume.origin;
+    const glm::dvec3 boundsMax =
+        volume.origin + glm::dvec3(volume.dims[0] - 1, volume.dims[1] - 1, volume.dims[2] - 1) *
+                            volume.spacing;
+    // The cameras: one (or none for a full extraction without a picture), or a path.
+    std::vector<Camera> cameras;
+    if (o.orbitFrames > 0)
+        cameras = orbitCameras(o.view, boundsMin, boundsMax, o.width, o.height, o.orbitFrames);
+    else if (!o.pathFile.empty())
+        cameras = readCameraPath(o.pathFile, o.width, o.height);
+    else if (!o.cameraPath.empty())
+        cameras.push_back(readCameraJson(o.cameraPath, o.width, o.height));
+    else if (!o.pngPath.empty() || isViewDependent(o.method))
+        cameras.push_back(presetCamera(o.view, boundsMin, boundsMax, o.width, o.height));
+    for (Camera& c : cameras)
+        if (!c.hasClipPlanes()) fitClipPlanes(c, boundsMin, boundsMax);
+    const bool path = o.orbitFrames > 0 || !o.pathFile.empty();
+
+    std::string statsText, summary;
+    const ProgressFn progress = progressBar("extract", 0, o.quiet || path);
+    const size_t frames = std::max<size_t>(1, cameras.size());
+    for (size_t f = 0; f < frames; ++f) {
+        const std::optional<Camera> camera =
+            cameras.empty() ? std::nullopt : std::optional<Camera>(cameras[f]);
+        const std::string png = path && !o.pngPath.empty() ? framePath(o.pngPath, int(f)) : o.pngPath;
+        JsonObject s = extractFrame(o, store, cache, camera, path ? "" : o.meshPath, png,
+                                    path ? "" : o.pointsPath, progress, summary);
+        if (path) s.add("frame", int64_t(f));
+        else if (camera)
+            s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());
+        statsText += s.str() + "\n";
+        if (o.statsPath == "-") std::fputs((s.str() + "\n").c_str(), stdout);
+        if (!o.quiet && o.statsPath != "-")
+            std::printf("%s%s\n", path ? ("frame " + std::to_string(f) + ": ").c_str() : "",
+                        summary.c_str());
+    }
+    if (!o.statsPath.empty() && o.statsPath != "-") {
         AtomicOutputFile out(o.statsPath, o.overwrite);
-        out.append(json.data(), json.size());
+        out.append(statsText.data(), statsText.size());
         out.commit();
     }
-    if (!o.quiet && o.statsPath != "-")
-        std::printf("%s iso %g: %llu triangles, %llu vertices, %.3f s extract (%.3f s read, "
-                    "%.3f s decode), %llu bricks read (%.1f MB)%s\n",
-                    o.method.c_str(), *o.iso, (unsigned long long)stats.triangles,
-                    (unsigned long long)stats.vertices,
-                    stats.extractSeconds, io.readSeconds, io.decodeSeconds,
-                    (unsigned long long)io.misses, io.bytesRead / 1e6,
-                    drawSeconds ? (", drawn in " + std::to_string(*drawSeconds) + " s").c_str() : "");
     return 0;
 }
 
