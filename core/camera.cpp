@@ -39,19 +39,28 @@ glm::dmat4 Camera::projectionMatrix() const {
     return glm::perspective(glm::radians(fovYDegrees), aspect(), n, f);
 }
 
-glm::dvec3 Camera::project(const glm::dvec3& world) const {
-    const glm::dvec4 clip = viewProjection() * glm::dvec4(world, 1.0);
+glm::dvec3 Camera::project(const glm::dvec3& world) const { return PixelProjector(*this).project(world); }
+
+glm::dvec3 Camera::unproject(const glm::dvec3& pixelAndDepth) const {
+    return PixelProjector(*this).unproject(pixelAndDepth);
+}
+
+PixelProjector::PixelProjector(const Camera& camera)
+    : mViewProjection(camera.viewProjection()), mInverse(glm::inverse(mViewProjection)),
+      mWidth(camera.width), mHeight(camera.height) {}
+
+glm::dvec3 PixelProjector::project(const glm::dvec3& world) const {
+    const glm::dvec4 clip = mViewProjection * glm::dvec4(world, 1.0);
     if (!(clip.w > 0.0)) return glm::dvec3(std::numeric_limits<double>::quiet_NaN());
     const glm::dvec3 ndc = glm::dvec3(clip) / clip.w;
     // The y flip turns OpenGL's bottom-up window coordinates into top-down image rows.
-    return {(ndc.x * 0.5 + 0.5) * width, (0.5 - ndc.y * 0.5) * height, ndc.z * 0.5 + 0.5};
+    return {(ndc.x * 0.5 + 0.5) * mWidth, (0.5 - ndc.y * 0.5) * mHeight, ndc.z * 0.5 + 0.5};
 }
 
-glm::dvec3 Camera::unproject(const glm::dvec3& pixelAndDepth) const {
-    const glm::dvec4 ndc{pixelAndDepth.x / width * 2.0 - 1.0,
-                         1.0 - pixelAndDepth.y / height * 2.0,
+glm::dvec3 PixelProjector::unproject(const glm::dvec3& pixelAndDepth) const {
+    const glm::dvec4 ndc{pixelAndDepth.x / mWidth * 2.0 - 1.0, 1.0 - pixelAndDepth.y / mHeight * 2.0,
                          pixelAndDepth.z * 2.0 - 1.0, 1.0};
-    const glm::dvec4 world = glm::inverse(viewProjection()) * ndc;
+    const glm::dvec4 world = mInverse * ndc;
     return glm::dvec3(world) / world.w;
 }
 

@@ -50,6 +50,19 @@ struct Camera {
     glm::dvec3 unproject(const glm::dvec3& pixelAndDepth) const;
 };
 
+// A camera's projection with its matrices computed once: for the hot loops that project every
+// vertex (Camera::project rebuilds them on each call). Same conventions as Camera::project.
+class PixelProjector {
+public:
+    explicit PixelProjector(const Camera& camera);
+    glm::dvec3 project(const glm::dvec3& world) const;
+    glm::dvec3 unproject(const glm::dvec3& pixelAndDepth) const;
+
+private:
+    glm::dmat4 mViewProjection, mInverse;
+    double mWidth, mHeight;
+};
+
 // Sets zNear and zFar so that the box [boundsMin, boundsMax] lies between them with a 1% margin.
 // When the eye is inside the box or close to it, zNear is clamped to zFar / 1000 to keep depth
 // precision (24-bit buffers); geometry nearer than that is clipped.

@@ -29,6 +29,7 @@ struct Traversal {
     const VolumeInfo& volume;
     const BrickLayout& layout;
     BoxProjector projector;
+    PixelProjector pixels;
     OcclusionPyramid pyramid;
     BrickExtractor extractor;
     EdgeVertexMap seams;
@@ -37,7 +38,7 @@ struct Traversal {
     Traversal(BrickSource& s, const Camera& c, const ViewExtractOptions& o, TriangleMesh& m,
               PointSet& p, ViewExtractStats& st)
         : source(s), camera(c), options(o), mesh(m), points(p), stats(st), volume(s.volume()),
-          layout(s.layout()), projector(c), pyramid(c.width, c.height),
+          layout(s.layout()), projector(c), pixels(c), pyramid(c.width, c.height),
           extractor(s.volume(), s.layout(), o.metaCellSize) {}
 
     // World box of the cells [lo, hi) (cell coordinates; clamped to the volume's cells).
@@ -105,8 +106,8 @@ struct Traversal {
 
     bool rayHit(const glm::ivec2& pixel, const glm::dvec3& a, const glm::dvec3& b,
                 glm::vec3& position, glm::vec3& normal) const {
-        const glm::dvec3 nearPoint = camera.unproject({pixel.x + 0.5, pixel.y + 0.5, 0.0});
-        const glm::dvec3 farPoint = camera.unproject({pixel.x + 0.5, pixel.y + 0.5, 1.0});
+        const glm::dvec3 nearPoint = pixels.unproject({pixel.x + 0.5, pixel.y + 0.5, 0.0});
+        const glm::dvec3 farPoint = pixels.unproject({pixel.x + 0.5, pixel.y + 0.5, 1.0});
         const glm::dvec3 direction = farPoint - nearPoint;
         double t0 = 0.0, t1 = 1.0;  // slab intersection with the box
         for (int k = 0; k < 3; ++k) {
@@ -126,11 +127,10 @@ struct Traversal {
     // Scan-converts a polygon just appended (SAGE §3.2), each vertex projected once.
     static void onPolygon(void* context, const uint32_t* vertices, int count) {
         auto& t = *static_cast<Traversal*>(context);
-        const auto start = Clock::now();
         glm::dvec2 projected[kMcMaxPolygonVertices];
         for (int k = 0; k < count; ++k) {
             const glm::vec3& p = t.mesh.positions[vertices[k] - t.mesh.firstVertex];
-            const glm::dvec3 s = t.camera.project(glm::dvec3(p));
+            const glm::dvec3 s = t.pixels.project(glm::dvec3(p));
             if (!(s.z >= 0.0 && s.z <= 1.0)) return;  // behind the eye or clipped: mark nothing
             projected[k] = glm::dvec2(s.x, s.y);
         }
@@ -147,7 +147,6 @@ struct Traversal {
                 scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
             }
         }
-        t.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
     }
 
     // The meta-cells [lo, hi) of the current brick, front to back by halving (the same exact
@@ -180,9 +179,13 @@ struct Traversal {
         const Verdict v = test(range, a, b, true);
         if (v != Verdict::Visible) return;
         if (single) {
+            // Timed per meta-cell (extraction and scan conversion are interleaved polygon by
+            // polygon; a clock read per polygon would cost more than it measures).
+            const auto start = Clock::now();
             extractor.extractMetaCell(metaCell, options.iso, mesh, seams, &Traversal::onPolygon, this);
             ++stats.metaCellsExtracted;
             if (options.bottomUp) pyramid.propagate();
+            scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
             return;
         }
         int axis = 0;
@@ -251,6 +254,12 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     const auto start = Clock::now();
     ViewExtractStats stats;
     const uint64_t trianglesBefore = mesh.triangleCount();
+    // What is visible scales with the image, not the volume: room for a couple of triangles
+    // per pixel saves regrowth copies (untouched reserved pages cost nothing).
+    const size_t pixels = size_t(camera.width) * size_t(camera.height);
+    mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
+    mesh.positions.reserve(mesh.positions.size() + pixels);
+    mesh.normals.reserve(mesh.positions.capacity());
     Traversal t(source, camera, options, mesh, points, stats);
     t.run();
     stats.triangles = mesh.triangleCount() - trianglesBefore;

@@ -55,7 +55,8 @@ struct ViewExtractStats {
     int64_t metaCellsExtracted = 0;
     int64_t bricksAcquired = 0;
     uint64_t triangles = 0, points = 0;
-    double scanSeconds = 0;     // projection and scan conversion into the pyramid
+    double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan
+                                // conversion into the pyramid (interleaved per polygon)
     double extractSeconds = 0;  // everything, brick reads included
 };
 
