@@ -191,18 +191,35 @@ struct BrickKernel {
         return v;
     }
 
-    void extractMetaCell(int m, PolygonCallback onPolygon = nullptr, void* context = nullptr) {
+    void extractMetaCell(int m, PolygonCallback onPolygon = nullptr, void* context = nullptr,
+                         CellFilter keepCell = nullptr, const glm::dvec3* eyeCell = nullptr) {
         int lo[3], hi[3];
         metaCellBox(m, lo, hi);
+        // Cell order per axis: ascending, or with an eye (in this brick's cell coordinates)
+        // nearest the eye first. Nested z, y, x, each ordered so, is a front-to-back order
+        // for a grid: a cell hiding another is no farther from the eye on any axis.
+        int order[3][64];
+        for (int a = 0; a < 3; ++a) {
+            const int n = hi[a] - lo[a];
+            for (int k = 0; k < n; ++k) order[a][k] = lo[a] + k;
+            if (eyeCell)
+                std::sort(order[a], order[a] + n, [&](int i, int j) {
+                    return std::abs(i + 0.5 - (*eyeCell)[a]) < std::abs(j + 0.5 - (*eyeCell)[a]);
+                });
+        }
         KernelCounters& counters = x.mCounters;
-        for (int cz = lo[2]; cz < hi[2]; ++cz)
-            for (int cy = lo[1]; cy < hi[1]; ++cy) {
-                const T* cell = s + sampleIndex(lo[0], cy, cz);
-                for (int cx = lo[0]; cx < hi[0]; ++cx, ++cell) {
+        for (int iz = 0; iz < hi[2] - lo[2]; ++iz)
+            for (int iy = 0; iy < hi[1] - lo[1]; ++iy) {
+                const int cz = order[2][iz], cy = order[1][iy];
+                for (int ix = 0; ix < hi[0] - lo[0]; ++ix) {
+                    const int cx = order[0][ix];
+                    const T* cell = s + sampleIndex(cx, cy, cz);
                     int caseIndex = 0;
                     for (int k = 0; k < 8; ++k)
                         caseIndex |= int(threshold.above(cell[cornerStride[k]])) << k;
                     if (caseIndex == 0 || caseIndex == 255) continue;
+                    if (keepCell && !keepCell(context, corner0[0] + cx, corner0[1] + cy, corner0[2] + cz))
+                        continue;
                     ++counters.cellsActive;
                     const McPolygonCase& pc = mcPolygonCase(caseIndex);
                     int at = 0;
@@ -232,7 +249,7 @@ struct BrickKernel {
 
 BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout,
                                int metaCellSize)
-    : mVolume(volume), mLayout(layout), mMetaCellSize(std::max(1, metaCellSize)) {
+    : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, 64)) {
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);
     mEdges.resize(corners * corners * corners * 3);
@@ -344,12 +361,18 @@ bool BrickExtractor::firstHit(const glm::dvec3& origin, const glm::dvec3& direct
 
 void BrickExtractor::extractMetaCell(uint32_t metaCell, double iso, TriangleMesh& mesh,
                                      EdgeVertexMap& seams, PolygonCallback onPolygon,
-                                     void* context) {
+                                     void* context, CellFilter keepCell,
+                                     const glm::dvec3* eyeWorld) {
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         BrickKernel<T> k(*this, mCurrentBrick, mCurrentSamples, iso, mesh, seams);
         ++mCounters.metaCellsActive;
-        k.extractMetaCell(int(metaCell), onPolygon, context);
+        glm::dvec3 eyeCell;
+        if (eyeWorld)
+            for (int a = 0; a < 3; ++a)
+                eyeCell[a] = ((*eyeWorld)[a] - mVolume.origin[a]) / mVolume.spacing[a] -
+                             double(k.corner0[a]);
+        k.extractMetaCell(int(metaCell), onPolygon, context, keepCell, eyeWorld ? &eyeCell : nullptr);
     });
 }
 

@@ -25,7 +25,7 @@
 
 namespace vdiso {
 
-constexpr int kDefaultMetaCellSize = 4;
+constexpr int kDefaultMetaCellSize = 4;  // meta-cell sizes are clamped to 1..64
 
 // Vertices of edges on brick faces, by global edge key, so neighbouring bricks share them.
 // Open addressing with linear probing on a power-of-two table (keys are stored plus one, so
@@ -83,6 +83,10 @@ private:
 // fan triangles are appended: the view-dependent traversal scan-converts it (SAGE §3.2).
 using PolygonCallback = void (*)(void* context, const uint32_t* vertices, int count);
 
+// Asked for each active cell (global cell coordinates) before its surface is made; false
+// skips the cell. The view-dependent traversal's per-cell visibility test.
+using CellFilter = bool (*)(void* context, int64_t x, int64_t y, int64_t z);
+
 struct KernelCounters {
     int64_t metaCellsTested = 0, metaCellsActive = 0, cellsVisited = 0, cellsActive = 0;
 };
@@ -111,11 +115,13 @@ public:
 
     // One meta-cell at a time, for traversals that decide per meta-cell (SAGE): beginBrick
     // makes `samples` the current brick (its vertices are shared across its meta-cells) and
-    // computes its meta-cell ranges; extractMetaCell appends one meta-cell's surface.
+    // computes its meta-cell ranges; extractMetaCell appends one meta-cell's surface, its
+    // cells front to back from `eye` (world) when given, else in memory order.
     void beginBrick(int64_t id, const void* samples);
     const std::vector<BrickRange>& currentRanges() const { return mRanges; }
     void extractMetaCell(uint32_t metaCell, double iso, TriangleMesh& mesh, EdgeVertexMap& seams,
-                         PolygonCallback onPolygon = nullptr, void* context = nullptr);
+                         PolygonCallback onPolygon = nullptr, void* context = nullptr,
+                         CellFilter keepCell = nullptr, const glm::dvec3* eye = nullptr);
     int metaCellsPerAxis() const { return mMetaPerAxis; }
     // The first crossing of the isovalue along the ray origin + t * direction, t in
     // [tEnter, tExit], through the current brick's trilinear interpolant (world units; the

@@ -124,29 +124,46 @@ struct Traversal {
                extractor.firstHit(nearPoint, direction, t0, t1, options.iso, position, normal);
     }
 
-    // Scan-converts a polygon just appended (SAGE §3.2), each vertex projected once.
+    // Scan-converts a polygon just appended (SAGE §3.2), each vertex projected once. Cells
+    // arrive front to back, so a cell can be hidden by the cells before it in its meta-cell.
     static void onPolygon(void* context, const uint32_t* vertices, int count) {
         auto& t = *static_cast<Traversal*>(context);
-        glm::dvec2 projected[kMcMaxPolygonVertices];
+        glm::dvec2 v[kMcMaxPolygonVertices];
         for (int k = 0; k < count; ++k) {
             const glm::vec3& p = t.mesh.positions[vertices[k] - t.mesh.firstVertex];
             const glm::dvec3 s = t.pixels.project(glm::dvec3(p));
             if (!(s.z >= 0.0 && s.z <= 1.0)) return;  // behind the eye or clipped: mark nothing
-            projected[k] = glm::dvec2(s.x, s.y);
+            v[k] = glm::dvec2(s.x, s.y);
         }
         if (!t.options.bottomUp) {
             for (int k = 2; k < count; ++k) {
-                const glm::dvec2 triangle[3] = {projected[0], projected[k - 1], projected[k]};
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
                 t.pyramid.insertTriangleTopDown(triangle);
             }
         } else if (t.options.scanPolygons) {
-            scanConvertPolygon(std::span<const glm::dvec2>(projected, size_t(count)), t.pyramid);
+            scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), t.pyramid);
         } else {
             for (int k = 2; k < count; ++k) {
-                const glm::dvec2 triangle[3] = {projected[0], projected[k - 1], projected[k]};
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
                 scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
             }
         }
+    }
+
+    // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
+    static bool keepCell(void* context, int64_t x, int64_t y, int64_t z) {
+        auto& t = *static_cast<Traversal*>(context);
+        const int64_t lo[3] = {x, y, z}, hi[3] = {x + 1, y + 1, z + 1};
+        glm::dvec3 a, b;
+        t.worldBox(lo, hi, a, b);
+        const ScreenBox box = t.options.estimateBox ? t.projector.estimateBox(a, b)
+                                                    : t.projector.exactBox(a, b);
+        if (box.crossesNearPlane) return true;
+        const int x0 = int(std::ceil(box.left - 0.5)), x1 = int(std::floor(box.right - 0.5));
+        const int y0 = int(std::ceil(box.top - 0.5)), y1 = int(std::floor(box.bottom - 0.5));
+        const bool keep = x0 <= x1 && y0 <= y1 && !t.pyramid.isOccluded(x0, y0, x1, y1);
+        t.stats.cellsCulled += !keep;
+        return keep;
     }
 
     // The meta-cells [lo, hi) of the current brick, front to back by halving (the same exact
@@ -182,7 +199,9 @@ struct Traversal {
             // Timed per meta-cell (extraction and scan conversion are interleaved polygon by
             // polygon; a clock read per polygon would cost more than it measures).
             const auto start = Clock::now();
-            extractor.extractMetaCell(metaCell, options.iso, mesh, seams, &Traversal::onPolygon, this);
+            extractor.extractMetaCell(metaCell, options.iso, mesh, seams, &Traversal::onPolygon,
+                                      this, options.cellTests ? &Traversal::keepCell : nullptr,
+                                      &camera.eye);
             ++stats.metaCellsExtracted;
             if (options.bottomUp) pyramid.propagate();
             scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();

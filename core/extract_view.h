@@ -15,6 +15,8 @@
 //   5. otherwise a node descends, and a meta-cell is extracted: its triangles are appended,
 //      and its polygons are projected (each vertex once) and scan-converted into the bottom
 //      of the pyramid, changed tiles propagated upward after the meta-cell (SAGE §3.1-3.2).
+//      Its cells are visited front to back too; with cellTests, each is first tested like a
+//      node (no pixel centre, or all covered: skipped), so cells hide cells.
 // WISE = exact boxes, no points, one triangle at a time inserted top-down (Greene's masks).
 // Every SAGE feature is a switch, for the ablations of the paper's Tables 3-4.
 #pragma once
@@ -36,6 +38,10 @@ struct ViewExtractOptions {
     bool estimateBox = true;   // false: the exact 8-corner box
     bool points = true;        // sub-pixel nodes become points
     bool bottomUp = true;      // false: top-down insertion of each triangle (WISE)
+    // Beyond the paper: inside an extracted meta-cell, skip each cell whose screen box covers
+    // no pixel centre, or only centres nearer meta-cells already cover. Where cells are
+    // smaller than pixels this brings the output near the visible-surface oracle.
+    bool cellTests = true;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {
@@ -44,6 +50,7 @@ struct ViewExtractOptions {
         o.estimateBox = false;
         o.points = false;
         o.bottomUp = false;
+        o.cellTests = false;
         return o;
     }
 };
@@ -53,6 +60,7 @@ struct ViewExtractStats {
     int64_t culledByRange = 0, culledByFrustum = 0, culledByOcclusion = 0;
     int64_t droppedSubPixel = 0;  // sub-pixel nodes covering no free pixel centre
     int64_t metaCellsExtracted = 0;
+    int64_t cellsCulled = 0;  // by the per-cell test
     int64_t bricksAcquired = 0;
     uint64_t triangles = 0, points = 0;
     double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan

@@ -11,6 +11,7 @@
 #include "core/camera.h"
 #include "core/extract_full.h"
 #include "core/extract_view.h"
+#include "core/visible_oracle.h"
 #include "io/brick_store.h"
 #include "io/image_compare.h"
 #include "io/renderer.h"
@@ -91,6 +92,38 @@ TEST(ViewFidelity, RealMri) {
     const BrickStoreReader store(scratch.file("mri.vdiso"));
     BrickCache cache(store, 256u << 20);
     expectFaithful(cache, 40.5, "mri skin");
+}
+
+}  // namespace
+}  // namespace vdiso
+
+namespace vdiso {
+namespace {
+
+TEST(VisibleOracle, BoundsWhatAViewDependentExtractionNeeds) {
+    SynthParams p;
+    p.kind = SynthKind::Head;
+    p.dims = {96, 96, 96};
+    auto head = test::synthBrickSource(p, 16);
+    const VolumeInfo& v = head->volume();
+    const glm::dvec3 lo = v.origin, hi = v.origin + glm::dvec3(95.0) * v.spacing;
+    Camera camera = presetCamera(ViewPreset::Normal, lo, hi, 400, 400);
+    fitClipPlanes(camera, lo, hi);
+    TriangleMesh full, view;
+    PointSet points;
+    extractOctree(*head, {kHeadSkinIso, 4}, full);
+    const ViewExtractStats s = extractViewDependent(*head, camera, ViewExtractOptions::sage(kHeadSkinIso), view, points);
+    const RenderResult r = renderSurface(full, PointSet{}, camera);
+    const VisibleSurfaceOracle oracle = visibleSurfaceOracle(*head, camera, r.depth, kHeadSkinIso);
+    uint64_t covered = 0;
+    for (float d : r.depth) covered += d < 1.0f;
+    EXPECT_EQ(oracle.pixels, covered);
+    EXPECT_GT(oracle.triangles, 0u);
+    EXPECT_LE(oracle.cells, oracle.pixels);
+    EXPECT_LT(oracle.triangles, full.triangleCount() / 2);  // a closed surface hides its back
+    // What the extraction read and produced covers the picture, so it is not below the least.
+    EXPECT_GE(uint64_t(s.bricksAcquired), oracle.bricks);
+    EXPECT_GE(view.triangleCount() + points.size(), oracle.cells / 2);
 }
 
 }  // namespace

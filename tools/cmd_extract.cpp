@@ -8,6 +8,7 @@
 #include "core/camera.h"
 #include "core/extract_full.h"
 #include "core/extract_view.h"
+#include "core/visible_oracle.h"
 #include "io/atomic_output.h"
 #include "io/camera_json.h"
 #include "io/json.h"
@@ -40,7 +41,13 @@ constexpr const char* kHelp =
     "  --box estimate|exact          sage/wise: screen box by the SAGE estimate or 8 corners\n"
     "  --points on|off               sage/wise: sub-pixel parts as points\n"
     "  --update bottom-up|top-down   sage/wise: occlusion pyramid update\n"
+    "  --cell-test on|off        sage/wise: test each cell of an extracted meta-cell too\n"
+    "                            (on for sage, off for wise)\n"
     "  --points-out POINTS.ply   write the points (with normals)\n"
+    "  --oracle                  also measure the visible-surface oracle: the full surface's\n"
+    "                            depth buffer mapped back to cells and bricks, the least any\n"
+    "                            view-dependent extraction must produce and read; reports\n"
+    "                            oracle_* figures and our ratios to them\n"
     "  --path orbit:N | CAMS.json    a moving camera: N frames around the volume (from the\n"
     "                            --view preset), or a JSON list of cameras; one cache is kept\n"
     "                            across frames; --stats gets one JSON line per frame, --png\n"
@@ -65,8 +72,9 @@ constexpr const char* kHelp =
 
 struct ExtractOptions {
     std::string input;
-    std::optional<bool> scanPolygons, estimateBox, points, bottomUp;  // sage/wise switches
+    std::optional<bool> scanPolygons, estimateBox, points, bottomUp, cellTests;  // sage/wise
     std::string pointsPath;
+    bool oracle = false;
     int orbitFrames = 0;   // --path orbit:N
     std::string pathFile;  // --path FILE.json
     std::optional<double> iso;
@@ -138,12 +146,16 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.points = parseSwitch(a, args.value(a), "on", "off");
         } else if (a == "--update") {
             o.bottomUp = parseSwitch(a, args.value(a), "bottom-up", "top-down");
+        } else if (a == "--oracle") {
+            o.oracle = true;
         } else if (a == "--path") {
             const std::string p = args.value(a);
             if (p.rfind("orbit:", 0) == 0)
                 o.orbitFrames = int(parseInt(a, p.substr(6), 1, 100000));
             else
                 o.pathFile = p;
+        } else if (a == "--cell-test") {
+            o.cellTests = parseSwitch(a, args.value(a), "on", "off");
         } else if (a == "--points-out") {
             o.pointsPath = args.value(a);
         } else if (a == "-o" || a == "--output") {
@@ -194,12 +206,16 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
         (o.viewGiven || !o.cameraPath.empty()))
         throw UsageError("--view and --camera frame the picture: they need --png (or a "
                          "view-dependent --method)");
-    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp))
-        throw UsageError("--scan, --box, --points and --update apply to --method sage or wise");
+    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests))
+        throw UsageError("--scan, --box, --points, --update and --cell-test apply to --method "
+                         "sage or wise");
     if (!o.pointsPath.empty() && !viewDependent)
         throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
+    if (o.oracle && !viewDependent && o.pngPath.empty() && !o.viewGiven && o.cameraPath.empty())
+        throw UsageError("--oracle needs a camera: --view, --camera or a view-dependent --method");
     if (o.orbitFrames > 0 || !o.pathFile.empty()) {
+        if (o.oracle) throw UsageError("--oracle measures one view, not a --path");
         if (!o.cameraPath.empty()) throw UsageError("give --path or --camera, not both");
         if (!o.meshPath.empty() || !o.pointsPath.empty())
             throw UsageError("a --path writes pictures (--png frame_%04d.png) and statistics, "
@@ -277,6 +293,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.estimateBox) v.estimateBox = *o.estimateBox;
         if (o.points) v.points = *o.points;
         if (o.bottomUp) v.bottomUp = *o.bottomUp;
+        if (o.cellTests) v.cellTests = *o.cellTests;
         view = extractViewDependent(cache, *camera, v, mesh, points, progress);
         stats.triangles = view->triangles;
         stats.vertices = mesh.vertexCount();
@@ -324,9 +341,24 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         s.add("culled_occlusion", view->culledByOcclusion);
         s.add("dropped_subpixel", view->droppedSubPixel);
         s.add("meta_cells_extracted", view->metaCellsExtracted).add("scan_s", view->scanSeconds);
+        s.add("cells_culled", view->cellsCulled);
     }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
+    if (o.oracle && camera) {
+        // After this frame's figures are taken: the full surface from the same camera.
+        TriangleMesh full;
+        extractOctree(cache, {*o.iso, o.metaCellSize, o.threads}, full);
+        const RenderResult r = renderSurface(full, PointSet{}, *camera);
+        const VisibleSurfaceOracle v = visibleSurfaceOracle(cache, *camera, r.depth, *o.iso);
+        s.add("oracle_pixels", v.pixels).add("oracle_cells", v.cells);
+        s.add("oracle_triangles", v.triangles).add("oracle_bricks", v.bricks);
+        s.add("full_triangles", uint64_t(full.triangleCount()));
+        s.add("triangles_over_oracle", double(stats.triangles) / double(std::max<uint64_t>(1, v.triangles)));
+        s.add("bricks_over_oracle", double(io.misses) / double(std::max<uint64_t>(1, v.bricks)));
+        s.add("primitives_per_pixel",
+              double(stats.triangles + points.size()) / double(std::max<uint64_t>(1, v.pixels)));
+    }
     s.add("peak_rss_mb", peakRssMb());
     char line[512];
     std::snprintf(line, sizeof line,
