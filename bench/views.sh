@@ -61,3 +61,24 @@ for view in distant normal closeup; do
   row data/head512.vdiso 600.5 $view sage "no-points" --points off
   row data/head512.vdiso 600.5 $view sage "top-down" --update top-down
 done
+
+echo
+echo "SAGE against the visible-surface oracle (extract --oracle: the full surface's depth buffer"
+echo "mapped back to cells and bricks, the least any view-dependent method needs)."
+echo
+echo "| volume | iso | view | triangles | points | oracle triangles | triangles / oracle | bricks read | oracle bricks | bricks / oracle | primitives per covered pixel | full / sage primitives |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+for spec in "data/head512.vdiso 600.5" "data/head512.vdiso 1224.5" "data/ch2.vdiso 40.5"; do
+  set -- $spec
+  for view in distant normal closeup; do
+    $vdiso extract "$1" --iso "$2" --method sage --view $view --size ${size}x${size} --oracle --stats - --quiet |
+      python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+prims = d["triangles"] + d["points"]
+print("| %s | %s | %s | %d | %d | %d | %.2f | %d | %d | %.2f | %.2f | %.0f |" % (
+    sys.argv[1], sys.argv[2], sys.argv[3], d["triangles"], d["points"], d["oracle_triangles"],
+    d["triangles_over_oracle"], d["bricks_loaded"], d["oracle_bricks"], d["bricks_over_oracle"],
+    d["primitives_per_pixel"], d["full_triangles"] / max(1, prims)))' "$(basename "$1")" "$2" "$view"
+  done
+done
