@@ -62,11 +62,7 @@ int main(int argc, char** argv) {
         BrickCache cache(store, 256u << 20);
         TriangleMesh mesh;
         extractOctree(cache, {iso, 4, 2}, mesh);
-        double area = 0;
-        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-            glm::dvec3 a(mesh.positions[mesh.indices[3*t]]), b(mesh.positions[mesh.indices[3*t+1]]), c(mesh.positions[mesh.indices[3*t+2]]);
-            area += 0.5 * glm::length(glm::cross(b - a, c - a));
-        }
+        const double area = surfaceArea(mesh);
         std::printf("k=%d triangles %zu area %.1f\n", k, mesh.triangleCount(), area);
         std::fflush(stdout);
     }

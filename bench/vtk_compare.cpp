@@ -159,19 +159,6 @@ double triangleArea(const double a[3], const double b[3], const double c[3]) {
     return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
-double surfaceArea(const TriangleMesh& mesh) {
-    double area = 0;
-    for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-        double corners[3][3];
-        for (int k = 0; k < 3; ++k) {
-            const glm::vec3& p = mesh.positions[mesh.indices[3 * t + k]];
-            corners[k][0] = p.x, corners[k][1] = p.y, corners[k][2] = p.z;
-        }
-        area += triangleArea(corners[0], corners[1], corners[2]);
-    }
-    return area;
-}
-
 // Sum of the areas of the polygons of `poly` (triangles from both VTK filters; a polygon with
 // more corners would be fanned).
 double surfaceArea(vtkPolyData* poly) {

@@ -42,6 +42,10 @@ public:
     virtual void append(const TriangleMesh& part) = 0;
 };
 
+// Sum of the triangles' areas (in double), in world units squared. Indices must refer to the
+// vertices the mesh holds (firstVertex == 0).
+double surfaceArea(const TriangleMesh& mesh);
+
 // Hands what `mesh` holds to the sink and drops it, keeping the global vertex numbering.
 inline void drainInto(MeshSink& sink, TriangleMesh& mesh) {
     sink.append(mesh);

@@ -58,7 +58,6 @@ std::string checkClosedOriented(const TriangleMesh& mesh, const VolumeInfo* volu
 // two meshes with the same triangles compare equal whatever their vertex numbering.
 std::vector<std::array<float, 9>> canonicalTriangles(const TriangleMesh& mesh);
 
-double surfaceArea(const TriangleMesh& mesh);
 double enclosedVolume(const TriangleMesh& mesh);
 
 }  // namespace vdiso::test

@@ -42,7 +42,7 @@ TEST(ExtractOctree, BallIsClosedAcrossBricksWithAnalyticAreaAndVolume) {
         EXPECT_EQ(test::checkClosedOriented(mesh), "") << scalarTypeName(type);
         // The surface is the sphere of radius ~13 (linear interpolation error is small).
         const double r = 13.0 * (1.0 - (iso / (type == ScalarType::F32 ? 1.0 : 50.0) - 100.0) / 100.0);
-        EXPECT_NEAR(test::surfaceArea(mesh) / (4 * std::numbers::pi * r * r), 1.0, 0.01);
+        EXPECT_NEAR(surfaceArea(mesh) / (4 * std::numbers::pi * r * r), 1.0, 0.01);
         EXPECT_NEAR(test::enclosedVolume(mesh) / (4.0 / 3.0 * std::numbers::pi * r * r * r), 1.0, 0.01);
         // Normals point outwards (along minus the gradient of a dense ball).
         const glm::vec3 centre((dims[0] - 1) / 2.0f, (dims[1] - 1) / 2.0f, (dims[2] - 1) / 2.0f);
