@@ -222,18 +222,18 @@ struct BrickKernel {
                         continue;
                     ++counters.cellsActive;
                     const McPolygonCase& pc = mcPolygonCase(caseIndex);
-                    int at = 0;
-                    for (int p = 0; p < pc.polygonCount; ++p) {
-                        const int count = pc.vertexCount[p];
-                        uint32_t outline[kMcMaxPolygonVertices];
-                        for (int k = 0; k < count; ++k)
-                            outline[k] = edgeVertex(cx, cy, cz, pc.edges[at + k]);
-                        for (int k = 2; k < count; ++k)
-                            mesh.indices.insert(mesh.indices.end(),
-                                                {outline[0], outline[k - 1], outline[k]});
-                        if (onPolygon) onPolygon(context, outline, count);
-                        at += count;
+                    uint32_t outline[kMcEdgeCount];  // every polygon's, one after another
+                    bool wanted = onPolygon == nullptr;
+                    for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
+                        for (int k = 0; k < pc.vertexCount[p]; ++k)
+                            outline[at + k] = edgeVertex(cx, cy, cz, pc.edges[at + k]);
+                        if (onPolygon) wanted |= onPolygon(context, outline + at, pc.vertexCount[p]);
                     }
+                    if (!wanted) continue;
+                    for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++])
+                        for (int k = 2; k < pc.vertexCount[p]; ++k)
+                            mesh.indices.insert(mesh.indices.end(),
+                                                {outline[at], outline[at + k - 1], outline[at + k]});
                 }
                 counters.cellsVisited += hi[0] - lo[0];
             }

@@ -79,9 +79,12 @@ private:
     size_t mSize = 0;
 };
 
-// Called with each polygon's outline (global vertex numbers into the mesh, in order) after its
-// fan triangles are appended: the view-dependent traversal scan-converts it (SAGE §3.2).
-using PolygonCallback = void (*)(void* context, const uint32_t* vertices, int count);
+// Called with each polygon's outline (global vertex numbers into the mesh, in order) before
+// its fan triangles are appended: the view-dependent traversal scan-converts it (SAGE §3.2)
+// and returns whether its triangles are wanted (false: they would draw no visible pixel). A
+// cell's triangles are appended when any of its polygons is wanted: the polygons of one cell
+// come in no front-to-back order, so one of them may hide another.
+using PolygonCallback = bool (*)(void* context, const uint32_t* vertices, int count);
 
 // Asked for each active cell (global cell coordinates) before its surface is made; false
 // skips the cell. The view-dependent traversal's per-cell visibility test.

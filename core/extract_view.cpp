@@ -124,30 +124,85 @@ struct Traversal {
                extractor.firstHit(nearPoint, direction, t0, t1, options.iso, position, normal);
     }
 
-    // Scan-converts a polygon just appended (SAGE §3.2), each vertex projected once. Cells
-    // arrive front to back, so a cell can be hidden by the cells before it in its meta-cell.
-    static void onPolygon(void* context, const uint32_t* vertices, int count) {
+    // Scan-converts a polygon (SAGE §3.2), each vertex projected once, before its triangles
+    // are appended. Cells arrive front to back, so a cell can be hidden by the cells before it
+    // in its meta-cell. With cell tests, a polygon that covers no pixel centre left uncovered
+    // is not kept: whatever it would draw lies behind what is drawn already or between pixel
+    // centres, where the rasterizer makes no fragment either.
+    static bool onPolygon(void* context, const uint32_t* vertices, int count) {
         auto& t = *static_cast<Traversal*>(context);
         glm::dvec2 v[kMcMaxPolygonVertices];
         for (int k = 0; k < count; ++k) {
             const glm::vec3& p = t.mesh.positions[vertices[k] - t.mesh.firstVertex];
             const glm::dvec3 s = t.pixels.project(glm::dvec3(p));
-            if (!(s.z >= 0.0 && s.z <= 1.0)) return;  // behind the eye or clipped: mark nothing
+            if (!(s.z >= 0.0 && s.z <= 1.0)) return true;  // behind the eye or clipped: mark nothing
             v[k] = glm::dvec2(s.x, s.y);
         }
+        bool coversNew = false;
         if (!t.options.bottomUp) {
             for (int k = 2; k < count; ++k) {
                 const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                t.pyramid.insertTriangleTopDown(triangle);
+                coversNew |= t.pyramid.insertTriangleTopDown(triangle);
             }
         } else if (t.options.scanPolygons) {
-            scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), t.pyramid);
+            coversNew = scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), t.pyramid);
+            // Where a non-planar polygon's projection folds over itself its winding cancels,
+            // yet its fan triangles, which are what gets drawn, cover those centres: before
+            // dropping it, ask them (they mark only what they draw).
+            for (int k = 2; k < count && !coversNew && t.options.cellTests; ++k) {
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
+            }
         } else {
             for (int k = 2; k < count; ++k) {
                 const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
+                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
             }
         }
+        if (!t.options.cellTests) return true;
+        // The rasterizer works in float on snapped coordinates, so a centre within a hair of
+        // an edge may fall the other way there: such a polygon is kept as well (it marks
+        // nothing; only coverage this side of the rounding is ever marked).
+        for (int k = 2; k < count && !coversNew; ++k)
+            coversNew = t.nearUncoveredCentre(v[0], v[k - 1], v[k]);
+        t.stats.polygonsHidden += !coversNew;
+        return coversNew;
+    }
+
+    // Whether an uncovered pixel centre lies inside the triangle or within kRasterSlack pixels
+    // of each of its edges' lines. Degenerate triangles draw nothing.
+    bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const {
+        constexpr double kRasterSlack = 1.0 / 64;  // GL's sub-pixel snapping is 1/256 or finer
+        const double area2 = (p1.x - p0.x) * (p2.y - p0.y) - (p1.y - p0.y) * (p2.x - p0.x);
+        if (!(area2 != 0.0)) return false;
+        const glm::dvec2 corner[3] = {p0, p1, p2};
+        double a[3], b[3], c[3];
+        for (int e = 0; e < 3; ++e) {  // signed distance to edge e, positive inside
+            const glm::dvec2 p = corner[e], q = corner[(e + 1) % 3];
+            const double length = glm::length(q - p), sign = area2 > 0 ? 1.0 : -1.0;
+            if (length == 0.0) return false;
+            a[e] = -(q.y - p.y) * sign / length;
+            b[e] = (q.x - p.x) * sign / length;
+            c[e] = -(a[e] * p.x + b[e] * p.y);
+        }
+        const double xMin = std::min({p0.x, p1.x, p2.x}) - kRasterSlack;
+        const double xMax = std::max({p0.x, p1.x, p2.x}) + kRasterSlack;
+        const double yMin = std::min({p0.y, p1.y, p2.y}) - kRasterSlack;
+        const double yMax = std::max({p0.y, p1.y, p2.y}) + kRasterSlack;
+        const int x0 = std::max(int(std::ceil(xMin - 0.5)), 0);
+        const int x1 = std::min(int(std::floor(xMax - 0.5)), camera.width - 1);
+        const int y0 = std::max(int(std::ceil(yMin - 0.5)), 0);
+        const int y1 = std::min(int(std::floor(yMax - 0.5)), camera.height - 1);
+        if (x0 > x1 || y0 > y1 || pyramid.isOccluded(x0, y0, x1, y1)) return false;
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                if (pyramid.isCovered(x, y)) continue;
+                bool inside = true;
+                for (int e = 0; e < 3 && inside; ++e)
+                    inside = a[e] * (x + 0.5) + b[e] * (y + 0.5) + c[e] >= -kRasterSlack;
+                if (inside) return true;
+            }
+        return false;
     }
 
     // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
@@ -279,8 +334,11 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
     mesh.positions.reserve(mesh.positions.size() + pixels);
     mesh.normals.reserve(mesh.positions.capacity());
+    const uint32_t firstNewVertex = mesh.nextVertex();
     Traversal t(source, camera, options, mesh, points, stats);
     t.run();
+    // Vertices made for polygons that were then hidden belong to no triangle.
+    if (options.cellTests) dropUnreferencedVertices(mesh, firstNewVertex);
     stats.triangles = mesh.triangleCount() - trianglesBefore;
     stats.scanSeconds = t.scanSeconds;
     stats.extractSeconds = std::chrono::duration<double>(Clock::now() - start).count();

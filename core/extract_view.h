@@ -16,7 +16,8 @@
 //      and its polygons are projected (each vertex once) and scan-converted into the bottom
 //      of the pyramid, changed tiles propagated upward after the meta-cell (SAGE §3.1-3.2).
 //      Its cells are visited front to back too; with cellTests, each is first tested like a
-//      node (no pixel centre, or all covered: skipped), so cells hide cells.
+//      node (no pixel centre, or all covered: skipped), so cells hide cells, and a polygon
+//      whose scan conversion covers no new pixel centre keeps no triangles.
 // WISE = exact boxes, no points, one triangle at a time inserted top-down (Greene's masks).
 // Every SAGE feature is a switch, for the ablations of the paper's Tables 3-4.
 #pragma once
@@ -39,8 +40,10 @@ struct ViewExtractOptions {
     bool points = true;        // sub-pixel nodes become points
     bool bottomUp = true;      // false: top-down insertion of each triangle (WISE)
     // Beyond the paper: inside an extracted meta-cell, skip each cell whose screen box covers
-    // no pixel centre, or only centres nearer meta-cells already cover. Where cells are
-    // smaller than pixels this brings the output near the visible-surface oracle.
+    // no pixel centre, or only centres nearer meta-cells already cover, and keep a polygon's
+    // triangles only when its scan conversion covers a pixel centre not covered before. Where
+    // cells are about the size of pixels this brings the output near the visible-surface
+    // oracle.
     bool cellTests = true;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
@@ -61,6 +64,7 @@ struct ViewExtractStats {
     int64_t droppedSubPixel = 0;  // sub-pixel nodes covering no free pixel centre
     int64_t metaCellsExtracted = 0;
     int64_t cellsCulled = 0;  // by the per-cell test
+    int64_t polygonsHidden = 0;  // scan-converted without covering a new pixel centre
     int64_t bricksAcquired = 0;
     uint64_t triangles = 0, points = 0;
     double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan

@@ -46,6 +46,10 @@ public:
 // vertices the mesh holds (firstVertex == 0).
 double surfaceArea(const TriangleMesh& mesh);
 
+// Removes the vertices numbered `fromVertex` onwards that no triangle refers to, renumbering
+// the later ones in the indices (which must all be held: none handed to a sink yet).
+void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex);
+
 // Hands what `mesh` holds to the sink and drops it, keeping the global vertex numbering.
 inline void drainInto(MeshSink& sink, TriangleMesh& mesh) {
     sink.append(mesh);

@@ -102,12 +102,13 @@ bool OcclusionPyramid::queryWord(int level, int wx, int wy, int x0, int y0, int 
     return true;
 }
 
-void OcclusionPyramid::coverSpan(int y, int x0, int x1) {
-    if (y < 0 || y >= mHeight) return;
+bool OcclusionPyramid::coverSpan(int y, int x0, int x1) {
+    if (y < 0 || y >= mHeight) return false;
     x0 = std::max(x0, 0);
     x1 = std::min(x1, mWidth - 1);
-    if (x0 > x1) return;
+    if (x0 > x1) return false;
     ++mStats.spans;
+    bool changed = false;
     const int rowShift = (y & 7) * 8;
     const size_t rowStart = size_t(y >> 3) * mWordsX[0];
     for (int tx = x0 >> 3, last = x1 >> 3; tx <= last; ++tx) {
@@ -117,6 +118,7 @@ void OcclusionPyramid::coverSpan(int y, int x0, int x1) {
         uint64_t& w = mWords[rowStart + size_t(tx)];
         if ((w & m) == m) continue;
         w |= m;
+        changed = true;
         ++mStats.tileUpdates;
         // Coverage only grows, so the one change that matters above is a tile becoming
         // full, and that happens once per tile: no duplicates in the list.
@@ -125,6 +127,7 @@ void OcclusionPyramid::coverSpan(int y, int x0, int x1) {
             mFilledTiles.push_back(uint32_t(rowStart + size_t(tx)));
         }
     }
+    return changed;
 }
 
 void OcclusionPyramid::propagate() {
@@ -173,12 +176,12 @@ struct OcclusionPyramid::TopDownTriangle {
     }
 };
 
-void OcclusionPyramid::insertTriangleTopDown(const glm::dvec2 (&v)[3]) {
+bool OcclusionPyramid::insertTriangleTopDown(const glm::dvec2 (&v)[3]) {
     ++mStats.topDownTriangles;
     TopDownTriangle t;
     double yMin, yMax;
     t.edgeCount = detail::buildScanEdges(v, 3, t.edges, yMin, yMax);
-    if (t.edgeCount < 2) return;  // not finite, or flat: the scan converter covers nothing
+    if (t.edgeCount < 2) return false;  // not finite, or flat: the scan converter covers nothing
 
     const double area2 = (v[1].x - v[0].x) * (v[2].y - v[0].y) -
                          (v[1].y - v[0].y) * (v[2].x - v[0].x);
@@ -210,8 +213,10 @@ void OcclusionPyramid::insertTriangleTopDown(const glm::dvec2 (&v)[3]) {
     t.colEnd = std::min(detail::firstCentreAtOrAfter(xMax, mWidth) + 1, mWidth - 1);
     t.rowBegin = std::max(detail::firstCentreAtOrAfter(yMin, mHeight) - 1, 0);
     t.rowEnd = std::min(detail::firstCentreAtOrAfter(yMax, mHeight) + 1, mHeight - 1);
-    if (t.colBegin > t.colEnd || t.rowBegin > t.rowEnd) return;
+    if (t.colBegin > t.colEnd || t.rowBegin > t.rowEnd) return false;
+    mTopDownChanged = false;
     insertWord(t, levels() - 1, 0, 0);
+    return mTopDownChanged;
 }
 
 // Inserts the triangle into word (wx, wy) of the level; returns whether the word is full.
@@ -229,10 +234,12 @@ bool OcclusionPyramid::insertWord(const TopDownTriangle& t, int level, int wx, i
         };
         const int rowFirst = std::max(t.rowBegin, baseY);
         const int rowLast = std::min(t.rowEnd, baseY + kTileSize - 1);
+        const uint64_t before = w;
         for (int row = rowFirst; row <= rowLast; ++row) {
             rowShift = row - baseY;
             detail::scanRow(t.edges, t.edgeCount, scratch, row, mWidth, sink);
         }
+        mTopDownChanged |= w != before;
         return w == kFull;
     }
 
@@ -265,7 +272,9 @@ bool OcclusionPyramid::insertWord(const TopDownTriangle& t, int level, int wx, i
 
 void OcclusionPyramid::fillSubtree(int level, int wx, int wy) {
     ++mStats.topDownWords;
-    wordRef(level, wx, wy) = kFull;
+    uint64_t& w = wordRef(level, wx, wy);
+    mTopDownChanged |= w != kFull;
+    w = kFull;
     if (level == 0) return;
     const int xEnd = std::min((wx + 1) * kTileSize, mWordsX[size_t(level) - 1]);
     const int yEnd = std::min((wy + 1) * kTileSize, mWordsY[size_t(level) - 1]);

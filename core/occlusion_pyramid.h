@@ -64,8 +64,9 @@ public:
     // it can be seen). Needs propagate() after the last coverSpan().
     bool isOccluded(int x0, int y0, int x1, int y1) const;
 
-    // Covers pixels x0..x1 (inclusive, clamped to the image) of row y.
-    void coverSpan(int y, int x0, int x1);
+    // Covers pixels x0..x1 (inclusive, clamped to the image) of row y; returns whether any of
+    // them was not covered before.
+    bool coverSpan(int y, int x0, int x1);
     // Carries the tiles filled since the last call up the hierarchy.
     void propagate();
     bool hasPendingChanges() const { return !mFilledTiles.empty(); }
@@ -73,8 +74,8 @@ public:
     // WISE (Greene): covers the pixel centres inside the triangle (the fill and tie rules of
     // core/scan_convert.h) by descending from the top word; whole nodes inside the triangle are
     // filled at once. Keeps every level consistent; unrelated pending coverSpan() changes still
-    // need propagate().
-    void insertTriangleTopDown(const glm::dvec2 (&v)[3]);
+    // need propagate(). Returns whether any pixel was not covered before.
+    bool insertTriangleTopDown(const glm::dvec2 (&v)[3]);
 
     // Inspection (tests, debugging): word (wx, wy) of a level, and the size of its word grid.
     int wordsX(int level) const { return mWordsX[size_t(level)]; }
@@ -97,6 +98,7 @@ private:
     bool queryWord(int level, int wx, int wy, int x0, int y0, int x1, int y1) const;
     bool insertWord(const TopDownTriangle& t, int level, int wx, int wy);
     void fillSubtree(int level, int wx, int wy);
+    bool mTopDownChanged = false;  // set by insertWord/fillSubtree during one insertion
 
     int mWidth, mHeight;
     std::vector<int> mWordsX, mWordsY;   // word grid per level

@@ -4,9 +4,11 @@
 
 namespace vdiso {
 
-void scanConvertPolygon(std::span<const glm::dvec2> vertices, OcclusionPyramid& pyramid) {
+bool scanConvertPolygon(std::span<const glm::dvec2> vertices, OcclusionPyramid& pyramid) {
+    bool changed = false;
     scanConvertPolygon(vertices, pyramid.width(), pyramid.height(),
-                       [&pyramid](int y, int x0, int x1) { pyramid.coverSpan(y, x0, x1); });
+                       [&](int y, int x0, int x1) { changed |= pyramid.coverSpan(y, x0, x1); });
+    return changed;
 }
 
 }  // namespace vdiso

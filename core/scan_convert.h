@@ -163,7 +163,8 @@ void scanConvertPolygon(std::span<const glm::dvec2> vertices, int width, int hei
 }
 
 // Convenience: covers the polygon's pixels in the pyramid's bottom level (coverSpan); the
-// caller runs pyramid.propagate() before the next query.
-void scanConvertPolygon(std::span<const glm::dvec2> vertices, OcclusionPyramid& pyramid);
+// caller runs pyramid.propagate() before the next query. Returns whether the polygon covered
+// a pixel centre that was not covered before.
+bool scanConvertPolygon(std::span<const glm::dvec2> vertices, OcclusionPyramid& pyramid);
 
 }  // namespace vdiso

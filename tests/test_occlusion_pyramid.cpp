@@ -23,10 +23,15 @@ struct Model {
     std::vector<uint8_t> covered;
 
     Model(int w, int h) : width(w), height(h), covered(size_t(w) * h, 0) {}
-    void coverSpan(int y, int x0, int x1) {
-        if (y < 0 || y >= height) return;
-        for (int x = std::max(x0, 0); x <= std::min(x1, width - 1); ++x)
+    // Returns whether a pixel was newly covered, as OcclusionPyramid::coverSpan does.
+    bool coverSpan(int y, int x0, int x1) {
+        if (y < 0 || y >= height) return false;
+        bool changed = false;
+        for (int x = std::max(x0, 0); x <= std::min(x1, width - 1); ++x) {
+            changed |= !covered[size_t(y) * width + x];
             covered[size_t(y) * width + x] = 1;
+        }
+        return changed;
     }
     bool isOccluded(int x0, int y0, int x1, int y1) const {
         for (int y = std::max(y0, 0); y <= std::min(y1, height - 1); ++y)
@@ -101,8 +106,7 @@ TEST(OcclusionPyramid, SpansAndQueriesMatchBruteForce) {
             }
             for (int r = 0; r < 20; ++r) {
                 const int y = rand(-2, h + 1), x0 = rand(-10, w + 2), x1 = x0 + rand(-2, 20);
-                pyramid.coverSpan(y, x0, x1);
-                model.coverSpan(y, x0, x1);
+                EXPECT_EQ(pyramid.coverSpan(y, x0, x1), model.coverSpan(y, x0, x1));
             }
             pyramid.propagate();
             EXPECT_FALSE(pyramid.hasPendingChanges());
@@ -177,8 +181,9 @@ TEST(OcclusionPyramid, TopDownTrianglesMatchBottomUpScanConversion) {
             for (int t = 0; t < count; ++t) {
                 const std::vector<glm::dvec2> v = randomTriangle(rng, w, h, t % 2 == 1);
                 const glm::dvec2 tri[3] = {v[0], v[1], v[2]};
-                topDown.insertTriangleTopDown(tri);
-                scanConvertPolygon(v, bottomUp);
+                const bool topDownChanged = topDown.insertTriangleTopDown(tri);
+                const bool bottomUpChanged = scanConvertPolygon(v, bottomUp);
+                EXPECT_EQ(topDownChanged, bottomUpChanged);
                 bottomUp.propagate();
                 ++triangles;
                 for (int level = 0; level < topDown.levels(); ++level)

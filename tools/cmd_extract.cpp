@@ -41,7 +41,8 @@ constexpr const char* kHelp =
     "  --box estimate|exact          sage/wise: screen box by the SAGE estimate or 8 corners\n"
     "  --points on|off               sage/wise: sub-pixel parts as points\n"
     "  --update bottom-up|top-down   sage/wise: occlusion pyramid update\n"
-    "  --cell-test on|off        sage/wise: test each cell of an extracted meta-cell too\n"
+    "  --cell-test on|off        sage/wise: test each cell of an extracted meta-cell too,\n"
+    "                            and keep a cell only if it covers a new pixel centre\n"
     "                            (on for sage, off for wise)\n"
     "  --points-out POINTS.ply   write the points (with normals)\n"
     "  --oracle                  also measure the visible-surface oracle: the full surface's\n"
@@ -342,6 +343,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         s.add("dropped_subpixel", view->droppedSubPixel);
         s.add("meta_cells_extracted", view->metaCellsExtracted).add("scan_s", view->scanSeconds);
         s.add("cells_culled", view->cellsCulled);
+        s.add("polygons_hidden", view->polygonsHidden);
     }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
