@@ -3,14 +3,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
-#include <deque>
-#include <thread>
 #include <mutex>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "core/brick_prefetcher.h"
 #include "core/minmax_tree.h"
 #include "core/span_space.h"
 
@@ -68,73 +66,6 @@ struct BrickWork {
 };
 int64_t brickOf(const BrickWork& w) { return w.id; }
 
-// Loads the bricks of `items` into the source's cache a bounded distance ahead of the
-// extraction, on its own thread, so reading and decoding overlap extraction. It only touches
-// bricks on the list (those that passed every test), in the order they will be used, never
-// more than `lookahead` ahead, and keeps each one pinned until the extraction has reached it:
-// a prefetched brick is never evicted before its use, so none is read twice. (The cache must
-// hold more than `lookahead` bricks; if it fills with pins, prefetching stops.)
-template <class Item>
-class BrickPrefetcher {
-public:
-    BrickPrefetcher(BrickSource& source, const std::vector<Item>& items, size_t lookahead)
-        : mSource(source), mItems(items), mLookahead(lookahead) {
-        if (lookahead > 0) mThread = std::thread([this] { run(); });
-    }
-    ~BrickPrefetcher() {
-        {
-            std::lock_guard lock(mMutex);
-            mStop = true;
-        }
-        mAdvanced.notify_all();
-        if (mThread.joinable()) mThread.join();
-        mPinned.clear();
-    }
-    // The extraction is about to use item i: earlier items' pins are no longer needed.
-    void consumed(size_t i) {
-        std::deque<std::pair<size_t, BrickHandle>> done;
-        {
-            std::lock_guard lock(mMutex);
-            mConsumed = i;
-            while (!mPinned.empty() && mPinned.front().first < i) {
-                done.push_back(std::move(mPinned.front()));
-                mPinned.pop_front();
-            }
-        }
-        mAdvanced.notify_all();
-    }  // `done` releases its pins here, outside the lock
-
-private:
-    void run() {
-        for (size_t i = 0;; ++i) {
-            std::unique_lock lock(mMutex);
-            mAdvanced.wait(lock, [&] { return mStop || i < mConsumed + mLookahead; });
-            // Fallen behind (the extraction outran us): skip what it already has or is
-            // loading itself; fetching those could only read them a second time.
-            if (i <= mConsumed) i = mConsumed + 1;
-            if (mStop || i >= mItems.size()) return;
-            lock.unlock();
-            BrickHandle brick;
-            try {
-                brick = mSource.acquire(brickOf(mItems[i]));
-            } catch (...) {
-                return;  // the extraction's own acquire meets the error and reports it
-            }
-            lock.lock();
-            mPinned.emplace_back(i, std::move(brick));
-        }
-    }
-    BrickSource& mSource;
-    const std::vector<Item>& mItems;
-    size_t mLookahead;
-    size_t mConsumed = 0;
-    bool mStop = false;
-    std::deque<std::pair<size_t, BrickHandle>> mPinned;  // by item index, ascending
-    std::mutex mMutex;
-    std::condition_variable mAdvanced;
-    std::thread mThread;
-};
-
 // Runs extractItem(extractor, item, samples, mesh, seams) over `items`, on `threads` threads,
 // into `mesh`, acquiring each item's brick first (the time waited for it is counted).
 template <class Item, class ExtractItem>
@@ -177,7 +108,9 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     if (options.threads <= 1) {
         BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
         EdgeVertexMap seams;
-        BrickPrefetcher<Item> prefetcher(source, items, size_t(options.prefetchBricks));
+        BrickPrefetcher prefetcher(source, size_t(options.prefetchBricks));
+        for (const Item& item : items) prefetcher.push(brickOf(item));
+        prefetcher.close();
         for (size_t i = 0; i < items.size(); ++i) {
             prefetcher.consumed(i);
             const BrickHandle brick = acquireTimed(items[i]);

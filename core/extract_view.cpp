@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
+#include "core/brick_prefetcher.h"
 #include "core/iso.h"
 #include "core/mc_tables.h"
 #include "core/minmax_tree.h"
@@ -33,13 +36,28 @@ struct Traversal {
     OcclusionPyramid pyramid;
     BrickExtractor extractor;
     EdgeVertexMap seams;
+    const MinMaxTree tree;
     double scanSeconds = 0;
+    // The look-ahead for prefetching: a second cursor over the same front-to-back order, run
+    // ahead of the traversal with tests 1-3 against the pyramid as it is now. Coverage only
+    // grows, so every brick the traversal will acquire is found by it first; a brick it finds
+    // may still be hidden by the time the traversal gets there (then it was read for nothing,
+    // and counted).
+    BrickPrefetcher prefetcher;
+    std::vector<uint32_t> aheadStack;
+    struct AheadBrick {
+        uint32_t node;
+        int64_t brick;
+        size_t item;  // in the prefetcher's list
+    };
+    std::deque<AheadBrick> aheadBricks;  // found ahead, in the traversal's order
 
     Traversal(BrickSource& s, const Camera& c, const ViewExtractOptions& o, TriangleMesh& m,
               PointSet& p, ViewExtractStats& st)
         : source(s), camera(c), options(o), mesh(m), points(p), stats(st), volume(s.volume()),
           layout(s.layout()), projector(c), pixels(c), pyramid(c.width, c.height),
-          extractor(s.volume(), s.layout(), o.metaCellSize) {}
+          extractor(s.volume(), s.layout(), o.metaCellSize), tree(s.layout(), s.brickRanges()),
+          prefetcher(s, size_t(std::max(o.prefetchBricks, 0))) {}
 
     // World box of the cells [lo, hi) (cell coordinates; clamped to the volume's cells).
     void worldBox(const int64_t lo[3], const int64_t hi[3], glm::dvec3& a, glm::dvec3& b) const {
@@ -50,6 +68,25 @@ struct Traversal {
     }
 
     enum class Verdict { Culled, Done, Visible };
+    enum class Cull { None, Range, Frustum, SubPixel, Occlusion };
+
+    // Tests 1-3 of the header for the box [a, b] whose range is `range`: the first that culls
+    // it, or None (a box crossing the near plane is never culled).
+    Cull cull(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b,
+              ScreenBox& box) const {
+        if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) return Cull::Range;
+        box = options.estimateBox ? projector.estimateBox(a, b) : projector.exactBox(a, b);
+        if (box.crossesNearPlane) return Cull::None;  // refined, never culled
+        if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
+            box.top > camera.height - 0.5)
+            return Cull::Frustum;
+        // Pixel centres i + 0.5 inside the box.
+        const int x0 = int(std::ceil(box.left - 0.5)), x1 = int(std::floor(box.right - 0.5));
+        const int y0 = int(std::ceil(box.top - 0.5)), y1 = int(std::floor(box.bottom - 0.5));
+        if (x0 > x1 || y0 > y1) return Cull::SubPixel;  // covers no pixel centre: nothing shows
+        if (pyramid.isOccluded(x0, y0, x1, y1)) return Cull::Occlusion;
+        return Cull::None;
+    }
 
     // Tests 1-4 of the header for the box [a, b] whose range is `range`. `samplesLoaded`: the
     // box lies in the current brick, so a point can be placed on the surface itself; above
@@ -57,28 +94,15 @@ struct Traversal {
     Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b,
                  bool samplesLoaded) {
         ++stats.nodesVisited;
-        if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) {
-            ++stats.culledByRange;
-            return Verdict::Culled;
+        ScreenBox box;
+        switch (cull(range, a, b, box)) {
+            case Cull::Range: ++stats.culledByRange; return Verdict::Culled;
+            case Cull::Frustum: ++stats.culledByFrustum; return Verdict::Culled;
+            case Cull::SubPixel: ++stats.droppedSubPixel; return Verdict::Culled;
+            case Cull::Occlusion: ++stats.culledByOcclusion; return Verdict::Culled;
+            case Cull::None: break;
         }
-        const ScreenBox box = options.estimateBox ? projector.estimateBox(a, b) : projector.exactBox(a, b);
-        if (box.crossesNearPlane) return Verdict::Visible;  // refined, never culled
-        if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
-            box.top > camera.height - 0.5) {
-            ++stats.culledByFrustum;
-            return Verdict::Culled;
-        }
-        // Pixel centres i + 0.5 inside the box.
-        const int x0 = int(std::ceil(box.left - 0.5)), x1 = int(std::floor(box.right - 0.5));
-        const int y0 = int(std::ceil(box.top - 0.5)), y1 = int(std::floor(box.bottom - 0.5));
-        if (x0 > x1 || y0 > y1) {  // covers no pixel centre: nothing of it can show
-            ++stats.droppedSubPixel;
-            return Verdict::Culled;
-        }
-        if (pyramid.isOccluded(x0, y0, x1, y1)) {
-            ++stats.culledByOcclusion;
-            return Verdict::Culled;
-        }
+        if (box.crossesNearPlane) return Verdict::Visible;
         // Fig. 4: a box under two pixels each way covering exactly one pixel centre is one
         // point; one covering two centres is refined like any other box.
         if (options.points && samplesLoaded && isSubPixel(box)) {
@@ -280,43 +304,106 @@ struct Traversal {
         }
     }
 
+    void nodeBox(const MinMaxNode& node, glm::dvec3& a, glm::dvec3& b) const {
+        int64_t cellLo[3], cellHi[3];
+        for (int k = 0; k < 3; ++k) {
+            cellLo[k] = int64_t(node.lo[k]) * layout.brickSize;
+            cellHi[k] = int64_t(node.hi[k]) * layout.brickSize;
+        }
+        worldBox(cellLo, cellHi, a, b);
+    }
+
+    // Pushes the children of node `index`, the far one first, so the near one pops first.
+    void pushChildren(std::vector<uint32_t>& stack, uint32_t index) const {
+        const std::vector<MinMaxNode>& nodes = tree.nodes();
+        const MinMaxNode& node = nodes[index];
+        const int axis = node.splitAxis;
+        const int64_t mid = int64_t(nodes[index + 1].hi[axis]);
+        const double split = volume.origin[axis] + double(mid * layout.brickSize) * volume.spacing[axis];
+        const bool lowerIsNear = camera.eye[axis] < split;
+        stack.push_back(lowerIsNear ? node.secondChild : index + 1);
+        stack.push_back(lowerIsNear ? index + 1 : node.secondChild);
+    }
+
+    // Moves the look-ahead on to the next brick that passes tests 1-3 now and hands it to the
+    // prefetcher; false when the tree is exhausted.
+    bool lookAheadOneBrick() {
+        const std::vector<MinMaxNode>& nodes = tree.nodes();
+        while (!aheadStack.empty()) {
+            const uint32_t index = aheadStack.back();
+            aheadStack.pop_back();
+            const MinMaxNode& node = nodes[index];
+            glm::dvec3 a, b;
+            nodeBox(node, a, b);
+            ScreenBox box;
+            if (cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) continue;
+            if (!node.isLeaf()) {
+                pushChildren(aheadStack, index);
+                continue;
+            }
+            const int64_t brick = tree.brickOf(node);
+            aheadBricks.push_back({index, brick, prefetcher.push(brick)});
+            return true;
+        }
+        return false;
+    }
+
+    // The traversal is about to acquire `brick`: bricks found ahead of it that it has not
+    // asked for are hidden by now (their pins go). Those still ahead are tested again, and
+    // the ones hidden since are cancelled before they are read; then the look-ahead moves on.
+    void prefetchAround(int64_t brick) {
+        while (true) {
+            while (!aheadBricks.empty() && aheadBricks.front().brick != brick) aheadBricks.pop_front();
+            if (!aheadBricks.empty() || !lookAheadOneBrick()) break;
+        }
+        if (!aheadBricks.empty()) {
+            prefetcher.consumed(aheadBricks.front().item);
+            aheadBricks.pop_front();
+        }
+        const std::vector<MinMaxNode>& nodes = tree.nodes();
+        std::erase_if(aheadBricks, [&](const AheadBrick& ahead) {
+            const MinMaxNode& node = nodes[ahead.node];
+            glm::dvec3 a, b;
+            nodeBox(node, a, b);
+            ScreenBox box;
+            if (cull({node.minValue, node.maxValue}, a, b, box) == Cull::None) return false;
+            prefetcher.cancel(ahead.item);
+            return true;
+        });
+        while (aheadBricks.size() < size_t(options.prefetchBricks) && lookAheadOneBrick()) {
+        }
+    }
+
     void run() {
-        const MinMaxTree tree(layout, source.brickRanges());
         const std::vector<MinMaxNode>& nodes = tree.nodes();
         std::vector<uint32_t> stack;
         if (!nodes.empty()) stack.push_back(0);
+        if (options.prefetchBricks > 0) aheadStack = stack;
         while (!stack.empty()) {
             const uint32_t index = stack.back();
             stack.pop_back();
             const MinMaxNode& node = nodes[index];
-            int64_t cellLo[3], cellHi[3];
-            for (int k = 0; k < 3; ++k) {
-                cellLo[k] = int64_t(node.lo[k]) * layout.brickSize;
-                cellHi[k] = int64_t(node.hi[k]) * layout.brickSize;
-            }
             glm::dvec3 a, b;
-            worldBox(cellLo, cellHi, a, b);
+            nodeBox(node, a, b);
             const Verdict v = test({node.minValue, node.maxValue}, a, b, false);
             if (v != Verdict::Visible) continue;
-            if (node.isLeaf()) {
-                const int64_t brick = tree.brickOf(node);
-                const BrickHandle handle = source.acquire(brick);  // only now: it passed 1-3
-                ++stats.bricksAcquired;
-                extractor.beginBrick(brick, handle.samples());
-                const int n = extractor.metaCellsPerAxis();
-                const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
-                visitMetaCells(brick, lo, hi);
+            if (!node.isLeaf()) {
+                pushChildren(stack, index);
                 continue;
             }
-            // Far child first on the stack, so the near one is visited first.
-            const int axis = node.splitAxis;
-            const int64_t mid = int64_t(nodes[index + 1].hi[axis]);
-            const double split =
-                volume.origin[axis] + double(mid * layout.brickSize) * volume.spacing[axis];
-            const bool lowerIsNear = camera.eye[axis] < split;
-            stack.push_back(lowerIsNear ? node.secondChild : index + 1);
-            stack.push_back(lowerIsNear ? index + 1 : node.secondChild);
+            const int64_t brick = tree.brickOf(node);
+            if (options.prefetchBricks > 0) prefetchAround(brick);
+            const auto start = Clock::now();
+            const BrickHandle handle = source.acquire(brick);  // only now: it passed 1-3
+            stats.brickWaitSeconds += std::chrono::duration<double>(Clock::now() - start).count();
+            ++stats.bricksAcquired;
+            extractor.beginBrick(brick, handle.samples());
+            const int n = extractor.metaCellsPerAxis();
+            const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
+            visitMetaCells(brick, lo, hi);
         }
+        prefetcher.close();
+        stats.bricksPrefetchedUnused = int64_t(prefetcher.skippedLoaded());
     }
 };
 

@@ -45,6 +45,10 @@ struct ViewExtractOptions {
     // cells are about the size of pixels this brings the output near the visible-surface
     // oracle.
     bool cellTests = true;
+    // Bricks a reader thread loads ahead of the traversal (core/brick_prefetcher.h), found by
+    // a look-ahead that runs tests 1-3 ahead of it; 0: none. The source's cache must hold
+    // more than this many bricks.
+    int prefetchBricks = 0;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {
@@ -66,6 +70,8 @@ struct ViewExtractStats {
     int64_t cellsCulled = 0;  // by the per-cell test
     int64_t polygonsHidden = 0;  // scan-converted without covering a new pixel centre
     int64_t bricksAcquired = 0;
+    int64_t bricksPrefetchedUnused = 0;  // read ahead, then hidden before the traversal came
+    double brickWaitSeconds = 0;         // in acquire: reads and decodes not hidden
     uint64_t triangles = 0, points = 0;
     double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan
                                 // conversion into the pyramid (interleaved per polygon)

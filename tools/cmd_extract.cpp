@@ -64,7 +64,9 @@ constexpr const char* kHelp =
     "  --metacell M              meta-cell size in cells (default 4)\n"
     "  --threads N               extraction threads (default 1)\n"
     "  --prefetch N              bricks read ahead of the extraction by a reader thread, from\n"
-    "                            the list of bricks to visit (default 32; 0: none)\n"
+    "                            the bricks it has decided to visit (sage/wise: found by a\n"
+    "                            look-ahead with the visibility tests; default 32; 0: none;\n"
+    "                            full methods with --threads 1 only)\n"
     "  --cache-mb N              brick cache budget in MB (default 1024)\n"
     "  --cold                    drop the store's pages from the page cache first and read\n"
     "                            every brick from disk (O_DIRECT), so io_s is disk time\n"
@@ -295,6 +297,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.points) v.points = *o.points;
         if (o.bottomUp) v.bottomUp = *o.bottomUp;
         if (o.cellTests) v.cellTests = *o.cellTests;
+        v.prefetchBricks = extract.prefetchBricks;
         view = extractViewDependent(cache, *camera, v, mesh, points, progress);
         stats.triangles = view->triangles;
         stats.vertices = mesh.vertexCount();
@@ -302,6 +305,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         stats.bricksActive = view->bricksAcquired;
         stats.nodesVisited = view->nodesVisited;
         stats.metaCellsActive = view->metaCellsExtracted;
+        stats.brickWaitSeconds = view->brickWaitSeconds;
     } else {
         stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
                                     : extractOctree(cache, extract, mesh, progress);
@@ -329,7 +333,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
-    s.add("prefetch", isViewDependent(o.method) ? 0 : extract.prefetchBricks);  // full methods only
+    s.add("prefetch", extract.threads > 1 && !isViewDependent(o.method) ? 0 : extract.prefetchBricks);
     // I/O the extraction did not wait for: read and decode time spent ahead of it.
     s.add("brick_wait_s", stats.brickWaitSeconds);
     s.add("io_hidden_s", std::max(0.0, io.readSeconds + io.decodeSeconds - stats.brickWaitSeconds));
@@ -343,6 +347,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         s.add("dropped_subpixel", view->droppedSubPixel);
         s.add("meta_cells_extracted", view->metaCellsExtracted).add("scan_s", view->scanSeconds);
         s.add("cells_culled", view->cellsCulled);
+        s.add("bricks_prefetched_unused", view->bricksPrefetchedUnused);
         s.add("polygons_hidden", view->polygonsHidden);
     }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);

@@ -1,0 +1,103 @@
+#include "core/brick_prefetcher.h"
+
+#include <algorithm>
+
+namespace vdiso {
+
+BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead)
+    : mSource(source), mLookahead(lookahead) {
+    if (mLookahead > 0) mThread = std::thread([this] { run(); });
+}
+
+BrickPrefetcher::~BrickPrefetcher() {
+    {
+        std::lock_guard lock(mMutex);
+        mStop = true;
+    }
+    mChanged.notify_all();
+    if (mThread.joinable()) mThread.join();
+    mPinned.clear();
+}
+
+size_t BrickPrefetcher::push(int64_t id) {
+    size_t index;
+    {
+        std::lock_guard lock(mMutex);
+        index = mItems.size();
+        if (mLookahead > 0) {
+            mItems.push_back(id);
+            mUsed.push_back(0);
+        }
+    }
+    mChanged.notify_all();
+    return index;
+}
+
+void BrickPrefetcher::close() {
+    {
+        std::lock_guard lock(mMutex);
+        mClosed = true;
+    }
+    mChanged.notify_all();
+}
+
+void BrickPrefetcher::consumed(size_t i) {
+    std::deque<std::pair<size_t, BrickHandle>> done;
+    {
+        std::lock_guard lock(mMutex);
+        mConsumed = std::max(mConsumed, i);
+        if (i < mUsed.size()) mUsed[i] = 1;
+        while (!mPinned.empty() && mPinned.front().first < mConsumed) {
+            mSkippedLoaded += !mUsed[mPinned.front().first];
+            done.push_back(std::move(mPinned.front()));
+            mPinned.pop_front();
+        }
+    }
+    mChanged.notify_all();
+}  // `done` releases its pins here, outside the lock
+
+void BrickPrefetcher::cancel(size_t i) {
+    std::lock_guard lock(mMutex);
+    if (i < mItems.size()) mItems[i] = kCancelled;
+}
+
+size_t BrickPrefetcher::skippedLoaded() const {
+    std::lock_guard lock(mMutex);
+    return mSkippedLoaded;
+}
+
+void BrickPrefetcher::run() {
+    size_t next = 0;
+    for (;;) {
+        std::unique_lock lock(mMutex);
+        // The item in use is the extraction's own to load; fetching one it has already passed
+        // could only read it a second time.
+        auto target = [&] { return std::max(next, mConsumed + 1); };
+        mChanged.wait(lock, [&] {
+            return mStop || (target() < mItems.size() && target() < mConsumed + 1 + mLookahead) ||
+                   (mClosed && target() >= mItems.size());
+        });
+        if (mStop || target() >= mItems.size()) return;
+        const size_t i = target();
+        const int64_t id = mItems[i];
+        next = i + 1;
+        if (id == kCancelled) continue;
+        lock.unlock();
+        BrickHandle brick;
+        try {
+            brick = mSource.acquire(id);
+        } catch (...) {
+            return;
+        }
+        lock.lock();
+        // The extraction may have got there meanwhile and acquired the brick itself.
+        if (i < mConsumed) {
+            mSkippedLoaded += !mUsed[i];
+            lock.unlock();
+            continue;  // `brick` releases its pin
+        }
+        mPinned.emplace_back(i, std::move(brick));
+    }
+}
+
+}  // namespace vdiso

@@ -1,0 +1,66 @@
+// Loads bricks into a BrickSource ahead of an extraction, on a thread of its own, so that
+// reading and decoding overlap extraction (DESIGN.md, "Out of core").
+//
+// The extraction pushes the bricks it has decided to visit, in the order it will use them
+// (all at once for the full methods; as its look-ahead finds them for SAGE), and says which
+// one it is about to use. The prefetcher loads only pushed bricks, in order, never more than
+// `lookahead` beyond the one in use, and keeps each pinned until the extraction has moved past
+// it: a prefetched brick is not evicted before its use, so none is read twice. The brick in
+// use the extraction acquires itself (a cache hit when the prefetcher got there first). The
+// source must hold more than `lookahead` bricks; if it fills with pins, prefetching stops.
+// push/close/consumed are for one extraction thread; a failed load is left for the
+// extraction's own acquire to meet and report.
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "core/brick_source.h"
+
+namespace vdiso {
+
+class BrickPrefetcher {
+public:
+    // lookahead 0: no thread; every call does nothing.
+    BrickPrefetcher(BrickSource& source, size_t lookahead);
+    ~BrickPrefetcher();
+    BrickPrefetcher(const BrickPrefetcher&) = delete;
+    BrickPrefetcher& operator=(const BrickPrefetcher&) = delete;
+
+    // Appends brick `id` to the list; returns its index in it.
+    size_t push(int64_t id);
+    // No more pushes: the thread ends once it has loaded what is left.
+    void close();
+    // The extraction is about to use item i (it acquires that brick itself): the pins of
+    // earlier items are released, whether they were used or skipped.
+    void consumed(size_t i);
+    // Item i is no longer wanted: it is not loaded if the thread has not got to it yet.
+    void cancel(size_t i);
+
+    // Items loaded by the thread that were released before their use (skipped by consumed).
+    size_t skippedLoaded() const;
+
+private:
+    void run();
+
+    BrickSource& mSource;
+    size_t mLookahead;
+    std::vector<int64_t> mItems;  // brick ids; kCancelled for cancelled items
+    static constexpr int64_t kCancelled = -1;
+    std::vector<uint8_t> mUsed;   // consumed() named it
+    size_t mConsumed = 0;
+    bool mClosed = false, mStop = false;
+    size_t mSkippedLoaded = 0;
+    std::deque<std::pair<size_t, BrickHandle>> mPinned;  // by item index, ascending
+    mutable std::mutex mMutex;
+    std::condition_variable mChanged;
+    std::thread mThread;
+};
+
+}  // namespace vdiso
