@@ -18,6 +18,8 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
+std::span<const SubBlockCode> BrickCache::subBlockCodes() const { return mStore.subBlockCodes(); }
+
 BrickCache::Chunk::Chunk(size_t n) : size(n) {
     void* p = ::mmap(nullptr, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) throw std::bad_alloc();

@@ -39,6 +39,7 @@ public:
     const VolumeInfo& volume() const override { return mStore.volume(); }
     const BrickLayout& layout() const override { return mStore.layout(); }
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
+    std::span<const SubBlockCode> subBlockCodes() const override;
     BrickHandle acquire(int64_t id) override;
 
     CacheCounters counters() const;

@@ -18,6 +18,11 @@ struct BrickRange {
     float minValue, maxValue;
 };
 
+// The range of one sub-block of a brick, coded in two bytes (core/sub_blocks.h).
+struct SubBlockCode {
+    uint8_t lo = 255, hi = 0;
+};
+
 class BrickSource;
 
 // A brick's samples, valid while the handle lives (the source keeps the brick pinned).
@@ -51,6 +56,9 @@ public:
     virtual const BrickLayout& layout() const = 0;
     // Min and max of each brick's cell samples, indexed by brick id.
     virtual std::span<const BrickRange> brickRanges() const = 0;
+    // The ranges of each brick's sub-blocks (core/sub_blocks.h), kSubBlocksPerBrick per brick
+    // in brick order, also known without reading the bricks; empty when the source has none.
+    virtual std::span<const SubBlockCode> subBlockCodes() const { return {}; }
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
     virtual BrickHandle acquire(int64_t id) = 0;
 

@@ -15,6 +15,7 @@
 #include "core/occlusion_pyramid.h"
 #include "core/scan_convert.h"
 #include "core/screen_box.h"
+#include "core/sub_blocks.h"
 
 namespace vdiso {
 
@@ -45,10 +46,19 @@ struct Traversal {
     // and counted).
     BrickPrefetcher prefetcher;
     std::vector<uint32_t> aheadStack;
+    // Pixel centres [x0, x1] x [y0, y1] a screen box covers.
+    struct PixelRect {
+        int x0, y0, x1, y1;
+        bool overlaps(const PixelRect& o) const {
+            return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1;
+        }
+    };
+    static constexpr size_t kNotPushed = SIZE_MAX;
     struct AheadBrick {
         uint32_t node;
         int64_t brick;
-        size_t item;  // in the prefetcher's list
+        PixelRect rect;
+        size_t item = kNotPushed;  // in the prefetcher's list, once handed to it
     };
     std::deque<AheadBrick> aheadBricks;  // found ahead, in the traversal's order
 
@@ -325,6 +335,51 @@ struct Traversal {
         stack.push_back(lowerIsNear ? index + 1 : node.secondChild);
     }
 
+    // Tests 1-3 for the sub-blocks of a brick whose box passed them (core/sub_blocks.h): does
+    // any show? Known from the index, so a brick whose box passes only where it holds no
+    // surface, or only where its surface is hidden, is not read. True when the source has no
+    // sub-block ranges.
+    bool subBlocksShow(int64_t brick) const {
+        const std::span<const SubBlockCode> codes = source.subBlockCodes();
+        if (codes.empty()) return true;
+        const BrickRange whole = source.brickRanges()[size_t(brick)];
+        const Dims3 c = layout.brickCoord(brick);
+        const int C = subBlockCells(layout.brickSize);
+        for (int s = 0; s < kSubBlocksPerBrick; ++s) {
+            const BrickRange range = decodeSubBlockRange(codes[size_t(brick) * kSubBlocksPerBrick + size_t(s)], whole);
+            if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) continue;
+            const int block[3] = {s % kSubBlocksPerAxis, s / kSubBlocksPerAxis % kSubBlocksPerAxis,
+                                  s / (kSubBlocksPerAxis * kSubBlocksPerAxis)};
+            int64_t lo[3], hi[3];
+            for (int k = 0; k < 3; ++k) {
+                const int64_t first = c[k] * layout.brickSize;
+                lo[k] = first + int64_t(block[k]) * C;
+                hi[k] = std::min(lo[k] + C, first + layout.cellsOnAxis(k, c[k]));
+            }
+            glm::dvec3 a, b;
+            worldBox(lo, hi, a, b);
+            ScreenBox box;
+            if (cull(range, a, b, box) == Cull::None) return true;
+        }
+        return false;
+    }
+
+    PixelRect pixelRect(const ScreenBox& box) const {
+        if (box.crossesNearPlane) return {0, 0, camera.width - 1, camera.height - 1};
+        return {int(std::ceil(box.left - 0.5)), int(std::ceil(box.top - 0.5)),
+                int(std::floor(box.right - 0.5)), int(std::floor(box.bottom - 0.5))};
+    }
+
+    // Tests 1-3 now, for the node and, for a brick, its sub-blocks.
+    bool passes(uint32_t index) const {
+        const MinMaxNode& node = tree.nodes()[index];
+        glm::dvec3 a, b;
+        nodeBox(node, a, b);
+        ScreenBox box;
+        if (cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) return false;
+        return !node.isLeaf() || subBlocksShow(tree.brickOf(node));
+    }
+
     // Moves the look-ahead on to the next brick that passes tests 1-3 now and hands it to the
     // prefetcher; false when the tree is exhausted.
     bool lookAheadOneBrick() {
@@ -333,44 +388,54 @@ struct Traversal {
             const uint32_t index = aheadStack.back();
             aheadStack.pop_back();
             const MinMaxNode& node = nodes[index];
-            glm::dvec3 a, b;
-            nodeBox(node, a, b);
-            ScreenBox box;
-            if (cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) continue;
+            if (!passes(index)) continue;
             if (!node.isLeaf()) {
                 pushChildren(aheadStack, index);
                 continue;
             }
-            const int64_t brick = tree.brickOf(node);
-            aheadBricks.push_back({index, brick, prefetcher.push(brick)});
+            glm::dvec3 a, b;
+            nodeBox(node, a, b);
+            ScreenBox box{};
+            cull({node.minValue, node.maxValue}, a, b, box);  // passed: box is set
+            aheadBricks.push_back({index, tree.brickOf(node), pixelRect(box)});
             return true;
         }
         return false;
     }
 
     // The traversal is about to acquire `brick`: bricks found ahead of it that it has not
-    // asked for are hidden by now (their pins go). Those still ahead are tested again, and
-    // the ones hidden since are cancelled before they are read; then the look-ahead moves on.
+    // asked for are hidden by now (their pins go). Those still ahead are tested again and
+    // dropped once hidden (cancelled, if handed to the prefetcher but not read yet); the
+    // look-ahead moves on; and bricks are handed to the prefetcher, in order, while each is
+    // settled: its screen box meets neither this brick's nor any brick's before it, so that
+    // nothing drawn before its turn can hide it, and reading it now cannot be wasted. The
+    // next kNearBricks go regardless, so reads keep ahead where boxes overlap.
     void prefetchAround(int64_t brick) {
+        constexpr size_t kNearBricks = 2;
         while (true) {
             while (!aheadBricks.empty() && aheadBricks.front().brick != brick) aheadBricks.pop_front();
             if (!aheadBricks.empty() || !lookAheadOneBrick()) break;
         }
+        PixelRect current{0, 0, camera.width - 1, camera.height - 1};
         if (!aheadBricks.empty()) {
-            prefetcher.consumed(aheadBricks.front().item);
+            current = aheadBricks.front().rect;
+            if (aheadBricks.front().item != kNotPushed) prefetcher.consumed(aheadBricks.front().item);
             aheadBricks.pop_front();
         }
-        const std::vector<MinMaxNode>& nodes = tree.nodes();
         std::erase_if(aheadBricks, [&](const AheadBrick& ahead) {
-            const MinMaxNode& node = nodes[ahead.node];
-            glm::dvec3 a, b;
-            nodeBox(node, a, b);
-            ScreenBox box;
-            if (cull({node.minValue, node.maxValue}, a, b, box) == Cull::None) return false;
-            prefetcher.cancel(ahead.item);
+            if (passes(ahead.node)) return false;
+            if (ahead.item != kNotPushed) prefetcher.cancel(ahead.item);
             return true;
         });
         while (aheadBricks.size() < size_t(options.prefetchBricks) && lookAheadOneBrick()) {
+        }
+        for (size_t k = 0; k < aheadBricks.size(); ++k) {
+            AheadBrick& ahead = aheadBricks[k];
+            if (ahead.item != kNotPushed) continue;
+            bool settled = !ahead.rect.overlaps(current);
+            for (size_t j = 0; j < k && settled; ++j) settled = !ahead.rect.overlaps(aheadBricks[j].rect);
+            if (!settled && k >= kNearBricks) break;
+            ahead.item = prefetcher.push(ahead.brick);
         }
     }
 
@@ -392,6 +457,10 @@ struct Traversal {
                 continue;
             }
             const int64_t brick = tree.brickOf(node);
+            if (!subBlocksShow(brick)) {
+                ++stats.bricksCulledBySubBlocks;
+                continue;
+            }
             if (options.prefetchBricks > 0) prefetchAround(brick);
             const auto start = Clock::now();
             const BrickHandle handle = source.acquire(brick);  // only now: it passed 1-3

@@ -7,8 +7,9 @@
 //   2. frustum: skipped if its screen box (SAGE §3.4 estimate, or the exact 8-corner box)
 //      misses the image; a box crossing the near plane counts as visible and is refined;
 //   3. occlusion: skipped if every pixel centre in its screen box is already covered in the
-//      occlusion pyramid — bricks are acquired only after passing 1-3, which is how the
-//      pyramid culls disk reads;
+//      occlusion pyramid — bricks are acquired only after passing 1-3, and after one of their
+//      sub-blocks (ranges from the store's index, core/sub_blocks.h) passes 1-3 too, which
+//      is how the pyramid culls disk reads;
 //   4. points (SAGE §3.3): a box under two pixels each way becomes one point with a normal
 //      if the Fig. 4 rule finds the pixel centre it covers (and that pixel is marked), or is
 //      dropped;
@@ -70,6 +71,7 @@ struct ViewExtractStats {
     int64_t cellsCulled = 0;  // by the per-cell test
     int64_t polygonsHidden = 0;  // scan-converted without covering a new pixel centre
     int64_t bricksAcquired = 0;
+    int64_t bricksCulledBySubBlocks = 0;  // box passed, no sub-block did: not read
     int64_t bricksPrefetchedUnused = 0;  // read ahead, then hidden before the traversal came
     double brickWaitSeconds = 0;         // in acquire: reads and decodes not hidden
     uint64_t triangles = 0, points = 0;

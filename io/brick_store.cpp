@@ -94,7 +94,7 @@ BrickStoreReader::BrickStoreReader(std::string path, ReadMode mode)
         std::vector<unsigned char> indexBytes(mHeader.indexBytes);
         preadExact(mFd, indexBytes.data(), indexBytes.size(), mHeader.indexOffset, mPath, "index");
         store_format::decodeIndex(indexBytes.data(), indexBytes.size(), mHeader, mLayout, mPath,
-                                  mIndex, mHistogram);
+                                  mIndex, mHistogram, mSubBlocks);
         if (mMode == ReadMode::Cold) {
             // Start cold: whatever of the file the page cache holds (from conversion, an
             // earlier run, or the header and index just read) is dropped.

@@ -18,11 +18,12 @@
 #include <vector>
 
 #include "core/brick_layout.h"
+#include "core/brick_source.h"
 #include "core/volume.h"
 
 namespace vdiso {
 
-constexpr uint32_t kStoreFormatVersion = 1;
+constexpr uint32_t kStoreFormatVersion = 2;
 constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;
@@ -91,6 +92,8 @@ public:
     const BrickLayout& layout() const { return mLayout; }
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
+    // kSubBlocksPerBrick codes per brick, in brick order (core/sub_blocks.h).
+    const std::vector<SubBlockCode>& subBlockCodes() const { return mSubBlocks; }
     uint64_t fileBytes() const { return mFileBytes; }
     ReadMode readMode() const { return mMode; }
     // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read).
@@ -120,6 +123,7 @@ private:
     BrickLayout mLayout;
     std::vector<BrickEntry> mIndex;
     ValueHistogram mHistogram;
+    std::vector<SubBlockCode> mSubBlocks;
 };
 
 }  // namespace vdiso

@@ -6,6 +6,7 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include "core/sub_blocks.h"
 #include "io/error.h"
 
 namespace vdiso::store_format {
@@ -107,6 +108,9 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
                                std::to_string(version) + "; this build reads up to version " +
                                std::to_string(kStoreFormatVersion) + ")");
     if (version == 0) throwIoError(path, "has an invalid format version 0");
+    if (version == 1)
+        throwIoError(path, "is in store format version 1, which lacks the sub-block ranges this "
+                           "build culls reads with; convert the volume again");
     const uint32_t storedCrc = [&] {
         uint32_t c;
         std::memcpy(&c, bytes + kHeaderChecksumAt, 4);
@@ -161,11 +165,13 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
 }
 
 uint64_t indexBytes(uint64_t brickCount) {
-    return 16 + brickCount * kEntryBytes + 24 + uint64_t(kHistogramBins) * 8 + 4;
+    return 16 + brickCount * kEntryBytes + 24 + uint64_t(kHistogramBins) * 8 + 8 +
+           brickCount * kSubBlocksPerBrick * 2 + 4;
 }
 
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
-                                       const ValueHistogram& histogram) {
+                                       const ValueHistogram& histogram,
+                                       const std::vector<SubBlockCode>& subBlocks) {
     std::vector<unsigned char> bytes(indexBytes(entries.size()));
     ByteWriter w(bytes.data());
     w.putBytes(kIndexMagic, 8);
@@ -184,13 +190,20 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
     w.put<uint32_t>(kHistogramBins);
     w.put<uint32_t>(0);
     for (uint64_t c : histogram.counts) w.put<uint64_t>(c);
+    w.put<uint32_t>(kSubBlocksPerAxis);
+    w.put<uint32_t>(0);
+    for (const SubBlockCode& code : subBlocks) {
+        w.put<uint8_t>(code.lo);
+        w.put<uint8_t>(code.hi);
+    }
     w.put<uint32_t>(crc32Of(bytes.data(), w.at()));
     return bytes;
 }
 
 void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header,
                  const BrickLayout& layout, const std::string& path,
-                 std::vector<BrickEntry>& entries, ValueHistogram& histogram) {
+                 std::vector<BrickEntry>& entries, ValueHistogram& histogram,
+                 std::vector<SubBlockCode>& subBlocks) {
     const uint64_t count = uint64_t(layout.brickCount());
     if (n != indexBytes(count) || std::memcmp(bytes, kIndexMagic, 8) != 0)
         throwIoError(path, "index is missing or corrupt (wrong magic at byte offset " +
@@ -229,6 +242,13 @@ void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header
     if (r.get<uint32_t>() != kHistogramBins) throwIoError(path, "index histogram is invalid");
     r.skip(4);
     for (uint64_t& c : histogram.counts) c = r.get<uint64_t>();
+    if (r.get<uint32_t>() != kSubBlocksPerAxis) throwIoError(path, "index sub-block ranges are invalid");
+    r.skip(4);
+    subBlocks.resize(count * kSubBlocksPerBrick);
+    for (SubBlockCode& code : subBlocks) {
+        code.lo = r.get<uint8_t>();
+        code.hi = r.get<uint8_t>();
+    }
 }
 
 }  // namespace vdiso::store_format

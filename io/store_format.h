@@ -22,8 +22,10 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& hea
 // Validates and decodes; throws IoError("<path>: ...") on anything wrong.
 StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string& path);
 
+// `subBlocks`: kSubBlocksPerBrick codes per entry.
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
-                                       const ValueHistogram& histogram);
+                                       const ValueHistogram& histogram,
+                                       const std::vector<SubBlockCode>& subBlocks);
 
 // Size in bytes of the index of a store with `brickCount` bricks.
 uint64_t indexBytes(uint64_t brickCount);
@@ -32,7 +34,8 @@ uint64_t indexBytes(uint64_t brickCount);
 // decodes; throws IoError naming the file and, for a bad entry, the brick.
 void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header,
                  const BrickLayout& layout, const std::string& path,
-                 std::vector<BrickEntry>& entries, ValueHistogram& histogram);
+                 std::vector<BrickEntry>& entries, ValueHistogram& histogram,
+                 std::vector<SubBlockCode>& subBlocks);
 
 // CRC-32 (zlib) of a byte range: the store's checksum algorithm.
 uint32_t crc32Of(const void* data, size_t n);

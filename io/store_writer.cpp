@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 #include <zstd.h>
 
+#include "core/sub_blocks.h"
 #include "io/atomic_output.h"
 #include "io/byte_shuffle.h"
 #include "io/error.h"
@@ -143,6 +144,7 @@ struct BrickScratch {
 struct StoredBrick {
     std::vector<unsigned char> bytes;
     BrickEntry entry;
+    SubBlockCode subBlocks[kSubBlocksPerBrick];
 };
 
 BrickFilter filterFor(ScalarType type, const StoreWriteOptions& options) {
@@ -164,6 +166,8 @@ void encodeBrick(const SliceRing& window, const BrickLayout& layout, ScalarType 
         measureBrick<T>(brick, layout, coord, out.entry.minValue, out.entry.maxValue,
                         scratch.histogramEven.data(), scratch.histogramOdd.data());
     });
+    measureSubBlocks(type, scratch.raw.data(), layout, coord,
+                     {out.entry.minValue, out.entry.maxValue}, out.subBlocks);
     out.entry.compressed = false;
     if (options.compression == Compression::Zstd) {
         if (!scratch.cctx) scratch.cctx = ZSTD_createCCtx();
@@ -224,6 +228,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     ring.bytes.resize(size_t(ring.slots) * ring.sliceBytes);
 
     std::vector<BrickEntry> entries(size_t(layout.brickCount()));
+    std::vector<SubBlockCode> subBlocks(entries.size() * kSubBlocksPerBrick);
     const int64_t rowBricks = layout.brickCounts[0];
     // Bricks are encoded a few rows at a time and written in id order: enough work for every
     // core, while the compressed bytes held stay a few MB whatever the layer's size.
@@ -261,6 +266,8 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
                 sb.entry.offset = fileEnd;
                 fileEnd = alignUp(fileEnd + sb.bytes.size());
                 entries[size_t(firstId + b)] = sb.entry;
+                std::copy(std::begin(sb.subBlocks), std::end(sb.subBlocks),
+                          subBlocks.begin() + (firstId + b) * kSubBlocksPerBrick);
             }
             if (pendingWrite.valid()) pendingWrite.get();
             pendingWrite = std::async(std::launch::async, [&out, &group, count, groupStart, fileEnd] {
@@ -307,7 +314,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         }
 
     header.indexOffset = fileEnd;
-    const std::vector<unsigned char> index = store_format::encodeIndex(entries, histogram);
+    const std::vector<unsigned char> index = store_format::encodeIndex(entries, histogram, subBlocks);
     header.indexBytes = index.size();
     out.writeAt(index.data(), index.size(), fileEnd);
     const auto headerBytes = store_format::encodeHeader(header);

@@ -7,6 +7,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/sub_blocks.h"
+
 namespace vdiso::test {
 
 MemoryBrickSource::MemoryBrickSource(const Dims3& dims, ScalarType type, int brickSize,
@@ -47,8 +49,11 @@ MemoryBrickSource::MemoryBrickSource(const Dims3& dims, ScalarType type, int bri
                             hi = std::max(hi, double(v));
                         }
                     }
-            mBricks.push_back(std::move(brick));
             mRanges.push_back({float(lo), float(hi)});
+            mSubBlocks.resize(mSubBlocks.size() + kSubBlocksPerBrick);
+            measureSubBlocks(type, brick.data(), mLayout, c, mRanges.back(),
+                             mSubBlocks.data() + mSubBlocks.size() - kSubBlocksPerBrick);
+            mBricks.push_back(std::move(brick));
         }
     });
 }

@@ -24,6 +24,7 @@ public:
     const VolumeInfo& volume() const override { return mInfo; }
     const BrickLayout& layout() const override { return mLayout; }
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
+    std::span<const SubBlockCode> subBlockCodes() const override { return mSubBlocks; }
     BrickHandle acquire(int64_t id) override;
     const std::vector<unsigned char>& samples() const { return mSamples; }
     int64_t acquired() const { return mAcquired; }
@@ -38,6 +39,7 @@ private:
     std::vector<unsigned char> mSamples;
     std::vector<std::vector<unsigned char>> mBricks;
     std::vector<BrickRange> mRanges;
+    std::vector<SubBlockCode> mSubBlocks;
     std::atomic<int64_t> mAcquired{0};  // acquire may be called from several threads
     std::atomic<int> mPinned{0};
 };

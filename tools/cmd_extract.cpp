@@ -348,6 +348,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         s.add("meta_cells_extracted", view->metaCellsExtracted).add("scan_s", view->scanSeconds);
         s.add("cells_culled", view->cellsCulled);
         s.add("bricks_prefetched_unused", view->bricksPrefetchedUnused);
+        s.add("bricks_culled_by_sub_blocks", view->bricksCulledBySubBlocks);
         s.add("polygons_hidden", view->polygonsHidden);
     }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);

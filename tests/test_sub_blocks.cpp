@@ -1,0 +1,191 @@
+// Sub-block ranges (core/sub_blocks.h): the codes always contain the true range, the store
+// keeps them, and view-dependent extraction uses them to read fewer bricks for the same
+// surface.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <random>
+
+#include "cache/brick_cache.h"
+#include "core/camera.h"
+#include "core/extract_view.h"
+#include "core/iso.h"
+#include "core/sub_blocks.h"
+#include "core/synth.h"
+#include "io/brick_store.h"
+#include "io/error.h"
+#include "io/store_writer.h"
+#include "io/volume_open.h"
+#include "tests/extract_test_util.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+TEST(SubBlocks, DecodedRangeContainsTheEncodedOne) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int trial = 0; trial < 200000; ++trial) {
+        // Ranges of every scale, integers (u16) and fractions (f32), and degenerate ones.
+        const double scale = trial % 3 == 0 ? 65535.0 : trial % 3 == 1 ? 1e-3 : 3e7;
+        float a = float((unit(rng) - 0.3) * scale), b = float((unit(rng) - 0.3) * scale);
+        if (trial % 2 == 0) {
+            a = std::round(a);
+            b = std::round(b);
+        }
+        const BrickRange brick{std::min(a, b), std::max(a, b)};
+        double lo = brick.minValue + unit(rng) * (double(brick.maxValue) - brick.minValue);
+        double hi = brick.minValue + unit(rng) * (double(brick.maxValue) - brick.minValue);
+        if (lo > hi) std::swap(lo, hi);
+        if (trial % 7 == 0) lo = brick.minValue;
+        if (trial % 11 == 0) hi = brick.maxValue;
+        lo = double(float(lo));  // sample values: representable in the brick's float range
+        hi = double(float(hi));
+        lo = std::clamp(lo, double(brick.minValue), double(brick.maxValue));
+        hi = std::clamp(hi, double(brick.minValue), double(brick.maxValue));
+        const BrickRange decoded = decodeSubBlockRange(encodeSubBlockRange(lo, hi, brick), brick);
+        ASSERT_LE(double(decoded.minValue), lo) << trial;
+        ASSERT_GE(double(decoded.maxValue), hi) << trial;
+        // Coarse by at most about two of the 255 steps.
+        const double step = (double(brick.maxValue) - brick.minValue) / 255.0;
+        ASSERT_LE(double(decoded.maxValue) - decoded.minValue, hi - lo + 2.5 * step + 1e-6 * scale)
+            << trial;
+    }
+}
+
+TEST(SubBlocks, EmptyAndConstantCodesHoldNoIsovalue) {
+    const BrickRange brick{100.0f, 200.0f};
+    const BrickRange empty = decodeSubBlockRange(SubBlockCode{}, brick);
+    for (double iso : {99.5, 100.0, 150.5, 199.5, 200.0})
+        EXPECT_FALSE(rangeHoldsIso(empty.minValue, empty.maxValue, iso)) << iso;
+    const BrickRange constant{7.0f, 7.0f};
+    const BrickRange c = decodeSubBlockRange(encodeSubBlockRange(7.0, 7.0, constant), constant);
+    EXPECT_EQ(c.minValue, 7.0f);
+    EXPECT_EQ(c.maxValue, 7.0f);
+}
+
+// The store's codes against each sub-block's cells measured directly in the volume.
+TEST(SubBlocks, StoreCodesContainEachSubBlocksCells) {
+    SynthParams p;
+    p.kind = SynthKind::Head;
+    p.dims = {70, 66, 37};  // partial bricks, and sub-blocks without cells, on every axis
+    test::ScratchDir dir;
+    StoreWriteOptions o;
+    o.brickSize = 12;  // sub-blocks of 3 cells
+    writeBrickStore(*openSynthVolume(p), dir.file("h.vdiso"), o);
+    const BrickStoreReader store(dir.file("h.vdiso"));
+    const auto memory = test::synthBrickSource(p, 12);
+    const uint16_t* s = reinterpret_cast<const uint16_t*>(memory->samples().data());
+    const BrickLayout& layout = store.layout();
+    ASSERT_EQ(store.subBlockCodes().size(), size_t(layout.brickCount()) * kSubBlocksPerBrick);
+    const int C = subBlockCells(layout.brickSize);
+    int64_t withCells = 0, without = 0;
+    for (int64_t id = 0; id < layout.brickCount(); ++id) {
+        const Dims3 c = layout.brickCoord(id);
+        const BrickRange whole{store.index()[size_t(id)].minValue, store.index()[size_t(id)].maxValue};
+        for (int sb = 0; sb < kSubBlocksPerBrick; ++sb) {
+            const int block[3] = {sb % 4, sb / 4 % 4, sb / 16};
+            int64_t lo[3], hi[3];
+            bool hasCells = true;
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = c[k] * layout.brickSize + block[k] * C;
+                hi[k] = std::min(lo[k] + C, c[k] * layout.brickSize + layout.cellsOnAxis(k, c[k]));
+                hasCells = hasCells && lo[k] < hi[k];
+            }
+            const SubBlockCode code = store.subBlockCodes()[size_t(id) * kSubBlocksPerBrick + size_t(sb)];
+            EXPECT_EQ(code.lo, memory->subBlockCodes()[size_t(id) * kSubBlocksPerBrick + size_t(sb)].lo);
+            if (!hasCells) {
+                EXPECT_EQ(code.lo, 255);
+                EXPECT_EQ(code.hi, 0);
+                ++without;
+                continue;
+            }
+            ++withCells;
+            uint16_t vmin = UINT16_MAX, vmax = 0;
+            for (int64_t z = lo[2]; z <= hi[2]; ++z)
+                for (int64_t y = lo[1]; y <= hi[1]; ++y)
+                    for (int64_t x = lo[0]; x <= hi[0]; ++x) {
+                        const uint16_t v = s[x + p.dims[0] * (y + p.dims[1] * z)];
+                        vmin = std::min(vmin, v);
+                        vmax = std::max(vmax, v);
+                    }
+            const BrickRange r = decodeSubBlockRange(code, whole);
+            ASSERT_LE(r.minValue, float(vmin)) << id << " " << sb;
+            ASSERT_GE(r.maxValue, float(vmax)) << id << " " << sb;
+        }
+    }
+    EXPECT_GT(withCells, 0);
+    EXPECT_GT(without, 0);
+}
+
+TEST(SubBlocks, FormatOneStoresAreRefusedWithAReason) {
+    test::ScratchDir dir;
+    SynthParams p;
+    p.dims = {20, 20, 20};
+    writeBrickStore(*openSynthVolume(p), dir.file("new.vdiso"), {});
+    std::vector<unsigned char> bytes = test::readFile(dir.file("new.vdiso"));
+    const uint32_t one = 1;
+    std::memcpy(bytes.data() + 8, &one, 4);
+    test::writeFile(dir.file("old.vdiso"), bytes.data(), bytes.size());
+    try {
+        BrickStoreReader store(dir.file("old.vdiso"));
+        FAIL() << "a format-1 store was opened";
+    } catch (const IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("old.vdiso"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("version 1"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("convert the volume again"), std::string::npos) << msg;
+    }
+}
+
+// The same source with its sub-block ranges hidden.
+class WithoutSubBlocks final : public BrickSource {
+public:
+    explicit WithoutSubBlocks(BrickSource& inner) : mInner(inner) {}
+    const VolumeInfo& volume() const override { return mInner.volume(); }
+    const BrickLayout& layout() const override { return mInner.layout(); }
+    std::span<const BrickRange> brickRanges() const override { return mInner.brickRanges(); }
+    BrickHandle acquire(int64_t id) override { return mInner.acquire(id); }
+
+protected:
+    void release(int64_t) override {}  // handles go back to the inner source
+
+private:
+    BrickSource& mInner;
+};
+
+TEST(SubBlocks, ViewDependentExtractionReadsFewerBricksForTheSameSurface) {
+    SynthParams p;
+    p.kind = SynthKind::Head;
+    p.dims = {128, 128, 128};
+    auto head = test::synthBrickSource(p, 16);
+    WithoutSubBlocks plain(*head);
+    const VolumeInfo& v = head->volume();
+    const glm::dvec3 lo = v.origin, hi = v.origin + glm::dvec3(127.0) * v.spacing;
+    int64_t readWith = 0, readWithout = 0, culled = 0;
+    for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup})
+        for (double iso : {kHeadSkinIso, kHeadBoneIso}) {
+            Camera camera = presetCamera(preset, lo, hi, 600, 600);
+            fitClipPlanes(camera, lo, hi);
+            TriangleMesh a, b;
+            PointSet pa, pb;
+            const ViewExtractStats with = extractViewDependent(*head, camera, ViewExtractOptions::sage(iso), a, pa);
+            const ViewExtractStats without = extractViewDependent(plain, camera, ViewExtractOptions::sage(iso), b, pb);
+            const std::string label = std::string(viewPresetName(preset)) + " " + std::to_string(iso);
+            // A brick none of whose sub-blocks passes has no meta-cell that would.
+            EXPECT_EQ(a.positions, b.positions) << label;
+            EXPECT_EQ(a.indices, b.indices) << label;
+            EXPECT_EQ(pa.positions, pb.positions) << label;
+            EXPECT_EQ(with.bricksAcquired + with.bricksCulledBySubBlocks, without.bricksAcquired) << label;
+            EXPECT_EQ(without.bricksCulledBySubBlocks, 0) << label;
+            readWith += with.bricksAcquired;
+            readWithout += without.bricksAcquired;
+            culled += with.bricksCulledBySubBlocks;
+        }
+    EXPECT_GT(culled, 0);
+    EXPECT_LT(readWith, readWithout);
+}
+
+}  // namespace
+}  // namespace vdiso
