@@ -6,7 +6,9 @@
 //
 // Drops the file's pages first (posix_fadvise DONTNEED), reads it with large sequential
 // reads into a vtkImageData, runs vtkFlyingEdges3D (normals on, as vdiso) on N threads, and
-// prints one JSON line: read_s, flying_edges_s, total_s, triangles, bytes.
+// prints one JSON line: read_s, flying_edges_s, total_s, triangles, bytes. The read alone is
+// reported on stderr as soon as it is done, for volumes where Flying Edges then runs out of
+// memory (it needs a byte of scratch per voxel besides the volume).
 #include <chrono>
 #include <cstdio>
 #include <algorithm>
@@ -96,6 +98,9 @@ int main(int argc, char** argv) {
     }
     ::close(fd);
     const double readSeconds = secondsSince(start);
+    // Said at once: Flying Edges may not get to finish (its scratch is a byte per voxel).
+    std::fprintf(stderr, "{\"file\": \"%s\", \"bytes\": %zu, \"read_s\": %.4f}\n", path.c_str(), bytes,
+                 readSeconds);
 
     vtk::detail::smp::vtkSMPToolsAPI::GetInstance().Initialize(threads);
     const auto feStart = std::chrono::steady_clock::now();
