@@ -472,6 +472,7 @@ struct Traversal {
             visitMetaCells(brick, lo, hi);
         }
         prefetcher.close();
+        stats.cellsActive = extractor.counters().cellsActive;
         stats.bricksPrefetchedUnused = int64_t(prefetcher.skippedLoaded());
     }
 };

@@ -68,6 +68,7 @@ struct ViewExtractStats {
     int64_t culledByRange = 0, culledByFrustum = 0, culledByOcclusion = 0;
     int64_t droppedSubPixel = 0;  // sub-pixel nodes covering no free pixel centre
     int64_t metaCellsExtracted = 0;
+    int64_t cellsActive = 0;  // cells of extracted meta-cells whose polygons were made
     int64_t cellsCulled = 0;  // by the per-cell test
     int64_t polygonsHidden = 0;  // scan-converted without covering a new pixel centre
     int64_t bricksAcquired = 0;

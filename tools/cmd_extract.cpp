@@ -306,6 +306,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         stats.nodesVisited = view->nodesVisited;
         stats.metaCellsActive = view->metaCellsExtracted;
         stats.brickWaitSeconds = view->brickWaitSeconds;
+        stats.cellsActive = view->cellsActive;
     } else {
         stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
                                     : extractOctree(cache, extract, mesh, progress);
