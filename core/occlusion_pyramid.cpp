@@ -66,6 +66,21 @@ bool OcclusionPyramid::isOccluded(int x0, int y0, int x1, int y1) const {
     x1 = std::min(x1, mWidth - 1);
     y1 = std::min(y1, mHeight - 1);
     if (x0 > x1 || y0 > y1) return true;
+    // A rectangle within 2x2 tiles (the per-cell and small-node queries, most of them): the
+    // bottom level alone answers, at most four words read directly instead of one per level
+    // from the top (when there are more than two levels, so that this reads fewer).
+    const int tx0 = x0 >> 3, tx1 = x1 >> 3, ty0 = y0 >> 3, ty1 = y1 >> 3;
+    if (tx1 - tx0 <= 1 && ty1 - ty0 <= 1 && levels() > 2) {
+        for (int ty = ty0; ty <= ty1; ++ty)
+            for (int tx = tx0; tx <= tx1; ++tx) {
+                ++mStats.queryWords;
+                const int baseX = tx * kTileSize, baseY = ty * kTileSize;
+                const uint64_t mask = rectMask(std::max(x0, baseX) - baseX, std::min(x1, baseX + 7) - baseX,
+                                               std::max(y0, baseY) - baseY, std::min(y1, baseY + 7) - baseY);
+                if (mask & ~mWords[size_t(ty) * mWordsX[0] + size_t(tx)]) return false;
+            }
+        return true;
+    }
     return queryWord(levels() - 1, 0, 0, x0, y0, x1, y1);
 }
 
