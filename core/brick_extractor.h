@@ -56,6 +56,25 @@ public:
             if (slot.key != 0) f(slot.key - 1, slot.vertex);
     }
 
+    // Keeps the entries whose key satisfies keep(edgeKey), in a table sized for them (at
+    // most half full, as ever). One pass over the old table.
+    template <class Keep>
+    void retainIf(Keep&& keep) {
+        std::vector<Slot> old;
+        old.swap(mSlots);
+        size_t kept = 0;
+        for (const Slot& slot : old) kept += slot.key != 0 && keep(slot.key - 1);
+        size_t capacity = size_t(1) << 12;
+        while (2 * (kept + 1) > capacity) capacity *= 2;
+        mSlots.resize(capacity);
+        mSize = 0;
+        for (const Slot& slot : old)
+            if (slot.key != 0 && keep(slot.key - 1)) {
+                place(slot.key, slot.vertex);
+                ++mSize;
+            }
+    }
+
 private:
     struct Slot {
         uint64_t key = 0;

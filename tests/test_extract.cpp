@@ -150,6 +150,35 @@ TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
     EXPECT_EQ(source.pinned(), 0);
 }
 
+// The map of brick-face vertices, trimmed as often as possible (every few entries) or never,
+// gives the same welded surface: no face a pending brick shares is forgotten, on any path.
+TEST(ExtractThreads, TrimmingTheSeamMapKeepsEveryWeld) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {45, 41, 37};  // partial bricks on every axis
+    auto turbulence = test::synthBrickSource(p, 8);
+    const double iso = turbulenceIso(ScalarType::U16);
+    FullExtractOptions never{iso, 4, 1};
+    never.seamTrimEntries = SIZE_MAX;
+    TriangleMesh reference;
+    extractOctree(*turbulence, never, reference);
+    ASSERT_GT(reference.triangleCount(), 10000u);
+    for (int threads : {1, 2}) {
+        for (bool noise : {false, true}) {
+            FullExtractOptions often{iso, 4, threads};
+            often.seamTrimEntries = 16;
+            TriangleMesh trimmed;
+            if (noise)
+                extractNoise(*turbulence, often, trimmed);
+            else
+                extractOctree(*turbulence, often, trimmed);
+            EXPECT_EQ(trimmed.vertexCount(), reference.vertexCount()) << threads << noise;
+            EXPECT_EQ(test::canonicalTriangles(trimmed), test::canonicalTriangles(reference));
+            EXPECT_EQ(test::checkClosedOriented(trimmed, &turbulence->volume()), "");
+        }
+    }
+}
+
 }  // namespace
 }  // namespace vdiso
 
