@@ -75,48 +75,74 @@ struct BrickKernel {
         }
     }
 
-    // Ranges of all meta-cells at once, separably: min/max over each meta-cell's x-run of
-    // corners in every row, then over y, then over z. About two passes over the samples,
-    // where a box per meta-cell would read each shared face twice and vectorise poorly.
+    // Ranges of all meta-cells at once, separably, whole rows at a time: first, for each
+    // z-slab of meta-cells, the elementwise min/max over the slab's planes (rows contiguous in
+    // x, so these loops vectorise); then over each y-run of those rows; last over the x-runs
+    // of what is left, a small array. Each sample is read about once.
     void metaCellRanges(std::vector<BrickRange>& out) const {
         const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
-        const int rowsY = cells[1] + 1, rowsZ = cells[2] + 1;
+        const int rowX = cells[0] + 1, rowsY = cells[1] + 1;
         std::vector<T>& lo = scratchLo();
         std::vector<T>& hi = scratchHi();
-        lo.resize(size_t(rowsZ) * rowsY * n);
+        const size_t slab = size_t(rowsY) * rowX;  // pass 1: n slabs of rowsY rows
+        const size_t plane = size_t(n) * rowX;     // pass 2: n x n rows, after the slabs
+        lo.resize(size_t(n) * slab + size_t(n) * plane);
         hi.resize(lo.size());
-        for (int z = 0; z < rowsZ; ++z)
+        T* lo2 = lo.data() + size_t(n) * slab;
+        T* hi2 = hi.data() + size_t(n) * slab;
+        const int slabs = (cells[2] + M - 1) / M, runsY = (cells[1] + M - 1) / M;
+        for (int mz = 0; mz < slabs; ++mz) {
+            const int z0 = mz * M, z1 = std::min(z0 + M, cells[2]);
             for (int y = 0; y < rowsY; ++y) {
-                const T* row = s + sampleIndex(0, y, z);
-                for (int m = 0; m < n; ++m) {
-                    const int x0 = std::min(m * M, cells[0]), x1 = std::min(x0 + M, cells[0]);
-                    T a = row[x0], b = row[x0];
-                    for (int i = x0 + 1; i <= x1; ++i) {
-                        a = row[i] < a ? row[i] : a;
-                        b = row[i] > b ? row[i] : b;
+                T* l = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
+                T* h = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
+                const T* first = s + sampleIndex(0, y, z0);
+                std::copy(first, first + rowX, l);
+                std::copy(first, first + rowX, h);
+                for (int z = z0 + 1; z <= z1; ++z) {
+                    const T* row = s + sampleIndex(0, y, z);
+                    for (int i = 0; i < rowX; ++i) {
+                        l[i] = row[i] < l[i] ? row[i] : l[i];
+                        h[i] = row[i] > h[i] ? row[i] : h[i];
                     }
-                    lo[(size_t(z) * rowsY + y) * n + m] = a;
-                    hi[(size_t(z) * rowsY + y) * n + m] = b;
                 }
             }
+            for (int my = 0; my < runsY; ++my) {
+                const int y0 = my * M, y1 = std::min(y0 + M, cells[1]);
+                T* l = lo2 + (size_t(mz) * n + my) * rowX;
+                T* h = hi2 + (size_t(mz) * n + my) * rowX;
+                const T* firstLo = lo.data() + size_t(mz) * slab + size_t(y0) * rowX;
+                const T* firstHi = hi.data() + size_t(mz) * slab + size_t(y0) * rowX;
+                std::copy(firstLo, firstLo + rowX, l);
+                std::copy(firstHi, firstHi + rowX, h);
+                for (int y = y0 + 1; y <= y1; ++y) {
+                    const T* rowLo = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
+                    const T* rowHi = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
+                    for (int i = 0; i < rowX; ++i) {
+                        l[i] = rowLo[i] < l[i] ? rowLo[i] : l[i];
+                        h[i] = rowHi[i] > h[i] ? rowHi[i] : h[i];
+                    }
+                }
+            }
+        }
         out.resize(size_t(n) * n * n);
         for (int mz = 0; mz < n; ++mz)
             for (int my = 0; my < n; ++my)
                 for (int mx = 0; mx < n; ++mx) {
-                    const int y0 = my * M, z0 = mz * M;
                     BrickRange& r = out[(size_t(mz) * n + my) * n + mx];
-                    if (mx * M >= cells[0] || y0 >= cells[1] || z0 >= cells[2]) {
+                    const int x0 = mx * M;
+                    if (x0 >= cells[0] || my >= runsY || mz >= slabs) {
                         r = {std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
                         continue;
                     }
-                    const int y1 = std::min(y0 + M, cells[1]), z1 = std::min(z0 + M, cells[2]);
-                    T a = lo[(size_t(z0) * rowsY + y0) * n + mx], b = hi[(size_t(z0) * rowsY + y0) * n + mx];
-                    for (int z = z0; z <= z1; ++z)
-                        for (int y = y0; y <= y1; ++y) {
-                            const size_t i = (size_t(z) * rowsY + y) * n + mx;
-                            a = lo[i] < a ? lo[i] : a;
-                            b = hi[i] > b ? hi[i] : b;
-                        }
+                    const int x1 = std::min(x0 + M, cells[0]);
+                    const T* l = lo2 + (size_t(mz) * n + my) * rowX;
+                    const T* h = hi2 + (size_t(mz) * n + my) * rowX;
+                    T a = l[x0], b = h[x0];
+                    for (int i = x0 + 1; i <= x1; ++i) {
+                        a = l[i] < a ? l[i] : a;
+                        b = h[i] > b ? h[i] : b;
+                    }
                     r = {float(a), float(b)};
                 }
     }

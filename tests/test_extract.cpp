@@ -4,11 +4,13 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <set>
 
 #include <glm/geometric.hpp>
 
 #include "cache/brick_cache.h"
+#include "core/brick_extractor.h"
 #include "core/camera.h"
 #include "core/extract_full.h"
 #include "core/extract_view.h"
@@ -148,6 +150,69 @@ TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
         }
     }
     EXPECT_EQ(source.pinned(), 0);
+}
+
+// Meta-cell ranges against the min and max of each meta-cell's corner samples, for every
+// sample type, partial bricks and meta-cell sizes that do and do not divide the brick.
+TEST(BrickExtractor, MetaCellRangesAreEachMetaCellsCornerRange) {
+    std::mt19937 rng(11);
+    for (ScalarType type : {ScalarType::U8, ScalarType::I16, ScalarType::U16, ScalarType::F32}) {
+        test::MemoryBrickSource source({23, 17, 30}, type, 8, [&](int64_t, int64_t, int64_t) {
+            return double(std::uniform_int_distribution<int>(0, 250)(rng));
+        });
+        const BrickLayout& layout = source.layout();
+        for (int M : {1, 3, 4, 5, 8}) {
+            BrickExtractor extractor(source.volume(), layout, M);
+            const int n = (layout.brickSize + M - 1) / M;
+            std::vector<BrickRange> ranges;
+            for (int64_t id = 0; id < layout.brickCount(); ++id) {
+                const BrickHandle brick = source.acquire(id);
+                extractor.metaCellRanges(id, brick.samples(), ranges);
+                ASSERT_EQ(ranges.size(), size_t(n) * n * n);
+                const Dims3 c = layout.brickCoord(id);
+                int cells[3];
+                for (int a = 0; a < 3; ++a) cells[a] = layout.cellsOnAxis(a, c[a]);
+                const std::vector<unsigned char>& all = source.samples();
+                auto sample = [&](int64_t gx, int64_t gy, int64_t gz) {
+                    const size_t i = size_t(gx + 23 * (gy + 17 * gz));
+                    switch (type) {
+                        case ScalarType::U8: return double(all[i]);
+                        case ScalarType::I16: return double(reinterpret_cast<const int16_t*>(all.data())[i]);
+                        case ScalarType::U16: return double(reinterpret_cast<const uint16_t*>(all.data())[i]);
+                        case ScalarType::F32: break;
+                    }
+                    return double(reinterpret_cast<const float*>(all.data())[i]);
+                };
+                for (int mz = 0; mz < n; ++mz)
+                    for (int my = 0; my < n; ++my)
+                        for (int mx = 0; mx < n; ++mx) {
+                            const BrickRange& r = ranges[size_t((mz * n + my) * n + mx)];
+                            const int m[3] = {mx, my, mz};
+                            int lo[3], hi[3];
+                            bool empty = false;
+                            for (int a = 0; a < 3; ++a) {
+                                lo[a] = m[a] * M;
+                                hi[a] = std::min(lo[a] + M, cells[a]);
+                                empty = empty || lo[a] >= cells[a];
+                            }
+                            if (empty) {
+                                EXPECT_GT(r.minValue, r.maxValue);
+                                continue;
+                            }
+                            double vmin = INFINITY, vmax = -INFINITY;
+                            for (int z = lo[2]; z <= hi[2]; ++z)
+                                for (int y = lo[1]; y <= hi[1]; ++y)
+                                    for (int x = lo[0]; x <= hi[0]; ++x) {
+                                        const double v = sample(c[0] * 8 + x, c[1] * 8 + y, c[2] * 8 + z);
+                                        vmin = std::min(vmin, v);
+                                        vmax = std::max(vmax, v);
+                                    }
+                            ASSERT_EQ(double(r.minValue), vmin) << int(type) << " M " << M << " brick " << id;
+                            ASSERT_EQ(double(r.maxValue), vmax) << int(type) << " M " << M << " brick " << id;
+                        }
+            }
+        }
+    }
 }
 
 // The map of brick-face vertices, trimmed as often as possible (every few entries) or never,
