@@ -1,103 +1,86 @@
 #include "io/vdb_reader.h"
 
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <array>
 #include <cerrno>
 #include <cstdio>
-#include <variant>
-
-#include <openvdb/io/File.h>
-#include <openvdb/openvdb.h>
-#include <openvdb/tools/Dense.h>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "io/error.h"
+#include "io/vdb_module/vdb_module.h"
 
 namespace vdiso {
 namespace {
 
-using GridPtr = std::variant<openvdb::FloatGrid::ConstPtr, openvdb::DoubleGrid::ConstPtr>;
+constexpr const char* kModuleName = "libvdiso_vdb.so";
 
-bool isConvertible(const openvdb::GridBase& grid) {
-    return grid.isType<openvdb::FloatGrid>() || grid.isType<openvdb::DoubleGrid>();
+struct VdbModule {
+    decltype(&vdiso_vdb_open) open = nullptr;
+    decltype(&vdiso_vdb_read) read = nullptr;
+    decltype(&vdiso_vdb_close) close = nullptr;
+};
+
+// Where the module is: in VDISO_MODULE_DIR when that is set; otherwise beside the running
+// executable (where the build puts it, next to vdiso), else in the build tree's directory for it.
+std::vector<std::string> moduleCandidates() {
+    std::vector<std::string> dirs;
+    if (const char* dir = std::getenv("VDISO_MODULE_DIR"))
+        return {std::string(dir) + "/" + kModuleName};
+    std::error_code ec;
+    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (!ec) dirs.push_back(exe.parent_path().string());
+#ifdef VDISO_BUILD_MODULE_DIR
+    dirs.emplace_back(VDISO_BUILD_MODULE_DIR);
+#endif
+    std::vector<std::string> paths;
+    for (const std::string& d : dirs) paths.push_back(d + "/" + kModuleName);
+    return paths;
 }
 
-std::string quoted(const std::string& name) {
-    return "'" + name + "'";
-}
-
-// "'density' (float), 'v' (vec3s)": what the file offers, for messages that must say what to ask
-// for instead.
-std::string describeGrids(const openvdb::GridPtrVec& grids) {
-    if (grids.empty()) return "no grids";
-    std::string list;
-    for (const openvdb::GridBase::Ptr& g : grids) {
-        if (!list.empty()) list += ", ";
-        list += quoted(g->getName()) + " (" + g->valueType() + ")";
-    }
-    return list;
-}
-
-// Picks the grid by name (empty: the first float or double grid) from the metadata alone, so
-// that only the chosen grid's voxels are ever loaded.
-openvdb::GridBase::Ptr chooseGrid(const std::string& path, const openvdb::GridPtrVec& grids,
-                                  const std::string& gridName) {
-    for (const openvdb::GridBase::Ptr& g : grids) {
-        if (gridName.empty() ? isConvertible(*g) : g->getName() == gridName) return g;
-    }
-    if (gridName.empty())
-        throwIoError(path, "no float or double grid; the file holds " + describeGrids(grids));
-    throwIoError(path,
-                 "no grid named " + quoted(gridName) + "; the file holds " + describeGrids(grids));
-}
-
-void requireConvertible(const std::string& path, const openvdb::GridBase& grid) {
-    if (!isConvertible(grid))
-        throwIoError(path, "grid " + quoted(grid.getName()) + " holds " + grid.valueType() +
-                               " values; only float and double grids can be converted");
-}
-
-// A dense volume has axis-aligned, evenly spaced samples; a rotated or frustum transform would
-// be silently misplaced.
-void requireAxisAligned(const std::string& path, const openvdb::GridBase& grid) {
-    const openvdb::math::Transform& t = grid.transform();
-    if (!t.isLinear() || !t.baseMap()->getAffineMap()->isScaleTranslate())
-        throwIoError(path, "grid " + quoted(grid.getName()) + " has a " + t.mapType() +
-                               " transform; only axis-aligned voxels can be converted");
-}
-
-openvdb::GridBase::Ptr loadGrid(const std::string& path, const std::string& gridName) {
-    openvdb::io::File file(path);
-    try {
-        // No delayed loading: a truncated file should fail here, not halfway through a slab.
-        file.open(false);
-    } catch (const openvdb::Exception& e) {
-        throwIoError(path, std::string("not an OpenVDB file (") + e.what() + ")");
-    }
-    const openvdb::GridPtrVecPtr metadata = file.readAllGridMetadata();
-    const openvdb::GridBase::Ptr chosen = chooseGrid(path, *metadata, gridName);
-    requireConvertible(path, *chosen);
-    openvdb::GridBase::Ptr grid = file.readGrid(chosen->getName());
-    file.close();
-    // Several grids may share a name; the one read must still be a float grid.
-    requireConvertible(path, *grid);
-    return grid;
-}
-
-GridPtr typedGrid(const openvdb::GridBase::Ptr& grid) {
-    if (grid->isType<openvdb::FloatGrid>())
-        return openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
-    return openvdb::gridConstPtrCast<openvdb::DoubleGrid>(grid);
+// Loaded on first use; throws IoError naming `path` (the file being read) when it cannot be.
+const VdbModule& vdbModule(const std::string& path) {
+    static const VdbModule* loaded = [] () -> const VdbModule* {
+        void* library = nullptr;
+        for (const std::string& candidate : moduleCandidates()) {
+            if (::access(candidate.c_str(), R_OK) != 0) continue;
+            library = ::dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
+            if (library) break;
+        }
+        if (!library) return nullptr;
+        static VdbModule m;
+        m.open = reinterpret_cast<decltype(m.open)>(::dlsym(library, "vdiso_vdb_open"));
+        m.read = reinterpret_cast<decltype(m.read)>(::dlsym(library, "vdiso_vdb_read"));
+        m.close = reinterpret_cast<decltype(m.close)>(::dlsym(library, "vdiso_vdb_close"));
+        return m.open && m.read && m.close ? &m : nullptr;
+    }();
+    if (!loaded)
+        throwIoError(path, std::string("reading OpenVDB files needs the module ") + kModuleName +
+                               ", which was not found or did not load (the build puts it beside "
+                               "vdiso; VDISO_MODULE_DIR says where else to look)");
+    return *loaded;
 }
 
 class VdbSliceReader final : public SliceReader {
 public:
-    VdbSliceReader(const std::string& path, const std::string& gridName) : mPath(path) {
-        requireReadable(path);
-        openvdb::initialize();
-        try {
-            open(gridName);
-        } catch (const openvdb::Exception& e) {
-            throwIoError(path, e.what());
-        }
+    VdbSliceReader(const std::string& path, const std::string& gridName)
+        : mPath(path), mModule(vdbModule(requireReadable(path))) {
+        VdisoVdbVolume volume{};
+        std::array<char, 1024> err{};
+        mHandle = mModule.open(path.c_str(), gridName.c_str(), &volume, err.data(), err.size());
+        if (!mHandle) throwIoError(path, err.data());
+        mInfo.dims = {volume.dims[0], volume.dims[1], volume.dims[2]};
+        mInfo.type = ScalarType::F32;
+        mInfo.spacing = {volume.spacing[0], volume.spacing[1], volume.spacing[2]};
+        mInfo.origin = {volume.origin[0], volume.origin[1], volume.origin[2]};
     }
+    ~VdbSliceReader() override { mModule.close(mHandle); }
+    VdbSliceReader(const VdbSliceReader&) = delete;
+    VdbSliceReader& operator=(const VdbSliceReader&) = delete;
 
     const VolumeInfo& info() const override { return mInfo; }
 
@@ -107,56 +90,26 @@ public:
                                     std::to_string(mNextZ) + " runs past the grid's " +
                                     std::to_string(mInfo.dims[2]));
         if (count == 0) return;
-        // Only the slab's sub-box goes dense; copyToDense writes every voxel of it, inactive
-        // ones included (as the tree's value there, the background outside any tile).
-        const openvdb::Coord lo = mBox.min().offsetBy(0, 0, int32_t(mNextZ));
-        const openvdb::Coord hi(mBox.max().x(), mBox.max().y(), lo.z() + int32_t(count) - 1);
-        openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> slab(openvdb::CoordBBox(lo, hi),
-                                                                     static_cast<float*>(dst));
-        try {
-            std::visit([&](const auto& grid) { openvdb::tools::copyToDense(*grid, slab); }, mGrid);
-        } catch (const openvdb::Exception& e) {
-            throwIoError(mPath, e.what());
-        }
+        std::array<char, 1024> err{};
+        if (mModule.read(mHandle, mNextZ, count, static_cast<float*>(dst), err.data(), err.size()) != 0)
+            throwIoError(mPath, err.data());
         mNextZ += count;
     }
 
     std::string name() const override { return mPath; }
 
 private:
-    static void requireReadable(const std::string& path) {
+    static const std::string& requireReadable(const std::string& path) {
         std::FILE* f = std::fopen(path.c_str(), "rb");
         if (!f) throwSystemError(path, "cannot open", errno);
         std::fclose(f);
-    }
-
-    void open(const std::string& gridName) {
-        const openvdb::GridBase::Ptr grid = loadGrid(mPath, gridName);
-        requireAxisAligned(mPath, *grid);
-        mBox = grid->evalActiveVoxelBoundingBox();
-        const std::string label = "grid " + quoted(grid->getName());
-        if (mBox.empty()) throwIoError(mPath, label + " has no active voxels");
-        const openvdb::Coord extent = mBox.dim();
-        for (int a = 0; a < 3; ++a) {
-            if (extent[a] < 2)
-                throwIoError(mPath, label + "'s active voxels span " + std::to_string(extent.x()) +
-                                        " x " + std::to_string(extent.y()) + " x " +
-                                        std::to_string(extent.z()) +
-                                        "; every axis needs at least 2 samples");
-        }
-        mInfo.dims = {extent.x(), extent.y(), extent.z()};
-        mInfo.type = ScalarType::F32;
-        const openvdb::Vec3d spacing = grid->voxelSize();
-        const openvdb::Vec3d origin = grid->indexToWorld(mBox.min());
-        mInfo.spacing = {spacing.x(), spacing.y(), spacing.z()};
-        mInfo.origin = {origin.x(), origin.y(), origin.z()};
-        mGrid = typedGrid(grid);
+        return path;
     }
 
     std::string mPath;
+    const VdbModule& mModule;
+    void* mHandle = nullptr;
     VolumeInfo mInfo;
-    GridPtr mGrid;
-    openvdb::CoordBBox mBox;
     int64_t mNextZ = 0;
 };
 

@@ -3,7 +3,8 @@
 // A float or double grid chosen by name (empty: the first float or double grid); its
 // active-voxel bounding box becomes the volume's extent, inactive voxels take the grid's
 // background value, the voxel size gives the spacing and the box's world position the origin.
-// OpenVDB's types never leave vdb_reader.cpp.
+// The reading is done by the module libvdiso_vdb.so (io/vdb_module/), loaded on first use, so
+// that no other command pays for linking OpenVDB.
 #pragma once
 
 #include <memory>

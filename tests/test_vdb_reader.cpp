@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "io/error.h"
+#include "tests/test_util.h"
 
 namespace vdiso {
 namespace {
@@ -209,6 +210,30 @@ TEST(VdbReader, UnevenSlabsMatchAWholeRead) {
         for (int y = 0; y < dims[1]; ++y)
             for (int x = 0; x < dims[0]; ++x, ++i)
                 ASSERT_EQ(expected[i], acc.getValue(lo.offsetBy(x, y, z))) << x << " " << y;
+}
+
+// The command line reads .vdb through the module beside the binary, and says so plainly when
+// the module cannot be found.
+TEST(VdbReader, ConvertFindsTheModuleOrSaysItIsMissing) {
+    TempFile file(".vdb"), store(".vdiso");
+    writeDensityAndOther(file.path());
+    auto r = test::runVdiso("convert " + file.path() + " " + store.path() + " --grid density --quiet");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(store.path()));
+    std::filesystem::remove(store.path());
+    const std::string missing = "VDISO_MODULE_DIR=/nonexistent ";
+    const std::string command = missing + VDISO_BINARY + " convert " + file.path() + " " +
+                                store.path() + " 2>&1";
+    FILE* pipe = ::popen(command.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string output;
+    char buf[512];
+    while (size_t n = std::fread(buf, 1, sizeof buf, pipe)) output.append(buf, n);
+    const int status = ::pclose(pipe);
+    EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+    EXPECT_NE(output.find(file.path()), std::string::npos) << output;
+    EXPECT_NE(output.find("libvdiso_vdb.so"), std::string::npos) << output;
+    EXPECT_FALSE(std::filesystem::exists(store.path()));
 }
 
 TEST(VdbReader, ReadingPastTheLastSliceThrows) {
