@@ -52,6 +52,9 @@ struct Traversal {
         bool overlaps(const PixelRect& o) const {
             return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1;
         }
+        PixelRect intersection(const PixelRect& o) const {
+            return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+        }
     };
     static constexpr size_t kNotPushed = SIZE_MAX;
     struct AheadBrick {
@@ -407,9 +410,10 @@ struct Traversal {
     // asked for are hidden by now (their pins go). Those still ahead are tested again and
     // dropped once hidden (cancelled, if handed to the prefetcher but not read yet); the
     // look-ahead moves on; and bricks are handed to the prefetcher, in order, while each is
-    // settled: its screen box meets neither this brick's nor any brick's before it, so that
-    // nothing drawn before its turn can hide it, and reading it now cannot be wasted. The
-    // next kNearBricks go regardless, so reads keep ahead where boxes overlap.
+    // settled: where its screen box meets this brick's or any brick's before it, every pixel
+    // is covered already, so that nothing drawn before its turn can hide it and reading it now
+    // cannot be wasted. The next kNearBricks go regardless, so reads keep ahead where boxes
+    // overlap.
     void prefetchAround(int64_t brick) {
         constexpr size_t kNearBricks = 2;
         while (true) {
@@ -429,11 +433,16 @@ struct Traversal {
         });
         while (aheadBricks.size() < size_t(options.prefetchBricks) && lookAheadOneBrick()) {
         }
+        auto harmless = [&](const PixelRect& a, const PixelRect& b) {
+            if (!a.overlaps(b)) return true;
+            const PixelRect both = a.intersection(b);
+            return pyramid.isOccluded(both.x0, both.y0, both.x1, both.y1);
+        };
         for (size_t k = 0; k < aheadBricks.size(); ++k) {
             AheadBrick& ahead = aheadBricks[k];
             if (ahead.item != kNotPushed) continue;
-            bool settled = !ahead.rect.overlaps(current);
-            for (size_t j = 0; j < k && settled; ++j) settled = !ahead.rect.overlaps(aheadBricks[j].rect);
+            bool settled = harmless(ahead.rect, current);
+            for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, aheadBricks[j].rect);
             if (!settled && k >= kNearBricks) break;
             ahead.item = prefetcher.push(ahead.brick);
         }

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# The out-of-core issue's time target, measured as medians: a cold normal view (SAGE) against
+# reading the raw volume whole from cold disk and running VTK Flying Edges on 2 threads, the
+# two alternated RUNS times in one run so that the disk's and the machine's moods fall on both.
+# Wall time of the whole vdiso process (start-up, index, extraction) against the baseline's
+# read + Flying Edges.
+#
+#   bench/first_frame.sh [SIZE] [RUNS]     default 1024 5 (needs data/headSIZE.raw, .vdiso:
+#                                          bench/io.sh SIZE makes them)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+size=${1:-1024}
+runs=${2:-5}
+raw=data/head$size.raw
+store=data/head$size.vdiso
+cmake -S . -B build-vtk -DCMAKE_BUILD_TYPE=Release -DVDISO_BUILD_VTK_COMPARE=ON -DVDISO_BUILD_TESTS=OFF >/dev/null
+cmake --build build-vtk -j "${JOBS:-2}" --target vdiso vdiso_raw_baseline >/dev/null
+vdiso=build-vtk/bin/vdiso
+[ -f $raw ] && [ -f $store ] || { echo "needs $raw and $store (bench/io.sh $size)"; exit 1; }
+
+echo "| iso | run | sage wall s | sage extract s | baseline read s | baseline Flying Edges s | baseline s |"
+echo "|---|---|---|---|---|---|---|"
+for iso in 600.5 1224.5; do
+  for ((r = 1; r <= runs; r++)); do
+    start=$(date +%s.%N)
+    extract=$($vdiso extract $store --iso $iso --method sage --view normal --cold --stats - --quiet |
+              python3 -c 'import json,sys; print(json.load(sys.stdin)["extract_s"])')
+    wall=$(python3 -c "print($(date +%s.%N) - $start)")
+    base=$(build-vtk/bin/vdiso_raw_baseline $raw --dims $size,$size,$size --type u16 --iso $iso --threads 2 2>/dev/null)
+    python3 -c '
+import json, sys
+b = json.loads(sys.argv[5])
+print("| %s | %s | %.3f | %.3f | %.3f | %.3f | %.3f |" % (sys.argv[1], sys.argv[2], float(sys.argv[3]),
+      float(sys.argv[4]), b["read_s"], b["flying_edges_s"], b["total_s"]))' $iso $r $wall $extract "$base"
+  done
+done | tee /tmp/vdiso_first_frame.md
+echo
+python3 - <<'PY'
+import statistics
+rows = [l.split("|")[1:-1] for l in open("/tmp/vdiso_first_frame.md") if l.startswith("| ") and l[2].isdigit()]
+for iso in sorted({r[0].strip() for r in rows}):
+    sage = [float(r[2]) for r in rows if r[0].strip() == iso]
+    base = [float(r[6]) for r in rows if r[0].strip() == iso]
+    ms, mb = statistics.median(sage), statistics.median(base)
+    print("iso %s: sage median %.3f s, baseline median %.3f s: %.1fx sooner (runs: %.1f-%.1fx)" % (
+        iso, ms, mb, mb / ms, min(b / s for b, s in zip(base, sage)), max(b / s for b, s in zip(base, sage))))
+PY
+rm -f /tmp/vdiso_first_frame.md
