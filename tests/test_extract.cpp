@@ -292,16 +292,20 @@ TEST(ExtractStreaming, StreamedPiecesRebuildTheHeldMesh) {
 namespace vdiso {
 namespace {
 
-TEST(ExtractPrefetch, ReadsEachListedBrickOnceAndNothingElse) {
+// A generated head of `dims` samples written to a store of 8-cell bricks in `dir`.
+std::string headStore(const test::ScratchDir& dir, const Dims3& dims) {
     SynthParams p;
     p.kind = SynthKind::Head;
-    p.dims = {70, 66, 60};
-    test::ScratchDir dir;
-    auto head = openSynthVolume(p);
+    p.dims = dims;
     StoreWriteOptions o;
     o.brickSize = 8;
-    writeBrickStore(*head, dir.file("h.vdiso"), o);
-    const BrickStoreReader store(dir.file("h.vdiso"));
+    writeBrickStore(*openSynthVolume(p), dir.file("h.vdiso"), o);
+    return dir.file("h.vdiso");
+}
+
+TEST(ExtractPrefetch, ReadsEachListedBrickOnceAndNothingElse) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {70, 66, 60}));
     size_t activeBricks = 0;
     for (const BrickEntry& e : store.index())
         activeBricks += rangeHoldsIso(e.minValue, e.maxValue, kHeadSkinIso);
@@ -328,15 +332,8 @@ TEST(ExtractPrefetch, ReadsEachListedBrickOnceAndNothingElse) {
 // found visible: the traversal's own bricks, plus those hidden by the time it got there,
 // which it counts.
 TEST(ExtractPrefetch, ViewDependentLookAheadReadsOnlyBricksThatPassedTheTests) {
-    SynthParams p;
-    p.kind = SynthKind::Head;
-    p.dims = {96, 96, 96};
     test::ScratchDir dir;
-    auto head = openSynthVolume(p);
-    StoreWriteOptions o;
-    o.brickSize = 8;
-    writeBrickStore(*head, dir.file("h.vdiso"), o);
-    const BrickStoreReader store(dir.file("h.vdiso"));
+    const BrickStoreReader store(headStore(dir, {96, 96, 96}));
     const VolumeInfo& v = store.volume();
     const glm::dvec3 lo = v.origin, hi = v.origin + glm::dvec3(95.0) * v.spacing;
     for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup}) {
