@@ -9,13 +9,16 @@ BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead)
     if (mLookahead > 0) mThread = std::thread([this] { run(); });
 }
 
-BrickPrefetcher::~BrickPrefetcher() {
+BrickPrefetcher::~BrickPrefetcher() { stop(); }
+
+void BrickPrefetcher::stop() {
     {
         std::lock_guard lock(mMutex);
         mStop = true;
     }
     mChanged.notify_all();
     if (mThread.joinable()) mThread.join();
+    for (const auto& [item, brick] : mPinned) mSkippedLoaded += !mUsed[item];
     mPinned.clear();
 }
 

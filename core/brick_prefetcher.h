@@ -42,8 +42,11 @@ public:
     void consumed(size_t i);
     // Item i is no longer wanted: it is not loaded if the thread has not got to it yet.
     void cancel(size_t i);
+    // Ends the thread at once (loading nothing more) and releases every pin; for an
+    // extraction that has finished early or that will use nothing more it pushed.
+    void stop();
 
-    // Items loaded by the thread that were released before their use (skipped by consumed).
+    // Items loaded by the thread and released unused (skipped by consumed, or left at stop).
     size_t skippedLoaded() const;
 
 private:

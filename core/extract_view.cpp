@@ -413,7 +413,8 @@ struct Traversal {
     // settled: where its screen box meets this brick's or any brick's before it, every pixel
     // is covered already, so that nothing drawn before its turn can hide it and reading it now
     // cannot be wasted. The next kNearBricks go regardless, so reads keep ahead where boxes
-    // overlap.
+    // overlap, unless most of one's box lies in this brick's (closeups: it is likely behind
+    // this one and hidden by it).
     void prefetchAround(int64_t brick) {
         constexpr size_t kNearBricks = 2;
         while (true) {
@@ -433,6 +434,17 @@ struct Traversal {
         });
         while (aheadBricks.size() < size_t(options.prefetchBricks) && lookAheadOneBrick()) {
         }
+        // Pixels of a rectangle on the image.
+        auto pixelsOf = [&](const PixelRect& r) {
+            const int64_t w = std::min(r.x1, camera.width - 1) - std::max(r.x0, 0) + 1;
+            const int64_t h = std::min(r.y1, camera.height - 1) - std::max(r.y0, 0) + 1;
+            return w > 0 && h > 0 ? w * h : int64_t(0);
+        };
+        // Most of a brick's box lies in the current brick's: it is likely behind, and hidden
+        // once the current one is drawn (closeups), so it is not read on speculation.
+        auto mostlyBehind = [&](const PixelRect& a, const PixelRect& b) {
+            return a.overlaps(b) && 2 * pixelsOf(a.intersection(b)) > pixelsOf(a);
+        };
         auto harmless = [&](const PixelRect& a, const PixelRect& b) {
             if (!a.overlaps(b)) return true;
             const PixelRect both = a.intersection(b);
@@ -443,7 +455,7 @@ struct Traversal {
             if (ahead.item != kNotPushed) continue;
             bool settled = harmless(ahead.rect, current);
             for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, aheadBricks[j].rect);
-            if (!settled && k >= kNearBricks) break;
+            if (!settled && (k >= kNearBricks || mostlyBehind(ahead.rect, current))) break;
             ahead.item = prefetcher.push(ahead.brick);
         }
     }
@@ -480,7 +492,7 @@ struct Traversal {
             const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
             visitMetaCells(brick, lo, hi);
         }
-        prefetcher.close();
+        prefetcher.stop();
         stats.cellsActive = extractor.counters().cellsActive;
         stats.bricksPrefetchedUnused = int64_t(prefetcher.skippedLoaded());
     }
