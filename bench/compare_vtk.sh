@@ -12,17 +12,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repeat=${1:-3}
-jobs=${JOBS:-2}
 build=build-vtk
-
-# Configure and build quietly; on failure, show what the tools said.
-log=$(mktemp)
-trap 'rm -f "$log"' EXIT
-if ! { cmake -S . -B $build -DCMAKE_BUILD_TYPE=Release -DVDISO_BUILD_VTK_COMPARE=ON -DVDISO_BUILD_TESTS=OFF &&
-       cmake --build $build -j"$jobs" --target vdiso vdiso_vtk_compare; } > "$log" 2>&1; then
-  cat "$log" >&2
-  exit 1
-fi
+bench/build_vtk.sh vdiso vdiso_vtk_compare
 
 mkdir -p data
 [ -f data/head512.vdiso ] || $build/bin/vdiso synth data/head512.vdiso --kind head --size 512 --quiet

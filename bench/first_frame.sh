@@ -13,8 +13,7 @@ size=${1:-1024}
 runs=${2:-5}
 raw=data/head$size.raw
 store=data/head$size.vdiso
-cmake -S . -B build-vtk -DCMAKE_BUILD_TYPE=Release -DVDISO_BUILD_VTK_COMPARE=ON -DVDISO_BUILD_TESTS=OFF >/dev/null
-cmake --build build-vtk -j "${JOBS:-2}" --target vdiso vdiso_raw_baseline >/dev/null
+bench/build_vtk.sh vdiso vdiso_raw_baseline
 vdiso=build-vtk/bin/vdiso
 [ -f $raw ] && [ -f $store ] || { echo "needs $raw and $store (bench/io.sh $size)"; exit 1; }
 

@@ -12,8 +12,7 @@ cd "$(dirname "$0")/.."
 size=${1:-1024}
 raw=data/head$size.raw
 store=data/head$size.vdiso
-cmake -S . -B build-vtk -DCMAKE_BUILD_TYPE=Release -DVDISO_BUILD_VTK_COMPARE=ON -DVDISO_BUILD_TESTS=OFF >/dev/null
-cmake --build build-vtk -j "${JOBS:-2}" --target vdiso vdiso_raw_baseline >/dev/null
+bench/build_vtk.sh vdiso vdiso_raw_baseline
 vdiso=build-vtk/bin/vdiso
 mkdir -p data
 [ -f $raw ] || $vdiso synth $raw --kind head --size $size --quiet

@@ -83,22 +83,33 @@ struct Traversal {
     enum class Verdict { Culled, Done, Visible };
     enum class Cull { None, Range, Frustum, SubPixel, Occlusion };
 
-    // Tests 1-3 of the header for the box [a, b] whose range is `range`: the first that culls
-    // it, or None (a box crossing the near plane is never culled).
-    Cull cull(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b,
-              ScreenBox& box) const {
-        if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) return Cull::Range;
+    // The pixel centres i + 0.5 a screen box covers (possibly none, possibly off the image);
+    // all of the image for a box crossing the near plane.
+    PixelRect pixelRect(const ScreenBox& box) const {
+        if (box.crossesNearPlane) return {0, 0, camera.width - 1, camera.height - 1};
+        return {int(std::ceil(box.left - 0.5)), int(std::ceil(box.top - 0.5)),
+                int(std::floor(box.right - 0.5)), int(std::floor(box.bottom - 0.5))};
+    }
+
+    // Tests 2-3 of the header for the box [a, b]: the first that culls it, or None (a box
+    // crossing the near plane is never culled).
+    Cull cullBox(const glm::dvec3& a, const glm::dvec3& b, ScreenBox& box) const {
         box = options.estimateBox ? projector.estimateBox(a, b) : projector.exactBox(a, b);
         if (box.crossesNearPlane) return Cull::None;  // refined, never culled
         if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
             box.top > camera.height - 0.5)
             return Cull::Frustum;
-        // Pixel centres i + 0.5 inside the box.
-        const int x0 = int(std::ceil(box.left - 0.5)), x1 = int(std::floor(box.right - 0.5));
-        const int y0 = int(std::ceil(box.top - 0.5)), y1 = int(std::floor(box.bottom - 0.5));
-        if (x0 > x1 || y0 > y1) return Cull::SubPixel;  // covers no pixel centre: nothing shows
-        if (pyramid.isOccluded(x0, y0, x1, y1)) return Cull::Occlusion;
+        const PixelRect r = pixelRect(box);
+        if (r.x0 > r.x1 || r.y0 > r.y1) return Cull::SubPixel;  // no pixel centre: nothing shows
+        if (pyramid.isOccluded(r.x0, r.y0, r.x1, r.y1)) return Cull::Occlusion;
         return Cull::None;
+    }
+
+    // Tests 1-3 for the box [a, b] whose range is `range`.
+    Cull cull(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b,
+              ScreenBox& box) const {
+        if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) return Cull::Range;
+        return cullBox(a, b, box);
     }
 
     // Tests 1-4 of the header for the box [a, b] whose range is `range`. `samplesLoaded`: the
@@ -248,12 +259,8 @@ struct Traversal {
         const int64_t lo[3] = {x, y, z}, hi[3] = {x + 1, y + 1, z + 1};
         glm::dvec3 a, b;
         t.worldBox(lo, hi, a, b);
-        const ScreenBox box = t.options.estimateBox ? t.projector.estimateBox(a, b)
-                                                    : t.projector.exactBox(a, b);
-        if (box.crossesNearPlane) return true;
-        const int x0 = int(std::ceil(box.left - 0.5)), x1 = int(std::floor(box.right - 0.5));
-        const int y0 = int(std::ceil(box.top - 0.5)), y1 = int(std::floor(box.bottom - 0.5));
-        const bool keep = x0 <= x1 && y0 <= y1 && !t.pyramid.isOccluded(x0, y0, x1, y1);
+        ScreenBox box;
+        const bool keep = t.cullBox(a, b, box) == Cull::None;
         t.stats.cellsCulled += !keep;
         return keep;
     }
@@ -367,18 +374,12 @@ struct Traversal {
         return false;
     }
 
-    PixelRect pixelRect(const ScreenBox& box) const {
-        if (box.crossesNearPlane) return {0, 0, camera.width - 1, camera.height - 1};
-        return {int(std::ceil(box.left - 0.5)), int(std::ceil(box.top - 0.5)),
-                int(std::floor(box.right - 0.5)), int(std::floor(box.bottom - 0.5))};
-    }
-
-    // Tests 1-3 now, for the node and, for a brick, its sub-blocks.
-    bool passes(uint32_t index) const {
+    // Tests 1-3 now, for the node and, for a brick, its sub-blocks; the node's screen box
+    // in `box`.
+    bool passes(uint32_t index, ScreenBox& box) const {
         const MinMaxNode& node = tree.nodes()[index];
         glm::dvec3 a, b;
         nodeBox(node, a, b);
-        ScreenBox box;
         if (cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) return false;
         return !node.isLeaf() || subBlocksShow(tree.brickOf(node));
     }
@@ -391,15 +392,12 @@ struct Traversal {
             const uint32_t index = aheadStack.back();
             aheadStack.pop_back();
             const MinMaxNode& node = nodes[index];
-            if (!passes(index)) continue;
+            ScreenBox box;
+            if (!passes(index, box)) continue;
             if (!node.isLeaf()) {
                 pushChildren(aheadStack, index);
                 continue;
             }
-            glm::dvec3 a, b;
-            nodeBox(node, a, b);
-            ScreenBox box{};
-            cull({node.minValue, node.maxValue}, a, b, box);  // passed: box is set
             aheadBricks.push_back({index, tree.brickOf(node), pixelRect(box)});
             return true;
         }
@@ -428,7 +426,8 @@ struct Traversal {
             aheadBricks.pop_front();
         }
         std::erase_if(aheadBricks, [&](const AheadBrick& ahead) {
-            if (passes(ahead.node)) return false;
+            ScreenBox box;
+            if (passes(ahead.node, box)) return false;
             if (ahead.item != kNotPushed) prefetcher.cancel(ahead.item);
             return true;
         });

@@ -24,6 +24,10 @@ struct VolumeInfo {
     int64_t sliceSamples() const { return dims[0] * dims[1]; }
     int64_t sampleCount() const { return dims[0] * dims[1] * dims[2]; }
     uint64_t byteSize() const { return uint64_t(sampleCount()) * scalarSize(type); }
+    // World position of the last sample: the volume's bounds are [origin, worldMax()].
+    glm::dvec3 worldMax() const {
+        return origin + glm::dvec3(dims[0] - 1, dims[1] - 1, dims[2] - 1) * spacing;
+    }
 };
 
 }  // namespace vdiso

@@ -65,6 +65,7 @@ TEST(Cli, UnknownTypeIsAUsageError) {
     auto r = runVdiso("convert " + raw + " " + dir.file("o.vdiso") + " --dims 2,2,2 --type u12");
     EXPECT_EQ(r.exitCode, 2);
     EXPECT_TRUE(contains(r.output, "unknown type 'u12'")) << r.output;
+    EXPECT_TRUE(contains(r.output, "i8, i32, u32 or f64")) << r.output;  // every type it takes
 }
 
 TEST(Cli, ExistingOutputIsNeverTouched) {

@@ -335,10 +335,8 @@ TEST(ExtractPrefetch, ViewDependentLookAheadReadsOnlyBricksThatPassedTheTests) {
     test::ScratchDir dir;
     const BrickStoreReader store(headStore(dir, {96, 96, 96}));
     const VolumeInfo& v = store.volume();
-    const glm::dvec3 lo = v.origin, hi = v.origin + glm::dvec3(95.0) * v.spacing;
     for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup}) {
-        Camera camera = presetCamera(preset, lo, hi, 400, 400);
-        fitClipPlanes(camera, lo, hi);
+        const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
         TriangleMesh without, with;
         PointSet pointsWithout, pointsWith;
         ViewExtractStats plain, ahead;

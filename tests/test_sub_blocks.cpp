@@ -162,12 +162,10 @@ TEST(SubBlocks, ViewDependentExtractionReadsFewerBricksForTheSameSurface) {
     auto head = test::synthBrickSource(p, 16);
     WithoutSubBlocks plain(*head);
     const VolumeInfo& v = head->volume();
-    const glm::dvec3 lo = v.origin, hi = v.origin + glm::dvec3(127.0) * v.spacing;
     int64_t readWith = 0, readWithout = 0, culled = 0;
     for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup})
         for (double iso : {kHeadSkinIso, kHeadBoneIso}) {
-            Camera camera = presetCamera(preset, lo, hi, 600, 600);
-            fitClipPlanes(camera, lo, hi);
+            const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 600, 600);
             TriangleMesh a, b;
             PointSet pa, pb;
             const ViewExtractStats with = extractViewDependent(*head, camera, ViewExtractOptions::sage(iso), a, pa);

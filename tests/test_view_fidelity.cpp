@@ -35,10 +35,7 @@ struct FidelityResult {
 FidelityResult compareWithFull(BrickSource& source, double iso, ViewPreset preset,
                                const ViewExtractOptions& options) {
     const VolumeInfo& v = source.volume();
-    const glm::dvec3 lo = v.origin;
-    const glm::dvec3 hi = v.origin + glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1) * v.spacing;
-    Camera camera = presetCamera(preset, lo, hi, 800, 800);  // vdiso extract's default size
-    fitClipPlanes(camera, lo, hi);
+    const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 800, 800);  // vdiso extract's default
     TriangleMesh full, view;
     PointSet points;
     const FullExtractStats f = extractOctree(source, {iso, 4}, full);
@@ -130,9 +127,7 @@ TEST(VisibleOracle, BoundsWhatAViewDependentExtractionNeeds) {
     p.dims = {96, 96, 96};
     auto head = test::synthBrickSource(p, 16);
     const VolumeInfo& v = head->volume();
-    const glm::dvec3 lo = v.origin, hi = v.origin + glm::dvec3(95.0) * v.spacing;
-    Camera camera = presetCamera(ViewPreset::Normal, lo, hi, 400, 400);
-    fitClipPlanes(camera, lo, hi);
+    const Camera camera = presetCamera(ViewPreset::Normal, v.origin, v.worldMax(), 400, 400);
     TriangleMesh full, view;
     PointSet points;
     extractOctree(*head, {kHeadSkinIso, 4}, full);

@@ -63,7 +63,9 @@ int runConvert(int argc, char** argv) {
         } else if (a == "--type") {
             const std::string t = args.value(a);
             const auto type = parseFileScalar(t);
-            if (!type) throw UsageError("unknown type '" + t + "' (expected u8, i16, u16 or f32)");
+            if (!type)
+                throw UsageError("unknown type '" + t +
+                                 "' (expected u8, i16, u16, f32, i8, i32, u32 or f64)");
             raw.type = *type;
             typeGiven = true;
         } else if (a == "--spacing") {

@@ -393,9 +393,7 @@ int runExtract(int argc, char** argv) {
     BrickCache cache(store, o.cacheMb << 20);
     const VolumeInfo& volume = store.volume();
     const glm::dvec3 boundsMin = volume.origin;
-    const glm::dvec3 boundsMax =
-        volume.origin + glm::dvec3(volume.dims[0] - 1, volume.dims[1] - 1, volume.dims[2] - 1) *
-                            volume.spacing;
+    const glm::dvec3 boundsMax = volume.worldMax();
     // The cameras: one (or none for a full extraction without a picture), or a path.
     std::vector<Camera> cameras;
     if (o.orbitFrames > 0)
