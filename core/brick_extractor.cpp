@@ -30,6 +30,80 @@ struct IsoThreshold {
     bool above(T s) const { return Compare(s) > value; }
 };
 
+// Ranges of all meta-cells of one brick ((B+3)^3 samples, `cells` cells per axis) at once,
+// separably, whole rows at a time: first, for each z-slab of meta-cells, the elementwise
+// min/max over the slab's planes (rows contiguous in x, so these loops vectorise); then over
+// each y-run of those rows; last over the x-runs of what is left, a small array. Each sample
+// is read about once. Meta-cells beyond the brick's cells (n per axis in all) get an empty
+// range.
+template <class T>
+void computeMetaCellRanges(const T* s, int side, const int cells[3], int M, int n,
+                           std::vector<BrickRange>& out) {
+    thread_local std::vector<T> lo, hi;
+    const int rowX = cells[0] + 1, rowsY = cells[1] + 1;
+    const size_t slab = size_t(rowsY) * rowX;  // pass 1: n slabs of rowsY rows
+    const size_t plane = size_t(n) * rowX;     // pass 2: n x n rows, after the slabs
+    lo.resize(size_t(n) * slab + size_t(n) * plane);
+    hi.resize(lo.size());
+    T* lo2 = lo.data() + size_t(n) * slab;
+    T* hi2 = hi.data() + size_t(n) * slab;
+    const int slabs = (cells[2] + M - 1) / M, runsY = (cells[1] + M - 1) / M;
+    for (int mz = 0; mz < slabs; ++mz) {
+        const int z0 = mz * M, z1 = std::min(z0 + M, cells[2]);
+        for (int y = 0; y < rowsY; ++y) {
+            T* l = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
+            T* h = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
+            const T* first = s + BrickLayout::cornerIndex(side, 0, y, z0);
+            std::copy(first, first + rowX, l);
+            std::copy(first, first + rowX, h);
+            for (int z = z0 + 1; z <= z1; ++z) {
+                const T* row = s + BrickLayout::cornerIndex(side, 0, y, z);
+                for (int i = 0; i < rowX; ++i) {
+                    l[i] = row[i] < l[i] ? row[i] : l[i];
+                    h[i] = row[i] > h[i] ? row[i] : h[i];
+                }
+            }
+        }
+        for (int my = 0; my < runsY; ++my) {
+            const int y0 = my * M, y1 = std::min(y0 + M, cells[1]);
+            T* l = lo2 + (size_t(mz) * n + my) * rowX;
+            T* h = hi2 + (size_t(mz) * n + my) * rowX;
+            const T* firstLo = lo.data() + size_t(mz) * slab + size_t(y0) * rowX;
+            const T* firstHi = hi.data() + size_t(mz) * slab + size_t(y0) * rowX;
+            std::copy(firstLo, firstLo + rowX, l);
+            std::copy(firstHi, firstHi + rowX, h);
+            for (int y = y0 + 1; y <= y1; ++y) {
+                const T* rowLo = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
+                const T* rowHi = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
+                for (int i = 0; i < rowX; ++i) {
+                    l[i] = rowLo[i] < l[i] ? rowLo[i] : l[i];
+                    h[i] = rowHi[i] > h[i] ? rowHi[i] : h[i];
+                }
+            }
+        }
+    }
+    out.resize(size_t(n) * n * n);
+    for (int mz = 0; mz < n; ++mz)
+        for (int my = 0; my < n; ++my)
+            for (int mx = 0; mx < n; ++mx) {
+                BrickRange& r = out[(size_t(mz) * n + my) * n + mx];
+                const int x0 = mx * M;
+                if (x0 >= cells[0] || my >= runsY || mz >= slabs) {
+                    r = {std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
+                    continue;
+                }
+                const int x1 = std::min(x0 + M, cells[0]);
+                const T* l = lo2 + (size_t(mz) * n + my) * rowX;
+                const T* h = hi2 + (size_t(mz) * n + my) * rowX;
+                T a = l[x0], b = h[x0];
+                for (int i = x0 + 1; i <= x1; ++i) {
+                    a = l[i] < a ? l[i] : a;
+                    b = h[i] > b ? h[i] : b;
+                }
+                r = {float(a), float(b)};
+            }
+}
+
 }  // namespace
 
 // The cell loop for one brick of sample type T.
@@ -44,7 +118,6 @@ struct BrickKernel {
     IsoThreshold<T> threshold;
     TriangleMesh& mesh;
     EdgeVertexMap& seams;
-    int cornerStride[8];  // offset of each cell corner from the cell's first corner
 
     BrickKernel(BrickExtractor& extractor, int64_t id, const void* samples, double isovalue,
                 TriangleMesh& out, EdgeVertexMap& seamMap)
@@ -55,15 +128,11 @@ struct BrickKernel {
             cells[a] = x.mLayout.cellsOnAxis(a, c[a]);
             corner0[a] = c[a] * x.mLayout.brickSize;
         }
-        for (int k = 0; k < 8; ++k)
-            cornerStride[k] = (kCornerOffset[k][2] * side + kCornerOffset[k][1]) * side +
-                              kCornerOffset[k][0];
     }
 
     // Index of local cell corner (cx, cy, cz) in the sample array (ghost offset included).
     size_t sampleIndex(int cx, int cy, int cz) const {
-        return (size_t(cz + kGhostBefore) * side + size_t(cy + kGhostBefore)) * side +
-               size_t(cx + kGhostBefore);
+        return BrickLayout::cornerIndex(side, cx, cy, cz);
     }
 
     void metaCellBox(int m, int lo[3], int hi[3]) const {
@@ -75,87 +144,6 @@ struct BrickKernel {
         }
     }
 
-    // Ranges of all meta-cells at once, separably, whole rows at a time: first, for each
-    // z-slab of meta-cells, the elementwise min/max over the slab's planes (rows contiguous in
-    // x, so these loops vectorise); then over each y-run of those rows; last over the x-runs
-    // of what is left, a small array. Each sample is read about once.
-    void metaCellRanges(std::vector<BrickRange>& out) const {
-        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
-        const int rowX = cells[0] + 1, rowsY = cells[1] + 1;
-        std::vector<T>& lo = scratchLo();
-        std::vector<T>& hi = scratchHi();
-        const size_t slab = size_t(rowsY) * rowX;  // pass 1: n slabs of rowsY rows
-        const size_t plane = size_t(n) * rowX;     // pass 2: n x n rows, after the slabs
-        lo.resize(size_t(n) * slab + size_t(n) * plane);
-        hi.resize(lo.size());
-        T* lo2 = lo.data() + size_t(n) * slab;
-        T* hi2 = hi.data() + size_t(n) * slab;
-        const int slabs = (cells[2] + M - 1) / M, runsY = (cells[1] + M - 1) / M;
-        for (int mz = 0; mz < slabs; ++mz) {
-            const int z0 = mz * M, z1 = std::min(z0 + M, cells[2]);
-            for (int y = 0; y < rowsY; ++y) {
-                T* l = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
-                T* h = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
-                const T* first = s + sampleIndex(0, y, z0);
-                std::copy(first, first + rowX, l);
-                std::copy(first, first + rowX, h);
-                for (int z = z0 + 1; z <= z1; ++z) {
-                    const T* row = s + sampleIndex(0, y, z);
-                    for (int i = 0; i < rowX; ++i) {
-                        l[i] = row[i] < l[i] ? row[i] : l[i];
-                        h[i] = row[i] > h[i] ? row[i] : h[i];
-                    }
-                }
-            }
-            for (int my = 0; my < runsY; ++my) {
-                const int y0 = my * M, y1 = std::min(y0 + M, cells[1]);
-                T* l = lo2 + (size_t(mz) * n + my) * rowX;
-                T* h = hi2 + (size_t(mz) * n + my) * rowX;
-                const T* firstLo = lo.data() + size_t(mz) * slab + size_t(y0) * rowX;
-                const T* firstHi = hi.data() + size_t(mz) * slab + size_t(y0) * rowX;
-                std::copy(firstLo, firstLo + rowX, l);
-                std::copy(firstHi, firstHi + rowX, h);
-                for (int y = y0 + 1; y <= y1; ++y) {
-                    const T* rowLo = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
-                    const T* rowHi = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
-                    for (int i = 0; i < rowX; ++i) {
-                        l[i] = rowLo[i] < l[i] ? rowLo[i] : l[i];
-                        h[i] = rowHi[i] > h[i] ? rowHi[i] : h[i];
-                    }
-                }
-            }
-        }
-        out.resize(size_t(n) * n * n);
-        for (int mz = 0; mz < n; ++mz)
-            for (int my = 0; my < n; ++my)
-                for (int mx = 0; mx < n; ++mx) {
-                    BrickRange& r = out[(size_t(mz) * n + my) * n + mx];
-                    const int x0 = mx * M;
-                    if (x0 >= cells[0] || my >= runsY || mz >= slabs) {
-                        r = {std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
-                        continue;
-                    }
-                    const int x1 = std::min(x0 + M, cells[0]);
-                    const T* l = lo2 + (size_t(mz) * n + my) * rowX;
-                    const T* h = hi2 + (size_t(mz) * n + my) * rowX;
-                    T a = l[x0], b = h[x0];
-                    for (int i = x0 + 1; i <= x1; ++i) {
-                        a = l[i] < a ? l[i] : a;
-                        b = h[i] > b ? h[i] : b;
-                    }
-                    r = {float(a), float(b)};
-                }
-    }
-
-    static std::vector<T>& scratchLo() {
-        thread_local std::vector<T> v;
-        return v;
-    }
-    static std::vector<T>& scratchHi() {
-        thread_local std::vector<T> v;
-        return v;
-    }
-
     glm::dvec3 gradientAt(size_t i) const {
         const glm::dvec3& h = x.mVolume.spacing;
         const size_t sy = size_t(side), sz = size_t(side) * side;
@@ -165,7 +153,10 @@ struct BrickKernel {
     }
 
     // The vertex on edge `e` of cell (cx, cy, cz), computed the first time it is asked for.
-    uint32_t edgeVertex(int cx, int cy, int cz, int e) {
+    // Without `withNormal` its normal is left zero, for ensureNormal() to fill once the cell
+    // is known to be kept: the view-dependent traversal drops about half the vertices it
+    // makes, and the normal is most of a vertex's cost.
+    uint32_t edgeVertex(int cx, int cy, int cz, int e, bool withNormal) {
         const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
         const int px = cx + o[0], py = cy + o[1], pz = cz + o[2], axis = mcEdgeAxis(e);
         const int n = x.mLayout.brickSize + 1;
@@ -199,22 +190,39 @@ struct BrickKernel {
         const glm::dvec3 position =
             x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
                                    x.mVolume.spacing;
-        const glm::dvec3 gradient = glm::mix(gradientAt(i0), gradientAt(i0 + step), t);
-        const double length = glm::length(gradient);
-        glm::dvec3 normal;
-        if (length > 0) {
-            normal = -gradient / length;
-        } else {
-            // Flat gradient (clamped border, plateau): the edge itself says which way is up.
-            normal = glm::dvec3(0.0);
-            normal[axis] = s1 > s0 ? -1.0 : 1.0;
-        }
         const uint32_t v = mesh.nextVertex();
         mesh.positions.push_back(glm::vec3(position));
-        mesh.normals.push_back(glm::vec3(normal));
+        mesh.normals.push_back(withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
         slot = {x.mStamp, v};
         if (onFace) seams.insert(key, v);
         return v;
+    }
+
+    // Minus the gradient at the crossing of the edge from sample i0 to i0 + step (along
+    // `axis`), interpolated between central differences at its ends, normalized. Never zero:
+    // a flat gradient (clamped border, plateau) takes the edge's own direction, so a zero
+    // normal means "not computed yet". Any brick holding the edge gives the same normal (the
+    // ghost samples cover the differences), so a welded vertex may get it from either.
+    glm::vec3 edgeNormal(size_t i0, size_t step, int axis) const {
+        const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
+        const double t = (iso - s0) / (s1 - s0);
+        const glm::dvec3 gradient = glm::mix(gradientAt(i0), gradientAt(i0 + step), t);
+        const double length = glm::length(gradient);
+        glm::dvec3 normal(0.0);
+        if (length > 0)
+            normal = -gradient / length;
+        else
+            normal[axis] = s1 > s0 ? -1.0 : 1.0;
+        return glm::vec3(normal);
+    }
+
+    void ensureNormal(uint32_t v, int cx, int cy, int cz, int e) {
+        glm::vec3& normal = mesh.normals[v - mesh.firstVertex];
+        if (normal != glm::vec3(0.0f)) return;
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        const int axis = mcEdgeAxis(e);
+        const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
+        normal = edgeNormal(sampleIndex(cx + o[0], cy + o[1], cz + o[2]), step, axis);
     }
 
     void extractMetaCell(int m, PolygonCallback onPolygon = nullptr, void* context = nullptr,
@@ -224,7 +232,7 @@ struct BrickKernel {
         // Cell order per axis: ascending, or with an eye (in this brick's cell coordinates)
         // nearest the eye first. Nested z, y, x, each ordered so, is a front-to-back order
         // for a grid: a cell hiding another is no farther from the eye on any axis.
-        int order[3][64];
+        int order[3][kMaxMetaCellSize];
         for (int a = 0; a < 3; ++a) {
             const int n = hi[a] - lo[a];
             for (int k = 0; k < n; ++k) order[a][k] = lo[a] + k;
@@ -233,75 +241,93 @@ struct BrickKernel {
                     return std::abs(i + 0.5 - (*eyeCell)[a]) < std::abs(j + 0.5 - (*eyeCell)[a]);
                 });
         }
+        // Above bits of the meta-cell's corner samples, one word per corner row (bit i: corner
+        // lo[0] + i). A cell's case is then four 2-bit fields, and a row of cells that the
+        // surface misses is passed over with a few word operations instead of 8 comparisons
+        // per cell: most cells of an active meta-cell are empty.
+        const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
+        uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
+        for (int z = 0; z <= nz; ++z)
+            for (int y = 0; y <= ny; ++y) {
+                const T* row = s + sampleIndex(lo[0], lo[1] + y, lo[2] + z);
+                uint64_t bits = 0;
+                for (int i = 0; i <= nx; ++i) bits |= uint64_t(threshold.above(row[i])) << i;
+                above[z][y] = bits;
+            }
+        const uint64_t cellBits = (uint64_t(1) << nx) - 1;
         KernelCounters& counters = x.mCounters;
-        for (int iz = 0; iz < hi[2] - lo[2]; ++iz)
-            for (int iy = 0; iy < hi[1] - lo[1]; ++iy) {
+        counters.cellsVisited += int64_t(nx) * ny * nz;
+        for (int iz = 0; iz < nz; ++iz)
+            for (int iy = 0; iy < ny; ++iy) {
                 const int cz = order[2][iz], cy = order[1][iy];
-                for (int ix = 0; ix < hi[0] - lo[0]; ++ix) {
-                    const int cx = order[0][ix];
-                    const T* cell = s + sampleIndex(cx, cy, cz);
-                    int caseIndex = 0;
-                    for (int k = 0; k < 8; ++k)
-                        caseIndex |= int(threshold.above(cell[cornerStride[k]])) << k;
-                    if (caseIndex == 0 || caseIndex == 255) continue;
+                const int rz = cz - lo[2], ry = cy - lo[1];
+                const uint64_t r00 = above[rz][ry], r10 = above[rz][ry + 1];
+                const uint64_t r01 = above[rz + 1][ry], r11 = above[rz + 1][ry + 1];
+                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
+                const uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits;
+                if (mixed == 0) continue;
+                for (int ix = 0; ix < nx; ++ix) {
+                    const int cx = order[0][ix], rx = cx - lo[0];
+                    if (!(mixed >> rx & 1)) continue;
+                    // Corner k is (k & 1, k >> 1 & 1, k >> 2): rows (y, z) = 00, 10, 01, 11.
+                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
+                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
                     if (keepCell && !keepCell(context, corner0[0] + cx, corner0[1] + cy, corner0[2] + cz))
                         continue;
                     ++counters.cellsActive;
                     const McPolygonCase& pc = mcPolygonCase(caseIndex);
                     uint32_t outline[kMcEdgeCount];  // every polygon's, one after another
                     bool wanted = onPolygon == nullptr;
+                    int outlineLength = 0;
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
                         for (int k = 0; k < pc.vertexCount[p]; ++k)
-                            outline[at + k] = edgeVertex(cx, cy, cz, pc.edges[at + k]);
+                            outline[at + k] = edgeVertex(cx, cy, cz, pc.edges[at + k], !onPolygon);
                         if (onPolygon) wanted |= onPolygon(context, outline + at, pc.vertexCount[p]);
+                        outlineLength = at + pc.vertexCount[p];
                     }
                     if (!wanted) continue;
+                    if (onPolygon)
+                        for (int k = 0; k < outlineLength; ++k) ensureNormal(outline[k], cx, cy, cz, pc.edges[k]);
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++])
                         for (int k = 2; k < pc.vertexCount[p]; ++k)
                             mesh.indices.insert(mesh.indices.end(),
                                                 {outline[at], outline[at + k - 1], outline[at + k]});
                 }
-                counters.cellsVisited += hi[0] - lo[0];
             }
-    }
-
-    void beginBrick() {
-        if (++x.mStamp == 0) {  // wrapped: old stamps could collide, so clear once
-            std::fill(x.mEdges.begin(), x.mEdges.end(), BrickExtractor::EdgeSlot{});
-            x.mStamp = 1;
-        }
     }
 };
 
 BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout,
                                int metaCellSize)
-    : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, 64)) {
+    : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, kMaxMetaCellSize)) {
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);
     mEdges.resize(corners * corners * corners * 3);
 }
 
 void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out) {
-    TriangleMesh unused;
-    EdgeVertexMap unusedSeams;
+    const Dims3 c = mLayout.brickCoord(id);
+    const int cells[3] = {mLayout.cellsOnAxis(0, c[0]), mLayout.cellsOnAxis(1, c[1]),
+                          mLayout.cellsOnAxis(2, c[2])};
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
-        BrickKernel<T> k(*this, id, samples, 0.0, unused, unusedSeams);
-        k.metaCellRanges(out);
+        computeMetaCellRanges(static_cast<const T*>(samples), mLayout.side(), cells,
+                              mMetaCellSize, mMetaPerAxis, out);
     });
+}
+
+void BrickExtractor::nextStamp() {
+    if (++mStamp == 0) {  // wrapped: old stamps could collide, so clear once
+        std::fill(mEdges.begin(), mEdges.end(), EdgeSlot{});
+        mStamp = 1;
+    }
 }
 
 void BrickExtractor::beginBrick(int64_t id, const void* samples) {
     mCurrentBrick = id;
     mCurrentSamples = samples;
-    visitScalarType(mVolume.type, [&](auto zero) {
-        using T = decltype(zero);
-        TriangleMesh unused;
-        EdgeVertexMap unusedSeams;
-        BrickKernel<T> k(*this, id, samples, 0.0, unused, unusedSeams);
-        k.beginBrick();
-        k.metaCellRanges(mRanges);
-    });
+    nextStamp();
+    metaCellRanges(id, samples, mRanges);
 }
 
 bool BrickExtractor::firstHit(const glm::dvec3& origin, const glm::dvec3& direction,
@@ -404,11 +430,11 @@ void BrickExtractor::extractMetaCell(uint32_t metaCell, double iso, TriangleMesh
 
 void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
                                   EdgeVertexMap& seams) {
+    nextStamp();
+    metaCellRanges(id, samples, mRanges);
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         BrickKernel<T> k(*this, id, samples, iso, mesh, seams);
-        k.beginBrick();
-        k.metaCellRanges(mRanges);
         for (int m = 0; m < metaCellsPerBrick(); ++m) {
             const BrickRange r = mRanges[size_t(m)];
             ++mCounters.metaCellsTested;
@@ -422,10 +448,10 @@ void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, T
 void BrickExtractor::extractMetaCells(int64_t id, const void* samples, double iso,
                                       std::span<const uint32_t> metaCells, TriangleMesh& mesh,
                                       EdgeVertexMap& seams) {
+    nextStamp();
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         BrickKernel<T> k(*this, id, samples, iso, mesh, seams);
-        k.beginBrick();
         for (uint32_t m : metaCells) {
             ++mCounters.metaCellsActive;
             k.extractMetaCell(int(m));

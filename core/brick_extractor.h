@@ -25,7 +25,9 @@
 
 namespace vdiso {
 
-constexpr int kDefaultMetaCellSize = 4;  // meta-cell sizes are clamped to 1..64
+constexpr int kDefaultMetaCellSize = 4;
+// Meta-cell sizes are clamped to 1..32: a row of a meta-cell's corners fits one 64-bit word.
+constexpr int kMaxMetaCellSize = 32;
 
 // Vertices of edges on brick faces, by global edge key, so neighbouring bricks share them.
 // Open addressing with linear probing on a power-of-two table (keys are stored plus one, so
@@ -172,6 +174,7 @@ private:
     };
     std::vector<EdgeSlot> mEdges;
     uint32_t mStamp = 0;
+    void nextStamp();  // a new brick: forget the vertices of the last one
     std::vector<BrickRange> mRanges;
     int64_t mCurrentBrick = -1;
     const void* mCurrentSamples = nullptr;

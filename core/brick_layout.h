@@ -30,6 +30,12 @@ struct BrickLayout {
     int64_t brickCount() const { return brickCounts[0] * brickCounts[1] * brickCounts[2]; }
     int side() const { return brickSize + kGhostBefore + kGhostAfter; }
     int64_t samplesPerBrick() const { return int64_t(side()) * side() * side(); }
+    // Index in a brick's sample array (side^3, x fastest) of its cell corner (cx, cy, cz),
+    // local to the brick, the ghost samples before it accounted for.
+    static size_t cornerIndex(int side, int cx, int cy, int cz) {
+        return (size_t(cz + kGhostBefore) * size_t(side) + size_t(cy + kGhostBefore)) * size_t(side) +
+               size_t(cx + kGhostBefore);
+    }
 
     // Bricks are numbered x fastest, then y, then z, which is also their order in the file.
     int64_t brickId(int64_t i, int64_t j, int64_t k) const {

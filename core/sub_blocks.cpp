@@ -69,13 +69,11 @@ void measureSubBlocks(ScalarType type, const void* samples, const BrickLayout& l
                     }
                     // NaN samples (f32) compare false both ways and so never widen the range,
                     // as in the brick's own range.
-                    T lo = s[((size_t(first[2]) + kGhostBefore) * side + first[1] + kGhostBefore) * side +
-                             first[0] + kGhostBefore];
+                    T lo = s[BrickLayout::cornerIndex(side, first[0], first[1], first[2])];
                     T hi = lo;
                     for (int z = first[2]; z <= last[2]; ++z)
                         for (int y = first[1]; y <= last[1]; ++y) {
-                            const T* row = s + ((size_t(z) + kGhostBefore) * side + y + kGhostBefore) * side +
-                                           kGhostBefore;
+                            const T* row = s + BrickLayout::cornerIndex(side, 0, y, z);
                             for (int x = first[0]; x <= last[0]; ++x) {
                                 lo = row[x] < lo ? row[x] : lo;
                                 hi = row[x] > hi ? row[x] : hi;

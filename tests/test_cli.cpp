@@ -210,6 +210,12 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --method marching").exitCode, 2);
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 -o x.stl").exitCode, 1);
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --view sideways --png " + dir.file("a.png")).exitCode, 2);
+    // A meta-cell's row of corners is one 64-bit word: 32 cells at most.
+    const auto big = test::runVdiso("extract " + store + " --iso 1 --metacell 33");
+    EXPECT_EQ(big.exitCode, 2);
+    EXPECT_NE(big.output.find("--metacell must be between 1 and 32, not 33"), std::string::npos) << big.output;
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --metacell 32").exitCode, 0);
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --readers 0").exitCode, 2);
     const auto r = test::runVdiso("extract " + dir.file("missing.vdiso") + " --iso 1");
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("missing.vdiso: cannot open"), std::string::npos) << r.output;

@@ -2,7 +2,9 @@
 // triangles from both methods and from memory or the store, analytic areas and volumes.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 #include <set>
@@ -314,18 +316,23 @@ TEST(ExtractPrefetch, ReadsEachListedBrickOnceAndNothingElse) {
         BrickCache cache(store, 16 * store.brickBytes());
         extractOctree(cache, {kHeadSkinIso, 4}, without);
     }
-    BrickCache cache(store, 16 * store.brickBytes());  // small: lookahead 8 must not thrash it
-    FullExtractOptions withPrefetch{kHeadSkinIso, 4};
-    withPrefetch.prefetchBricks = 8;
-    extractOctree(cache, withPrefetch, with);
-    EXPECT_EQ(with.positions, without.positions);
-    EXPECT_EQ(with.indices, without.indices);
-    // Each listed brick is read once and no other, except that a prefetch thread descheduled
-    // for many bricks' time can come back to fetch one the extraction has just used and
-    // evicted: rare (1 extra read in 40 runs of 40 concurrent copies), bounded here at 5%.
-    // Prefetching behind the extraction read 1.9x the bricks; this catches it.
-    EXPECT_GE(cache.counters().misses, activeBricks);
-    EXPECT_LE(double(cache.counters().misses), 1.05 * double(activeBricks));
+    for (int readers : {1, 3}) {
+        with = TriangleMesh{};
+        BrickCache cache(store, 16 * store.brickBytes());  // small: lookahead 8 must not thrash it
+        FullExtractOptions withPrefetch{kHeadSkinIso, 4};
+        withPrefetch.prefetchBricks = 8;
+        withPrefetch.prefetchReaders = readers;
+        extractOctree(cache, withPrefetch, with);
+        EXPECT_EQ(with.positions, without.positions) << readers;
+        EXPECT_EQ(with.indices, without.indices) << readers;
+        // Each listed brick is read once and no other, except that a prefetch thread
+        // descheduled for many bricks' time can come back to fetch one the extraction has
+        // just used and evicted: rare (1 extra read in 40 runs of 40 concurrent copies),
+        // bounded here at 5%. Prefetching behind the extraction read 1.9x the bricks; this
+        // catches it.
+        EXPECT_GE(cache.counters().misses, activeBricks) << readers;
+        EXPECT_LE(double(cache.counters().misses), 1.05 * double(activeBricks)) << readers;
+    }
 }
 
 // SAGE's look-ahead prefetch: the same surface, and every brick read was one the look-ahead
@@ -345,23 +352,58 @@ TEST(ExtractPrefetch, ViewDependentLookAheadReadsOnlyBricksThatPassedTheTests) {
             plain = extractViewDependent(cache, camera, ViewExtractOptions::sage(kHeadSkinIso),
                                          without, pointsWithout);
         }
-        BrickCache cache(store, 64 * store.brickBytes());
-        ViewExtractOptions options = ViewExtractOptions::sage(kHeadSkinIso);
-        options.prefetchBricks = 16;
-        ahead = extractViewDependent(cache, camera, options, with, pointsWith);
-        const char* label = viewPresetName(preset);
-        EXPECT_EQ(with.positions, without.positions) << label;
-        EXPECT_EQ(with.indices, without.indices) << label;
-        EXPECT_EQ(pointsWith.positions, pointsWithout.positions) << label;
-        EXPECT_EQ(ahead.bricksAcquired, plain.bricksAcquired) << label;
-        // Read: the traversal's bricks and the ones found ahead then hidden, each once (the
-        // rare re-read of a descheduled prefetch thread allowed for, as above).
-        const double expected = double(ahead.bricksAcquired + ahead.bricksPrefetchedUnused);
-        EXPECT_GE(double(cache.counters().misses), expected) << label;
-        EXPECT_LE(double(cache.counters().misses), 1.05 * expected) << label;
-        // Hidden after being found: bounded by the look-ahead's reach each time the picture
-        // grows, and here, bricks of 8 cells and a near camera, never more than were used.
-        EXPECT_LE(ahead.bricksPrefetchedUnused, ahead.bricksAcquired) << label;
+        for (int readers : {1, 3}) {
+            with = TriangleMesh{};
+            pointsWith = PointSet{};
+            BrickCache cache(store, 64 * store.brickBytes());
+            ViewExtractOptions options = ViewExtractOptions::sage(kHeadSkinIso);
+            options.prefetchBricks = 16;
+            options.prefetchReaders = readers;
+            ahead = extractViewDependent(cache, camera, options, with, pointsWith);
+            const std::string label = std::string(viewPresetName(preset)) + ", readers " + std::to_string(readers);
+            EXPECT_EQ(with.positions, without.positions) << label;
+            EXPECT_EQ(with.indices, without.indices) << label;
+            EXPECT_EQ(pointsWith.positions, pointsWithout.positions) << label;
+            EXPECT_EQ(ahead.bricksAcquired, plain.bricksAcquired) << label;
+            // Read: the traversal's bricks and the ones found ahead then hidden, each once (the
+            // rare re-read of a descheduled prefetch thread allowed for, as above).
+            const double expected = double(ahead.bricksAcquired + ahead.bricksPrefetchedUnused);
+            EXPECT_GE(double(cache.counters().misses), expected) << label;
+            EXPECT_LE(double(cache.counters().misses), 1.05 * expected) << label;
+            // Hidden after being found: bounded by the look-ahead's reach each time the picture
+            // grows, and here, bricks of 8 cells and a near camera, never more than were used.
+            EXPECT_LE(ahead.bricksPrefetchedUnused, ahead.bricksAcquired) << label;
+        }
+    }
+}
+
+// Normals are made only for the vertices of kept cells, some of them in a later brick than
+// the vertex (welded across a brick face): each must be the full extraction's normal there.
+TEST(ExtractView, VertexNormalsAreTheFullExtractionsNormals) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {96, 96, 96}));
+    BrickCache cache(store, 64 * store.brickBytes());
+    TriangleMesh full;
+    extractOctree(cache, {kHeadSkinIso, 4}, full);
+    std::map<std::array<float, 3>, glm::vec3> normalAt;
+    for (size_t k = 0; k < full.positions.size(); ++k) {
+        const glm::vec3& p = full.positions[k];
+        normalAt[{p.x, p.y, p.z}] = full.normals[k];
+    }
+    const VolumeInfo& v = store.volume();
+    for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup}) {
+        const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
+        TriangleMesh view;
+        PointSet points;
+        extractViewDependent(cache, camera, ViewExtractOptions::sage(kHeadSkinIso), view, points);
+        ASSERT_GT(view.positions.size(), 0u);
+        size_t wrong = 0;
+        for (size_t k = 0; k < view.positions.size(); ++k) {
+            const glm::vec3& p = view.positions[k];
+            const auto found = normalAt.find({p.x, p.y, p.z});
+            wrong += found == normalAt.end() || found->second != view.normals[k];
+        }
+        EXPECT_EQ(wrong, 0u) << viewPresetName(preset) << " of " << view.positions.size();
     }
 }
 

@@ -61,12 +61,14 @@ constexpr const char* kHelp =
     "                            \"fov\":30,\"width\":800,\"height\":600}\n"
     "  --size WxH                image size (default 800x800)\n"
     "  --stats STATS.json        write one JSON object of statistics ('-' for stdout)\n"
-    "  --metacell M              meta-cell size in cells (default 4)\n"
+    "  --metacell M              meta-cell size in cells, 1 to 32 (default 4)\n"
     "  --threads N               extraction threads (default 1)\n"
     "  --prefetch N              bricks a reader thread loads ahead of the extraction\n"
     "                            (default 32; 0: none): for sage/wise those a look-ahead finds\n"
     "                            visible; for octree/noise the active bricks, with --threads 1\n"
     "                            (with more threads no reader thread runs: stats say prefetch 0)\n"
+    "  --readers N               threads reading those bricks, so N reads wait on the disk at\n"
+    "                            once (default 2)\n"
     "  --cache-mb N              brick cache budget in MB (default 1024)\n"
     "  --cold                    drop the store's pages from the page cache first and read\n"
     "                            every brick from disk (O_DIRECT), so io_s is disk time\n"
@@ -89,6 +91,7 @@ struct ExtractOptions {
     int metaCellSize = kDefaultMetaCellSize;
     int threads = 1;
     int prefetch = 32;
+    int readers = BrickPrefetcher::kDefaultReaders;
     uint64_t cacheMb = 1024;
     bool overwrite = false, quiet = false, cold = false;
 };
@@ -180,11 +183,13 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
         } else if (a == "--stats") {
             o.statsPath = args.value(a);
         } else if (a == "--metacell") {
-            o.metaCellSize = int(parseInt(a, args.value(a), 1, 64));
+            o.metaCellSize = int(parseInt(a, args.value(a), 1, kMaxMetaCellSize));
         } else if (a == "--threads") {
             o.threads = int(parseInt(a, args.value(a), 1, 256));
         } else if (a == "--prefetch") {
             o.prefetch = int(parseInt(a, args.value(a), 0, 4096));
+        } else if (a == "--readers") {
+            o.readers = int(parseInt(a, args.value(a), 1, 64));
         } else if (a == "--cache-mb") {
             o.cacheMb = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30));
         } else if (a == "--cold") {
@@ -285,6 +290,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     // The prefetcher must not evict what it loaded before use: half the cache at most.
     extract.prefetchBricks = int(std::min<uint64_t>(uint64_t(o.prefetch),
                                                     cache.budgetBytes() / store.brickBytes() / 2));
+    extract.prefetchReaders = o.readers;
     PointSet points;
     FullExtractStats stats;
     std::optional<ViewExtractStats> view;
@@ -298,6 +304,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.bottomUp) v.bottomUp = *o.bottomUp;
         if (o.cellTests) v.cellTests = *o.cellTests;
         v.prefetchBricks = extract.prefetchBricks;
+        v.prefetchReaders = extract.prefetchReaders;
         view = extractViewDependent(cache, *camera, v, mesh, points, progress);
         stats.triangles = view->triangles;
         stats.vertices = mesh.vertexCount();
@@ -335,6 +342,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
     s.add("prefetch", extract.threads > 1 && !isViewDependent(o.method) ? 0 : extract.prefetchBricks);
+    s.add("readers", extract.prefetchReaders);
     // I/O the extraction did not wait for: read and decode time spent ahead of it.
     s.add("brick_wait_s", stats.brickWaitSeconds);
     s.add("io_hidden_s", std::max(0.0, io.readSeconds + io.decodeSeconds - stats.brickWaitSeconds));
