@@ -4,9 +4,10 @@
 
 namespace vdiso {
 
-BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead)
+BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead, int readers)
     : mSource(source), mLookahead(lookahead) {
-    if (mLookahead > 0) mThread = std::thread([this] { run(); });
+    if (mLookahead > 0)
+        for (int k = 0; k < std::max(readers, 1); ++k) mThreads.emplace_back([this] { run(); });
 }
 
 BrickPrefetcher::~BrickPrefetcher() { stop(); }
@@ -17,7 +18,8 @@ void BrickPrefetcher::stop() {
         mStop = true;
     }
     mChanged.notify_all();
-    if (mThread.joinable()) mThread.join();
+    for (std::thread& t : mThreads)
+        if (t.joinable()) t.join();
     for (const auto& [item, brick] : mPinned) mSkippedLoaded += !mUsed[item];
     mPinned.clear();
 }
@@ -70,12 +72,11 @@ size_t BrickPrefetcher::skippedLoaded() const {
 }
 
 void BrickPrefetcher::run() {
-    size_t next = 0;
     for (;;) {
         std::unique_lock lock(mMutex);
         // The item in use is the extraction's own to load; fetching one it has already passed
         // could only read it a second time.
-        auto target = [&] { return std::max(next, mConsumed + 1); };
+        auto target = [&] { return std::max(mNext, mConsumed + 1); };
         mChanged.wait(lock, [&] {
             return mStop || (target() < mItems.size() && target() < mConsumed + 1 + mLookahead) ||
                    (mClosed && target() >= mItems.size());
@@ -83,7 +84,7 @@ void BrickPrefetcher::run() {
         if (mStop || target() >= mItems.size()) return;
         const size_t i = target();
         const int64_t id = mItems[i];
-        next = i + 1;
+        mNext = i + 1;
         if (id == kCancelled) continue;
         lock.unlock();
         BrickHandle brick;
@@ -99,7 +100,10 @@ void BrickPrefetcher::run() {
             lock.unlock();
             continue;  // `brick` releases its pin
         }
-        mPinned.emplace_back(i, std::move(brick));
+        // Readers finish out of order: keep the pins sorted for consumed().
+        auto at = mPinned.end();
+        while (at != mPinned.begin() && std::prev(at)->first > i) --at;
+        mPinned.emplace(at, i, std::move(brick));
     }
 }
 

@@ -1,5 +1,8 @@
-// Loads bricks into a BrickSource ahead of an extraction, on a thread of its own, so that
-// reading and decoding overlap extraction (DESIGN.md, "Out of core").
+// Loads bricks into a BrickSource ahead of an extraction, on reader threads of its own, so
+// that reading and decoding overlap extraction (DESIGN.md, "Out of core"). Several readers
+// keep several reads queued at the device: a brick is a small random read, and one at a time
+// a disk's latency, not its bandwidth, sets the pace (a read waits on the device, not on a
+// core, so readers beyond the cores cost nothing while they wait).
 //
 // The extraction pushes the bricks it has decided to visit, in the order it will use them
 // (all at once for the full methods; as its look-ahead finds them for SAGE), and says which
@@ -27,8 +30,10 @@ namespace vdiso {
 
 class BrickPrefetcher {
 public:
-    // lookahead 0: no thread; every call does nothing.
-    BrickPrefetcher(BrickSource& source, size_t lookahead);
+    // lookahead 0: no thread; every call does nothing. Items are taken in list order by
+    // `readers` threads, each loading one brick at a time.
+    BrickPrefetcher(BrickSource& source, size_t lookahead, int readers = kDefaultReaders);
+    static constexpr int kDefaultReaders = 2;
     ~BrickPrefetcher();
     BrickPrefetcher(const BrickPrefetcher&) = delete;
     BrickPrefetcher& operator=(const BrickPrefetcher&) = delete;
@@ -58,12 +63,13 @@ private:
     static constexpr int64_t kCancelled = -1;
     std::vector<uint8_t> mUsed;   // consumed() named it
     size_t mConsumed = 0;
+    size_t mNext = 0;             // the next item a reader takes
     bool mClosed = false, mStop = false;
     size_t mSkippedLoaded = 0;
     std::deque<std::pair<size_t, BrickHandle>> mPinned;  // by item index, ascending
     mutable std::mutex mMutex;
     std::condition_variable mChanged;
-    std::thread mThread;
+    std::vector<std::thread> mThreads;
 };
 
 }  // namespace vdiso

@@ -170,7 +170,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     if (options.threads <= 1) {
         BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
         EdgeVertexMap seams;
-        BrickPrefetcher prefetcher(source, size_t(options.prefetchBricks));
+        BrickPrefetcher prefetcher(source, size_t(options.prefetchBricks), options.prefetchReaders);
         for (int64_t id : bricks) prefetcher.push(id);
         prefetcher.close();
         for (size_t i = 0; i < items.size(); ++i) {

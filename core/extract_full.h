@@ -14,6 +14,7 @@
 #include <cstdint>
 
 #include "core/brick_extractor.h"
+#include "core/brick_prefetcher.h"
 #include "core/brick_source.h"
 #include "core/mesh.h"
 #include "core/progress.h"
@@ -38,6 +39,7 @@ struct FullExtractOptions {
     // brick is read. 0: none. Prefetched bricks stay pinned until used, so the source's cache
     // must hold more than this many bricks (vdiso extract uses at most half the cache).
     int prefetchBricks = 0;
+    int prefetchReaders = BrickPrefetcher::kDefaultReaders;  // threads reading them
     // The map of brick-face vertices forgets faces no pending brick shares once it holds this
     // many entries, and again each time it doubles (see SeamTrimmer in extract_full.cpp).
     size_t seamTrimEntries = size_t(1) << 16;

@@ -33,6 +33,9 @@ struct Traversal {
     const VolumeInfo& volume;
     const BrickLayout& layout;
     BoxProjector projector;
+    // The same projection from cell coordinates (the grid's affine map folded in), so a
+    // cell's box costs no world-coordinate arithmetic: the per-cell test runs a million times.
+    BoxProjector cellProjector;
     PixelProjector pixels;
     OcclusionPyramid pyramid;
     BrickExtractor extractor;
@@ -68,9 +71,11 @@ struct Traversal {
     Traversal(BrickSource& s, const Camera& c, const ViewExtractOptions& o, TriangleMesh& m,
               PointSet& p, ViewExtractStats& st)
         : source(s), camera(c), options(o), mesh(m), points(p), stats(st), volume(s.volume()),
-          layout(s.layout()), projector(c), pixels(c), pyramid(c.width, c.height),
+          layout(s.layout()), projector(c),
+          cellProjector(c.viewProjection() * s.volume().gridToWorld(), c.width, c.height),
+          pixels(c), pyramid(c.width, c.height),
           extractor(s.volume(), s.layout(), o.metaCellSize), tree(s.layout(), s.brickRanges()),
-          prefetcher(s, size_t(std::max(o.prefetchBricks, 0))) {}
+          prefetcher(s, size_t(std::max(o.prefetchBricks, 0)), o.prefetchReaders) {}
 
     // World box of the cells [lo, hi) (cell coordinates; clamped to the volume's cells).
     void worldBox(const int64_t lo[3], const int64_t hi[3], glm::dvec3& a, glm::dvec3& b) const {
@@ -94,7 +99,11 @@ struct Traversal {
     // Tests 2-3 of the header for the box [a, b]: the first that culls it, or None (a box
     // crossing the near plane is never culled).
     Cull cullBox(const glm::dvec3& a, const glm::dvec3& b, ScreenBox& box) const {
-        box = options.estimateBox ? projector.estimateBox(a, b) : projector.exactBox(a, b);
+        return cullBox(projector, a, b, box);
+    }
+    Cull cullBox(const BoxProjector& by, const glm::dvec3& a, const glm::dvec3& b,
+                 ScreenBox& box) const {
+        box = options.estimateBox ? by.estimateBox(a, b) : by.exactBox(a, b);
         if (box.crossesNearPlane) return Cull::None;  // refined, never culled
         if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
             box.top > camera.height - 0.5)
@@ -256,11 +265,9 @@ struct Traversal {
     // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
     static bool keepCell(void* context, int64_t x, int64_t y, int64_t z) {
         auto& t = *static_cast<Traversal*>(context);
-        const int64_t lo[3] = {x, y, z}, hi[3] = {x + 1, y + 1, z + 1};
-        glm::dvec3 a, b;
-        t.worldBox(lo, hi, a, b);
+        const glm::dvec3 a{double(x), double(y), double(z)};
         ScreenBox box;
-        const bool keep = t.cullBox(a, b, box) == Cull::None;
+        const bool keep = t.cullBox(t.cellProjector, a, a + 1.0, box) == Cull::None;
         t.stats.cellsCulled += !keep;
         return keep;
     }

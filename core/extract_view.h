@@ -27,6 +27,7 @@
 
 #include "core/brick_extractor.h"
 #include "core/brick_source.h"
+#include "core/brick_prefetcher.h"
 #include "core/camera.h"
 #include "core/mesh.h"
 #include "core/progress.h"
@@ -50,6 +51,7 @@ struct ViewExtractOptions {
     // a look-ahead that runs tests 1-3 ahead of it; 0: none. The source's cache must hold
     // more than this many bricks.
     int prefetchBricks = 0;
+    int prefetchReaders = BrickPrefetcher::kDefaultReaders;  // threads reading them
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include "core/scalar_type.h"
@@ -24,6 +25,15 @@ struct VolumeInfo {
     int64_t sliceSamples() const { return dims[0] * dims[1]; }
     int64_t sampleCount() const { return dims[0] * dims[1] * dims[2]; }
     uint64_t byteSize() const { return uint64_t(sampleCount()) * scalarSize(type); }
+    // The affine map from sample coordinates (i, j, k) to world coordinates.
+    glm::dmat4 gridToWorld() const {
+        glm::dmat4 m(1.0);
+        for (int k = 0; k < 3; ++k) {
+            m[k][k] = spacing[k];
+            m[3][k] = origin[k];
+        }
+        return m;
+    }
     // World position of the last sample: the volume's bounds are [origin, worldMax()].
     glm::dvec3 worldMax() const {
         return origin + glm::dvec3(dims[0] - 1, dims[1] - 1, dims[2] - 1) * spacing;
