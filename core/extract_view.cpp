@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <exception>
+#include <thread>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -68,14 +70,24 @@ struct Traversal {
     };
     std::deque<AheadBrick> aheadBricks;  // found ahead, in the traversal's order
 
+    std::vector<int64_t> acquired;  // bricks, in the order extracted
+
+    // Extracts what shows in pixel columns [column0, column1) of the image: the pyramid
+    // starts with every other column covered, so the tests cull whatever shows only there.
     Traversal(BrickSource& s, const Camera& c, const ViewExtractOptions& o, TriangleMesh& m,
-              PointSet& p, ViewExtractStats& st)
+              PointSet& p, ViewExtractStats& st, int column0, int column1)
         : source(s), camera(c), options(o), mesh(m), points(p), stats(st), volume(s.volume()),
           layout(s.layout()), projector(c),
           cellProjector(c.viewProjection() * s.volume().gridToWorld(), c.width, c.height),
           pixels(c), pyramid(c.width, c.height),
           extractor(s.volume(), s.layout(), o.metaCellSize), tree(s.layout(), s.brickRanges()),
-          prefetcher(s, size_t(std::max(o.prefetchBricks, 0)), o.prefetchReaders) {}
+          prefetcher(s, size_t(std::max(o.prefetchBricks, 0)), o.prefetchReaders) {
+        for (int y = 0; y < c.height; ++y) {
+            if (column0 > 0) pyramid.coverSpan(y, 0, column0 - 1);
+            if (column1 < c.width) pyramid.coverSpan(y, column1, c.width - 1);
+        }
+        pyramid.propagate();
+    }
 
     // World box of the cells [lo, hi) (cell coordinates; clamped to the volume's cells).
     void worldBox(const int64_t lo[3], const int64_t hi[3], glm::dvec3& a, glm::dvec3& b) const {
@@ -493,6 +505,7 @@ struct Traversal {
             const BrickHandle handle = source.acquire(brick);  // only now: it passed 1-3
             stats.brickWaitSeconds += std::chrono::duration<double>(Clock::now() - start).count();
             ++stats.bricksAcquired;
+            acquired.push_back(brick);
             extractor.beginBrick(brick, handle.samples());
             const int n = extractor.metaCellsPerAxis();
             const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
@@ -504,6 +517,37 @@ struct Traversal {
     }
 };
 
+
+// Column bounds of `strips` strips of the image with about as many active bricks (range
+// holding iso) projecting into each: a stand-in for equal work.
+std::vector<int> stripColumns(BrickSource& source, const Camera& camera, double iso, int strips) {
+    const BrickLayout& layout = source.layout();
+    const VolumeInfo& volume = source.volume();
+    const PixelProjector pixels(camera);
+    std::vector<double> centres;
+    const std::span<const BrickRange> ranges = source.brickRanges();
+    for (int64_t id = 0; id < layout.brickCount(); ++id) {
+        if (!rangeHoldsIso(ranges[size_t(id)].minValue, ranges[size_t(id)].maxValue, iso)) continue;
+        const Dims3 c = layout.brickCoord(id);
+        glm::dvec3 centre;
+        for (int k = 0; k < 3; ++k)
+            centre[k] = volume.origin[k] +
+                        (double(c[k] * layout.brickSize) + 0.5 * layout.cellsOnAxis(k, c[k])) *
+                            volume.spacing[k];
+        const glm::dvec3 s = pixels.project(centre);
+        if (s.z >= 0.0 && s.z <= 1.0 && s.x >= 0.0 && s.x < camera.width) centres.push_back(s.x);
+    }
+    std::sort(centres.begin(), centres.end());
+    std::vector<int> columns{0};
+    for (int k = 1; k < strips; ++k) {
+        const int even = camera.width * k / strips;
+        const int cut = centres.empty() ? even : int(centres[centres.size() * size_t(k) / size_t(strips)]);
+        columns.push_back(std::clamp(cut, columns.back() + 1, camera.width - (strips - k)));
+    }
+    columns.push_back(camera.width);
+    return columns;
+}
+
 }  // namespace
 
 ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
@@ -512,19 +556,76 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     const auto start = Clock::now();
     ViewExtractStats stats;
     const uint64_t trianglesBefore = mesh.triangleCount();
+    const int strips = std::clamp(options.threads, 1, camera.width);
     // What is visible scales with the image, not the volume: room for a couple of triangles
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).
     const size_t pixels = size_t(camera.width) * size_t(camera.height);
-    mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
-    mesh.positions.reserve(mesh.positions.size() + pixels);
-    mesh.normals.reserve(mesh.positions.capacity());
-    const uint32_t firstNewVertex = mesh.nextVertex();
-    Traversal t(source, camera, options, mesh, points, stats);
-    t.run();
-    // Vertices made for polygons that were then hidden belong to no triangle.
-    if (options.cellTests) dropUnreferencedVertices(mesh, firstNewVertex);
+    if (strips == 1) {
+        mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
+        mesh.positions.reserve(mesh.positions.size() + pixels);
+        mesh.normals.reserve(mesh.positions.capacity());
+        const uint32_t firstNewVertex = mesh.nextVertex();
+        Traversal t(source, camera, options, mesh, points, stats, 0, camera.width);
+        t.run();
+        // Vertices made for polygons that were then hidden belong to no triangle.
+        if (options.cellTests) dropUnreferencedVertices(mesh, firstNewVertex);
+        stats.scanSeconds = t.scanSeconds;
+    } else {
+        // Strips of the image in parallel, each its own traversal, pyramid and mesh; bricks
+        // come through the one shared source, read once. A cell whose polygons cover new
+        // pixel centres on both sides of a strip border is kept by both strips.
+        const std::vector<int> columns = stripColumns(source, camera, options.iso, strips);
+        struct Strip {
+            TriangleMesh triangles;
+            PointSet dots;
+            ViewExtractStats counts;
+            std::vector<int64_t> acquired;
+            double scanSeconds = 0;
+            std::exception_ptr error;
+        };
+        std::vector<Strip> parts(static_cast<size_t>(strips));
+        ViewExtractOptions each = options;
+        each.prefetchBricks = options.prefetchBricks / strips;
+        std::vector<std::thread> threads;
+        for (int k = 0; k < strips; ++k)
+            threads.emplace_back([&, k] {
+                Strip& part = parts[size_t(k)];
+                try {
+                    const size_t share = pixels / size_t(strips);
+                    part.triangles.indices.reserve(6 * share);
+                    part.triangles.positions.reserve(share);
+                    part.triangles.normals.reserve(share);
+                    Traversal t(source, camera, each, part.triangles, part.dots, part.counts,
+                                columns[size_t(k)], columns[size_t(k) + 1]);
+                    t.run();
+                    if (options.cellTests) dropUnreferencedVertices(part.triangles, 0);
+                    part.acquired = std::move(t.acquired);
+                    part.scanSeconds = t.scanSeconds;
+                } catch (...) {
+                    part.error = std::current_exception();
+                }
+            });
+        for (std::thread& t : threads) t.join();
+        for (const Strip& part : parts)
+            if (part.error) std::rethrow_exception(part.error);
+        std::vector<int64_t> acquired;
+        for (Strip& part : parts) {
+            const uint32_t offset = mesh.nextVertex();
+            const TriangleMesh& m = part.triangles;
+            mesh.positions.insert(mesh.positions.end(), m.positions.begin(), m.positions.end());
+            mesh.normals.insert(mesh.normals.end(), m.normals.begin(), m.normals.end());
+            for (uint32_t v : m.indices) mesh.indices.push_back(v + offset);
+            const PointSet& d = part.dots;
+            points.positions.insert(points.positions.end(), d.positions.begin(), d.positions.end());
+            points.normals.insert(points.normals.end(), d.normals.begin(), d.normals.end());
+            part.counts.scanSeconds = part.scanSeconds;
+            stats += part.counts;
+            acquired.insert(acquired.end(), part.acquired.begin(), part.acquired.end());
+        }
+        std::sort(acquired.begin(), acquired.end());
+        stats.bricksAcquired = int64_t(std::unique(acquired.begin(), acquired.end()) - acquired.begin());
+    }
     stats.triangles = mesh.triangleCount() - trianglesBefore;
-    stats.scanSeconds = t.scanSeconds;
     stats.extractSeconds = std::chrono::duration<double>(Clock::now() - start).count();
     if (progress) progress(1.0);
     return stats;

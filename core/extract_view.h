@@ -52,6 +52,12 @@ struct ViewExtractOptions {
     // more than this many bricks.
     int prefetchBricks = 0;
     int prefetchReaders = BrickPrefetcher::kDefaultReaders;  // threads reading them
+    // Vertical strips of the image extracted in parallel, one thread each, with about as many
+    // active bricks projecting into each. A strip's traversal treats the rest of the image as
+    // covered, so it extracts what shows in its strip; a cell showing on both sides of a strip
+    // border is kept by both (its triangles appear twice, a fraction of a percent). Bricks are
+    // read once, through the shared source; each strip prefetches prefetchBricks / threads.
+    int threads = 1;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {
@@ -81,11 +87,32 @@ struct ViewExtractStats {
     double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan
                                 // conversion into the pyramid (interleaved per polygon)
     double extractSeconds = 0;  // everything, brick reads included
+
+    // Sums the counters and seconds (not triangles, bricksAcquired, extractSeconds: the
+    // caller knows those of the whole).
+    ViewExtractStats& operator+=(const ViewExtractStats& o) {
+        points += o.points;
+        nodesVisited += o.nodesVisited;
+        culledByRange += o.culledByRange;
+        culledByFrustum += o.culledByFrustum;
+        culledByOcclusion += o.culledByOcclusion;
+        droppedSubPixel += o.droppedSubPixel;
+        metaCellsExtracted += o.metaCellsExtracted;
+        cellsActive += o.cellsActive;
+        cellsCulled += o.cellsCulled;
+        polygonsHidden += o.polygonsHidden;
+        bricksCulledBySubBlocks += o.bricksCulledBySubBlocks;
+        bricksPrefetchedUnused += o.bricksPrefetchedUnused;
+        brickWaitSeconds += o.brickWaitSeconds;
+        scanSeconds += o.scanSeconds;
+        return *this;
+    }
 };
 
 // Appends the surface visible from `camera` to `mesh` and sub-pixel points to `points`.
 // Culling is conservative: rendered from the same camera, the result looks like the full
-// surface. Single-threaded.
+// surface. options.threads strips run in parallel; the source must then be thread-safe (a
+// BrickCache is).
 ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                                       const ViewExtractOptions& options, TriangleMesh& mesh,
                                       PointSet& points, const ProgressFn& progress = {});

@@ -377,6 +377,39 @@ TEST(ExtractPrefetch, ViewDependentLookAheadReadsOnlyBricksThatPassedTheTests) {
     }
 }
 
+// Image strips on threads share one cache: each brick is read once, and the strips together
+// need no brick the whole traversal did not (a strip's coverage within its columns grows as
+// the whole's does).
+TEST(ExtractView, StripsOnThreadsReadEachBrickOnce) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {96, 96, 96}));
+    const VolumeInfo& v = store.volume();
+    for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup}) {
+        const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
+        ViewExtractStats whole, strips;
+        TriangleMesh wholeMesh, stripsMesh;
+        PointSet points;
+        {
+            BrickCache cache(store, 256 * store.brickBytes());
+            whole = extractViewDependent(cache, camera, ViewExtractOptions::sage(kHeadSkinIso),
+                                         wholeMesh, points);
+        }
+        BrickCache cache(store, 256 * store.brickBytes());
+        ViewExtractOptions options = ViewExtractOptions::sage(kHeadSkinIso);
+        options.threads = 2;
+        options.prefetchBricks = 32;
+        strips = extractViewDependent(cache, camera, options, stripsMesh, points);
+        const char* label = viewPresetName(preset);
+        EXPECT_LE(strips.bricksAcquired, whole.bricksAcquired) << label;
+        EXPECT_GE(double(strips.bricksAcquired), 0.9 * double(whole.bricksAcquired)) << label;
+        const double expected = double(strips.bricksAcquired + strips.bricksPrefetchedUnused);
+        EXPECT_GE(double(cache.counters().misses), double(strips.bricksAcquired)) << label;
+        EXPECT_LE(double(cache.counters().misses), 1.05 * expected) << label;
+        // Cells kept by both strips at their border: a small share.
+        EXPECT_LE(double(stripsMesh.triangleCount()), 1.05 * double(wholeMesh.triangleCount())) << label;
+    }
+}
+
 // Normals are made only for the vertices of kept cells, some of them in a later brick than
 // the vertex (welded across a brick face): each must be the full extraction's normal there.
 TEST(ExtractView, VertexNormalsAreTheFullExtractionsNormals) {

@@ -57,11 +57,14 @@ FidelityResult compareWithFull(BrickSource& source, double iso, ViewPreset prese
 void expectFaithful(BrickSource& source, double iso, const char* what,
                     bool distantHasPoints = false) {
     for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup})
-        for (bool sage : {true, false}) {
-            const ViewExtractOptions o = sage ? ViewExtractOptions::sage(iso) : ViewExtractOptions::wise(iso);
+        for (int run = 0; run < 3; ++run) {
+            // SAGE, SAGE in 3 image strips on 3 threads, WISE.
+            const bool sage = run < 2;
+            ViewExtractOptions o = sage ? ViewExtractOptions::sage(iso) : ViewExtractOptions::wise(iso);
+            o.threads = run == 1 ? 3 : 1;
             const FidelityResult r = compareWithFull(source, iso, preset, o);
             const std::string label = std::string(what) + " " + viewPresetName(preset) +
-                                      (sage ? " sage" : " wise");
+                                      (run == 0 ? " sage" : run == 1 ? " sage 3 strips" : " wise");
             EXPECT_GE(r.image.agreement(), 0.995)
                 << label << ": " << r.image.missing << " missing, " << r.image.differentColour
                 << " of another colour, of " << r.image.referenceCovered;

@@ -62,7 +62,8 @@ constexpr const char* kHelp =
     "  --size WxH                image size (default 800x800)\n"
     "  --stats STATS.json        write one JSON object of statistics ('-' for stdout)\n"
     "  --metacell M              meta-cell size in cells, 1 to 32 (default 4)\n"
-    "  --threads N               extraction threads (default 1)\n"
+    "  --threads N               extraction threads (default 1); sage and wise split the image\n"
+    "                            into N vertical strips, one traversal each\n"
     "  --prefetch N              bricks a reader thread loads ahead of the extraction\n"
     "                            (default 32; 0: none): for sage/wise those a look-ahead finds\n"
     "                            visible; for octree/noise the active bricks, with --threads 1\n"
@@ -305,6 +306,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.cellTests) v.cellTests = *o.cellTests;
         v.prefetchBricks = extract.prefetchBricks;
         v.prefetchReaders = extract.prefetchReaders;
+        v.threads = o.threads;
         view = extractViewDependent(cache, *camera, v, mesh, points, progress);
         stats.triangles = view->triangles;
         stats.vertices = mesh.vertexCount();
