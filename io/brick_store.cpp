@@ -8,6 +8,7 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+#include <lz4.h>
 #include <zstd.h>
 
 #include "io/byte_shuffle.h"
@@ -17,7 +18,7 @@
 namespace vdiso {
 
 const char* compressionName(Compression c) {
-    return c == Compression::Zstd ? "zstd" : "none";
+    return c == Compression::Zstd ? "zstd" : c == Compression::Lz4 ? "lz4" : "none";
 }
 
 const char* brickFilterName(BrickFilter f) {
@@ -189,9 +190,17 @@ void BrickStoreReader::decodeBrick(int64_t id, const std::vector<unsigned char>&
     const bool shuffled = mHeader.filter == BrickFilter::ByteShuffle && sampleBytes > 1;
     thread_local std::vector<unsigned char> planes;
     if (shuffled) planes.resize(raw);
-    const size_t got = ZSTD_decompress(shuffled ? planes.data() : dst, raw, stored.data(), stored.size());
-    if (ZSTD_isError(got)) failBrick(id, std::string("cannot decompress: ") + ZSTD_getErrorName(got));
-    if (got != raw) failBrick(id, "decompressed to the wrong size");
+    unsigned char* out = shuffled ? planes.data() : static_cast<unsigned char*>(dst);
+    if (mHeader.compression == Compression::Lz4) {
+        const int got = LZ4_decompress_safe(reinterpret_cast<const char*>(stored.data()),
+                                            reinterpret_cast<char*>(out), int(stored.size()), int(raw));
+        if (got < 0) failBrick(id, "cannot decompress: malformed LZ4 data");
+        if (size_t(got) != raw) failBrick(id, "decompressed to the wrong size");
+    } else {
+        const size_t got = ZSTD_decompress(out, raw, stored.data(), stored.size());
+        if (ZSTD_isError(got)) failBrick(id, std::string("cannot decompress: ") + ZSTD_getErrorName(got));
+        if (got != raw) failBrick(id, "decompressed to the wrong size");
+    }
     if (shuffled)
         unshuffleBytes(planes.data(), raw / sampleBytes, sampleBytes, static_cast<unsigned char*>(dst));
 }

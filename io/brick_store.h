@@ -28,7 +28,10 @@ constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;
 
-enum class Compression : uint8_t { None = 0, Zstd = 1 };
+// How each brick is compressed (on its own). zstd stores about a fifth smaller; LZ4 decodes
+// about five times faster (head volume, byte-shuffled: 1.99x at 1.2 GB/s against 1.61x at
+// 5.6 GB/s), which matters when one core decodes for a view that another extracts.
+enum class Compression : uint8_t { None = 0, Zstd = 1, Lz4 = 2 };
 const char* compressionName(Compression c);
 
 enum class ChecksumAlgorithm : uint8_t { Crc32 = 1 };  // zlib's CRC-32 of the stored bytes

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include <zlib.h>
+#include <lz4.h>
 #include <zstd.h>
 
 #include "core/sub_blocks.h"
@@ -128,7 +129,7 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
                   checksum = r.get<uint8_t>(), filter = r.get<uint8_t>();
     if (!isValidScalarCode(type))
         throwIoError(path, "unknown scalar type code " + std::to_string(type));
-    if (compression > uint8_t(Compression::Zstd))
+    if (compression > uint8_t(Compression::Lz4))
         throwIoError(path, "unknown compression code " + std::to_string(compression));
     if (checksum != uint8_t(ChecksumAlgorithm::Crc32))
         throwIoError(path, "unknown checksum algorithm code " + std::to_string(checksum));
@@ -217,7 +218,8 @@ void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header
     if (r.get<uint64_t>() != count) throwIoError(path, "index brick count does not match header");
 
     const uint64_t rawBytes = uint64_t(layout.samplesPerBrick()) * scalarSize(header.volume.type);
-    const uint64_t maxStored = std::max<uint64_t>(rawBytes, ZSTD_compressBound(rawBytes));
+    const uint64_t maxStored = std::max<uint64_t>(
+        {rawBytes, ZSTD_compressBound(rawBytes), uint64_t(LZ4_compressBound(int(rawBytes)))});
     entries.resize(count);
     for (uint64_t id = 0; id < count; ++id) {
         BrickEntry& e = entries[id];

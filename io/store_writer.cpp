@@ -13,6 +13,7 @@
 #include <tbb/blocked_range2d.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <lz4.h>
 #include <zstd.h>
 
 #include "core/sub_blocks.h"
@@ -148,7 +149,7 @@ struct StoredBrick {
 };
 
 BrickFilter filterFor(ScalarType type, const StoreWriteOptions& options) {
-    return options.compression == Compression::Zstd && options.shuffle && scalarSize(type) > 1
+    return options.compression != Compression::None && options.shuffle && scalarSize(type) > 1
                ? BrickFilter::ByteShuffle
                : BrickFilter::None;
 }
@@ -169,18 +170,27 @@ void encodeBrick(const SliceRing& window, const BrickLayout& layout, ScalarType 
     measureSubBlocks(type, scratch.raw.data(), layout, coord,
                      {out.entry.minValue, out.entry.maxValue}, out.subBlocks);
     out.entry.compressed = false;
-    if (options.compression == Compression::Zstd) {
-        if (!scratch.cctx) scratch.cctx = ZSTD_createCCtx();
+    if (options.compression != Compression::None) {
         const unsigned char* input = scratch.raw.data();
         if (filterFor(type, options) == BrickFilter::ByteShuffle) {
             scratch.shuffled.resize(rawBytes);
             shuffleBytes(input, rawBytes / scalarSize(type), scalarSize(type), scratch.shuffled.data());
             input = scratch.shuffled.data();
         }
-        out.bytes.resize(ZSTD_compressBound(rawBytes));
-        const size_t n = ZSTD_compressCCtx(scratch.cctx, out.bytes.data(), out.bytes.size(),
-                                           input, rawBytes, options.compressionLevel);
-        if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
+        size_t n = 0;
+        if (options.compression == Compression::Lz4) {
+            out.bytes.resize(size_t(LZ4_compressBound(int(rawBytes))));
+            n = size_t(LZ4_compress_default(reinterpret_cast<const char*>(input),
+                                            reinterpret_cast<char*>(out.bytes.data()),
+                                            int(rawBytes), int(out.bytes.size())));
+            if (n == 0) throw std::runtime_error("lz4: cannot compress a brick");
+        } else {
+            if (!scratch.cctx) scratch.cctx = ZSTD_createCCtx();
+            out.bytes.resize(ZSTD_compressBound(rawBytes));
+            n = ZSTD_compressCCtx(scratch.cctx, out.bytes.data(), out.bytes.size(), input, rawBytes,
+                                  options.compressionLevel);
+            if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
+        }
         // Incompressible bricks (noise) are stored raw: reading them is then a plain copy.
         if (n < rawBytes) {
             out.bytes.resize(n);

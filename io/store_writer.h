@@ -20,9 +20,9 @@ namespace vdiso {
 
 struct StoreWriteOptions {
     int brickSize = 32;                       // B, cells per brick side (2..512)
-    Compression compression = Compression::Zstd;
+    Compression compression = Compression::Lz4;  // the faster first frame (io/brick_store.h)
     int compressionLevel = 1;                 // zstd level; 1 keeps conversion near disk speed
-    bool shuffle = true;                      // byte-shuffle multi-byte samples before zstd
+    bool shuffle = true;                      // byte-shuffle multi-byte samples before compressing
     bool overwrite = false;                   // replace an existing output file
 };
 

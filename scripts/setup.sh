@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  libglm-dev libtbb-dev zlib1g-dev libzstd-dev libpng-dev
+  libglm-dev libtbb-dev zlib1g-dev libzstd-dev liblz4-dev libpng-dev
   libopenvdb-dev libboost-iostreams-dev   # OpenVDB's Find module needs boost-iostreams and TBB
   libosmesa6-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev

@@ -71,7 +71,8 @@ glm::dvec3 parseSpacing(const std::string& flag, const std::string& text) {
 
 const char* const kStoreWriteOptionsHelp =
     "  --brick B               cells per brick side (default 32)\n"
-    "  --compress zstd|none    brick compression (default zstd)\n"
+    "  --compress C            brick compression: lz4 (default), zstd or none; zstd stores\n"
+    "                          about a quarter fewer bytes, lz4 decodes about 5x faster\n"
     "  --level N               zstd level (default 1)\n"
     "  --no-shuffle            compress multi-byte samples without the byte-shuffle filter\n"
     "  --force                 replace OUTPUT if it exists\n";
@@ -83,10 +84,12 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
         const std::string c = args.value(flag);
         if (c == "zstd")
             options.compression = Compression::Zstd;
+        else if (c == "lz4")
+            options.compression = Compression::Lz4;
         else if (c == "none")
             options.compression = Compression::None;
         else
-            throw UsageError("--compress expects zstd or none, not '" + c + "'");
+            throw UsageError("--compress expects zstd, lz4 or none, not '" + c + "'");
     } else if (flag == "--level") {
         options.compressionLevel = int(parseInt(flag, args.value(flag), -7, 19));
     } else if (flag == "--no-shuffle") {
