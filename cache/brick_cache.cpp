@@ -96,11 +96,12 @@ BrickHandle BrickCache::acquire(int64_t id) {
     mSlotOfBrick[id] = slot;
     lock.unlock();
 
-    thread_local std::vector<unsigned char> stored;
     double readSeconds = 0, decodeSeconds = 0;
+    size_t storedBytes = 0;
     try {
         auto start = std::chrono::steady_clock::now();
-        mStore.readStoredBrick(id, stored);
+        const std::span<const unsigned char> stored = mStore.readStoredBrick(id);
+        storedBytes = stored.size();
         readSeconds = secondsSince(start);
         start = std::chrono::steady_clock::now();
         mStore.decodeBrick(id, stored, s.samples);
@@ -122,7 +123,7 @@ BrickHandle BrickCache::acquire(int64_t id) {
     s.loading = false;
     mCounters.readSeconds += readSeconds;
     mCounters.decodeSeconds += decodeSeconds;
-    mCounters.bytesRead += stored.size();
+    mCounters.bytesRead += storedBytes;
     mLoaded.notify_all();
     return BrickHandle(this, id, s.samples);
 }

@@ -120,7 +120,7 @@ const char* BrickStoreReader::readMethod() const {
 
 namespace {
 
-// A 4 KiB-aligned buffer per thread for O_DIRECT reads.
+// A buffer per thread for stored bricks, 4 KiB-aligned so that O_DIRECT reads land in it.
 struct AlignedBuffer {
     unsigned char* data = nullptr;
     size_t size = 0;
@@ -146,15 +146,14 @@ void BrickStoreReader::failBrick(int64_t id, const std::string& what) const {
                             ": " + what);
 }
 
-void BrickStoreReader::readStoredBrick(int64_t id, std::vector<unsigned char>& stored) const {
+std::span<const unsigned char> BrickStoreReader::readStoredBrick(int64_t id) const {
     if (id < 0 || id >= mLayout.brickCount())
         throwIoError(mPath, "no brick " + std::to_string(id) + " (the store has " +
                                 std::to_string(mLayout.brickCount()) + ")");
     const BrickEntry& e = mIndex[size_t(id)];
-    stored.resize(e.storedBytes);
+    thread_local AlignedBuffer buffer;
     if (mDirectFd >= 0) {
         // Whole aligned blocks; the padding after a brick (or the index) fills the last one.
-        thread_local AlignedBuffer buffer;
         const size_t blocks = (size_t(e.storedBytes) + kStoreAlignment - 1) / kStoreAlignment;
         const size_t length = std::min<uint64_t>(blocks * kStoreAlignment, mFileBytes - e.offset);
         const size_t aligned = (length + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;
@@ -167,17 +166,18 @@ void BrickStoreReader::readStoredBrick(int64_t id, std::vector<unsigned char>& s
             if (r == 0) failBrick(id, "the file ends inside the brick: it is truncated");
             done += size_t(r);
         }
-        std::memcpy(stored.data(), block, e.storedBytes);
     } else {
-        preadExact(mFd, stored.data(), stored.size(), e.offset, mPath, "brick data");
+        preadExact(mFd, buffer.reserve(e.storedBytes), e.storedBytes, e.offset, mPath, "brick data");
         if (mMode == ReadMode::Cold)
             ::posix_fadvise(mFd, off_t(e.offset), off_t(e.storedBytes), POSIX_FADV_DONTNEED);
     }
-    if (store_format::crc32Of(stored.data(), stored.size()) != e.checksum)
+    const std::span<const unsigned char> bytes(buffer.data, e.storedBytes);
+    if (store_format::crc32Of(bytes.data(), bytes.size()) != e.checksum)
         failBrick(id, "checksum mismatch (the brick is corrupt)");
+    return bytes;
 }
 
-void BrickStoreReader::decodeBrick(int64_t id, const std::vector<unsigned char>& stored,
+void BrickStoreReader::decodeBrick(int64_t id, std::span<const unsigned char> stored,
                                    void* dst) const {
     const BrickEntry& e = mIndex[size_t(id)];
     const size_t raw = brickBytes();
@@ -206,9 +206,7 @@ void BrickStoreReader::decodeBrick(int64_t id, const std::vector<unsigned char>&
 }
 
 void BrickStoreReader::readBrick(int64_t id, void* dst) const {
-    thread_local std::vector<unsigned char> stored;
-    readStoredBrick(id, stored);
-    decodeBrick(id, stored, dst);
+    decodeBrick(id, readStoredBrick(id), dst);
 }
 
 }  // namespace vdiso

@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -110,9 +111,11 @@ public:
     void readBrick(int64_t id, void* dst) const;
 
     // The two halves of readBrick, for a cache that times them apart: the stored bytes
-    // (checksum verified) into `stored`, then decoding them into dst.
-    void readStoredBrick(int64_t id, std::vector<unsigned char>& stored) const;
-    void decodeBrick(int64_t id, const std::vector<unsigned char>& stored, void* dst) const;
+    // (checksum verified), then decoding them into dst. The stored bytes live in a buffer of
+    // the calling thread, valid until its next readStoredBrick: with O_DIRECT the read lands
+    // in it, aligned, and is decoded from there without a copy.
+    std::span<const unsigned char> readStoredBrick(int64_t id) const;
+    void decodeBrick(int64_t id, std::span<const unsigned char> stored, void* dst) const;
 
 private:
     [[noreturn]] void failBrick(int64_t id, const std::string& what) const;
