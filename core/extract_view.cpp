@@ -111,11 +111,10 @@ struct Traversal {
     // Tests 2-3 of the header for the box [a, b]: the first that culls it, or None (a box
     // crossing the near plane is never culled).
     Cull cullBox(const glm::dvec3& a, const glm::dvec3& b, ScreenBox& box) const {
-        return cullBox(projector, a, b, box);
+        box = options.estimateBox ? projector.estimateBox(a, b) : projector.exactBox(a, b);
+        return cullScreenBox(box);
     }
-    Cull cullBox(const BoxProjector& by, const glm::dvec3& a, const glm::dvec3& b,
-                 ScreenBox& box) const {
-        box = options.estimateBox ? by.estimateBox(a, b) : by.exactBox(a, b);
+    Cull cullScreenBox(const ScreenBox& box) const {
         if (box.crossesNearPlane) return Cull::None;  // refined, never culled
         if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
             box.top > camera.height - 0.5)
@@ -278,8 +277,9 @@ struct Traversal {
     static bool keepCell(void* context, int64_t x, int64_t y, int64_t z) {
         auto& t = *static_cast<Traversal*>(context);
         const glm::dvec3 a{double(x), double(y), double(z)};
-        ScreenBox box;
-        const bool keep = t.cullBox(t.cellProjector, a, a + 1.0, box) == Cull::None;
+        const ScreenBox box = t.options.estimateBox ? t.cellProjector.estimateUnitBox(a)
+                                                    : t.cellProjector.exactBox(a, a + 1.0);
+        const bool keep = t.cullScreenBox(box) == Cull::None;
         t.stats.cellsCulled += !keep;
         return keep;
     }

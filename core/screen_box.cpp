@@ -40,6 +40,10 @@ BoxProjector::BoxProjector(const glm::dmat4& viewProjection, int width, int heig
       mAbsY(glm::abs(glm::dvec3(mRowY))),
       mAbsW(glm::abs(glm::dvec3(mRowW))),
       mAbsNear(glm::abs(glm::dvec3(mRowNear))),
+      mUnitX(glm::dot(mAbsX, glm::dvec3(0.5))),
+      mUnitY(glm::dot(mAbsY, glm::dvec3(0.5))),
+      mUnitW(glm::dot(mAbsW, glm::dvec3(0.5))),
+      mUnitNear(glm::dot(mAbsNear, glm::dvec3(0.5))),
       mWidth(width),
       mHeight(height) {}
 
@@ -67,15 +71,22 @@ ScreenBox BoxProjector::exactBox(const glm::dvec3& lo, const glm::dvec3& hi) con
 }
 
 ScreenBox BoxProjector::estimateBox(const glm::dvec3& lo, const glm::dvec3& hi) const {
-    const glm::dvec3 p = 0.5 * (lo + hi);
     const glm::dvec3 d = 0.5 * (hi - lo);
-    const double pmw = apply(mRowW, p), dmw = glm::dot(mAbsW, d);
+    return estimate(0.5 * (lo + hi), glm::dot(mAbsX, d), glm::dot(mAbsY, d), glm::dot(mAbsW, d),
+                    glm::dot(mAbsNear, d));
+}
+
+ScreenBox BoxProjector::estimateUnitBox(const glm::dvec3& lo) const {
+    return estimate(lo + 0.5, mUnitX, mUnitY, mUnitW, mUnitNear);
+}
+
+ScreenBox BoxProjector::estimate(const glm::dvec3& p, double dmx, double dmy, double dmw,
+                                 double dmNear) const {
+    const double pmw = apply(mRowW, p);
     // The smallest w and z + w over the corners, exactly: each is linear in the corner.
-    if (!(pmw - dmw > 0.0) || !(apply(mRowNear, p) - glm::dot(mAbsNear, d) > 0.0))
-        return nearPlaneBox();
+    if (!(pmw - dmw > 0.0) || !(apply(mRowNear, p) - dmNear > 0.0)) return nearPlaneBox();
     const double fNear = 1.0 / (pmw - dmw), fFar = 1.0 / (pmw + dmw);
-    const double pmx = apply(mRowX, p), dmx = glm::dot(mAbsX, d);
-    const double pmy = apply(mRowY, p), dmy = glm::dot(mAbsY, d);
+    const double pmx = apply(mRowX, p), pmy = apply(mRowY, p);
     return fromNdc(compute(pmx - dmx, fFar, fNear), compute(pmx + dmx, fNear, fFar),
                    compute(pmy - dmy, fFar, fNear), compute(pmy + dmy, fNear, fFar));
 }

@@ -49,6 +49,9 @@ public:
     // nearest corner's w, so the near-plane test is exact. Two matrix-vector products, two
     // divisions.
     ScreenBox estimateBox(const glm::dvec3& lo, const glm::dvec3& hi) const;
+    // estimateBox(lo, lo + 1): a unit cube (a grid cell, with the grid's map in the matrix),
+    // its half-extent terms computed once.
+    ScreenBox estimateUnitBox(const glm::dvec3& lo) const;
 
     int width() const { return mWidth; }
     int height() const { return mHeight; }
@@ -60,6 +63,9 @@ private:
     // plane) and their elementwise absolute values for the half extents.
     glm::dvec4 mRowX, mRowY, mRowW, mRowNear;
     glm::dvec3 mAbsX, mAbsY, mAbsW, mAbsNear;
+    double mUnitX, mUnitY, mUnitW, mUnitNear;  // |row| . (0.5, 0.5, 0.5)
+    ScreenBox estimate(const glm::dvec3& centre, double dmx, double dmy, double dmw,
+                       double dmNear) const;
     int mWidth, mHeight;
 };
 

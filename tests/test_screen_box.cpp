@@ -12,6 +12,7 @@
 
 #include "core/camera.h"
 #include "core/screen_box.h"
+#include "core/volume.h"
 
 namespace vdiso {
 namespace {
@@ -109,6 +110,37 @@ TEST(ScreenBox, EstimateContainsExactAndExactMatchesCameraProject) {
         }
     }
     EXPECT_EQ(boxes, 6000);
+}
+
+// A cell's box from cell coordinates (the grid's map folded into the matrix, as the per-cell
+// test does) is the box of the cell's world box.
+TEST(ScreenBox, UnitBoxInGridCoordinatesIsTheCellsWorldBox) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int cam = 0; cam < 100; ++cam) {
+        const Camera c = randomCamera(rng);
+        VolumeInfo grid;
+        grid.spacing = glm::dvec3(0.002 + 0.02 * unit(rng), 0.002 + 0.02 * unit(rng), 0.002 + 0.02 * unit(rng));
+        grid.origin = glm::dvec3(unit(rng), unit(rng), unit(rng)) - 0.5;
+        const BoxProjector world(c), cells(c.viewProjection() * grid.gridToWorld(), c.width, c.height);
+        for (int b = 0; b < 30; ++b) {
+            const glm::dvec3 cell = glm::floor(glm::dvec3(unit(rng), unit(rng), unit(rng)) * 60.0);
+            const glm::dvec3 lo = grid.origin + cell * grid.spacing, hi = lo + grid.spacing;
+            const ScreenBox a = world.estimateBox(lo, hi), e = cells.estimateUnitBox(cell);
+            const ScreenBox x = world.exactBox(lo, hi), y = cells.exactBox(cell, cell + 1.0);
+            ASSERT_EQ(a.crossesNearPlane, e.crossesNearPlane);
+            ASSERT_EQ(x.crossesNearPlane, y.crossesNearPlane);
+            if (a.crossesNearPlane || x.crossesNearPlane) continue;
+            const double tol = 1e-9 * (1.0 + std::abs(a.left) + std::abs(a.top) + std::abs(a.right) +
+                                       std::abs(a.bottom));
+            EXPECT_NEAR(e.left, a.left, tol);
+            EXPECT_NEAR(e.right, a.right, tol);
+            EXPECT_NEAR(e.top, a.top, tol);
+            EXPECT_NEAR(e.bottom, a.bottom, tol);
+            EXPECT_NEAR(y.left, x.left, tol);
+            EXPECT_NEAR(y.bottom, x.bottom, tol);
+        }
+    }
 }
 
 TEST(ScreenBox, BoxesAtOrBehindTheNearPlaneCrossIt) {
