@@ -345,7 +345,8 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("read_method", store.readMethod());
     s.add("prefetch", extract.threads > 1 && !isViewDependent(o.method) ? 0 : extract.prefetchBricks);
     s.add("readers", extract.prefetchReaders);
-    // I/O the extraction did not wait for: read and decode time spent ahead of it.
+    // I/O the extraction did not wait for: read and decode time spent ahead of it (summed over
+    // the reader threads, as io_s and decode_s are).
     s.add("brick_wait_s", stats.brickWaitSeconds);
     s.add("io_hidden_s", std::max(0.0, io.readSeconds + io.decodeSeconds - stats.brickWaitSeconds));
     s.add("bricks_loaded", io.misses).add("bricks_requested", io.requests);
