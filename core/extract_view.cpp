@@ -608,6 +608,14 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
         for (std::thread& t : threads) t.join();
         for (const Strip& part : parts)
             if (part.error) std::rethrow_exception(part.error);
+        size_t vertices = 0, indices = 0;
+        for (const Strip& part : parts) {
+            vertices += part.triangles.positions.size();
+            indices += part.triangles.indices.size();
+        }
+        mesh.positions.reserve(mesh.positions.size() + vertices);
+        mesh.normals.reserve(mesh.normals.size() + vertices);
+        mesh.indices.reserve(mesh.indices.size() + indices);
         std::vector<int64_t> acquired;
         for (Strip& part : parts) {
             const uint32_t offset = mesh.nextVertex();
