@@ -123,6 +123,7 @@ struct BrickKernel {
                 TriangleMesh& out, EdgeVertexMap& seamMap)
         : x(extractor), s(static_cast<const T*>(samples)), side(extractor.mLayout.side()),
           iso(isovalue), threshold(isovalue), mesh(out), seams(seamMap) {
+        if (x.mBrickFirstVertex == BrickExtractor::kNoFirstVertex) x.mBrickFirstVertex = out.nextVertex();
         const Dims3 c = x.mLayout.brickCoord(id);
         for (int a = 0; a < 3; ++a) {
             cells[a] = x.mLayout.cellsOnAxis(a, c[a]);
@@ -161,8 +162,8 @@ struct BrickKernel {
         const int px = cx + o[0], py = cy + o[1], pz = cz + o[2], axis = mcEdgeAxis(e);
         const int n = x.mLayout.brickSize + 1;
         const size_t local = ((size_t(pz) * n + py) * n + px) * 3 + axis;
-        BrickExtractor::EdgeSlot& slot = x.mEdges[local];
-        if (slot.stamp == x.mStamp) return slot.vertex;
+        uint32_t& slot = x.mEdgeVertex[local];
+        if (slot > x.mBrickFirstVertex) return slot - 1;
 
         // Edges on the brick's faces are shared with a neighbour brick: weld through the map.
         const int p[3] = {px, py, pz};
@@ -175,10 +176,7 @@ struct BrickKernel {
             key = ((uint64_t(corner0[2] + pz) * uint64_t(d[1]) + uint64_t(corner0[1] + py)) *
                        uint64_t(d[0]) + uint64_t(corner0[0] + px)) * 3 + uint64_t(axis);
             const uint32_t v = seams.find(key);
-            if (v != UINT32_MAX) {
-                slot = {x.mStamp, v};
-                return v;
-            }
+            if (v != UINT32_MAX) return v;
         }
 
         const size_t i0 = sampleIndex(px, py, pz);
@@ -193,7 +191,7 @@ struct BrickKernel {
         const uint32_t v = mesh.nextVertex();
         mesh.positions.push_back(glm::vec3(position));
         mesh.normals.push_back(withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
-        slot = {x.mStamp, v};
+        slot = v + 1;
         if (onFace) seams.insert(key, v);
         return v;
     }
@@ -302,7 +300,7 @@ BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layo
     : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, kMaxMetaCellSize)) {
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);
-    mEdges.resize(corners * corners * corners * 3);
+    mEdgeVertex.resize(corners * corners * corners * 3);
 }
 
 void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out) {
@@ -316,17 +314,12 @@ void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector
     });
 }
 
-void BrickExtractor::nextStamp() {
-    if (++mStamp == 0) {  // wrapped: old stamps could collide, so clear once
-        std::fill(mEdges.begin(), mEdges.end(), EdgeSlot{});
-        mStamp = 1;
-    }
-}
+void BrickExtractor::forgetBrickVertices() { mBrickFirstVertex = kNoFirstVertex; }
 
 void BrickExtractor::beginBrick(int64_t id, const void* samples) {
     mCurrentBrick = id;
     mCurrentSamples = samples;
-    nextStamp();
+    forgetBrickVertices();
     metaCellRanges(id, samples, mRanges);
 }
 
@@ -430,7 +423,7 @@ void BrickExtractor::extractMetaCell(uint32_t metaCell, double iso, TriangleMesh
 
 void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
                                   EdgeVertexMap& seams) {
-    nextStamp();
+    forgetBrickVertices();
     metaCellRanges(id, samples, mRanges);
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
@@ -448,7 +441,7 @@ void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, T
 void BrickExtractor::extractMetaCells(int64_t id, const void* samples, double iso,
                                       std::span<const uint32_t> metaCells, TriangleMesh& mesh,
                                       EdgeVertexMap& seams) {
-    nextStamp();
+    forgetBrickVertices();
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         BrickKernel<T> k(*this, id, samples, iso, mesh, seams);

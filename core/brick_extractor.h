@@ -166,15 +166,15 @@ private:
     BrickLayout mLayout;
     int mMetaCellSize;
     int mMetaPerAxis;
-    // Vertex of each local edge of the current brick, valid where its stamp == mStamp:
-    // stamping avoids clearing (B+1)^3 * 3 entries per brick; stamp and vertex side by side
-    // cost one cache access per lookup.
-    struct EdgeSlot {
-        uint32_t stamp = 0, vertex = 0;
-    };
-    std::vector<EdgeSlot> mEdges;
-    uint32_t mStamp = 0;
-    void nextStamp();  // a new brick: forget the vertices of the last one
+    // Vertex + 1 of each local edge of the current brick, 0 for none. Vertex numbers only
+    // grow, so an entry is the current brick's exactly when it is above the brick's first
+    // vertex number: nothing is cleared between bricks, and an entry is 4 bytes (the array,
+    // (B+1)^3 * 3 entries, is the kernel's most-missed memory). Vertices welded from the seam
+    // map are older, so their edges are looked up in the map each time.
+    std::vector<uint32_t> mEdgeVertex;
+    static constexpr uint32_t kNoFirstVertex = UINT32_MAX;
+    uint32_t mBrickFirstVertex = kNoFirstVertex;  // set by the brick's first kernel
+    void forgetBrickVertices();  // a new brick: forget the vertices of the last one
     std::vector<BrickRange> mRanges;
     int64_t mCurrentBrick = -1;
     const void* mCurrentSamples = nullptr;
