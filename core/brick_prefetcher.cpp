@@ -6,8 +6,13 @@ namespace vdiso {
 
 BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead, int readers)
     : mSource(source), mLookahead(lookahead) {
-    if (mLookahead > 0)
+    if (mLookahead == 0) return;
+    try {
         for (int k = 0; k < std::max(readers, 1); ++k) mThreads.emplace_back([this] { run(); });
+    } catch (...) {
+        stop();  // the threads already started, joined: no destructor runs after a throw
+        throw;
+    }
 }
 
 BrickPrefetcher::~BrickPrefetcher() { stop(); }

@@ -586,25 +586,30 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
         std::vector<Strip> parts(static_cast<size_t>(strips));
         ViewExtractOptions each = options;
         each.prefetchBricks = options.prefetchBricks / strips;
+        auto runStrip = [&](int k) {
+            Strip& part = parts[size_t(k)];
+            try {
+                const size_t share = pixels / size_t(strips);
+                part.triangles.indices.reserve(6 * share);
+                part.triangles.positions.reserve(share);
+                part.triangles.normals.reserve(share);
+                Traversal t(source, camera, each, part.triangles, part.dots, part.counts,
+                            columns[size_t(k)], columns[size_t(k) + 1]);
+                t.run();
+                if (options.cellTests) dropUnreferencedVertices(part.triangles, 0);
+                part.acquired = std::move(t.acquired);
+                part.scanSeconds = t.scanSeconds;
+            } catch (...) {
+                part.error = std::current_exception();
+            }
+        };
         std::vector<std::thread> threads;
-        for (int k = 0; k < strips; ++k)
-            threads.emplace_back([&, k] {
-                Strip& part = parts[size_t(k)];
-                try {
-                    const size_t share = pixels / size_t(strips);
-                    part.triangles.indices.reserve(6 * share);
-                    part.triangles.positions.reserve(share);
-                    part.triangles.normals.reserve(share);
-                    Traversal t(source, camera, each, part.triangles, part.dots, part.counts,
-                                columns[size_t(k)], columns[size_t(k) + 1]);
-                    t.run();
-                    if (options.cellTests) dropUnreferencedVertices(part.triangles, 0);
-                    part.acquired = std::move(t.acquired);
-                    part.scanSeconds = t.scanSeconds;
-                } catch (...) {
-                    part.error = std::current_exception();
-                }
-            });
+        try {
+            for (int k = 0; k < strips; ++k) threads.emplace_back(runStrip, k);
+        } catch (...) {  // a thread could not start: let the others finish, then report it
+            for (std::thread& t : threads) t.join();
+            throw;
+        }
         for (std::thread& t : threads) t.join();
         for (const Strip& part : parts)
             if (part.error) std::rethrow_exception(part.error);

@@ -83,7 +83,9 @@ struct ViewExtractStats {
     int64_t bricksAcquired = 0;
     int64_t bricksCulledBySubBlocks = 0;  // box passed, no sub-block did: not read
     int64_t bricksPrefetchedUnused = 0;  // read ahead, then hidden before the traversal came
-    double brickWaitSeconds = 0;         // in acquire: reads and decodes not hidden
+    // In acquire: reads and decodes not hidden. Summed over strips, where a strip also waits
+    // for a brick another strip is loading.
+    double brickWaitSeconds = 0;
     uint64_t triangles = 0, points = 0;
     double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan
                                 // conversion into the pyramid (interleaved per polygon)

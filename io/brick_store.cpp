@@ -128,9 +128,13 @@ struct AlignedBuffer {
     unsigned char* reserve(size_t n) {
         if (n > size) {
             std::free(data);
-            data = static_cast<unsigned char*>(std::aligned_alloc(kStoreAlignment, n));
+            data = nullptr;
+            size = 0;
+            // aligned_alloc wants a multiple of the alignment.
+            const size_t bytes = (n + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;
+            data = static_cast<unsigned char*>(std::aligned_alloc(kStoreAlignment, bytes));
             if (!data) throw std::bad_alloc();
-            size = n;
+            size = bytes;
         }
         return data;
     }

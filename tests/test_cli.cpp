@@ -216,6 +216,15 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     EXPECT_NE(big.output.find("--metacell must be between 1 and 32, not 33"), std::string::npos) << big.output;
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --metacell 32").exitCode, 0);
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --readers 0").exitCode, 2);
+    // Image strips pin bricks: a cache too small for them is refused before anything is read
+    // (13^3 bricks of 16 cells, 13.7 KB each: 1 MB holds 76, enough for 19 strips, not 20).
+    const std::string bricks = dir.file("b.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + bricks + " --kind head --size 200 --brick 16 --quiet").exitCode, 0);
+    const auto strips = test::runVdiso("extract " + bricks + " --iso 600.5 --method sage --cache-mb 1 --threads 20");
+    EXPECT_EQ(strips.exitCode, 2);
+    EXPECT_NE(strips.output.find("--threads 20 needs a brick cache of 80 bricks; --cache-mb 1 holds 76"),
+              std::string::npos) << strips.output;
+    EXPECT_EQ(test::runVdiso("extract " + bricks + " --iso 600.5 --method sage --cache-mb 1 --threads 19").exitCode, 0);
     const auto r = test::runVdiso("extract " + dir.file("missing.vdiso") + " --iso 1");
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("missing.vdiso: cannot open"), std::string::npos) << r.output;

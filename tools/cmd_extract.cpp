@@ -190,7 +190,7 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
         } else if (a == "--prefetch") {
             o.prefetch = int(parseInt(a, args.value(a), 0, 4096));
         } else if (a == "--readers") {
-            o.readers = int(parseInt(a, args.value(a), 1, 64));
+            o.readers = int(parseInt(a, args.value(a), 1, 16));
         } else if (a == "--cache-mb") {
             o.cacheMb = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30));
         } else if (a == "--cold") {
@@ -289,8 +289,17 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
     if (streamed) extract.sink = &*streamed;
     // The prefetcher must not evict what it loaded before use: half the cache at most.
-    extract.prefetchBricks = int(std::min<uint64_t>(uint64_t(o.prefetch),
-                                                    cache.budgetBytes() / store.brickBytes() / 2));
+    const uint64_t slots = cache.budgetBytes() / store.brickBytes();
+    extract.prefetchBricks = int(std::min<uint64_t>(uint64_t(o.prefetch), slots / 2));
+    // Each image strip pins its brick and its share of that half (plus one being read): with
+    // at most a quarter of the cache's bricks in strips, pins never fill the cache. A cache
+    // holding every brick never needs to evict.
+    if (isViewDependent(o.method) && uint64_t(o.threads) * 4 > slots &&
+        slots < uint64_t(store.layout().brickCount()))
+        throw UsageError("--threads " + std::to_string(o.threads) + " needs a brick cache of " +
+                         std::to_string(4 * o.threads) + " bricks; --cache-mb " +
+                         std::to_string(o.cacheMb) + " holds " + std::to_string(slots) +
+                         " of " + std::to_string(store.brickBytes() >> 10) + " KB");
     extract.prefetchReaders = o.readers;
     PointSet points;
     FullExtractStats stats;
@@ -346,7 +355,8 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("prefetch", extract.threads > 1 && !isViewDependent(o.method) ? 0 : extract.prefetchBricks);
     s.add("readers", extract.prefetchReaders);
     // I/O the extraction did not wait for: read and decode time spent ahead of it (summed over
-    // the reader threads, as io_s and decode_s are).
+    // the reader threads, as io_s and decode_s are). With image strips a lower bound: a strip
+    // waiting for a brick another strip loads counts as waiting, the read only once.
     s.add("brick_wait_s", stats.brickWaitSeconds);
     s.add("io_hidden_s", std::max(0.0, io.readSeconds + io.decodeSeconds - stats.brickWaitSeconds));
     s.add("bricks_loaded", io.misses).add("bricks_requested", io.requests);
