@@ -123,7 +123,13 @@ struct BrickKernel {
                 TriangleMesh& out, EdgeVertexMap& seamMap)
         : x(extractor), s(static_cast<const T*>(samples)), side(extractor.mLayout.side()),
           iso(isovalue), threshold(isovalue), mesh(out), seams(seamMap) {
-        if (x.mBrickFirstVertex == BrickExtractor::kNoFirstVertex) x.mBrickFirstVertex = out.nextVertex();
+        if (x.mBrickFirstVertex == BrickExtractor::kNoFirstVertex) {
+            x.mBrickFirstVertex = out.nextVertex();
+            if (x.mBrickFirstVertex < x.mVerticesMade) {  // another mesh: its numbers restart
+                std::fill(x.mEdgeVertex.begin(), x.mEdgeVertex.end(), 0u);
+                x.mVerticesMade = 0;
+            }
+        }
         const Dims3 c = x.mLayout.brickCoord(id);
         for (int a = 0; a < 3; ++a) {
             cells[a] = x.mLayout.cellsOnAxis(a, c[a]);
@@ -192,6 +198,7 @@ struct BrickKernel {
         mesh.positions.push_back(glm::vec3(position));
         mesh.normals.push_back(withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
         slot = v + 1;
+        x.mVerticesMade = v + 1;
         if (onFace) seams.insert(key, v);
         return v;
     }

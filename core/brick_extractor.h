@@ -167,13 +167,15 @@ private:
     int mMetaCellSize;
     int mMetaPerAxis;
     // Vertex + 1 of each local edge of the current brick, 0 for none. Vertex numbers only
-    // grow, so an entry is the current brick's exactly when it is above the brick's first
-    // vertex number: nothing is cleared between bricks, and an entry is 4 bytes (the array,
-    // (B+1)^3 * 3 entries, is the kernel's most-missed memory). Vertices welded from the seam
-    // map are older, so their edges are looked up in the map each time.
+    // grow within a mesh, so an entry is the current brick's exactly when it is above the
+    // brick's first vertex number: nothing is cleared between bricks, and an entry is 4 bytes
+    // (the array, (B+1)^3 * 3 entries, is the kernel's most-missed memory). Vertices welded
+    // from the seam map are older, so their edges are looked up in the map each time. When
+    // the numbers start again (the extractor used on another mesh), the array is cleared.
     std::vector<uint32_t> mEdgeVertex;
     static constexpr uint32_t kNoFirstVertex = UINT32_MAX;
     uint32_t mBrickFirstVertex = kNoFirstVertex;  // set by the brick's first kernel
+    uint32_t mVerticesMade = 0;                   // the largest entry written
     void forgetBrickVertices();  // a new brick: forget the vertices of the last one
     std::vector<BrickRange> mRanges;
     int64_t mCurrentBrick = -1;
