@@ -87,11 +87,6 @@ TEST_F(BrickCacheTest, CorruptBrickIsReportedNotReturned) {
     EXPECT_NO_THROW(cache.acquire(1));
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 TEST_F(BrickCacheTest, ColdReadsReturnTheSameBricksFromDisk) {
     const BrickStoreReader buffered(path);

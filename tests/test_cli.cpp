@@ -170,11 +170,6 @@ TEST(Cli, HelpAndUsage) {
     EXPECT_EQ(runVdiso("synth x.raw --kind head --size 8 --type u8").exitCode, 2);
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 TEST(CliExtract, WritesMeshPictureAndStats) {
     test::ScratchDir dir;
@@ -230,11 +225,6 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     EXPECT_NE(r.output.find("missing.vdiso: cannot open"), std::string::npos) << r.output;
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 TEST(CliExtract, OrbitPathWritesAStatsLineAndAPicturePerFrame) {
     test::ScratchDir dir;

@@ -123,11 +123,6 @@ TEST(ExtractOctree, EmptyWhenNoBrickHoldsTheIsovalue) {
     EXPECT_EQ(source.acquired(), 0);
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
     SynthParams p;
@@ -272,11 +267,6 @@ TEST(ExtractThreads, TrimmingTheSeamMapKeepsEveryWeld) {
     }
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 // Collects streamed pieces back into one mesh, checking they arrive in vertex order.
 struct CollectingSink final : MeshSink {
@@ -314,11 +304,6 @@ TEST(ExtractStreaming, StreamedPiecesRebuildTheHeldMesh) {
     }
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 // The bricks read (cache misses) are at least `atLeast`, and each of the `needed` read once,
 // except that a prefetch thread descheduled for many bricks' time can come back to fetch one

@@ -286,11 +286,6 @@ TEST(StoreHistogram, QuantilesOfAKnownDistribution) {
     EXPECT_NEAR(store.histogram().quantile(1.0), 255.0, 2.0);
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 TEST(ByteShuffle, UnshuffleInvertsShuffle) {
     for (size_t sampleBytes : {1u, 2u, 3u, 4u, 8u}) {
@@ -326,11 +321,6 @@ TEST(StoreWriter, ShuffleFilterIsRecordedAndOptional) {
     }
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 // A source that records how far it has been read, to check conversion streams.
 class CountingSource final : public SliceReader {

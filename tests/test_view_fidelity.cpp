@@ -118,11 +118,6 @@ TEST(ViewFidelity, RealMri) {
     expectFaithful(cache, 40.5, "mri skin", true);
 }
 
-}  // namespace
-}  // namespace vdiso
-
-namespace vdiso {
-namespace {
 
 TEST(VisibleOracle, BoundsWhatAViewDependentExtractionNeeds) {
     SynthParams p;
