@@ -42,7 +42,7 @@ struct Traversal {
     OcclusionPyramid pyramid;
     BrickExtractor extractor;
     EdgeVertexMap seams;
-    const MinMaxTree tree;
+    const MinMaxTree& tree;  // shared by the strips
     double scanSeconds = 0;
     // The look-ahead for prefetching: a second cursor over the same front-to-back order, run
     // ahead of the traversal with tests 1-3 against the pyramid as it is now. Coverage only
@@ -74,13 +74,14 @@ struct Traversal {
 
     // Extracts what shows in pixel columns [column0, column1) of the image: the pyramid
     // starts with every other column covered, so the tests cull whatever shows only there.
-    Traversal(BrickSource& s, const Camera& c, const ViewExtractOptions& o, TriangleMesh& m,
-              PointSet& p, ViewExtractStats& st, int column0, int column1)
+    Traversal(BrickSource& s, const MinMaxTree& minMax, const Camera& c,
+              const ViewExtractOptions& o, TriangleMesh& m, PointSet& p, ViewExtractStats& st,
+              int column0, int column1)
         : source(s), camera(c), options(o), mesh(m), points(p), stats(st), volume(s.volume()),
           layout(s.layout()), projector(c),
           cellProjector(c.viewProjection() * s.volume().gridToWorld(), c.width, c.height),
           pixels(c), pyramid(c.width, c.height),
-          extractor(s.volume(), s.layout(), o.metaCellSize), tree(s.layout(), s.brickRanges()),
+          extractor(s.volume(), s.layout(), o.metaCellSize), tree(minMax),
           prefetcher(s, size_t(std::max(o.prefetchBricks, 0)), o.prefetchReaders) {
         for (int y = 0; y < c.height; ++y) {
             if (column0 > 0) pyramid.coverSpan(y, 0, column0 - 1);
@@ -557,6 +558,7 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     ViewExtractStats stats;
     const uint64_t trianglesBefore = mesh.triangleCount();
     const int strips = std::clamp(options.threads, 1, camera.width);
+    const MinMaxTree tree(source.layout(), source.brickRanges());
     // What is visible scales with the image, not the volume: room for a couple of triangles
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).
     const size_t pixels = size_t(camera.width) * size_t(camera.height);
@@ -565,7 +567,7 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
         mesh.positions.reserve(mesh.positions.size() + pixels);
         mesh.normals.reserve(mesh.positions.capacity());
         const uint32_t firstNewVertex = mesh.nextVertex();
-        Traversal t(source, camera, options, mesh, points, stats, 0, camera.width);
+        Traversal t(source, tree, camera, options, mesh, points, stats, 0, camera.width);
         t.run();
         // Vertices made for polygons that were then hidden belong to no triangle.
         if (options.cellTests) dropUnreferencedVertices(mesh, firstNewVertex);
@@ -593,7 +595,7 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                 part.triangles.indices.reserve(6 * share);
                 part.triangles.positions.reserve(share);
                 part.triangles.normals.reserve(share);
-                Traversal t(source, camera, each, part.triangles, part.dots, part.counts,
+                Traversal t(source, tree, camera, each, part.triangles, part.dots, part.counts,
                             columns[size_t(k)], columns[size_t(k) + 1]);
                 t.run();
                 if (options.cellTests) dropUnreferencedVertices(part.triangles, 0);
