@@ -50,6 +50,12 @@ public:
         ++mSize;
     }
     size_t size() const { return mSize; }
+    // Forgets every entry (the table shrinks back to its first size).
+    void clear() {
+        if (mSize == 0) return;
+        mSlots.assign(size_t(1) << 12, Slot{});
+        mSize = 0;
+    }
 
     // Calls f(edgeKey, vertex) for every entry, in no particular order.
     template <class F>

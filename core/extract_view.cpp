@@ -71,6 +71,10 @@ struct Traversal {
     std::deque<AheadBrick> aheadBricks;  // found ahead, in the traversal's order
 
     std::vector<int64_t> acquired;  // bricks, in the order extracted
+    // The current brick is extracted whole (ViewStream::Use::Whole): hidden meta-cells too,
+    // without points or per-cell tests.
+    bool wholeBrick = false;
+    bool cellTestsNow() const { return options.cellTests && !wholeBrick; }
 
     // Extracts what shows in pixel columns [column0, column1) of the image: the pyramid
     // starts with every other column covered, so the tests cull whatever shows only there.
@@ -218,7 +222,7 @@ struct Traversal {
             // Where a non-planar polygon's projection folds over itself its winding cancels,
             // yet its fan triangles, which are what gets drawn, cover those centres: before
             // dropping it, ask them (they mark only what they draw).
-            for (int k = 2; k < count && !coversNew && t.options.cellTests; ++k) {
+            for (int k = 2; k < count && !coversNew && t.cellTestsNow(); ++k) {
                 const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
                 coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
             }
@@ -228,7 +232,7 @@ struct Traversal {
                 coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), t.pyramid);
             }
         }
-        if (!t.options.cellTests) return true;
+        if (!t.cellTestsNow()) return true;
         // The rasterizer works in float on snapped coordinates, so a centre within a hair of
         // an edge may fall the other way there: such a polygon is kept as well (it marks
         // nothing; only coverage this side of the rounding is ever marked).
@@ -312,14 +316,27 @@ struct Traversal {
         worldBox(cellLo, cellHi, a, b);
         const bool single = hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1;
         const uint32_t metaCell = uint32_t((lo[2] * n + lo[1]) * n + lo[0]);
-        const Verdict v = test(range, a, b, true);
-        if (v != Verdict::Visible) return;
+        if (wholeBrick) {
+            // Every active meta-cell is made; only those that show are scan-converted.
+            ++stats.nodesVisited;
+            if (!rangeHoldsIso(range.minValue, range.maxValue, options.iso)) {
+                ++stats.culledByRange;
+                return;
+            }
+            ScreenBox box;
+            if (cullBox(a, b, box) != Cull::None) {
+                extractUnseen(lo, hi);
+                return;
+            }
+        } else if (test(range, a, b, true) != Verdict::Visible) {
+            return;
+        }
         if (single) {
             // Timed per meta-cell (extraction and scan conversion are interleaved polygon by
             // polygon; a clock read per polygon would cost more than it measures).
             const auto start = Clock::now();
             extractor.extractMetaCell(metaCell, options.iso, mesh, seams, &Traversal::onPolygon,
-                                      this, options.cellTests ? &Traversal::keepCell : nullptr,
+                                      this, cellTestsNow() ? &Traversal::keepCell : nullptr,
                                       &camera.eye);
             ++stats.metaCellsExtracted;
             if (options.bottomUp) pyramid.propagate();
@@ -342,6 +359,21 @@ struct Traversal {
             visitMetaCells(brick, secondLo, hi);
             visitMetaCells(brick, lo, firstHi);
         }
+    }
+
+    // The surface of the active meta-cells [lo, hi) of the current brick, which do not show:
+    // made for a whole brick's chunk, not scan-converted.
+    void extractUnseen(const int lo[3], const int hi[3]) {
+        const int n = extractor.metaCellsPerAxis();
+        const std::vector<BrickRange>& ranges = extractor.currentRanges();
+        for (int z = lo[2]; z < hi[2]; ++z)
+            for (int y = lo[1]; y < hi[1]; ++y)
+                for (int x = lo[0]; x < hi[0]; ++x) {
+                    const uint32_t metaCell = uint32_t((z * n + y) * n + x);
+                    const BrickRange& r = ranges[metaCell];
+                    if (!rangeHoldsIso(r.minValue, r.maxValue, options.iso)) continue;
+                    extractor.extractMetaCell(metaCell, options.iso, mesh, seams);
+                }
     }
 
     void nodeBox(const MinMaxNode& node, glm::dvec3& a, glm::dvec3& b) const {
@@ -501,6 +533,21 @@ struct Traversal {
                 ++stats.bricksCulledBySubBlocks;
                 continue;
             }
+            ViewStream::Use use = ViewStream::Use::Part;
+            if (options.stream) {
+                ScreenBox box;
+                cullBox(a, b, box);
+                const double cellPixels =
+                    box.crossesNearPlane ? INFINITY
+                                         : std::max(box.right - box.left, box.bottom - box.top) /
+                                               double(layout.brickSize);
+                if (!options.stream->beginBrick(brick, cellPixels, use)) {
+                    stats.abandoned = true;
+                    break;
+                }
+                // A chunk stands alone: no vertex is welded to another brick's.
+                seams.clear();
+            }
             if (options.prefetchBricks > 0) prefetchAround(brick);
             const auto start = Clock::now();
             const BrickHandle handle = source.acquire(brick);  // only now: it passed 1-3
@@ -510,7 +557,19 @@ struct Traversal {
             extractor.beginBrick(brick, handle.samples());
             const int n = extractor.metaCellsPerAxis();
             const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
+            const uint32_t firstVertex = mesh.nextVertex();
+            wholeBrick = use == ViewStream::Use::Whole;
             visitMetaCells(brick, lo, hi);
+            wholeBrick = false;
+            if (options.stream) {
+                if (options.cellTests && use != ViewStream::Use::Whole)
+                    dropUnreferencedVertices(mesh, firstVertex);
+                stats.triangles += mesh.triangleCount();
+                options.stream->endBrick(brick, use, mesh, points);
+                mesh.firstVertex = mesh.nextVertex();
+                mesh.clear();
+                points.clear();
+            }
         }
         prefetcher.stop();
         stats.cellsActive = extractor.counters().cellsActive;
@@ -563,14 +622,16 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).
     const size_t pixels = size_t(camera.width) * size_t(camera.height);
     if (strips == 1) {
-        mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
-        mesh.positions.reserve(mesh.positions.size() + pixels);
-        mesh.normals.reserve(mesh.positions.capacity());
+        if (!options.stream) {
+            mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
+            mesh.positions.reserve(mesh.positions.size() + pixels);
+            mesh.normals.reserve(mesh.positions.capacity());
+        }
         const uint32_t firstNewVertex = mesh.nextVertex();
         Traversal t(source, tree, camera, options, mesh, points, stats, 0, camera.width);
         t.run();
         // Vertices made for polygons that were then hidden belong to no triangle.
-        if (options.cellTests) dropUnreferencedVertices(mesh, firstNewVertex);
+        if (options.cellTests && !options.stream) dropUnreferencedVertices(mesh, firstNewVertex);
         stats.scanSeconds = t.scanSeconds;
     } else {
         // Strips of the image in parallel, each its own traversal, pyramid and mesh; bricks
@@ -591,14 +652,16 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
         auto runStrip = [&](int k) {
             Strip& part = parts[size_t(k)];
             try {
-                const size_t share = pixels / size_t(strips);
-                part.triangles.indices.reserve(6 * share);
-                part.triangles.positions.reserve(share);
-                part.triangles.normals.reserve(share);
+                if (!options.stream) {
+                    const size_t share = pixels / size_t(strips);
+                    part.triangles.indices.reserve(6 * share);
+                    part.triangles.positions.reserve(share);
+                    part.triangles.normals.reserve(share);
+                }
                 Traversal t(source, tree, camera, each, part.triangles, part.dots, part.counts,
                             columns[size_t(k)], columns[size_t(k) + 1]);
                 t.run();
-                if (options.cellTests) dropUnreferencedVertices(part.triangles, 0);
+                if (options.cellTests && !options.stream) dropUnreferencedVertices(part.triangles, 0);
                 part.acquired = std::move(t.acquired);
                 part.scanSeconds = t.scanSeconds;
             } catch (...) {
@@ -635,12 +698,13 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
             points.normals.insert(points.normals.end(), d.normals.begin(), d.normals.end());
             part.counts.scanSeconds = part.scanSeconds;
             stats += part.counts;
+            stats.triangles += part.counts.triangles;
             acquired.insert(acquired.end(), part.acquired.begin(), part.acquired.end());
         }
         std::sort(acquired.begin(), acquired.end());
         stats.bricksAcquired = int64_t(std::unique(acquired.begin(), acquired.end()) - acquired.begin());
     }
-    stats.triangles = mesh.triangleCount() - trianglesBefore;
+    if (!options.stream) stats.triangles = mesh.triangleCount() - trianglesBefore;
     stats.extractSeconds = std::chrono::duration<double>(Clock::now() - start).count();
     if (progress) progress(1.0);
     return stats;

@@ -34,6 +34,31 @@
 
 namespace vdiso {
 
+// Receives a view-dependent extraction brick by brick, front to back, as it runs (remote
+// viewing streams each brick's surface as soon as it is made: serve/). For each brick that
+// passes the tests, beginBrick chooses what the traversal makes of it:
+//   Whole: the brick's whole surface, the same for every camera (its hidden meta-cells are
+//          extracted too, without scan conversion; no points, no per-cell tests). Every polygon
+//          it scan-converts lies in that surface, so the coverage stays conservative.
+//   Held:  the consumer has the brick's whole surface already: the visible part is made only
+//          to mark the occlusion pyramid, and handed over to be dropped.
+//   Part:  what SAGE makes of it for this camera: points and the triangles of visible cells.
+// endBrick then gets that output: mesh.positions hold the vertices numbered mesh.firstVertex
+// onwards, mesh.indices refer to those only (bricks share no vertices in streaming), points
+// hold its points; both are cleared after the call. Calls come from the strip's thread, so an
+// implementation used with threads > 1 must be thread-safe; a brick showing in two strips
+// is offered by both.
+class ViewStream {
+public:
+    enum class Use { Whole, Held, Part };
+    virtual ~ViewStream() = default;
+    // Before brick `brick` is read. `cellPixels`: how many pixels a cell's side spans on screen
+    // at most (infinite for a brick crossing the near plane). Returns false to abandon the
+    // extraction here (a newer camera came): nothing more is read or made.
+    virtual bool beginBrick(int64_t brick, double cellPixels, Use& use) = 0;
+    virtual void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) = 0;
+};
+
 struct ViewExtractOptions {
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
@@ -59,6 +84,8 @@ struct ViewExtractOptions {
     // whose meta-cells on a border are whole in both). Bricks are read once, through the
     // shared source; each strip prefetches prefetchBricks / threads.
     int threads = 1;
+    // When set, output goes brick by brick to the stream instead of the mesh and points.
+    ViewStream* stream = nullptr;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {
@@ -87,6 +114,7 @@ struct ViewExtractStats {
     // for a brick another strip is loading.
     double brickWaitSeconds = 0;
     uint64_t triangles = 0, points = 0;
+    bool abandoned = false;  // a stream's beginBrick returned false
     double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan
                                 // conversion into the pyramid (interleaved per polygon)
     double extractSeconds = 0;  // everything, brick reads included
@@ -107,6 +135,7 @@ struct ViewExtractStats {
         bricksCulledBySubBlocks += o.bricksCulledBySubBlocks;
         bricksPrefetchedUnused += o.bricksPrefetchedUnused;
         brickWaitSeconds += o.brickWaitSeconds;
+        abandoned |= o.abandoned;
         scanSeconds += o.scanSeconds;
         return *this;
     }
