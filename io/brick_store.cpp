@@ -25,6 +25,29 @@ const char* brickFilterName(BrickFilter f) {
     return f == BrickFilter::ByteShuffle ? "byte shuffle" : "none";
 }
 
+double ValueHistogram::otsuThreshold() const {
+    double total = 0, sum = 0;
+    for (int b = 0; b < kHistogramBins; ++b) {
+        total += double(counts[b]);
+        sum += double(counts[b]) * (b + 0.5);
+    }
+    double below = 0, sumBelow = 0, best = -1;
+    int bestEdge = kHistogramBins / 2;
+    for (int edge = 1; edge < kHistogramBins; ++edge) {  // classes [0, edge) and [edge, end)
+        below += double(counts[edge - 1]);
+        sumBelow += double(counts[edge - 1]) * (edge - 0.5);
+        const double above = total - below;
+        if (below == 0 || above == 0) continue;
+        const double meanBelow = sumBelow / below, meanAbove = (sum - sumBelow) / above;
+        const double between = below * above * (meanBelow - meanAbove) * (meanBelow - meanAbove);
+        if (between > best) {
+            best = between;
+            bestEdge = edge;
+        }
+    }
+    return lo + (hi - lo) * bestEdge / kHistogramBins;
+}
+
 double ValueHistogram::quantile(double fraction) const {
     uint64_t total = 0;
     for (uint64_t c : counts) total += c;

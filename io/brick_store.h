@@ -61,6 +61,9 @@ struct ValueHistogram {
 
     // The value below which `fraction` of the samples lie, to within one bin.
     double quantile(double fraction) const;
+    // Otsu's threshold: the bin edge that best splits the samples into two classes (the least
+    // within-class variance), a default isovalue for scans (air against tissue).
+    double otsuThreshold() const;
 };
 
 struct StoreHeader {

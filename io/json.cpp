@@ -33,15 +33,22 @@ JsonObject& JsonObject::add(const std::string& key, const std::string& value) {
     return *this;
 }
 
+std::string jsonNumber(double value) {
+    if (!std::isfinite(value)) return "null";  // JSON has no NaN or infinity
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", value);
+    return buf;
+}
+
+std::string jsonArray(std::span<const double> values) {
+    std::string out = "[";
+    for (size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + jsonNumber(values[i]);
+    return out + "]";
+}
+
 JsonObject& JsonObject::add(const std::string& key, double value) {
     addKey(key);
-    if (!std::isfinite(value)) {
-        mBody += "null";  // JSON has no NaN or infinity
-    } else {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.9g", value);
-        mBody += buf;
-    }
+    mBody += jsonNumber(value);
     return *this;
 }
 

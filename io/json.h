@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 
 namespace vdiso {
@@ -27,5 +28,9 @@ private:
 
 // `s` as a JSON string literal, quotes included.
 std::string jsonQuote(const std::string& s);
+// A number as every writer here prints it (9 significant digits; null for NaN and infinity),
+// and an array of them.
+std::string jsonNumber(double value);
+std::string jsonArray(std::span<const double> values);
 
 }  // namespace vdiso
