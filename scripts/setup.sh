@@ -9,16 +9,30 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev   # OpenVDB's Find module needs boost-iostreams and TBB
   libosmesa6-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
+  libboost-dev libmeshoptimizer-dev       # vdiso serve: Beast (HTTP, WebSocket), geometry codecs
+  chromium                                # the viewer's end-to-end test (headless)
 )
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+# npm comes with Debian's nodejs from its own package (a machine may have a newer nodejs with
+# npm built in: then nothing is installed).
+command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
 
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-echo "setup: installing ${missing[*]}" >&2
-$sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}" >&2
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The viewer's modules (three.js, meshoptimizer's decoder, puppeteer-core for its test), at the
+# versions web/package-lock.json pins; again only when the lock file is newer than the install.
+cd "$(dirname "$0")/../web"
+if [ ! -f node_modules/.package-lock.json ] || [ package-lock.json -nt node_modules/.package-lock.json ]; then
+  echo "setup: npm ci in web/" >&2
+  npm ci --no-audit --no-fund --loglevel=error >/dev/null
+fi

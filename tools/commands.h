@@ -9,5 +9,6 @@ int runSynth(int argc, char** argv);
 int runInfo(int argc, char** argv);
 int runExtract(int argc, char** argv);
 int runCompare(int argc, char** argv);
+int runServe(int argc, char** argv);
 
 }  // namespace vdiso::cli

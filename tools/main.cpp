@@ -20,6 +20,8 @@ constexpr const char* kUsage =
     "  info FILE.vdiso              describe a brick store; with --iso, its active bricks\n"
     "  extract FILE.vdiso --iso V   extract an isosurface: mesh, picture, statistics\n"
     "  compare A.png B.png          how much of A's rendered surface B reproduces\n"
+    "  serve FILE.vdiso ...         look around isosurfaces from a browser: streams the visible\n"
+    "                               surface as the camera moves\n"
     "\n"
     "'vdiso <command> --help' describes each command.\n";
 
@@ -39,6 +41,7 @@ int main(int argc, char** argv) {
         if (command == "info") return runInfo(argc - 1, argv + 1);
         if (command == "extract") return runExtract(argc - 1, argv + 1);
         if (command == "compare") return runCompare(argc - 1, argv + 1);
+        if (command == "serve") return runServe(argc - 1, argv + 1);
         std::fprintf(stderr, "vdiso: unknown command '%s'\n\n%s", command.c_str(), kUsage);
         return 2;
     } catch (const UsageError& e) {

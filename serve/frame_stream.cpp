@@ -1,0 +1,167 @@
+#include "serve/frame_stream.h"
+
+#include <bit>
+#include <mutex>
+
+#include "serve/chunk_codec.h"
+#include "serve/protocol.h"
+
+namespace vdiso::serve {
+
+namespace {
+
+// REFs go out in batches this large (or before the next chunk, or at the frame's end).
+constexpr size_t kRefsPerBatch = 64;
+// Transient geometry goes out when a batch holds this many vertices and points.
+constexpr size_t kTransientVerticesPerBatch = 32768;
+
+void append(TriangleMesh& to, PointSet& toPoints, const TriangleMesh& mesh, const PointSet& points) {
+    const uint32_t offset = uint32_t(to.positions.size());
+    to.positions.insert(to.positions.end(), mesh.positions.begin(), mesh.positions.end());
+    to.normals.insert(to.normals.end(), mesh.normals.begin(), mesh.normals.end());
+    for (const uint32_t v : mesh.indices) to.indices.push_back(v - mesh.firstVertex + offset);
+    toPoints.positions.insert(toPoints.positions.end(), points.positions.begin(), points.positions.end());
+    toPoints.normals.insert(toPoints.normals.end(), points.normals.begin(), points.normals.end());
+}
+
+}  // namespace
+
+size_t ClientChunks::KeyHash::operator()(const Key& k) const {
+    uint64_t h = std::bit_cast<uint64_t>(k.iso) * 0x9E3779B97F4A7C15ull;
+    h ^= (uint64_t(k.store) << 32 | k.brick) + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2);
+    return size_t(h);
+}
+
+size_t ClientChunks::flushRefsLocked(Outbox& outbox) {
+    if (pendingRefs.empty()) return 0;
+    OutMessage m;
+    m.bytes = std::make_shared<const std::vector<uint8_t>>(encodeRefs(pendingFrame, pendingRefs));
+    m.frame = pendingFrame;
+    pendingRefs.clear();
+    const size_t bytes = m.bytes->size();
+    // Never waits for room: an eviction's answer, queued under the same lock, must follow it.
+    outbox.push(std::move(m), false);
+    return bytes;
+}
+
+FrameStream::FrameStream(ClientChunks& client, Outbox& outbox, uint32_t frame, uint32_t store,
+                         double iso, const std::atomic<bool>& superseded,
+                         std::chrono::steady_clock::time_point start)
+    : mClient(client), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
+      mSuperseded(superseded), mStart(start) {}
+
+void FrameStream::queued(size_t bytes) {
+    mCounters.bytes += bytes;
+    if (bytes && mCounters.firstChunkSeconds < 0)
+        mCounters.firstChunkSeconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
+}
+
+bool FrameStream::beginBrick(int64_t brick, double cellPixels, Use& use) {
+    if (mSuperseded.load(std::memory_order_relaxed) || mOutbox.closed()) return false;
+    const uint32_t b = uint32_t(brick);
+    std::scoped_lock lock(mClient.mutex, mMutex);
+    if (mWhole.contains(b) || mReferred.contains(b) || mClient.held.contains({mStore, mIso, b}))
+        use = Use::Held;
+    else if (cellPixels >= kWholeCellPixels)
+        use = Use::Whole, mWhole.insert(b);
+    else
+        use = Use::Part;
+    return true;
+}
+
+void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) {
+    const uint32_t b = uint32_t(brick);
+    if (use == Use::Whole) {
+        ChunkHeader header;
+        header.flags = kChunkCacheable;
+        header.frame = mFrame;
+        header.store = mStore;
+        header.brick = b;
+        header.iso = mIso;
+        OutMessage m;
+        m.bytes = std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, PointSet{}));
+        m.frame = mFrame;
+        m.cacheable = true;
+        m.store = mStore;
+        m.brick = b;
+        m.iso = mIso;
+        m.triangles = uint32_t(mesh.triangleCount());
+        const size_t bytes = m.bytes->size();
+        {
+            std::scoped_lock lock(mClient.mutex, mMutex);
+            mClient.pendingFrame = mFrame;
+            queued(mClient.flushRefsLocked(mOutbox));
+            ++mCounters.chunks;
+            mCounters.triangles += mesh.triangleCount();
+            queued(bytes);
+        }
+        mOutbox.push(std::move(m));  // waits while the client is behind
+        return;
+    }
+    if (use == Use::Held) {
+        std::scoped_lock lock(mClient.mutex, mMutex);
+        if (mWhole.contains(b) || mReferred.contains(b)) return;  // another strip has it
+        const auto held = mClient.held.find({mStore, mIso, b});
+        if (held != mClient.held.end()) {
+            mReferred.insert(b);
+            ++mCounters.refs;
+            mCounters.triangles += held->second;
+            mClient.pendingFrame = mFrame;
+            mClient.pendingRefs.push_back(b);
+            if (mClient.pendingRefs.size() >= kRefsPerBatch) queued(mClient.flushRefsLocked(mOutbox));
+            return;
+        }
+        // Evicted since beginBrick: what was made for it this frame goes as transient geometry.
+    }
+    bool full = false;
+    {
+        std::lock_guard lock(mMutex);
+        append(mTransient, mTransientPoints, mesh, points);
+        full = mTransient.positions.size() + mTransientPoints.size() >= kTransientVerticesPerBatch;
+    }
+    if (full) pushTransient(false);
+}
+
+// Encodes and queues the transient batch (taken under the lock, encoded outside it).
+void FrameStream::pushTransient(bool force) {
+    TriangleMesh mesh;
+    PointSet points;
+    {
+        std::lock_guard lock(mMutex);
+        if (!force && mTransient.positions.size() + mTransientPoints.size() < kTransientVerticesPerBatch)
+            return;
+        if (mTransient.positions.empty() && mTransientPoints.positions.empty()) return;
+        std::swap(mesh, mTransient);
+        std::swap(points, mTransientPoints);
+    }
+    ChunkHeader header;
+    header.frame = mFrame;
+    header.store = mStore;
+    header.iso = mIso;
+    OutMessage m;
+    m.bytes = std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, points));
+    m.frame = mFrame;
+    {
+        std::scoped_lock lock(mClient.mutex, mMutex);
+        queued(mClient.flushRefsLocked(mOutbox));
+        ++mCounters.chunks;
+        mCounters.triangles += mesh.triangleCount();
+        mCounters.points += points.size();
+        queued(m.bytes->size());
+    }
+    mOutbox.push(std::move(m));
+}
+
+void FrameStream::finish() {
+    pushTransient(true);
+    std::scoped_lock lock(mClient.mutex, mMutex);
+    queued(mClient.flushRefsLocked(mOutbox));
+}
+
+FrameCounters FrameStream::counters() {
+    std::lock_guard lock(mMutex);
+    return mCounters;
+}
+
+}  // namespace vdiso::serve

@@ -1,0 +1,87 @@
+// One frame of one client, streamed as the SAGE traversal makes it (core/extract_view.h's
+// ViewStream), and what that client holds across frames.
+//
+// Chunk policy (docs/protocol.md, "Chunks"): a visible brick the client holds already becomes
+// a REF; one it lacks, whose cells are at least kWholeCellPixels on screen, a cacheable chunk
+// of its whole surface (the same for every camera, so later frames only refer to it); a
+// smaller one goes to the frame's transient chunks the SAGE way (points, visible triangles).
+// Refs and transient geometry are batched; each cacheable chunk is encoded on the strip's
+// thread and queued as soon as its brick is done, refs queued before it, so the stream stays
+// front to back.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <mutex>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "core/extract_view.h"
+#include "serve/outbox.h"
+
+namespace vdiso::serve {
+
+// Cells smaller than this on screen (pixels per cell side) are not worth sending whole: the
+// brick's surface would cost more triangles than the pixels it covers.
+constexpr double kWholeCellPixels = 0.5;
+
+// The cacheable chunks a client holds: sent (written to its socket) and not evicted. Guarded
+// by `mutex`, which also orders a frame's REFS before an eviction's answer.
+struct ClientChunks {
+    struct Key {
+        uint32_t store;
+        double iso;
+        uint32_t brick;
+        bool operator==(const Key&) const = default;
+    };
+    struct KeyHash {
+        size_t operator()(const Key& k) const;
+    };
+    std::mutex mutex;
+    std::unordered_map<Key, uint32_t, KeyHash> held;  // -> triangles
+    // REFs of the running frame not yet queued (flushed before an eviction is answered).
+    uint32_t pendingFrame = 0;
+    std::vector<uint32_t> pendingRefs;
+    uint64_t pendingRefBytes = 0;
+
+    // Queues the pending REFs as one REFS message (caller holds `mutex`); returns its bytes.
+    size_t flushRefsLocked(Outbox& outbox);
+};
+
+struct FrameCounters {
+    uint64_t chunks = 0, refs = 0, triangles = 0, points = 0, bytes = 0;
+    double firstChunkSeconds = -1;  // from the frame's start to its first CHUNK or REFS queued
+};
+
+class FrameStream final : public ViewStream {
+public:
+    // `superseded` is read before every brick: set, the frame is abandoned there.
+    FrameStream(ClientChunks& client, Outbox& outbox, uint32_t frame, uint32_t store, double iso,
+                const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
+
+    bool beginBrick(int64_t brick, double cellPixels, Use& use) override;
+    void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) override;
+    // Queues what is still batched. Call once, after the extraction.
+    void finish();
+    FrameCounters counters();
+
+private:
+    void pushTransient(bool force);
+    void queued(size_t bytes);  // counts bytes queued; notes the first
+
+    ClientChunks& mClient;
+    Outbox& mOutbox;
+    const uint32_t mFrame, mStore;
+    const double mIso;
+    const std::atomic<bool>& mSuperseded;
+    const std::chrono::steady_clock::time_point mStart;
+    std::mutex mMutex;  // below; taken after mClient.mutex when both are held
+    std::unordered_set<uint32_t> mWhole, mReferred;  // bricks of this frame, by use
+    TriangleMesh mTransient;
+    PointSet mTransientPoints;
+    FrameCounters mCounters;
+};
+
+}  // namespace vdiso::serve

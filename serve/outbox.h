@@ -1,0 +1,68 @@
+// A session's outgoing messages: a queue bounded in bytes, where a newer frame replaces the
+// unsent messages of older ones.
+//
+// The frame's producer (an extraction thread) pushes; the connection's writer pops one message
+// at a time. Messages belong to a frame or are control messages (hello, errors, acks, frame
+// ends), which are never dropped. beginFrame(f) drops every queued message of a frame before
+// f: a slow client gets the newest frame, not a backlog of superseded ones. push() blocks while
+// the queue holds more than its byte limit, until the writer drains it, the frame is
+// superseded or the outbox is closed: so a slow client costs at most the limit (plus one
+// message) of memory, never more. Thread-safe.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+namespace vdiso::serve {
+
+struct OutMessage {
+    static constexpr uint32_t kControl = UINT32_MAX;
+    std::shared_ptr<const std::vector<uint8_t>> bytes;
+    bool text = false;
+    uint32_t frame = kControl;  // the frame it belongs to, or kControl
+    // A cacheable chunk: once written, the client holds (store, iso, brick).
+    bool cacheable = false;
+    uint32_t store = 0, brick = 0, triangles = 0;
+    double iso = 0;
+
+    static OutMessage control(const std::string& json);
+};
+
+class Outbox {
+public:
+    // `wake` is called (outside the lock) when a message is queued, so the writer can start.
+    Outbox(size_t byteLimit, std::function<void()> wake);
+
+    // Queues `m`; a frame message first waits while the queue is over its limit, unless
+    // `waitForRoom` is false (small messages queued under a lock the writer may need).
+    // Returns false, queuing nothing, when the outbox is closed or m's frame is older than the
+    // newest begun.
+    bool push(OutMessage m, bool waitForRoom = true);
+    // Drops queued messages of frames before `frame`, and wakes a push blocked for them.
+    void beginFrame(uint32_t frame);
+    // The next message to write, or nothing.
+    std::optional<OutMessage> pop();
+    // Drops everything, refuses further pushes, releases blocked ones.
+    void close();
+    bool closed() const;
+    size_t queuedBytes() const;
+
+private:
+    const size_t mLimit;
+    std::function<void()> mWake;
+    mutable std::mutex mMutex;
+    std::condition_variable mDrained;
+    std::deque<OutMessage> mQueue;
+    size_t mBytes = 0;
+    bool mClosed = false;
+    bool mHasFrame = false;
+    uint32_t mNewestFrame = 0;
+};
+
+}  // namespace vdiso::serve

@@ -1,0 +1,410 @@
+#include "serve/server.h"
+
+#include <algorithm>
+#include <atomic>
+#include <fstream>
+#include <list>
+#include <mutex>
+#include <sstream>
+
+#include <boost/asio/dispatch.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+
+#include "io/error.h"
+#include "serve/store_catalog.h"
+#include "serve/viewer_session.h"
+#include "serve/web_files.h"
+
+namespace vdiso::serve {
+
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+
+namespace {
+
+constexpr const char* kServerName = "vdiso";
+constexpr auto kHttpTimeout = std::chrono::seconds(30);
+constexpr size_t kReadPiece = 64 * 1024;  // WebSocket reads in pieces, so size is checked as it comes
+
+// Frames that may extract at once: each pins its strips' bricks and prefetches, which must
+// never fill a cache (a cache holding its whole volume never evicts, so then any number).
+int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
+    int slots = 64;
+    for (size_t i = 0; i < stores.size(); ++i) {
+        const BrickCache& cache = *stores[i].cache;
+        const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
+        if (bricks >= uint64_t(stores[i].reader->layout().brickCount())) continue;
+        const uint64_t perFrame = uint64_t(settings.prefetchBricks + 4 * settings.threads);
+        slots = std::min<int>(slots, int(std::max<uint64_t>(1, bricks / (2 * perFrame))));
+    }
+    return slots;
+}
+
+class WsSession;
+
+}  // namespace
+
+struct Server::Impl {
+    ServeOptions options;
+    StoreCatalog stores;
+    WebFiles web;
+    SessionSettings settings;
+    FrameGate gate;
+    std::string token;
+    net::io_context ioc{1};
+    tcp::acceptor acceptor{ioc};
+    net::signal_set signals{ioc};
+    std::mutex mutex;
+    std::list<std::weak_ptr<WsSession>> sessions;
+    std::atomic<uint64_t> sessionsOpened{0}, httpRequests{0}, httpRefused{0};
+    std::atomic<bool> stopping{false};
+
+    explicit Impl(const ServeOptions& o)
+        : options(o), stores(o.stores, o.cacheBytes, o.iso), web(o.webRoot),
+          settings{o.threads, o.metaCellSize}, gate(frameSlots(stores, settings)),
+          token(o.token.empty() ? randomToken() : o.token) {}
+
+    void accept();
+    void shutdown();
+    bool authorized(const http::request<http::string_body>& request, bool& fromQuery) const;
+};
+
+namespace {
+
+// One WebSocket connection: reads messages into the session, writes what it queues.
+class WsSession : public std::enable_shared_from_this<WsSession> {
+public:
+    WsSession(tcp::socket&& socket, Server::Impl& server) : mWs(std::move(socket)), mServer(server) {}
+
+    ~WsSession() { mViewer.reset(); }  // joins the worker
+
+    void run(http::request<http::string_body> request) {
+        mWs.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+        mWs.set_option(websocket::stream_base::decorator(
+            [](websocket::response_type& r) { r.set(http::field::server, kServerName); }));
+        mWs.read_message_max(0);  // sizes are checked as pieces arrive (readPiece)
+        std::weak_ptr<WsSession> weak = weak_from_this();
+        auto executor = mWs.get_executor();
+        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.gate, [weak, executor] {
+            net::post(executor, [weak] {
+                if (auto self = weak.lock()) self->pump();
+            });
+        });
+        mWs.async_accept(request, beast::bind_front_handler(&WsSession::onAccept, shared_from_this()));
+    }
+
+    // The server is stopping: the session's work stops now (at its next brick) and its
+    // worker is joined; the socket closes with the I/O context.
+    void stop() {
+        if (mViewer) mViewer->close();
+    }
+    void join() {
+        if (mViewer) mViewer->join();
+    }
+
+private:
+    void onAccept(beast::error_code error) {
+        if (error) return;
+        ++mServer.sessionsOpened;
+        mViewer->start();
+        readPiece();
+    }
+
+    void readPiece() {
+        mWs.async_read_some(mBuffer, kReadPiece,
+                            beast::bind_front_handler(&WsSession::onRead, shared_from_this()));
+    }
+
+    void onRead(beast::error_code error, size_t bytes) {
+        if (error) {  // closed by the client, or broken: its work stops now
+            mViewer->close();
+            return;
+        }
+        mMessageBytes += bytes;
+        if (mMessageBytes > kMaxClientMessageBytes) mBuffer.consume(mBuffer.size());  // skipped
+        if (mWs.is_message_done()) {
+            if (mMessageBytes > kMaxClientMessageBytes) {
+                mViewer->onOversize(mMessageBytes);
+            } else {
+                const auto data = mBuffer.cdata();
+                mViewer->onMessage({static_cast<const uint8_t*>(data.data()), data.size()}, mWs.got_text());
+            }
+            mBuffer.consume(mBuffer.size());
+            mMessageBytes = 0;
+        }
+        readPiece();
+    }
+
+    // Writes the next queued message unless one is being written.
+    void pump() {
+        if (mWriting) return;
+        mCurrent = mViewer->nextToWrite();
+        if (!mCurrent) return;
+        mWriting = true;
+        mWs.text(mCurrent->text);
+        mWs.async_write(net::buffer(*mCurrent->bytes),
+                        beast::bind_front_handler(&WsSession::onWrite, shared_from_this()));
+    }
+
+    void onWrite(beast::error_code error, size_t) {
+        mWriting = false;
+        mCurrent.reset();
+        if (error) {
+            mViewer->close();
+            return;
+        }
+        pump();
+    }
+
+    websocket::stream<beast::tcp_stream> mWs;
+    Server::Impl& mServer;
+    beast::flat_buffer mBuffer;
+    uint64_t mMessageBytes = 0;
+    std::unique_ptr<ViewerSession> mViewer;
+    std::optional<OutMessage> mCurrent;
+    bool mWriting = false;
+};
+
+// One HTTP connection: the viewer's files, or the upgrade to a WebSocket.
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+public:
+    HttpSession(tcp::socket&& socket, Server::Impl& server) : mStream(std::move(socket)), mServer(server) {}
+
+    void run() {
+        net::dispatch(mStream.get_executor(), beast::bind_front_handler(&HttpSession::read, shared_from_this()));
+    }
+
+private:
+    void read() {
+        mParser.emplace();
+        mParser->header_limit(16 * 1024);
+        mParser->body_limit(16 * 1024);
+        mStream.expires_after(kHttpTimeout);
+        http::async_read(mStream, mBuffer, *mParser,
+                         beast::bind_front_handler(&HttpSession::onRead, shared_from_this()));
+    }
+
+    void onRead(beast::error_code error, size_t) {
+        if (error == http::error::end_of_stream) {
+            mStream.socket().shutdown(tcp::socket::shutdown_send, error);
+            return;
+        }
+        if (error) {  // malformed, too large or timed out: answer once, then close
+            if (error != beast::error::timeout && error != net::error::operation_aborted)
+                send(reply(http::status::bad_request, "malformed request: " + error.message() + "\n", 11, false));
+            return;
+        }
+        http::request<http::string_body> request = mParser->release();
+        ++mServer.httpRequests;
+        bool fromQuery = false;
+        const bool allowed = mServer.authorized(request, fromQuery);
+        if (websocket::is_upgrade(request)) {
+            const std::string target(request.target());
+            if (allowed && target.substr(0, target.find('?')) == "/ws" && !mServer.stopping) {
+                mStream.expires_never();
+                auto session = std::make_shared<WsSession>(mStream.release_socket(), mServer);
+                {
+                    std::lock_guard lock(mServer.mutex);
+                    std::erase_if(mServer.sessions, [](const std::weak_ptr<WsSession>& w) { return w.expired(); });
+                    mServer.sessions.push_back(session);
+                }
+                session->run(std::move(request));
+                return;
+            }
+            ++mServer.httpRefused;
+            send(reply(allowed ? http::status::not_found : http::status::forbidden,
+                       allowed ? "no such WebSocket endpoint (use /ws)\n" : "access token missing or wrong\n",
+                       request.version(), false));
+            return;
+        }
+        send(respond(request, allowed, fromQuery));
+    }
+
+    http::response<http::string_body> reply(http::status status, std::string body, unsigned version,
+                                            bool keepAlive, const std::string& type = "text/plain; charset=utf-8") {
+        http::response<http::string_body> r{status, version};
+        r.set(http::field::server, kServerName);
+        r.set(http::field::content_type, type);
+        r.set(http::field::cache_control, "no-store");
+        r.set("X-Content-Type-Options", "nosniff");
+        r.keep_alive(keepAlive);
+        r.body() = std::move(body);
+        r.prepare_payload();
+        return r;
+    }
+
+    http::response<http::string_body> respond(const http::request<http::string_body>& request,
+                                              bool allowed, bool fromQuery) {
+        const unsigned version = request.version();
+        const bool keepAlive = request.keep_alive();
+        if (!allowed) {
+            ++mServer.httpRefused;
+            return reply(http::status::forbidden,
+                         "access token missing or wrong: open the URL vdiso serve printed\n", version, keepAlive);
+        }
+        if (request.method() != http::verb::get && request.method() != http::verb::head) {
+            ++mServer.httpRefused;
+            return reply(http::status::method_not_allowed, "only GET and HEAD\n", version, keepAlive);
+        }
+        const std::string target(request.target());
+        const std::optional<WebFile> file = mServer.web.find(target.substr(0, target.find('?')));
+        if (!file) {
+            ++mServer.httpRefused;
+            return reply(http::status::not_found, "not found\n", version, keepAlive);
+        }
+        std::ifstream in(file->path, std::ios::binary);
+        std::ostringstream body;
+        body << in.rdbuf();
+        if (!in) return reply(http::status::internal_server_error, "cannot read the file\n", version, keepAlive);
+        http::response<http::string_body> r = reply(http::status::ok, body.str(), version, keepAlive, file->contentType);
+        // A page opened with the token in its URL gets it as a cookie, for its modules and socket.
+        if (fromQuery)
+            r.set(http::field::set_cookie, "vdiso_token=" + mServer.token + "; HttpOnly; SameSite=Strict; Path=/");
+        if (request.method() == http::verb::head) {
+            r.body().clear();
+            r.content_length(body.str().size());
+        }
+        return r;
+    }
+
+    void send(http::response<http::string_body>&& response) {
+        auto r = std::make_shared<http::response<http::string_body>>(std::move(response));
+        http::async_write(mStream, *r, [self = shared_from_this(), r](beast::error_code error, size_t) {
+            if (error || !r->keep_alive()) {
+                self->mStream.socket().shutdown(tcp::socket::shutdown_send, error);
+                return;
+            }
+            self->read();
+        });
+    }
+
+    beast::tcp_stream mStream;
+    Server::Impl& mServer;
+    beast::flat_buffer mBuffer;
+    std::optional<http::request_parser<http::string_body>> mParser;
+};
+
+}  // namespace
+
+bool Server::Impl::authorized(const http::request<http::string_body>& request, bool& fromQuery) const {
+    const std::string target(request.target());
+    const size_t q = target.find('?');
+    if (q != std::string::npos) {
+        const std::optional<std::string> given = findParameter(target.substr(q + 1), "token", '&');
+        if (given && constantTimeEquals(*given, token)) {
+            fromQuery = true;
+            return true;
+        }
+    }
+    const auto cookie = request.find(http::field::cookie);
+    if (cookie != request.end()) {
+        const std::optional<std::string> given = findParameter(std::string(cookie->value()), "vdiso_token", ';');
+        if (given && constantTimeEquals(*given, token)) return true;
+    }
+    return false;
+}
+
+void Server::Impl::accept() {
+    acceptor.async_accept(net::make_strand(ioc), [this](beast::error_code error, tcp::socket socket) {
+        if (error) return;  // closed: stopping
+        std::make_shared<HttpSession>(std::move(socket), *this)->run();
+        accept();
+    });
+}
+
+void Server::Impl::shutdown() {
+    if (stopping.exchange(true)) return;
+    beast::error_code ignored;
+    acceptor.close(ignored);
+    signals.cancel(ignored);
+    {
+        std::lock_guard lock(mutex);
+        for (const std::weak_ptr<WsSession>& w : sessions)
+            if (auto s = w.lock()) s->stop();
+    }
+    // Idle HTTP connections hold no work worth waiting for; sockets close with the context.
+    ioc.stop();
+}
+
+Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(options)) {
+    Impl& s = *mImpl;
+    beast::error_code error;
+    const net::ip::address address = net::ip::make_address(options.host, error);
+    if (error) throw IoError("--host " + options.host + ": not an IP address: " + error.message());
+    const tcp::endpoint endpoint(address, options.port);
+    s.acceptor.open(endpoint.protocol(), error);
+    if (!error) s.acceptor.set_option(net::socket_base::reuse_address(true), error);
+    if (!error) s.acceptor.bind(endpoint, error);
+    if (!error) s.acceptor.listen(net::socket_base::max_listen_connections, error);
+    if (error)
+        throw IoError(options.host + ":" + std::to_string(options.port) + ": cannot listen: " + error.message());
+    if (options.handleSignals) {
+        s.signals.add(SIGINT);
+        s.signals.add(SIGTERM);
+        s.signals.async_wait([this](beast::error_code e, int) {
+            if (!e) mImpl->shutdown();
+        });
+    }
+    s.accept();
+}
+
+Server::~Server() {
+    stop();
+}
+
+uint16_t Server::port() const {
+    beast::error_code ignored;
+    return mImpl->acceptor.is_open() ? mImpl->acceptor.local_endpoint(ignored).port() : 0;
+}
+
+const std::string& Server::token() const { return mImpl->token; }
+
+std::string Server::url() const {
+    const std::string host = mImpl->options.host.find(':') != std::string::npos
+                                 ? "[" + mImpl->options.host + "]"
+                                 : mImpl->options.host;
+    return "http://" + host + ":" + std::to_string(port()) + "/?token=" + mImpl->token;
+}
+
+void Server::run() {
+    mImpl->ioc.run();
+    // Every session's worker is stopped before the context (and the sockets) go away.
+    std::list<std::weak_ptr<WsSession>> sessions;
+    {
+        std::lock_guard lock(mImpl->mutex);
+        sessions = mImpl->sessions;
+    }
+    for (const std::weak_ptr<WsSession>& w : sessions)
+        if (auto s = w.lock()) {
+            s->stop();
+            s->join();
+        }
+}
+
+void Server::stop() {
+    net::post(mImpl->ioc, [this] { mImpl->shutdown(); });
+    if (mImpl->ioc.stopped()) mImpl->shutdown();
+}
+
+ServerCounters Server::counters() const {
+    ServerCounters c;
+    c.sessionsOpened = mImpl->sessionsOpened;
+    {
+        std::lock_guard lock(mImpl->mutex);
+        for (const auto& w : mImpl->sessions) c.sessionsOpen += !w.expired();
+    }
+    c.httpRequests = mImpl->httpRequests;
+    c.httpRefused = mImpl->httpRefused;
+    return c;
+}
+
+}  // namespace vdiso::serve

@@ -1,0 +1,66 @@
+// `vdiso serve`: HTTP for the viewer's files and a WebSocket per browser that streams the
+// visible surface as the camera moves (DESIGN.md, "Remote viewing"; docs/protocol.md).
+//
+// One process holds the stores and one brick cache per store, shared by every frame of every
+// client. Each WebSocket connection is a ViewerSession (serve/viewer_session.h) with its own
+// worker thread; networking runs on one I/O thread (Boost.Beast), reads and writes of a
+// connection on its strand. Every request needs the access token (in the URL or its cookie);
+// only the viewer's files are served (serve/web_files.h). A malformed request or message is
+// answered with an error; neither the connection nor the server goes down for it.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdiso::serve {
+
+struct ServeOptions {
+    std::vector<std::string> stores;
+    std::optional<double> iso;  // every store's default isovalue; else Otsu's threshold
+    std::string host = "127.0.0.1";
+    uint16_t port = 8080;  // 0: the system chooses
+    uint64_t cacheBytes = uint64_t(1024) << 20;  // brick cache, split across the stores
+    int threads = 1;  // image strips per frame
+    int metaCellSize = 4;
+    std::string webRoot;  // the viewer's folder (web/)
+    std::string token;    // empty: a random one
+    bool handleSignals = false;  // SIGINT and SIGTERM stop run()
+};
+
+struct ServerCounters {
+    uint64_t sessionsOpened = 0, sessionsOpen = 0;
+    uint64_t httpRequests = 0, httpRefused = 0;
+};
+
+class Server {
+public:
+    // Opens the stores and the viewer's files and binds the port. Throws IoError naming what
+    // fails (a store, the web folder, the address).
+    explicit Server(const ServeOptions& options);
+    ~Server();
+    Server(const Server&) = delete;
+    Server& operator=(const Server&) = delete;
+
+    uint16_t port() const;
+    const std::string& token() const;
+    // http://HOST:PORT/?token=TOKEN
+    std::string url() const;
+
+    // Serves until stop() (or a signal, with handleSignals). Returns once every connection is
+    // closed and every session's worker has stopped.
+    void run();
+    // Thread-safe; run() returns soon after.
+    void stop();
+
+    ServerCounters counters() const;
+
+    struct Impl;  // Beast stays out of this header
+
+private:
+    std::unique_ptr<Impl> mImpl;
+};
+
+}  // namespace vdiso::serve

@@ -1,0 +1,42 @@
+// The stores a server offers: each opened once, with one brick cache that every frame of
+// every client reads through, and its description for the viewer (the `hello` message of
+// docs/protocol.md).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cache/brick_cache.h"
+#include "io/brick_store.h"
+
+namespace vdiso::serve {
+
+struct ServedStore {
+    std::string name;  // the file name without its directory and ".vdiso"
+    std::unique_ptr<BrickStoreReader> reader;
+    std::unique_ptr<BrickCache> cache;
+    double defaultIso = 0;  // --iso, else Otsu's threshold of the histogram
+    std::string description;  // the store's JSON object in `hello`
+};
+
+class StoreCatalog {
+public:
+    // Opens every store (throws IoError naming the file that fails) and gives each a cache of
+    // cacheBytes / stores.size(). Two stores of the same name are refused.
+    StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes,
+                 std::optional<double> iso);
+
+    size_t size() const { return mStores.size(); }
+    ServedStore& operator[](size_t i) { return mStores[i]; }
+    // {"type":"hello","version":1,"stores":[...]}
+    const std::string& hello() const { return mHello; }
+
+private:
+    std::vector<ServedStore> mStores;
+    std::string mHello;
+};
+
+}  // namespace vdiso::serve

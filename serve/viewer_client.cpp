@@ -1,0 +1,173 @@
+#include "serve/viewer_client.h"
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+#include <nlohmann/json.hpp>
+
+#include "io/error.h"
+
+namespace vdiso::serve {
+
+namespace beast = boost::beast;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+using Clock = std::chrono::steady_clock;
+
+struct ViewerClient::Connection {
+    net::io_context ioc;
+    websocket::stream<tcp::socket> ws{ioc};
+};
+
+namespace {
+
+std::string typeOf(const std::string& text) {
+    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("type") || !j["type"].is_string())
+        throw ProtocolError("server sent text that is not a typed JSON object: " + text.substr(0, 200));
+    return j["type"].get<std::string>();
+}
+
+}  // namespace
+
+ViewerClient::ViewerClient(const std::string& host, uint16_t port, const std::string& token)
+    : mConnection(std::make_unique<Connection>()) {
+    try {
+        tcp::resolver resolver(mConnection->ioc);
+        net::connect(mConnection->ws.next_layer(), resolver.resolve(host, std::to_string(port)));
+        mConnection->ws.read_message_max(uint64_t(1) << 30);
+        mConnection->ws.handshake(host + ":" + std::to_string(port), "/ws?token=" + token);
+    } catch (const beast::system_error& e) {
+        throw IoError(host + ":" + std::to_string(port) + ": WebSocket connection failed: " + e.code().message());
+    }
+    mHello = readText();
+    if (typeOf(mHello) != "hello") throw ProtocolError("the server's first message is not hello: " + mHello);
+}
+
+ViewerClient::~ViewerClient() { close(); }
+
+void ViewerClient::close() {
+    if (!mConnection || !mConnection->ws.is_open()) return;
+    beast::error_code ignored;
+    mConnection->ws.close(websocket::close_code::normal, ignored);
+}
+
+bool ViewerClient::read(std::vector<uint8_t>& message) {
+    beast::flat_buffer buffer;
+    try {
+        mConnection->ws.read(buffer);
+    } catch (const beast::system_error& e) {
+        throw IoError("WebSocket read failed: " + e.code().message());
+    }
+    const auto data = buffer.cdata();
+    const auto* bytes = static_cast<const uint8_t*>(data.data());
+    message.assign(bytes, bytes + data.size());
+    return mConnection->ws.got_text();
+}
+
+void ViewerClient::sendRaw(const std::vector<uint8_t>& bytes, bool text) {
+    mConnection->ws.text(text);
+    mConnection->ws.write(net::buffer(bytes));
+}
+
+std::string ViewerClient::readText() {
+    std::vector<uint8_t> message;
+    while (!read(message)) {
+    }
+    return std::string(message.begin(), message.end());
+}
+
+void ViewerClient::sendView(const ViewMessage& view) {
+    mSent = Clock::now();
+    mViews[view.seq] = {view.store, view.iso};
+    sendRaw(encodeView(view));
+}
+
+ClientFrame ViewerClient::requestFrame(const ViewMessage& view) {
+    sendView(view);
+    return readFrame(view.seq);
+}
+
+ClientFrame ViewerClient::readFrame(uint32_t frame) {
+    ClientFrame f;
+    f.frame = frame;
+    const auto view = mViews.find(frame);
+    if (view == mViews.end()) throw ProtocolError("no VIEW was sent for frame " + std::to_string(frame));
+    f.store = view->second.first;
+    f.iso = view->second.second;
+    std::vector<uint8_t> message;
+    auto since = [&] { return std::chrono::duration<double>(Clock::now() - mSent).count(); };
+    while (true) {
+        if (read(message)) {
+            const std::string text(message.begin(), message.end());
+            const std::string type = typeOf(text);
+            if (type == "error") f.errors.push_back(text);
+            if (type != "frameEnd") continue;
+            const nlohmann::json j = nlohmann::json::parse(text);
+            if (j.value("frame", int64_t(-1)) != int64_t(frame)) continue;
+            f.status = j.value("status", std::string());
+            f.frameEnd = text;
+            f.completeSeconds = since();
+            return f;
+        }
+        if (message.empty()) throw ProtocolError("empty binary message");
+        if (message[0] == uint8_t(MessageType::Chunk)) {
+            DecodedChunk chunk = decodeChunk(message);
+            if (chunk.header.frame != frame) continue;  // an older frame's, still in flight
+            if (f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();
+            f.binaryBytes += message.size();
+            if (chunk.header.flags & kChunkCacheable) {
+                f.chunks.push_back(chunk.header.brick);
+                mCache[{chunk.header.store, chunk.header.iso, chunk.header.brick}] = std::move(chunk);
+            } else {
+                f.transient.push_back(std::move(chunk));
+            }
+        } else if (message[0] == uint8_t(MessageType::Refs)) {
+            uint32_t refsFrame = 0;
+            const std::vector<uint32_t> bricks = decodeRefs(message, refsFrame);
+            if (refsFrame != frame) continue;
+            if (f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();
+            f.binaryBytes += message.size();
+            f.refs.insert(f.refs.end(), bricks.begin(), bricks.end());
+            for (const uint32_t b : bricks) f.missingRefs += !mCache.contains({f.store, f.iso, b});
+        } else {
+            throw ProtocolError("unknown binary message type " + std::to_string(message[0]));
+        }
+    }
+}
+
+void ViewerClient::evict(uint32_t store, double iso, const std::vector<uint32_t>& bricks) {
+    EvictMessage e;
+    e.seq = ++mEvictSeq;
+    e.store = store;
+    e.iso = iso;
+    e.bricks = bricks;
+    for (const uint32_t b : bricks) mCache.erase({store, iso, b});
+    sendRaw(encodeEvict(e));
+    while (true) {
+        const std::string text = readText();
+        if (typeOf(text) != "evicted") continue;
+        if (nlohmann::json::parse(text).value("seq", int64_t(-1)) == int64_t(e.seq)) return;
+    }
+}
+
+void ViewerClient::assemble(const ClientFrame& frame, TriangleMesh& mesh, PointSet& points) const {
+    auto add = [&](const DecodedChunk& c) {
+        const uint32_t offset = uint32_t(mesh.positions.size());
+        mesh.positions.insert(mesh.positions.end(), c.mesh.positions.begin(), c.mesh.positions.end());
+        mesh.normals.insert(mesh.normals.end(), c.mesh.normals.begin(), c.mesh.normals.end());
+        for (const uint32_t v : c.mesh.indices) mesh.indices.push_back(v + offset);
+        points.positions.insert(points.positions.end(), c.points.positions.begin(), c.points.positions.end());
+        points.normals.insert(points.normals.end(), c.points.normals.begin(), c.points.normals.end());
+    };
+    for (const std::vector<uint32_t>* list : {&frame.chunks, &frame.refs})
+        for (const uint32_t brick : *list) {
+            const auto it = mCache.find({frame.store, frame.iso, brick});
+            if (it != mCache.end()) add(it->second);
+        }
+    for (const DecodedChunk& c : frame.transient) add(c);
+}
+
+}  // namespace vdiso::serve

@@ -1,0 +1,85 @@
+// A client of `vdiso serve` in C++: what the browser does, without drawing. It connects with
+// the token, sends VIEWs and EVICTs, decodes the chunks, keeps the cacheable ones by what they
+// hold (store, iso, brick) and assembles each frame from the chunks it names. The tests check
+// frames against the library with it, and bench/ measures latency and bytes with it.
+// Blocking calls on one thread; not thread-safe (one client per thread).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "serve/chunk_codec.h"
+#include "serve/protocol.h"
+
+namespace vdiso::serve {
+
+struct ClientFrame {
+    uint32_t frame = 0;
+    uint32_t store = 0;  // the VIEW's
+    double iso = 0;
+    std::string status;    // frameEnd's status: "complete", "superseded", "error"
+    std::string frameEnd;  // the frameEnd message as it came
+    std::vector<uint32_t> chunks;  // cacheable chunks received, in arrival order
+    std::vector<uint32_t> refs;    // chunks named by REFS, in arrival order
+    std::vector<DecodedChunk> transient;
+    uint64_t binaryBytes = 0;      // CHUNK and REFS bytes received for this frame
+    uint64_t missingRefs = 0;      // REFS naming a chunk the client does not hold
+    double firstGeometrySeconds = -1;  // from sending the VIEW to the first CHUNK or REFS
+    double completeSeconds = -1;       // to frameEnd
+    std::vector<std::string> errors;   // error messages that arrived meanwhile
+};
+
+class ViewerClient {
+public:
+    // Connects to ws://host:port/ws?token=TOKEN and reads the hello. Throws IoError (refused,
+    // handshake failed) or ProtocolError (no hello).
+    ViewerClient(const std::string& host, uint16_t port, const std::string& token);
+    ~ViewerClient();
+    ViewerClient(const ViewerClient&) = delete;
+    ViewerClient& operator=(const ViewerClient&) = delete;
+
+    const std::string& hello() const { return mHello; }
+
+    // Sends raw bytes as one message (binary, or text), for tests of what the server refuses.
+    void sendRaw(const std::vector<uint8_t>& bytes, bool text = false);
+    // Sends a VIEW and returns when its frameEnd has arrived (frames of older VIEWs that
+    // arrive meanwhile are read and discarded).
+    ClientFrame requestFrame(const ViewMessage& view);
+    // Sends a VIEW without waiting.
+    void sendView(const ViewMessage& view);
+    // Reads until the frameEnd of `frame`.
+    ClientFrame readFrame(uint32_t frame);
+    // The next text message (skipping binary ones). Throws IoError when the connection ends.
+    std::string readText();
+    // Drops chunks from the cache, tells the server, and waits for its answer.
+    void evict(uint32_t store, double iso, const std::vector<uint32_t>& bricks);
+
+    // The frame's geometry: the cacheable chunks it names, from the cache, and its transient
+    // chunks, in one mesh (firstVertex 0) and one point set.
+    void assemble(const ClientFrame& frame, TriangleMesh& mesh, PointSet& points) const;
+    size_t cachedChunks() const { return mCache.size(); }
+    bool holds(uint32_t store, double iso, uint32_t brick) const {
+        return mCache.contains({store, iso, brick});
+    }
+    void close();
+
+private:
+    struct Connection;
+    // One message; true when it is text.
+    bool read(std::vector<uint8_t>& message);
+
+    std::unique_ptr<Connection> mConnection;
+    std::string mHello;
+    std::map<std::tuple<uint32_t, double, uint32_t>, DecodedChunk> mCache;
+    std::map<uint32_t, std::pair<uint32_t, double>> mViews;  // seq -> store, iso
+    uint32_t mEvictSeq = 0;
+    std::chrono::steady_clock::time_point mSent;
+};
+
+}  // namespace vdiso::serve

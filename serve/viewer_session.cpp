@@ -1,0 +1,197 @@
+#include "serve/viewer_session.h"
+
+#include <exception>
+
+#include "core/camera.h"
+#include "io/json.h"
+
+namespace vdiso::serve {
+
+using Clock = std::chrono::steady_clock;
+
+bool FrameGate::enter(const std::function<bool()>& giveUp) {
+    std::unique_lock lock(mMutex);
+    // Woken by leave(); polled for giveUp, which another thread sets without this lock.
+    while (mFree == 0) {
+        if (giveUp()) return false;
+        mChanged.wait_for(lock, std::chrono::milliseconds(20));
+    }
+    --mFree;
+    return true;
+}
+
+void FrameGate::leave() {
+    {
+        std::lock_guard lock(mMutex);
+        ++mFree;
+    }
+    mChanged.notify_one();
+}
+
+ViewerSession::ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FrameGate& gate,
+                             std::function<void()> wake)
+    : mStores(stores), mSettings(settings), mGate(gate), mOutbox(settings.outboxBytes, std::move(wake)) {}
+
+ViewerSession::~ViewerSession() {
+    close();
+    join();
+}
+
+void ViewerSession::join() {
+    std::lock_guard lock(mJoinMutex);
+    if (mWorker.joinable()) mWorker.join();
+}
+
+void ViewerSession::start() {
+    mOutbox.push(OutMessage::control(mStores.hello()));
+    mWorker = std::thread([this] { work(); });
+}
+
+void ViewerSession::close() {
+    {
+        std::lock_guard lock(mMutex);
+        mClosing = true;
+        mSuperseded = true;
+    }
+    mWork.notify_all();
+    mOutbox.close();
+}
+
+void ViewerSession::reply(const std::string& error) {
+    mOutbox.push(OutMessage::control(JsonObject().add("type", "error").add("message", error).str()));
+}
+
+void ViewerSession::onOversize(uint64_t bytes) {
+    reply("message of " + std::to_string(bytes) + " bytes is above the limit of " +
+          std::to_string(kMaxClientMessageBytes) + "; ignored");
+}
+
+void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
+    try {
+        if (text)
+            throw ProtocolError("text message refused: a client sends binary VIEW and EVICT "
+                                "messages (docs/protocol.md)");
+        if (clientMessageType(bytes) == MessageType::View) {
+            const ViewMessage view = parseView(bytes);
+            if (view.store >= mStores.size())
+                throw ProtocolError("VIEW: unknown store " + std::to_string(view.store) + " (" +
+                                    std::to_string(mStores.size()) + " served)");
+            const StoreHeader& h = mStores[view.store].reader->header();
+            if (!(view.iso >= h.valueMin && view.iso <= h.valueMax))
+                throw ProtocolError("VIEW: iso " + jsonNumber(view.iso) + " is outside store '" +
+                                    mStores[view.store].name + "''s values [" + jsonNumber(h.valueMin) +
+                                    ", " + jsonNumber(h.valueMax) + "]");
+            {
+                std::lock_guard lock(mMutex);
+                if (mLastSeq && view.seq <= *mLastSeq)
+                    throw ProtocolError("VIEW: seq " + std::to_string(view.seq) +
+                                        " does not follow the last one (" + std::to_string(*mLastSeq) + ")");
+                mLastSeq = view.seq;
+                mPending = view;
+                mPendingArrival = Clock::now();
+                mSuperseded = true;  // the running frame stops at its next brick
+            }
+            mOutbox.beginFrame(view.seq);  // what is queued of older frames is dropped now
+            mWork.notify_one();
+            return;
+        }
+        const EvictMessage evict = parseEvict(bytes);
+        if (evict.store >= mStores.size())
+            throw ProtocolError("EVICT: unknown store " + std::to_string(evict.store));
+        std::lock_guard lock(mClient.mutex);
+        // REFs decided before the eviction go out before its answer.
+        mClient.flushRefsLocked(mOutbox);
+        for (const uint32_t brick : evict.bricks) mClient.held.erase({evict.store, evict.iso, brick});
+        mOutbox.push(OutMessage::control(
+            JsonObject().add("type", "evicted").add("seq", int64_t(evict.seq)).str()));
+    } catch (const ProtocolError& e) {
+        reply(e.what());
+    }
+}
+
+std::optional<OutMessage> ViewerSession::nextToWrite() {
+    std::optional<OutMessage> m = mOutbox.pop();
+    if (m && m->cacheable) {
+        std::lock_guard lock(mClient.mutex);
+        mClient.held[{m->store, m->iso, m->brick}] = m->triangles;
+    }
+    return m;
+}
+
+void ViewerSession::work() {
+    while (true) {
+        ViewMessage view;
+        Clock::time_point arrival;
+        {
+            std::unique_lock lock(mMutex);
+            mWork.wait(lock, [&] { return mClosing || mPending; });
+            if (mClosing) return;
+            view = *mPending;
+            arrival = mPendingArrival;
+            mPending.reset();
+            mSuperseded = false;
+        }
+        runFrame(view, arrival);
+    }
+}
+
+void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival) {
+    ServedStore& store = mStores[view.store];
+    const VolumeInfo& volume = store.reader->volume();
+    Camera camera;
+    camera.eye = view.eye;
+    camera.target = view.target;
+    camera.up = view.up;
+    camera.fovYDegrees = view.fovYDegrees;
+    camera.width = int(view.width);
+    camera.height = int(view.height);
+    fitClipPlanes(camera, volume.origin, volume.worldMax());
+
+    mOutbox.push(OutMessage::control(JsonObject()
+                                         .add("type", "frameBegin")
+                                         .add("frame", int64_t(view.seq))
+                                         .add("store", int64_t(view.store))
+                                         .add("iso", view.iso)
+                                         .str()),
+                 false);
+    FrameStream stream(mClient, mOutbox, view.seq, view.store, view.iso, mSuperseded, arrival);
+    ViewExtractOptions options = ViewExtractOptions::sage(view.iso);
+    options.metaCellSize = mSettings.metaCellSize;
+    options.threads = mSettings.threads;
+    options.prefetchBricks = mSettings.prefetchBricks;
+    options.stream = &stream;
+    const CacheCounters before = store.cache->counters();
+    std::string status = "complete", error;
+    ViewExtractStats stats;
+    if (!mGate.enter([&] { return mSuperseded.load(); })) {
+        status = "superseded";
+    } else {
+        try {
+            TriangleMesh unused;
+            PointSet unusedPoints;
+            stats = extractViewDependent(*store.cache, camera, options, unused, unusedPoints);
+            if (stats.abandoned) status = "superseded";
+        } catch (const std::exception& e) {
+            status = "error";
+            error = e.what();
+        }
+        mGate.leave();
+    }
+    stream.finish();
+    if (!error.empty()) reply("frame " + std::to_string(view.seq) + ": " + error);
+    const FrameCounters c = stream.counters();
+    const CacheCounters after = store.cache->counters();
+    const double seconds = std::chrono::duration<double>(Clock::now() - arrival).count();
+    JsonObject end;
+    end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", status);
+    end.add("chunks", c.chunks).add("refs", c.refs).add("triangles", c.triangles);
+    end.add("points", c.points).add("bytes", c.bytes);
+    // The cache is shared: misses while this frame ran, whoever caused them.
+    end.add("bricksRead", after.misses - before.misses);
+    end.add("bricksVisited", stats.bricksAcquired);
+    end.add("serverMs", seconds * 1e3);
+    end.add("firstChunkMs", c.firstChunkSeconds < 0 ? -1.0 : c.firstChunkSeconds * 1e3);
+    mOutbox.push(OutMessage::control(end.str()));
+}
+
+}  // namespace vdiso::serve

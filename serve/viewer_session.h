@@ -1,0 +1,91 @@
+// One browser's session, apart from the socket: the protocol's messages in, frames out.
+//
+// The connection hands every message it reads to onMessage() and writes what nextToWrite()
+// gives it, one at a time (its `wake` callback says when there is something). A VIEW replaces
+// the pending camera and marks the running frame superseded, so the worker thread abandons it
+// at its next brick and extracts for the newest camera: frames are never queued. Every
+// malformed or invalid message is answered with an error message; the session goes on.
+// close() stops the worker at its next brick and drops whatever is queued; the destructor
+// joins it.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <thread>
+
+#include "serve/frame_stream.h"
+#include "serve/outbox.h"
+#include "serve/protocol.h"
+#include "serve/store_catalog.h"
+
+namespace vdiso::serve {
+
+struct SessionSettings {
+    int threads = 1;        // image strips per frame (core/extract_view.h)
+    int metaCellSize = 4;
+    int prefetchBricks = 8;  // per frame
+    size_t outboxBytes = size_t(32) << 20;
+};
+
+// At most `slots` frames extract at once, so that their pinned bricks never fill a cache.
+class FrameGate {
+public:
+    explicit FrameGate(int slots) : mFree(slots) {}
+    // Waits for a slot; false (no slot taken) once `giveUp` returns true.
+    bool enter(const std::function<bool()>& giveUp);
+    void leave();
+
+private:
+    std::mutex mMutex;
+    std::condition_variable mChanged;
+    int mFree;
+};
+
+class ViewerSession {
+public:
+    ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FrameGate& gate,
+                  std::function<void()> wake);
+    ~ViewerSession();
+    ViewerSession(const ViewerSession&) = delete;
+    ViewerSession& operator=(const ViewerSession&) = delete;
+
+    // Queues the hello message and starts the worker.
+    void start();
+    void onMessage(std::span<const uint8_t> bytes, bool text);
+    // A message above kMaxClientMessageBytes was skipped unread.
+    void onOversize(uint64_t bytes);
+    // The next message to write, if any; a cacheable chunk counts as held from here on.
+    std::optional<OutMessage> nextToWrite();
+    void close();
+    // Waits for the worker to stop (after close()).
+    void join();
+
+private:
+    void work();
+    void runFrame(const ViewMessage& view, std::chrono::steady_clock::time_point arrival);
+    void reply(const std::string& error);
+
+    StoreCatalog& mStores;
+    const SessionSettings mSettings;
+    FrameGate& mGate;
+    Outbox mOutbox;
+    ClientChunks mClient;
+
+    std::mutex mMutex;
+    std::condition_variable mWork;
+    std::optional<ViewMessage> mPending;
+    std::chrono::steady_clock::time_point mPendingArrival;
+    std::optional<uint32_t> mLastSeq;
+    bool mClosing = false;
+    std::atomic<bool> mSuperseded{false};
+    std::mutex mJoinMutex;
+    std::thread mWorker;
+};
+
+}  // namespace vdiso::serve

@@ -1,0 +1,75 @@
+#include <cstdio>
+#include <string>
+
+#include "serve/server.h"
+#include "tools/args.h"
+#include "tools/commands.h"
+
+namespace vdiso::cli {
+
+namespace {
+
+constexpr const char* kHelp =
+    "usage: vdiso serve STORE.vdiso [MORE.vdiso ...] [options]\n"
+    "\n"
+    "Serves a browser viewer that looks around the stores' isosurfaces: for each camera the\n"
+    "browser sends, the surface it sees is extracted (SAGE) and streamed front to back, and\n"
+    "only what the browser does not hold already goes over the network. Prints the URL to\n"
+    "open (with its access token) and serves until Ctrl-C.\n"
+    "\n"
+    "  --iso V             the isovalue the viewer starts at (default: Otsu's threshold of\n"
+    "                      each store's histogram)\n"
+    "  --host ADDRESS      the address to listen on (default 127.0.0.1: this machine only)\n"
+    "  --port N            the port (default 8080; 0: any free port)\n"
+    "  --cache-mb N        brick cache shared by every client, in MB (default 1024)\n"
+    "  --threads N         extraction threads per frame: image strips (default 1)\n"
+    "  --metacell M        meta-cell size in cells, 1 to 32 (default 4)\n"
+    "  --token T           the access token (default: random at each start)\n"
+    "  --web DIR           the viewer's folder (default: the source tree's web/)\n";
+
+}  // namespace
+
+int runServe(int argc, char** argv) {
+    Args args(argc, argv, 1);
+    serve::ServeOptions o;
+    o.webRoot = VDISO_WEB_DIR;
+    o.handleSignals = true;
+    while (!args.done()) {
+        const std::string a = args.take();
+        if (a == "--help" || a == "-h") {
+            std::fputs(kHelp, stdout);
+            return 0;
+        } else if (a == "--iso") {
+            o.iso = parseDouble(a, args.value(a));
+        } else if (a == "--host") {
+            o.host = args.value(a);
+        } else if (a == "--port") {
+            o.port = uint16_t(parseInt(a, args.value(a), 0, 65535));
+        } else if (a == "--cache-mb") {
+            o.cacheBytes = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30)) << 20;
+        } else if (a == "--threads") {
+            o.threads = int(parseInt(a, args.value(a), 1, 64));
+        } else if (a == "--metacell") {
+            o.metaCellSize = int(parseInt(a, args.value(a), 1, 32));
+        } else if (a == "--token") {
+            o.token = args.value(a);
+            if (o.token.size() < 8 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos)
+                throw UsageError("--token expects at least 8 hex digits, '-' or '_'");
+        } else if (a == "--web") {
+            o.webRoot = args.value(a);
+        } else if (!a.empty() && a[0] == '-') {
+            throw UsageError("unknown option '" + a + "'");
+        } else {
+            o.stores.push_back(a);
+        }
+    }
+    if (o.stores.empty()) throw UsageError("expects at least one STORE.vdiso");
+    serve::Server server(o);
+    std::printf("vdiso serve: open %s\n", server.url().c_str());
+    std::fflush(stdout);
+    server.run();
+    std::fprintf(stderr, "vdiso serve: stopped\n");
+    return 0;
+}
+
+}  // namespace vdiso::cli
