@@ -1,0 +1,31 @@
+// The WebSocket to `vdiso serve`: JSON text messages and binary ArrayBuffers in, binary out.
+// The token comes from the page's own URL (?token=T); the server also sets it as a cookie,
+// which the upgrade request carries, so either suffices.
+
+export function webSocketUrl(location) {
+  const token = new URLSearchParams(location.search).get('token');
+  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const query = token === null ? '' : `?token=${encodeURIComponent(token)}`;
+  return `${scheme}//${location.host}/ws${query}`;
+}
+
+export class Connection {
+  // handlers: { text(string), binary(arrayBuffer), close(closeEvent) }
+  constructor(url, handlers) {
+    this.socket = new WebSocket(url);
+    this.socket.binaryType = 'arraybuffer';
+    this.socket.addEventListener('message', (event) => {
+      if (typeof event.data === 'string') handlers.text(event.data);
+      else handlers.binary(event.data);
+    });
+    this.socket.addEventListener('close', (event) => handlers.close(event));
+  }
+
+  get isOpen() {
+    return this.socket.readyState === WebSocket.OPEN;
+  }
+
+  send(buffer) {
+    this.socket.send(buffer);
+  }
+}
