@@ -10,8 +10,9 @@ namespace vdiso::serve {
 
 namespace {
 
-// REFs go out in batches this large (or before the next chunk, or at the frame's end).
-constexpr size_t kRefsPerBatch = 64;
+// REFs go out in batches this large (or before the next chunk, or at the frame's end); the
+// first batch of a frame is small, so the nearest surface shows soon.
+constexpr size_t kRefsPerBatch = 64, kRefsInFirstBatch = 4;
 // Transient geometry goes out when a batch holds this many vertices and points.
 constexpr size_t kTransientVerticesPerBatch = 32768;
 
@@ -109,7 +110,8 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
             mCounters.triangles += held->second;
             mClient.pendingFrame = mFrame;
             mClient.pendingRefs.push_back(b);
-            if (mClient.pendingRefs.size() >= kRefsPerBatch) queued(mClient.flushRefsLocked(mOutbox));
+            const size_t batch = mCounters.firstChunkSeconds < 0 ? kRefsInFirstBatch : kRefsPerBatch;
+            if (mClient.pendingRefs.size() >= batch) queued(mClient.flushRefsLocked(mOutbox));
             return;
         }
         // Evicted since beginBrick: what was made for it this frame goes as transient geometry.

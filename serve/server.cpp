@@ -88,6 +88,10 @@ public:
     ~WsSession() { mViewer.reset(); }  // joins the worker
 
     void run(http::request<http::string_body> request) {
+        // Small messages (REFS, frame ends) go at once: Nagle's algorithm would hold them for
+        // the client's delayed ACK, 40 ms on Linux.
+        beast::error_code ignored;
+        beast::get_lowest_layer(mWs).socket().set_option(tcp::no_delay(true), ignored);
         mWs.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
         mWs.set_option(websocket::stream_base::decorator(
             [](websocket::response_type& r) { r.set(http::field::server, kServerName); }));

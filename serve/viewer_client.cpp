@@ -37,6 +37,7 @@ ViewerClient::ViewerClient(const std::string& host, uint16_t port, const std::st
     try {
         tcp::resolver resolver(mConnection->ioc);
         net::connect(mConnection->ws.next_layer(), resolver.resolve(host, std::to_string(port)));
+        mConnection->ws.next_layer().set_option(tcp::no_delay(true));
         mConnection->ws.read_message_max(uint64_t(1) << 30);
         mConnection->ws.handshake(host + ":" + std::to_string(port), "/ws?token=" + token);
     } catch (const beast::system_error& e) {
@@ -120,6 +121,7 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
             f.binaryBytes += message.size();
             if (chunk.header.flags & kChunkCacheable) {
                 f.chunks.push_back(chunk.header.brick);
+                mCacheBytes[{chunk.header.store, chunk.header.iso, chunk.header.brick}] = message.size();
                 mCache[{chunk.header.store, chunk.header.iso, chunk.header.brick}] = std::move(chunk);
             } else {
                 f.transient.push_back(std::move(chunk));
@@ -144,13 +146,21 @@ void ViewerClient::evict(uint32_t store, double iso, const std::vector<uint32_t>
     e.store = store;
     e.iso = iso;
     e.bricks = bricks;
-    for (const uint32_t b : bricks) mCache.erase({store, iso, b});
+    for (const uint32_t b : bricks) {
+        mCache.erase({store, iso, b});
+        mCacheBytes.erase({store, iso, b});
+    }
     sendRaw(encodeEvict(e));
     while (true) {
         const std::string text = readText();
         if (typeOf(text) != "evicted") continue;
         if (nlohmann::json::parse(text).value("seq", int64_t(-1)) == int64_t(e.seq)) return;
     }
+}
+
+uint64_t ViewerClient::chunkBytes(uint32_t store, double iso, uint32_t brick) const {
+    const auto it = mCacheBytes.find({store, iso, brick});
+    return it == mCacheBytes.end() ? 0 : it->second;
 }
 
 void ViewerClient::assemble(const ClientFrame& frame, TriangleMesh& mesh, PointSet& points) const {

@@ -64,6 +64,8 @@ public:
     // chunks, in one mesh (firstVertex 0) and one point set.
     void assemble(const ClientFrame& frame, TriangleMesh& mesh, PointSet& points) const;
     size_t cachedChunks() const { return mCache.size(); }
+    // The bytes of the CHUNK message that brought a cached chunk (0 if not cached).
+    uint64_t chunkBytes(uint32_t store, double iso, uint32_t brick) const;
     bool holds(uint32_t store, double iso, uint32_t brick) const {
         return mCache.contains({store, iso, brick});
     }
@@ -77,6 +79,7 @@ private:
     std::unique_ptr<Connection> mConnection;
     std::string mHello;
     std::map<std::tuple<uint32_t, double, uint32_t>, DecodedChunk> mCache;
+    std::map<std::tuple<uint32_t, double, uint32_t>, uint64_t> mCacheBytes;
     std::map<uint32_t, std::pair<uint32_t, double>> mViews;  // seq -> store, iso
     uint32_t mEvictSeq = 0;
     std::chrono::steady_clock::time_point mSent;

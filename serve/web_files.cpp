@@ -45,7 +45,7 @@ WebFiles::WebFiles(const std::string& webRoot) : mRoot(webRoot) {
     add("/vendor/three.module.js", modules / "three/build/three.module.js", true);
     add("/vendor/three.core.js", modules / "three/build/three.core.js", false);
     add("/vendor/OrbitControls.js", modules / "three/examples/jsm/controls/OrbitControls.js", true);
-    add("/vendor/meshopt_decoder.module.js", modules / "meshoptimizer/meshopt_decoder.module.js", true);
+    add("/vendor/meshopt_decoder.module.js", modules / "meshoptimizer/meshopt_decoder.mjs", true);
 }
 
 std::optional<WebFile> WebFiles::find(const std::string& urlPath) const {

@@ -216,7 +216,7 @@ void writeWebRoot(const test::ScratchDir& dir) {
     test::writeFile((root / "src/main.js").string(), "export const main = 1;\n");
     test::writeFile((root / "node_modules/three/build/three.module.js").string(), "export {};\n");
     test::writeFile((root / "node_modules/three/examples/jsm/controls/OrbitControls.js").string(), "export {};\n");
-    test::writeFile((root / "node_modules/meshoptimizer/meshopt_decoder.module.js").string(), "export {};\n");
+    test::writeFile((root / "node_modules/meshoptimizer/meshopt_decoder.mjs").string(), "export {};\n");
     test::writeFile((root / "node_modules/three/package.json").string(), "{}");
     test::writeFile((dir.path() / "secret.txt").string(), "not for the web");
 }
