@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# The viewer end to end on the real MRI: `vdiso serve` on the skull-stripped head, headless
+# chromium on the page (tests/browser/e2e.mjs) until the frame is complete, its screenshot
+# against `vdiso extract --method sage --camera ... --png` for the same camera. Different
+# rasterizers, so what must agree is coverage: the pixels the surface covers (--tolerance 255
+# compares covered against background only), at least 99.5%; the colour agreement is printed.
+#
+#   tests/browser/e2e.sh VDISO_BINARY [OUT_DIR]     (ctest runs it; needs VDISO_DATA_DIR)
+# With OUT_DIR, the screenshots stay there (docs/viewer.png is made this way).
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+vdiso=$1
+if [ -z "${VDISO_DATA_DIR:-}" ] || [ ! -f "$VDISO_DATA_DIR/ch2better.nii.gz" ]; then
+  echo "e2e: VDISO_DATA_DIR has no ch2better.nii.gz (scripts/fetch_data.sh): skipped"
+  exit 77
+fi
+work=$(mktemp -d)
+server=""
+cleanup() {
+  [ -n "$server" ] && kill "$server" 2>/dev/null && wait "$server" 2>/dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+out=${2:-$work}
+mkdir -p "$out"
+
+"$vdiso" convert "$VDISO_DATA_DIR/ch2better.nii.gz" "$work/ch2better.vdiso" --quiet
+"$vdiso" serve "$work/ch2better.vdiso" --port 0 --iso 40.5 > "$work/serve.log" 2>&1 &
+server=$!
+url=""
+for _ in $(seq 100); do
+  url=$(grep -o 'http://[^ ]*' "$work/serve.log" || true)
+  [ -n "$url" ] && break
+  kill -0 "$server" 2>/dev/null || { cat "$work/serve.log"; exit 1; }
+  sleep 0.1
+done
+[ -n "$url" ] || { echo "e2e: vdiso serve printed no URL"; cat "$work/serve.log"; exit 1; }
+
+# A view of the brain from the front, right and above (world units of the MRI).
+echo '{"eye": [188, 522, 170], "target": [0, -14.75, 9.25], "up": [0, 0, 1], "fov": 30}' > "$work/cam.json"
+node "$here/e2e.mjs" --url "$url" --camera "$work/cam.json" --size 800x800 --out "$out/viewer_frame.png" \
+  | tee "$work/stats.json"
+"$vdiso" extract "$work/ch2better.vdiso" --iso 40.5 --method sage --camera "$work/cam.json" \
+  --size 800x800 --png "$out/extract_sage.png" --force --quiet
+echo -n "colour (tolerance 24): "
+"$vdiso" compare "$out/extract_sage.png" "$out/viewer_frame.png"
+echo -n "coverage: "
+"$vdiso" compare "$out/extract_sage.png" "$out/viewer_frame.png" --tolerance 255 --min 0.995
+echo -n "coverage, the other way: "
+"$vdiso" compare "$out/viewer_frame.png" "$out/extract_sage.png" --tolerance 255 --min 0.995
+# The server stays up after the browser leaves, and stops cleanly on SIGTERM.
+kill -TERM "$server"
+wait "$server"
+server=""
+grep -q "stopped" "$work/serve.log"
+echo "e2e: passed"
