@@ -11,8 +11,9 @@ export class Panel {
     elements.store.addEventListener('change', () => actions.store(Number(elements.store.value)));
     elements.slider.addEventListener('input', () => actions.iso(Number(elements.slider.value)));
     elements.isoInput.addEventListener('change', () => {
-      const value = Number(elements.isoInput.value);
-      if (elements.isoInput.value !== '' && Number.isFinite(value)) actions.iso(value);
+      const { value, min, max } = elements.isoInput;
+      if (value === '' || !Number.isFinite(Number(value))) return;
+      actions.iso(Math.min(Math.max(Number(value), Number(min)), Number(max)));
     });
     for (const name of PRESET_NAMES) {
       const button = document.createElement('button');

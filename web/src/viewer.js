@@ -185,8 +185,17 @@ class Viewer {
     this.cameraController.set(presetCamera(name, store.boundsMin, store.boundsMax, this.scene.camera.aspect));
   }
 
+  // For the scripting interface: the store (and so the camera and isovalue) is chosen at hello.
+  requireReady() {
+    if (this.storeIndex < 0) throw new Error('the viewer is not ready yet: await vdisoViewer.ready first');
+  }
+
   setIso(value) {
-    if (!Number.isFinite(value)) throw new Error(`isovalue ${value} is not a finite number`);
+    this.requireReady();
+    const store = this.stores[this.storeIndex];
+    if (!(value >= store.valueMin && value <= store.valueMax)) {
+      throw new Error(`isovalue ${value} is outside the store's range [${store.valueMin}, ${store.valueMax}]`);
+    }
     this.iso = value;
     this.panel.setIso(value);
     this.viewDirty = true;
@@ -290,8 +299,14 @@ const viewer = new Viewer(new URLSearchParams(window.location.search));
 window.vdisoViewer = {
   ready: viewer.ready,
   // {eye, target, up, fov}: arrays of 3 numbers in world units, vertical fov in degrees.
-  setCamera: (camera) => viewer.cameraController.set(camera),
-  getCamera: () => viewer.cameraController.get(),
+  setCamera(camera) {
+    viewer.requireReady();
+    viewer.cameraController.set(camera);
+  },
+  getCamera() {
+    viewer.requireReady();
+    return viewer.cameraController.get();
+  },
   setIso: (value) => viewer.setIso(value),
   frameComplete: () => viewer.frameComplete(),
 };
