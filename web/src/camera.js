@@ -46,7 +46,7 @@ function checkVec3(name, value) {
 }
 
 // Throws unless the server would accept the camera (docs/protocol.md, VIEW).
-export function checkCamera({ eye, target, up, fov }) {
+function checkCamera({ eye, target, up, fov }) {
   checkVec3('eye', eye);
   checkVec3('target', target);
   checkVec3('up', up);

@@ -20,7 +20,7 @@ THREE.ColorManagement.enabled = false;
 
 // vdiso's renderer clears to (0.08, 0.08, 0.09): 8-bit (20, 20, 23). The end-to-end test
 // compares covered pixels with that renderer's picture, so this must be exact.
-export const BACKGROUND_RGB = [20, 20, 23];
+const BACKGROUND_RGB = [20, 20, 23];
 const SURFACE_COLOR = new THREE.Color(0.89, 0.85, 0.76); // bone / skin
 const AMBIENT = 0.15;
 const SPECULAR = 0.2;

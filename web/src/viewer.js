@@ -68,7 +68,7 @@ class Viewer {
     );
     document.body.classList.toggle('no-overlay', params.get('overlay') === '0');
     window.addEventListener('keydown', (event) => {
-      if (event.key === 'o' && !(event.target instanceof HTMLInputElement)) document.body.classList.toggle('no-overlay');
+      if (event.key === 'o' && !event.target.closest('input, select')) document.body.classList.toggle('no-overlay');
     });
     window.addEventListener('resize', () => {
       if (this.scene.resize()) this.viewChanged();
