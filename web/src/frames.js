@@ -15,12 +15,11 @@ function gpuBytes(chunk) {
 }
 
 class Frame {
-  constructor({ frame, store, iso }, sentAt, now) {
+  constructor({ frame, store, iso }, sentAt) {
     this.seq = frame;
     this.store = store;
     this.iso = iso;
     this.sentAt = sentAt; // performance.now() when its VIEW went out
-    this.beganAt = now;
     this.firstGeometryAt = null;
     this.endedAt = null;
     this.end = null; // the frameEnd message
@@ -95,7 +94,7 @@ export class FrameAssembler {
 
   begin(message, sentAt) {
     const unended = this.streaming;
-    this.streaming = new Frame(message, sentAt, this.now());
+    this.streaming = new Frame(message, sentAt);
     if (unended) {
       // A protocol error, but the new frame is still drawn right: the old one counts as superseded.
       this.partial = unended;
