@@ -52,6 +52,18 @@ JsonObject& JsonObject::add(const std::string& key, double value) {
     return *this;
 }
 
+JsonObject& JsonObject::addExact(const std::string& key, double value) {
+    addKey(key);
+    if (!std::isfinite(value)) {
+        mBody += "null";
+    } else {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g", value);
+        mBody += buf;
+    }
+    return *this;
+}
+
 JsonObject& JsonObject::add(const std::string& key, int64_t value) {
     addKey(key);
     mBody += std::to_string(value);

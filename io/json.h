@@ -13,6 +13,9 @@ public:
     JsonObject& add(const std::string& key, const std::string& value);
     JsonObject& add(const std::string& key, const char* value) { return add(key, std::string(value)); }
     JsonObject& add(const std::string& key, double value);
+    // A double written with 17 significant digits, so that it reads back bit-exactly (values
+    // a reader compares for equality, such as an isovalue that keys cached chunks).
+    JsonObject& addExact(const std::string& key, double value);
     JsonObject& add(const std::string& key, int64_t value);
     JsonObject& add(const std::string& key, uint64_t value);
     JsonObject& add(const std::string& key, int value) { return add(key, int64_t(value)); }

@@ -1,5 +1,6 @@
 #include "serve/viewer_session.h"
 
+#include <cstring>
 #include <exception>
 
 #include "core/camera.h"
@@ -57,8 +58,11 @@ void ViewerSession::close() {
     mOutbox.close();
 }
 
-void ViewerSession::reply(const std::string& error) {
-    mOutbox.push(OutMessage::control(JsonObject().add("type", "error").add("message", error).str()));
+void ViewerSession::reply(const std::string& error, std::optional<uint32_t> seq) {
+    JsonObject o;
+    o.add("type", "error").add("message", error);
+    if (seq) o.add("seq", int64_t(*seq));
+    mOutbox.push(OutMessage::control(o.str()));
 }
 
 void ViewerSession::onOversize(uint64_t bytes) {
@@ -105,7 +109,14 @@ void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
         mOutbox.push(OutMessage::control(
             JsonObject().add("type", "evicted").add("seq", int64_t(evict.seq)).str()));
     } catch (const ProtocolError& e) {
-        reply(e.what());
+        // A refused VIEW is named by its seq when it has one, so the client can tell which.
+        std::optional<uint32_t> seq;
+        if (!text && bytes.size() >= 8 && bytes[0] == uint8_t(MessageType::View)) {
+            uint32_t value;
+            std::memcpy(&value, bytes.data() + 4, sizeof value);
+            seq = value;
+        }
+        reply(e.what(), seq);
     }
 }
 
@@ -151,7 +162,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
                                          .add("type", "frameBegin")
                                          .add("frame", int64_t(view.seq))
                                          .add("store", int64_t(view.store))
-                                         .add("iso", view.iso)
+                                         .addExact("iso", view.iso)
                                          .str()),
                  false);
     FrameStream stream(mClient, mOutbox, view.seq, view.store, view.iso, mSuperseded, arrival);

@@ -69,7 +69,7 @@ public:
 private:
     void work();
     void runFrame(const ViewMessage& view, std::chrono::steady_clock::time_point arrival);
-    void reply(const std::string& error);
+    void reply(const std::string& error, std::optional<uint32_t> seq = std::nullopt);
 
     StoreCatalog& mStores;
     const SessionSettings mSettings;

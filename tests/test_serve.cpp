@@ -457,6 +457,7 @@ TEST(ServeSession, BadMessagesGetAnErrorAndTheConnectionStays) {
         const nlohmann::json j = nlohmann::json::parse(reply);
         EXPECT_EQ(j["type"], "error") << reply;
         EXPECT_NE(j["message"].get<std::string>().find(words), std::string::npos) << reply;
+        return j;
     };
     const Camera camera = presetFor(fixture.storePath, ViewPreset::Normal, 128);
     ViewMessage v = viewOf(camera, 1);
@@ -464,7 +465,8 @@ TEST(ServeSession, BadMessagesGetAnErrorAndTheConnectionStays) {
     expectError({1, 2, 3}, false, "shorter than a header");
     expectError({42, 1, 0, 0, 0, 0}, false, "unknown message type");
     v.eye.y = NAN;
-    expectError(encodeView(v), false, "finite");
+    v.seq = 42;
+    EXPECT_EQ(expectError(encodeView(v), false, "finite")["seq"], 42);  // names the refused VIEW
     v = viewOf(camera, 1);
     v.eye.x = INFINITY;
     expectError(encodeView(v), false, "finite");

@@ -129,6 +129,10 @@ class Viewer {
       case 'evicted':
         return this.cache.evicted(message.seq);
       case 'error':
+        // A refused VIEW (named by its seq) gets no frame: whoever waits for it hears why.
+        if (message.seq === this.seq) {
+          for (const waiter of this.waiters.splice(0)) waiter.reject(new Error(`server: ${message.message}`));
+        }
         return this.reportError(`server: ${message.message}`);
       default:
         throw new Error(`unknown message type '${message.type}'`);
