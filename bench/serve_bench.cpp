@@ -8,8 +8,9 @@
 // client runs the orbit to warm the brick cache (unless --no-warmup: then the first frame is
 // as cold as the page cache), then a fresh client runs it again, measured. Prints one JSON line
 // per frame (server latencies from its frameEnd, client latencies, bytes) and a summary line
-// with: the full surface's bytes (its mesh through the same codec), the first frame re-sent
-// whole, and with --images, the first and a later frame rendered to PNG files (bench/serve.sh
+// with: the full surface's bytes (its mesh through the same codec), SAGE's own output for the
+// first camera (per-cell tests: what a camera-dependent chunk would send every frame), and
+// with --images, the first and a later frame rendered to PNG files (bench/serve.sh
 // measures them and their JPEG).
 #include <algorithm>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "cache/brick_cache.h"
 #include "core/camera.h"
 #include "core/extract_full.h"
+#include "core/extract_view.h"
 #include "io/brick_store.h"
 #include "io/json.h"
 #include "io/png_image.h"
@@ -152,12 +154,22 @@ int main(int argc, char** argv) {
         summary.add("bytes_per_triangle_first_frame",
                     double(measured[0].binaryBytes) / double(std::max<uint64_t>(1, firstEnd["triangles"].get<uint64_t>())));
         {
-            // The full surface through the same codec, brick by brick as a full download would go.
+            // The full surface through the same codec, in one piece.
             BrickCache cache(store, options.cacheBytes);
             TriangleMesh full;
             extractOctree(cache, {iso, 4, 2}, full);
             summary.add("full_surface_triangles", uint64_t(full.triangleCount()));
             summary.add("full_surface_bytes", uint64_t(encodeChunk(ChunkHeader{}, full, PointSet{}).size()));
+            // The other choice of chunk: SAGE's own output with its per-cell tests, which
+            // depends on the camera and so would be sent whole every frame.
+            TriangleMesh sage;
+            PointSet sagePoints;
+            ViewExtractOptions v = ViewExtractOptions::sage(iso);
+            v.threads = options.threads;
+            extractViewDependent(cache, orbit[0], v, sage, sagePoints);
+            summary.add("sage_frame_triangles", uint64_t(sage.triangleCount()));
+            summary.add("sage_frame_points", uint64_t(sagePoints.size()));
+            summary.add("sage_frame_bytes", uint64_t(encodeChunk(ChunkHeader{}, sage, sagePoints).size()));
         }
         if (!images.empty()) {
             for (const size_t k : {size_t(0), size_t(frames / 4)}) {
@@ -165,7 +177,14 @@ int main(int argc, char** argv) {
                 PointSet points;
                 client.assemble(measured[k], mesh, points);
                 const RenderResult r = renderSurface(mesh, points, orbit[k]);
-                writePng(images + "/frame" + std::to_string(k) + ".png", r.image, true);
+                const std::string name = images + "/frame" + std::to_string(k);
+                writePng(name + ".png", r.image, true);
+                // And as PPM, which cjpeg reads (for the JPEG's size).
+                std::FILE* ppm = std::fopen((name + ".ppm").c_str(), "wb");
+                if (!ppm) throw std::runtime_error(name + ".ppm: cannot write");
+                std::fprintf(ppm, "P6\n%d %d\n255\n", r.image.width, r.image.height);
+                for (size_t i = 0; i < r.image.rgba.size(); i += 4) std::fwrite(&r.image.rgba[i], 1, 3, ppm);
+                std::fclose(ppm);
             }
         }
         std::printf("%s\n", summary.str().c_str());

@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   libboost-dev libmeshoptimizer-dev       # vdiso serve: Beast (HTTP, WebSocket), geometry codecs
   chromium                                # the viewer's end-to-end test (headless)
+  libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
 )
 
 missing=()

@@ -213,7 +213,13 @@ private:
         const bool allowed = mServer.authorized(request, fromQuery);
         if (websocket::is_upgrade(request)) {
             const std::string target(request.target());
-            if (allowed && target.substr(0, target.find('?')) == "/ws" && !mServer.stopping) {
+            // A browser says which page opens a socket: only this server's own page may (a
+            // page of another site, or of a rebound host name, is refused even with a token).
+            const auto origin = request.find(http::field::origin);
+            const auto host = request.find(http::field::host);
+            const bool sameOrigin = origin == request.end() ||
+                                    (host != request.end() && origin->value() == "http://" + std::string(host->value()));
+            if (allowed && sameOrigin && target.substr(0, target.find('?')) == "/ws" && !mServer.stopping) {
                 mStream.expires_never();
                 auto session = std::make_shared<WsSession>(mStream.release_socket(), mServer);
                 {
@@ -225,8 +231,12 @@ private:
                 return;
             }
             ++mServer.httpRefused;
-            send(reply(allowed ? http::status::not_found : http::status::forbidden,
-                       allowed ? "no such WebSocket endpoint (use /ws)\n" : "access token missing or wrong\n",
+            send(reply(!allowed ? http::status::forbidden
+                       : !sameOrigin ? http::status::forbidden
+                                     : http::status::not_found,
+                       !allowed ? "access token missing or wrong\n"
+                       : !sameOrigin ? "WebSocket from another origin refused\n"
+                                     : "no such WebSocket endpoint (use /ws)\n",
                        request.version(), false));
             return;
         }

@@ -12,6 +12,7 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
 #include <nlohmann/json.hpp>
 
 #include "cache/brick_cache.h"
@@ -544,8 +545,22 @@ TEST(ServeHttp, TokenIsRequiredAndOnlyTheViewersFilesAreServed) {
                              "/src", "/node_modules/three/package.json", "/vendor/", "/web/index.html",
                              "//etc/passwd", "/index.html/../../secret.txt"})
         EXPECT_EQ(httpGet(port, path, jar), 404) << path;
-    // The WebSocket needs the token too.
+    // The WebSocket needs the token too, and the server's own page as its origin.
     EXPECT_THROW(ViewerClient("127.0.0.1", port, "wrong"), IoError);
+    auto handshake = [&](const std::string& origin) {
+        namespace websocket = boost::beast::websocket;
+        boost::asio::io_context ioc;
+        boost::asio::ip::tcp::resolver resolver(ioc);
+        websocket::stream<boost::asio::ip::tcp::socket> ws(ioc);
+        boost::asio::connect(ws.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
+        ws.set_option(websocket::stream_base::decorator(
+            [&](websocket::request_type& r) { r.set(boost::beast::http::field::origin, origin); }));
+        boost::beast::error_code error;
+        ws.handshake("127.0.0.1:" + std::to_string(port), "/ws?token=" + token, error);
+        return !error;
+    };
+    EXPECT_TRUE(handshake("http://127.0.0.1:" + std::to_string(port)));
+    EXPECT_FALSE(handshake("http://evil.example"));
     EXPECT_GE(fixture.server->counters().httpRefused, 4u);
 }
 

@@ -4,12 +4,12 @@
 // `vdiso serve`.
 //
 //   node tests/browser/e2e.mjs --url URL --camera CAM.json --size 800x800 --out SHOT.png
-//                              [--iso V] [--store NAME] [--orbit N] [--timeout S]
+//                              [--iso V] [--store NAME] [--orbit N] [--timeout S] [--page PAGE.png]
 //
 // Opens URL (the one the server printed, with its token) at the camera of CAM.json
 // ({"eye":[x,y,z],"target":[x,y,z],"up":[x,y,z],"fov":30}) with the overlay hidden, waits
 // for window.vdisoViewer.frameComplete(), screenshots the canvas alone to SHOT.png and prints
-// the frame's stats as one JSON line. With --orbit N it then turns the camera about its up
+// the frame's stats as one JSON line (--page: also the whole page with its overlays). With --orbit N it then turns the camera about its up
 // axis through the target in N equal steps (as `vdiso extract --path orbit` does about +z),
 // printing one JSON line of stats per frame ("step": 0..N-1; step 0 is CAM.json itself).
 // Exits non-zero on a page error, a console error, a failed request or the timeout
@@ -112,6 +112,12 @@ async function run(options, browser, failure) {
     const canvas = await page.$('#view');
     // Capturing beyond the viewport would resize the page for a moment: a new VIEW, a new frame.
     await canvas.screenshot({ path: options.out, captureBeyondViewport: false });
+  }
+  if (options.page) {
+    // The whole page with its overlays, as a person sees it (docs/viewer.png).
+    await page.evaluate(() => document.body.classList.remove('no-overlay'));
+    await new Promise((resolve) => setTimeout(resolve, 200));  // a few frames drawn
+    await page.screenshot({ path: options.page, captureBeyondViewport: false });
   }
   if (options.orbit === 0) {
     console.log(JSON.stringify(first));

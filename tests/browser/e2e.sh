@@ -6,7 +6,8 @@
 # compares covered against background only), at least 99.5%; the colour agreement is printed.
 #
 #   tests/browser/e2e.sh VDISO_BINARY [OUT_DIR]     (ctest runs it; needs VDISO_DATA_DIR)
-# With OUT_DIR, the screenshots stay there (docs/viewer.png is made this way).
+# With OUT_DIR, the screenshots stay there, with one of the whole page and its overlays
+# (viewer_page.png: docs/viewer.png is made this way).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 vdiso=$1
@@ -38,8 +39,10 @@ done
 
 # A view of the brain from the front, right and above (world units of the MRI).
 echo '{"eye": [188, 522, 170], "target": [0, -14.75, 9.25], "up": [0, 0, 1], "fov": 30}' > "$work/cam.json"
+page=()
+[ -n "${2:-}" ] && page=(--page "$out/viewer_page.png")
 node "$here/e2e.mjs" --url "$url" --camera "$work/cam.json" --size 800x800 --out "$out/viewer_frame.png" \
-  | tee "$work/stats.json"
+  "${page[@]}" | tee "$work/stats.json"
 "$vdiso" extract "$work/ch2better.vdiso" --iso 40.5 --method sage --camera "$work/cam.json" \
   --size 800x800 --png "$out/extract_sage.png" --force --quiet
 echo -n "colour (tolerance 24): "
