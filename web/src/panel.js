@@ -22,7 +22,9 @@ export class Panel {
       button.addEventListener('click', () => actions.preset(name));
       elements.presets.append(button);
     }
-    window.addEventListener('resize', () => this.drawHistogram());
+    // Redrawn whenever the canvas changes size: also when the panel is shown after starting
+    // hidden (overlay=0, the 'o' key), when it had no size to draw at.
+    new ResizeObserver(() => this.drawHistogram()).observe(elements.histogram);
   }
 
   setStores(stores) {
