@@ -44,19 +44,6 @@ double median(std::vector<double> v) {
     return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-ViewMessage viewOf(const Camera& c, uint32_t seq, double iso) {
-    ViewMessage v;
-    v.seq = seq;
-    v.width = uint32_t(c.width);
-    v.height = uint32_t(c.height);
-    v.eye = c.eye;
-    v.target = c.target;
-    v.up = c.up;
-    v.fovYDegrees = c.fovYDegrees;
-    v.iso = iso;
-    return v;
-}
-
 // What re-sending the frame whole would cost: every chunk it names, as its CHUNK message.
 uint64_t wholeFrameBytes(const ViewerClient& client, const ClientFrame& f) {
     uint64_t bytes = 0;
@@ -111,7 +98,7 @@ int main(int argc, char** argv) {
         auto runOrbit = [&](ViewerClient& client, bool report, uint32_t firstSeq) {
             std::vector<ClientFrame> out;
             for (int k = 0; k < frames; ++k) {
-                ClientFrame f = client.requestFrame(viewOf(orbit[size_t(k)], firstSeq + uint32_t(k), iso));
+                ClientFrame f = client.requestFrame(viewMessage(orbit[size_t(k)], firstSeq + uint32_t(k), 0, iso));
                 if (f.status != "complete") throw std::runtime_error("frame " + std::to_string(k) + ": " + f.frameEnd);
                 if (report) {
                     const nlohmann::json end = nlohmann::json::parse(f.frameEnd);

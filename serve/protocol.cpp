@@ -125,6 +125,31 @@ EvictMessage parseEvict(std::span<const uint8_t> message) {
     return e;
 }
 
+ViewMessage viewMessage(const Camera& camera, uint32_t seq, uint32_t store, double iso) {
+    ViewMessage v;
+    v.seq = seq;
+    v.store = store;
+    v.width = uint32_t(camera.width);
+    v.height = uint32_t(camera.height);
+    v.eye = camera.eye;
+    v.target = camera.target;
+    v.up = camera.up;
+    v.fovYDegrees = camera.fovYDegrees;
+    v.iso = iso;
+    return v;
+}
+
+Camera cameraOf(const ViewMessage& view) {
+    Camera camera;
+    camera.eye = view.eye;
+    camera.target = view.target;
+    camera.up = view.up;
+    camera.fovYDegrees = view.fovYDegrees;
+    camera.width = int(view.width);
+    camera.height = int(view.height);
+    return camera;
+}
+
 std::vector<uint8_t> encodeView(const ViewMessage& v) {
     std::vector<uint8_t> out(kViewMessageBytes, 0);
     uint8_t* p = out.data();

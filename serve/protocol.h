@@ -14,6 +14,8 @@
 
 #include <glm/vec3.hpp>
 
+#include "core/camera.h"
+
 namespace vdiso::serve {
 
 constexpr uint8_t kProtocolVersion = 1;
@@ -58,6 +60,11 @@ MessageType clientMessageType(std::span<const uint8_t> message);
 // [kMinViewport, kMaxViewport], sizes). Throws ProtocolError.
 ViewMessage parseView(std::span<const uint8_t> message);
 EvictMessage parseEvict(std::span<const uint8_t> message);
+
+// A VIEW for `camera` (its clip planes are not sent: the server fits them to the volume), and
+// the camera a VIEW describes, without clip planes.
+ViewMessage viewMessage(const Camera& camera, uint32_t seq, uint32_t store, double iso);
+Camera cameraOf(const ViewMessage& view);
 
 // The client side, for tests and benchmarks.
 std::vector<uint8_t> encodeView(const ViewMessage& view);

@@ -149,13 +149,7 @@ void ViewerSession::work() {
 void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival) {
     ServedStore& store = mStores[view.store];
     const VolumeInfo& volume = store.reader->volume();
-    Camera camera;
-    camera.eye = view.eye;
-    camera.target = view.target;
-    camera.up = view.up;
-    camera.fovYDegrees = view.fovYDegrees;
-    camera.width = int(view.width);
-    camera.height = int(view.height);
+    Camera camera = cameraOf(view);
     fitClipPlanes(camera, volume.origin, volume.worldMax());
 
     mOutbox.push(OutMessage::control(JsonObject()

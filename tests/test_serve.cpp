@@ -273,16 +273,7 @@ Camera presetFor(const std::string& storePath, ViewPreset preset, int size, doub
 }
 
 ViewMessage viewOf(const Camera& c, uint32_t seq, double iso = kHeadSkinIso) {
-    ViewMessage v;
-    v.seq = seq;
-    v.width = uint32_t(c.width);
-    v.height = uint32_t(c.height);
-    v.eye = c.eye;
-    v.target = c.target;
-    v.up = c.up;
-    v.fovYDegrees = c.fovYDegrees;
-    v.iso = iso;
-    return v;
+    return viewMessage(c, seq, 0, iso);
 }
 
 // The library's streamed extraction for one camera with nothing held: what the first frame of
@@ -614,6 +605,45 @@ TEST(ServeSession, DisconnectMidFrameFreesTheSession) {
     EXPECT_EQ(fixture.server->counters().sessionsOpen, 0u);
     auto next = fixture.client();
     EXPECT_EQ(next->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 128), 1)).status, "complete");
+}
+
+TEST(ServeServer, OffersSeveralStores) {
+    test::ScratchDir dir;
+    writeWebRoot(dir);
+    SynthParams head;
+    head.dims = {40, 40, 40};
+    writeBrickStore(*openSynthVolume(head), dir.file("head.vdiso"), StoreWriteOptions{});
+    SynthParams turbulence;
+    turbulence.kind = SynthKind::Turbulence;
+    turbulence.dims = {36, 36, 36};
+    turbulence.type = ScalarType::F32;
+    writeBrickStore(*openSynthVolume(turbulence), dir.file("turbulence.vdiso"), StoreWriteOptions{});
+    ServeOptions s;
+    s.port = 0;
+    s.stores = {dir.file("head.vdiso"), dir.file("turbulence.vdiso")};
+    s.webRoot = dir.file("web");
+    Server server(s);
+    std::thread serving([&] { server.run(); });
+    {
+        ViewerClient client("127.0.0.1", server.port(), server.token());
+        const nlohmann::json stores = nlohmann::json::parse(client.hello())["stores"];
+        ASSERT_EQ(stores.size(), 2u);
+        EXPECT_EQ(stores[1]["name"], "turbulence");
+        EXPECT_EQ(stores[1]["type"], "f32");
+        // Without --iso each store starts at Otsu's threshold of its own values.
+        const double iso = stores[1]["iso"].get<double>();
+        EXPECT_GT(iso, stores[1]["valueMin"].get<double>());
+        EXPECT_LT(iso, stores[1]["valueMax"].get<double>());
+        Camera c = presetCamera(ViewPreset::Normal, {0, 0, 0}, {35, 35, 35}, 128, 128);
+        const ClientFrame f = client.requestFrame(viewMessage(c, 1, 1, iso));
+        EXPECT_EQ(f.status, "complete") << f.frameEnd;
+        TriangleMesh mesh;
+        PointSet points;
+        client.assemble(f, mesh, points);
+        EXPECT_GT(mesh.triangleCount(), 0u);
+    }
+    server.stop();
+    serving.join();
 }
 
 TEST(ServeServer, RefusesWhatItCannotServe) {
