@@ -54,13 +54,14 @@ void computeMetaCellRanges(const T* s, int side, const int cells[3], int M, int 
             T* l = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
             T* h = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
             const T* first = s + BrickLayout::cornerIndex(side, 0, y, z0);
-            std::copy(first, first + rowX, l);
-            std::copy(first, first + rowX, h);
+            // NaN samples count as -inf (core/iso.h).
+            for (int i = 0; i < rowX; ++i) l[i] = h[i] = rangeValue(first[i]);
             for (int z = z0 + 1; z <= z1; ++z) {
                 const T* row = s + BrickLayout::cornerIndex(side, 0, y, z);
                 for (int i = 0; i < rowX; ++i) {
-                    l[i] = row[i] < l[i] ? row[i] : l[i];
-                    h[i] = row[i] > h[i] ? row[i] : h[i];
+                    const T v = rangeValue(row[i]);
+                    l[i] = v < l[i] ? v : l[i];
+                    h[i] = v > h[i] ? v : h[i];
                 }
             }
         }
@@ -188,7 +189,7 @@ struct BrickKernel {
         const size_t i0 = sampleIndex(px, py, pz);
         const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
         const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
-        const double t = (iso - s0) / (s1 - s0);
+        const double t = crossingFraction(s0, s1, iso);
         glm::dvec3 local3(px, py, pz);
         local3[axis] += t;
         const glm::dvec3 position =
@@ -210,11 +211,12 @@ struct BrickKernel {
     // ghost samples cover the differences), so a welded vertex may get it from either.
     glm::vec3 edgeNormal(size_t i0, size_t step, int axis) const {
         const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
-        const double t = (iso - s0) / (s1 - s0);
+        const double t = crossingFraction(s0, s1, iso);
         const glm::dvec3 gradient = glm::mix(gradientAt(i0), gradientAt(i0 + step), t);
         const double length = glm::length(gradient);
         glm::dvec3 normal(0.0);
-        if (length > 0)
+        // A gradient through a non-finite sample is inf or NaN: the edge's direction then.
+        if (length > 0 && std::isfinite(length))
             normal = -gradient / length;
         else
             normal[axis] = s1 > s0 ? -1.0 : 1.0;
@@ -374,7 +376,7 @@ bool BrickExtractor::firstHit(const glm::dvec3& origin, const glm::dvec3& direct
             const double t = tEnter + (tExit - tEnter) * k / steps;
             const double value = field(toLocal(origin + direction * t));
             if (isAbove(previous, iso) != isAbove(value, iso)) {
-                const double u = (iso - previous) / (value - previous);
+                const double u = crossingFraction(previous, value, iso);
                 const glm::dvec3 w = origin + direction * (tPrevious + u * (t - tPrevious));
                 const glm::dvec3 l = toLocal(w);
                 // Central-difference gradients at the cell's corners, interpolated: the

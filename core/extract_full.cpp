@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "core/brick_prefetcher.h"
+#include "core/iso.h"
 #include "core/minmax_tree.h"
 #include "core/span_space.h"
 
@@ -230,6 +231,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
 
 FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
                                TriangleMesh& mesh, const ProgressFn& progress) {
+    requireFiniteIso(options.iso);
     const auto start = Clock::now();
     FullExtractStats stats;
     const MinMaxTree tree(source.layout(), source.brickRanges());
@@ -249,6 +251,7 @@ FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& op
 
 FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options,
                               TriangleMesh& mesh, const ProgressFn& progress) {
+    requireFiniteIso(options.iso);
     FullExtractStats stats;
     const BrickLayout& layout = source.layout();
     BrickExtractor rangeExtractor(source.volume(), layout, options.metaCellSize);

@@ -613,6 +613,7 @@ std::vector<int> stripColumns(BrickSource& source, const Camera& camera, double 
 ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                                       const ViewExtractOptions& options, TriangleMesh& mesh,
                                       PointSet& points, const ProgressFn& progress) {
+    requireFiniteIso(options.iso);
     const auto start = Clock::now();
     ViewExtractStats stats;
     const uint64_t trianglesBefore = mesh.triangleCount();

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/iso.h"
+
 namespace vdiso {
 
 namespace {
@@ -67,16 +69,17 @@ void measureSubBlocks(ScalarType type, const void* samples, const BrickLayout& l
                         code = SubBlockCode{};
                         continue;
                     }
-                    // NaN samples (f32) compare false both ways and so never widen the range,
-                    // as in the brick's own range.
-                    T lo = s[BrickLayout::cornerIndex(side, first[0], first[1], first[2])];
+                    // NaN samples (f32) count as -inf, as in the brick's own range
+                    // (core/iso.h).
+                    T lo = rangeValue(s[BrickLayout::cornerIndex(side, first[0], first[1], first[2])]);
                     T hi = lo;
                     for (int z = first[2]; z <= last[2]; ++z)
                         for (int y = first[1]; y <= last[1]; ++y) {
                             const T* row = s + BrickLayout::cornerIndex(side, 0, y, z);
                             for (int x = first[0]; x <= last[0]; ++x) {
-                                lo = row[x] < lo ? row[x] : lo;
-                                hi = row[x] > hi ? row[x] : hi;
+                                const T v = rangeValue(row[x]);
+                                lo = v < lo ? v : lo;
+                                hi = v > hi ? v : hi;
                             }
                         }
                     code = encodeSubBlockRange(double(lo), double(hi), brick);

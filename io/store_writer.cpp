@@ -16,6 +16,7 @@
 #include <lz4.h>
 #include <zstd.h>
 
+#include "core/iso.h"
 #include "core/sub_blocks.h"
 #include "io/atomic_output.h"
 #include "io/byte_shuffle.h"
@@ -34,21 +35,43 @@ constexpr int kFineBins = 1 << 16;
 inline uint32_t fineKey(uint8_t v) { return v; }
 inline uint32_t fineKey(uint16_t v) { return v; }
 inline uint32_t fineKey(int16_t v) { return uint32_t(int32_t(v) + 32768); }
+// Floats: every NaN goes to key 0 (a bin that otherwise holds only NaN bit patterns), so that
+// the keys of -inf (0x7f) and +inf (0xff80) hold nothing but infinities.
+constexpr uint32_t kNanKey = 0;
+constexpr uint32_t kNegativeInfinityKey = 0x7f;
+constexpr uint32_t kPositiveInfinityKey = 0xff80;
 inline uint32_t fineKey(float v) {
+    if (v != v) return kNanKey;
     const uint32_t u = std::bit_cast<uint32_t>(v);
     return ((u & 0x80000000u) ? ~u : (u | 0x80000000u)) >> 16;
 }
 
-double fineKeyValue(ScalarType type, uint32_t key) {
+// The float whose remapped bits are k.
+double remappedFloat(uint32_t k) {
+    const uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
+    return double(std::bit_cast<float>(u));
+}
+
+// The value at a fine bin's low end (part 0), middle (1) or high end (2): one value for integers.
+double fineKeyValue(ScalarType type, uint32_t key, int part = 1) {
     switch (type) {
         case ScalarType::U8:
         case ScalarType::U16: return double(key);
         case ScalarType::I16: return double(int32_t(key) - 32768);
         case ScalarType::F32: break;
     }
-    const uint32_t k = (key << 16) | 0x8000u;  // the middle of the bin
-    const uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
-    return double(std::bit_cast<float>(u));
+    static constexpr uint32_t kPart[3] = {0x0000u, 0x8000u, 0xffffu};
+    return remappedFloat((key << 16) | kPart[part]);
+}
+
+enum class KeyKind { Finite, NaN, NegativeInfinity, PositiveInfinity };
+
+KeyKind fineKeyKind(ScalarType type, uint32_t key) {
+    if (type != ScalarType::F32) return KeyKind::Finite;
+    if (key == kNanKey) return KeyKind::NaN;
+    if (key <= kNegativeInfinityKey) return KeyKind::NegativeInfinity;
+    if (key >= kPositiveInfinityKey) return KeyKind::PositiveInfinity;
+    return KeyKind::Finite;
 }
 
 // Slices held in memory: a ring of 2B+3, slice z in slot z mod 2B+3. A layer of bricks needs
@@ -108,14 +131,17 @@ void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord,
         cells[a] = layout.cellsOnAxis(a, coord[a]);
         owned[a] = layout.ownedSamplesOnAxis(a, coord[a]);
     }
-    T lo = brick[(size_t(kGhostBefore) * side + kGhostBefore) * side + kGhostBefore], hi = lo;
+    // NaN samples count as -inf in the range (core/iso.h), so a range is never NaN.
+    T lo = rangeValue(brick[(size_t(kGhostBefore) * side + kGhostBefore) * side + kGhostBefore]);
+    T hi = lo;
     for (int lz = kGhostBefore; lz <= kGhostBefore + cells[2]; ++lz) {
         for (int ly = kGhostBefore; ly <= kGhostBefore + cells[1]; ++ly) {
             const T* row = brick + (size_t(lz) * side + ly) * side + kGhostBefore;
-            T rowLo = row[0], rowHi = row[0];
+            T rowLo = rangeValue(row[0]), rowHi = rowLo;
             for (int i = 1; i <= cells[0]; ++i) {
-                rowLo = row[i] < rowLo ? row[i] : rowLo;
-                rowHi = row[i] > rowHi ? row[i] : rowHi;
+                const T v = rangeValue(row[i]);
+                rowLo = v < rowLo ? v : rowLo;
+                rowHi = v > rowHi ? v : rowHi;
             }
             lo = std::min(lo, rowLo);
             hi = std::max(hi, rowHi);
@@ -306,22 +332,41 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         header.storedBrickBytes += e.storedBytes;
     }
 
-    ValueHistogram histogram;
-    histogram.lo = header.valueMin;
-    histogram.hi = header.valueMax;
-    const double binScale = header.valueMax > header.valueMin
-                                ? kHistogramBins / (header.valueMax - header.valueMin)
-                                : 0.0;
+    // The histogram spans the finite samples (docs/store-format.md): -inf counts in the first
+    // bin, +inf in the last, NaN nowhere. Where the volume's range is infinite, the finite end
+    // is the edge of the extreme finite fine bin.
+    std::vector<uint64_t> fine(kFineBins, 0);
     for (const BrickScratch& s : scratch)
-        for (int key = 0; key < kFineBins; ++key) {
-            const uint64_t count = s.histogramEven[size_t(key)] + s.histogramOdd[size_t(key)];
-            if (!count) continue;
-            const double value = fineKeyValue(info.type, uint32_t(key));
-            if (std::isnan(value)) continue;  // NaN samples have no place on the value axis
-            const double v = std::clamp(value, header.valueMin, header.valueMax);
-            const int bin = std::min(kHistogramBins - 1, int((v - header.valueMin) * binScale));
-            histogram.counts[size_t(bin)] += count;
+        for (size_t key = 0; key < size_t(kFineBins); ++key)
+            fine[key] += s.histogramEven[key] + s.histogramOdd[key];
+    ValueHistogram histogram;
+    histogram.lo = std::isfinite(header.valueMin) ? header.valueMin : 0.0;
+    histogram.hi = std::isfinite(header.valueMax) ? header.valueMax : 0.0;
+    bool anyFinite = false;
+    for (uint32_t key = 0; key < uint32_t(kFineBins); ++key) {
+        if (!fine[key] || fineKeyKind(info.type, key) != KeyKind::Finite) continue;
+        if (!std::isfinite(header.valueMin) && !anyFinite) histogram.lo = fineKeyValue(info.type, key, 0);
+        if (!std::isfinite(header.valueMax)) histogram.hi = fineKeyValue(info.type, key, 2);
+        anyFinite = true;
+    }
+    if (!anyFinite) histogram.lo = histogram.hi = 0.0;
+    const double binScale =
+        histogram.hi > histogram.lo ? kHistogramBins / (histogram.hi - histogram.lo) : 0.0;
+    for (uint32_t key = 0; key < uint32_t(kFineBins); ++key) {
+        if (!fine[key]) continue;
+        int bin = 0;
+        switch (fineKeyKind(info.type, key)) {
+            case KeyKind::NaN: continue;  // NaN samples have no place on the value axis
+            case KeyKind::NegativeInfinity: bin = 0; break;
+            case KeyKind::PositiveInfinity: bin = kHistogramBins - 1; break;
+            case KeyKind::Finite: {
+                const double v = std::clamp(fineKeyValue(info.type, key), histogram.lo, histogram.hi);
+                bin = std::min(kHistogramBins - 1, int((v - histogram.lo) * binScale));
+                break;
+            }
         }
+        histogram.counts[size_t(bin)] += fine[key];
+    }
 
     header.indexOffset = fileEnd;
     const std::vector<unsigned char> index = store_format::encodeIndex(entries, histogram, subBlocks);
