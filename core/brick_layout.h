@@ -27,7 +27,10 @@ struct BrickLayout {
         for (int a = 0; a < 3; ++a) brickCounts[a] = (dims[a] - 1 + brickSize - 1) / brickSize;
     }
 
-    int64_t brickCount() const { return brickCounts[0] * brickCounts[1] * brickCounts[2]; }
+    // Throws std::overflow_error rather than wrap (dims beyond core/volume.h's limits).
+    int64_t brickCount() const {
+        return checkedMul(checkedMul(brickCounts[0], brickCounts[1]), brickCounts[2]);
+    }
     int side() const { return brickSize + kGhostBefore + kGhostAfter; }
     int64_t samplesPerBrick() const { return int64_t(side()) * side() * side(); }
     // Index in a brick's sample array (side^3, x fastest) of its cell corner (cx, cy, cz),

@@ -648,6 +648,8 @@ void synthesizeSlices(const SynthParams& params, int64_t z0, int64_t count, void
     const Dims3& d = params.dims;
     if (d[0] < 2 || d[1] < 2 || d[2] < 2 || d[0] > std::numeric_limits<int>::max() / 2)
         throw std::invalid_argument("synth: dimensions must be between 2 and 2^30");
+    if (const std::string problem = volumeDimsProblem(d); !problem.empty())
+        throw std::invalid_argument("synth: " + problem);
     if (z0 < 0 || count < 0 || z0 + count > d[2])
         throw std::invalid_argument("synth: slices [" + std::to_string(z0) + ", " +
                                     std::to_string(z0 + count) + ") outside the volume's " +

@@ -6,15 +6,39 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "core/checked_math.h"
 #include "core/scalar_type.h"
 
 namespace vdiso {
 
 using Dims3 = std::array<int64_t, 3>;
+
+// What vdiso accepts (docs/store-format.md, "Limits"): at most 2^31 samples on an axis and 2^48
+// in all, so every size derived from them (bytes, bricks, index bytes) fits 64 bits with room.
+constexpr int64_t kMaxAxisSamples = int64_t(1) << 31;
+constexpr int64_t kMaxVolumeSamples = int64_t(1) << 48;
+
+// "" when `dims` is within the limits above (and every axis has the 2 samples cells need), else
+// what is wrong, in words, for a reader to prefix with its file's name.
+inline std::string volumeDimsProblem(const Dims3& dims) {
+    const std::string text = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                             std::to_string(dims[2]) + " samples";
+    for (int64_t d : dims) {
+        if (d < 2) return text + ": every axis needs at least 2 samples";
+        if (d > kMaxAxisSamples) return text + ": an axis may hold at most 2^31 samples";
+    }
+    // Each factor is at most 2^31, so the first product cannot overflow; the second is checked
+    // by division.
+    const int64_t slice = dims[0] * dims[1];
+    if (slice > kMaxVolumeSamples || dims[2] > kMaxVolumeSamples / slice)
+        return text + ": a volume may hold at most 2^48 samples";
+    return "";
+}
 
 struct VolumeInfo {
     Dims3 dims{0, 0, 0};
@@ -22,9 +46,10 @@ struct VolumeInfo {
     glm::dvec3 spacing{1.0, 1.0, 1.0};
     glm::dvec3 origin{0.0, 0.0, 0.0};
 
-    int64_t sliceSamples() const { return dims[0] * dims[1]; }
-    int64_t sampleCount() const { return dims[0] * dims[1] * dims[2]; }
-    uint64_t byteSize() const { return uint64_t(sampleCount()) * scalarSize(type); }
+    // Sizes: throw std::overflow_error rather than wrap (dims beyond the limits above).
+    int64_t sliceSamples() const { return checkedMul(dims[0], dims[1]); }
+    int64_t sampleCount() const { return checkedMul(sliceSamples(), dims[2]); }
+    uint64_t byteSize() const { return checkedMul(uint64_t(sampleCount()), uint64_t(scalarSize(type))); }
     // The affine map from sample coordinates (i, j, k) to world coordinates.
     glm::dmat4 gridToWorld() const {
         glm::dmat4 m(1.0);

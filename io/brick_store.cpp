@@ -109,12 +109,13 @@ BrickStoreReader::BrickStoreReader(std::string path, ReadMode mode)
         preadExact(mFd, headerBytes.data(), headerBytes.size(), 0, mPath, "header");
         mHeader = store_format::decodeHeader(headerBytes.data(), headerBytes.size(), mPath);
         mLayout = BrickLayout(mHeader.volume.dims, mHeader.brickSize);
-        if (mHeader.indexOffset < kStoreHeaderBytes ||
-            mHeader.indexOffset + mHeader.indexBytes > mFileBytes)
-            throwIoError(mPath, "index is missing or truncated: it needs bytes [" +
-                                    std::to_string(mHeader.indexOffset) + ", " +
-                                    std::to_string(mHeader.indexOffset + mHeader.indexBytes) +
-                                    ") but the file has " + std::to_string(mFileBytes));
+        // Compared without a sum that could wrap: both numbers come from the file.
+        if (mHeader.indexOffset < kStoreHeaderBytes || mHeader.indexBytes > mFileBytes ||
+            mHeader.indexOffset > mFileBytes - mHeader.indexBytes)
+            throwIoError(mPath, "index is missing or truncated: it needs " +
+                                    std::to_string(mHeader.indexBytes) + " bytes from byte offset " +
+                                    std::to_string(mHeader.indexOffset) + " but the file has " +
+                                    std::to_string(mFileBytes));
         std::vector<unsigned char> indexBytes(mHeader.indexBytes);
         preadExact(mFd, indexBytes.data(), indexBytes.size(), mHeader.indexOffset, mPath, "index");
         store_format::decodeIndex(indexBytes.data(), indexBytes.size(), mHeader, mLayout, mPath,

@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "core/volume.h"
+
 namespace vdiso {
 
 void throwIoError(const std::string& path, const std::string& message) {
@@ -13,6 +15,11 @@ void throwIoError(const std::string& path, const std::string& message) {
 
 void throwSystemError(const std::string& path, const std::string& message, int errnoValue) {
     throwIoError(path, message + ": " + std::strerror(errnoValue));
+}
+
+void requireVolumeDims(const std::string& path, const std::array<int64_t, 3>& dims) {
+    const std::string problem = volumeDimsProblem(dims);
+    if (!problem.empty()) throwIoError(path, problem);
 }
 
 }  // namespace vdiso

@@ -4,6 +4,8 @@
 // the CLI prints what() as it is and exits non-zero.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -20,5 +22,9 @@ public:
 // Same, appending ": " and strerror(errnoValue).
 [[noreturn]] void throwSystemError(const std::string& path, const std::string& message,
                                    int errnoValue);
+
+// Throws "path: <what is wrong>" unless `dims` is within core/volume.h's limits. Every reader
+// calls it before deriving a size from the dimensions.
+void requireVolumeDims(const std::string& path, const std::array<int64_t, 3>& dims);
 
 }  // namespace vdiso

@@ -220,6 +220,7 @@ Dims3 niftiDims(const std::string& path, const NiftiHeaderBytes& b) {
     for (int64_t d : dims)
         if (d < 2)
             throwIoError(path, "dims " + dimsText(dims) + ": every axis needs at least 2 samples");
+    requireVolumeDims(path, dims);
     return dims;
 }
 

@@ -391,6 +391,7 @@ VolumeInfo nrrdVolumeInfo(const std::string& path, const NrrdHeader& h) {
         if (d < 2)
             throwIoError(path,
                          "sizes " + sizesText(info.dims) + ": every axis needs at least 2 samples");
+    requireVolumeDims(path, info.dims);
     // Bounds the byte count below 2^62, so later arithmetic cannot overflow.
     double bytes = double(fileScalarSize(*h.type));
     for (int64_t d : info.dims) bytes *= double(d);

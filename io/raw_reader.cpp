@@ -69,6 +69,7 @@ VolumeInfo rawVolumeInfo(const std::string& path, const RawOptions& o) {
         if (o.dims[a] < 2)
             throwIoError(path, "dimension " + std::to_string(o.dims[a]) +
                                    " is too small: every axis needs at least 2 samples");
+    requireVolumeDims(path, o.dims);
     VolumeInfo info;
     info.dims = o.dims;
     info.type = storeTypeFor(o.type, false);

@@ -150,9 +150,8 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     h.valueMax = r.get<double>();
     h.storedBrickBytes = r.get<uint64_t>();
 
-    for (int a = 0; a < 3; ++a)
-        if (h.volume.dims[a] < 2 || h.volume.dims[a] > (int64_t(1) << 31))
-            throwIoError(path, "header has invalid dimensions");
+    if (const std::string problem = volumeDimsProblem(h.volume.dims); !problem.empty())
+        throwIoError(path, "header has invalid dimensions " + problem);
     if (h.brickSize < 2 || h.brickSize > 1024)
         throwIoError(path, "header has invalid brick size " + std::to_string(h.brickSize));
     if (ghostBefore != kGhostBefore || ghostAfter != kGhostAfter)
@@ -166,8 +165,9 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
 }
 
 uint64_t indexBytes(uint64_t brickCount) {
-    return 16 + brickCount * kEntryBytes + 24 + uint64_t(kHistogramBins) * 8 + 8 +
-           brickCount * kSubBlocksPerBrick * 2 + 4;
+    const uint64_t perBrick = kEntryBytes + kSubBlocksPerBrick * 2;
+    return checkedAdd(checkedMul(brickCount, perBrick),
+                      16 + 24 + uint64_t(kHistogramBins) * 8 + 8 + 4);
 }
 
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
@@ -233,7 +233,8 @@ void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header
         e.compressed = (flags & 1u) != 0;
         const bool ok = e.offset >= kStoreHeaderBytes && e.offset % kStoreAlignment == 0 &&
                         e.storedBytes > 0 && e.storedBytes <= maxStored &&
-                        e.offset + e.storedBytes <= header.indexOffset &&
+                        e.offset <= header.indexOffset &&
+                        e.storedBytes <= header.indexOffset - e.offset &&
                         (e.compressed || e.storedBytes == rawBytes) &&
                         (e.compressed == false || header.compression != Compression::None) &&
                         !(e.minValue > e.maxValue);

@@ -242,6 +242,7 @@ void validateOptions(const VolumeInfo& info, const StoreWriteOptions& options,
     for (int a = 0; a < 3; ++a)
         if (info.dims[a] < 2)
             throwIoError(sourceName, "every axis needs at least 2 samples to hold cells");
+    requireVolumeDims(sourceName, info.dims);
 }
 
 }  // namespace

@@ -77,6 +77,11 @@ public:
         mInfo.type = ScalarType::F32;
         mInfo.spacing = {volume.spacing[0], volume.spacing[1], volume.spacing[2]};
         mInfo.origin = {volume.origin[0], volume.origin[1], volume.origin[2]};
+        const std::string problem = volumeDimsProblem(mInfo.dims);
+        if (!problem.empty()) {
+            mModule.close(mHandle);
+            throwIoError(path, "active voxels' bounding box of " + problem);
+        }
     }
     ~VdbSliceReader() override { mModule.close(mHandle); }
     VdbSliceReader(const VdbSliceReader&) = delete;

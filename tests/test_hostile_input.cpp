@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <vector>
@@ -15,6 +16,9 @@
 #include "core/iso.h"
 #include "core/mc_tables.h"
 #include "io/brick_store.h"
+#include "io/error.h"
+#include "io/store_format.h"
+#include "io/store_writer.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -143,6 +147,114 @@ TEST(HostileInput, CrossingFractionIsInTheEdgeForNonFiniteEnds) {
     EXPECT_EQ(rangeValue(kNaN), -kInf);
     EXPECT_EQ(rangeValue(2.5f), 2.5f);
     EXPECT_THROW(requireFiniteIso(kNaN), std::invalid_argument);
+}
+
+// A small valid store, and ways to make it hostile with valid checksums (recomputed after each
+// patch, so the checks behind them are reached).
+class HostileStore : public ::testing::Test {
+protected:
+    void SetUp() override { makeStore({21, 13, 12}, ScalarType::U16, 8); }
+    void makeStore(const Dims3& dims, ScalarType type, int brickSize) {
+        test::MemoryVolume volume(dims, type);
+        StoreWriteOptions o;
+        o.brickSize = brickSize;
+        o.overwrite = true;
+        path = dir.file("good.vdiso");
+        writeBrickStore(volume, path, o);
+        bytes = test::readFile(path);
+        header = BrickStoreReader(path).header();
+    }
+    template <class T>
+    void patchHeader(size_t offset, T value) {
+        std::memcpy(bytes.data() + offset, &value, sizeof(T));
+        const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+        std::memcpy(bytes.data() + 160, &crc, 4);
+    }
+    // `offset` within the index.
+    template <class T>
+    void patchIndex(size_t offset, T value) {
+        unsigned char* index = bytes.data() + header.indexOffset;
+        std::memcpy(index + offset, &value, sizeof(T));
+        const uint32_t crc = store_format::crc32Of(index, header.indexBytes - 4);
+        std::memcpy(index + header.indexBytes - 4, &crc, 4);
+    }
+    // The message opening the patched store (and reading every brick) gives; "" if none. Any
+    // exception other than IoError is a failure: every refusal must name the file.
+    std::string openError() {
+        const std::string bad = dir.file("bad.vdiso");
+        test::writeFile(bad, bytes.data(), bytes.size());
+        try {
+            BrickStoreReader store(bad);
+            std::vector<unsigned char> brick(store.brickBytes());
+            for (int64_t id = 0; id < store.layout().brickCount(); ++id)
+                store.readBrick(id, brick.data());
+        } catch (const IoError& e) {
+            return e.what();
+        } catch (const std::exception& e) {
+            ADD_FAILURE() << "not an IoError: " << e.what();
+            return e.what();
+        }
+        return "";
+    }
+    ScratchDir dir;
+    std::string path;
+    std::vector<unsigned char> bytes;
+    StoreHeader header;
+};
+
+// Class 2: raw dimensions whose product wraps 64 bits (2^93 samples) passed the size check
+// with an empty file, then allocated about 24 GB.
+TEST(HostileInput, RawDimensionsWhoseProductWrapsAreRefused) {
+    ScratchDir dir;
+    test::writeFile(dir.file("empty.raw"), "");
+    const auto r = runVdiso("convert " + dir.file("empty.raw") + " " + dir.file("out.vdiso") +
+                            " --dims 2147483648,2147483648,2147483648 --type f32");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("empty.raw"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("at most 2^48 samples"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out.vdiso")));
+    // Within the per-axis limit but over the total, without wrapping.
+    EXPECT_NE(volumeDimsProblem({1 << 20, 1 << 20, 1 << 9}), "");
+    EXPECT_EQ(volumeDimsProblem({1 << 20, 1 << 20, 1 << 8}), "");
+    EXPECT_NE(volumeDimsProblem({(int64_t(1) << 31) + 1, 2, 2}), "");
+    VolumeInfo huge;
+    huge.dims = {int64_t(1) << 31, int64_t(1) << 31, int64_t(1) << 31};
+    EXPECT_THROW(huge.sampleCount(), std::overflow_error);
+    EXPECT_THROW(BrickLayout(huge.dims, 2).brickCount(), std::overflow_error);
+    EXPECT_THROW(store_format::indexBytes(uint64_t(1) << 60), std::overflow_error);
+}
+
+// Class 2: a store whose dimensions make the brick count wrap (2^31 x 2^31 x 2^17 samples,
+// with the header's brick count set to the wrapped product) opened or failed with a bare
+// vector::_M_default_append.
+TEST_F(HostileStore, DimensionsWhoseBrickCountWrapsAreRefused) {
+    const int64_t dims[3] = {int64_t(1) << 31, int64_t(1) << 31, int64_t(1) << 17};
+    for (int a = 0; a < 3; ++a) patchHeader<uint64_t>(16 + 8 * size_t(a), uint64_t(dims[a]));
+    // ceil((2^31 - 1) / 8)^2 * ceil((2^17 - 1) / 8) = 2^70 bricks, which wraps to 0, and the
+    // index size of 0 bricks.
+    patchHeader<uint64_t>(112, 0);
+    patchHeader<uint64_t>(128, 2100);
+    const std::string msg = openError();
+    EXPECT_NE(msg.find("bad.vdiso"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("at most 2^48 samples"), std::string::npos) << msg;
+}
+
+// Class 2: an index offset near 2^64 made offset + size wrap past the file-size check.
+TEST_F(HostileStore, IndexOffsetThatWrapsIsRefused) {
+    patchHeader<uint64_t>(120, ~uint64_t(0) - 100);
+    const std::string msg = openError();
+    EXPECT_NE(msg.find("bad.vdiso"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("index is missing or truncated"), std::string::npos) << msg;
+}
+
+// Class 2 (and 11): an entry offset near 2^64 made offset + stored size wrap below the index.
+// Bricks stored raw of 19^3 f32 (27,436 bytes) at offset 2^64 - 8192 end at byte 19,244.
+TEST_F(HostileStore, EntryOffsetThatWrapsIsRefused) {
+    makeStore({40, 20, 20}, ScalarType::F32, 16);
+    patchIndex<uint64_t>(16 + 32 * 3, ~uint64_t(0) - 8191);  // brick 3, 4096-aligned
+    const std::string msg = openError();
+    EXPECT_NE(msg.find("bad.vdiso"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("index entry of brick 3 is invalid"), std::string::npos) << msg;
 }
 
 }  // namespace
