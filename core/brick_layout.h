@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <string>
 
 #include "core/volume.h"
 
@@ -16,6 +17,16 @@ namespace vdiso {
 
 constexpr int kGhostBefore = 1;
 constexpr int kGhostAfter = 2;
+
+// What the min/max tree (core/minmax_tree.h: 16-bit brick coordinates, 32-bit node numbers)
+// can index: at most 65,535 bricks along an axis and 2^31 in all.
+constexpr int64_t kMaxBricksPerAxis = 65535;
+constexpr int64_t kMaxBricks = int64_t(1) << 31;
+
+struct BrickLayout;
+// "" when the layout is within the limits above, else what is wrong and what to do, in words.
+// `dims` must be within core/volume.h's limits.
+inline std::string brickLayoutProblem(const BrickLayout& layout);
 
 struct BrickLayout {
     Dims3 dims{0, 0, 0};        // samples per axis
@@ -66,5 +77,20 @@ struct BrickLayout {
 
     int64_t clampSample(int axis, int64_t s) const { return std::clamp<int64_t>(s, 0, dims[axis] - 1); }
 };
+
+inline std::string brickLayoutProblem(const BrickLayout& layout) {
+    static const char* kAxis[3] = {"x", "y", "z"};
+    const std::string size = std::to_string(layout.dims[0]) + " x " + std::to_string(layout.dims[1]) +
+                             " x " + std::to_string(layout.dims[2]) + " samples in bricks of " +
+                             std::to_string(layout.brickSize) + " cells";
+    for (int a = 0; a < 3; ++a)
+        if (layout.brickCounts[a] > kMaxBricksPerAxis)
+            return size + " make " + std::to_string(layout.brickCounts[a]) + " bricks along " +
+                   kAxis[a] + "; vdiso indexes at most 65535 bricks per axis (use larger bricks)";
+    if (layout.brickCount() > kMaxBricks)
+        return size + " make " + std::to_string(layout.brickCount()) +
+               " bricks; vdiso indexes at most 2^31 (use larger bricks)";
+    return "";
+}
 
 }  // namespace vdiso

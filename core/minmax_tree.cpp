@@ -1,6 +1,8 @@
 #include "core/minmax_tree.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 #include "core/check.h"
 
@@ -9,7 +11,9 @@ namespace vdiso {
 MinMaxTree::MinMaxTree(const BrickLayout& layout, std::span<const BrickRange> ranges)
     : mLayout(layout) {
     VDISO_CHECK_EQ(int64_t(ranges.size()), layout.brickCount());
-    for (int a = 0; a < 3; ++a) VDISO_CHECK_LE(layout.brickCounts[a], int64_t(UINT16_MAX));
+    // Readers refuse larger layouts (brickLayoutProblem); this guards other sources.
+    if (const std::string problem = brickLayoutProblem(layout); !problem.empty())
+        throw std::invalid_argument(problem);
     if (ranges.empty()) return;
     mNodes.reserve(size_t(2 * layout.brickCount()));
     const uint16_t lo[3] = {0, 0, 0};

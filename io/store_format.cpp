@@ -154,6 +154,9 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
         throwIoError(path, "header has invalid dimensions " + problem);
     if (h.brickSize < 2 || h.brickSize > 1024)
         throwIoError(path, "header has invalid brick size " + std::to_string(h.brickSize));
+    if (const std::string problem = brickLayoutProblem(BrickLayout(h.volume.dims, h.brickSize));
+        !problem.empty())
+        throwIoError(path, problem);
     if (ghostBefore != kGhostBefore || ghostAfter != kGhostAfter)
         throwIoError(path, "unsupported ghost layout");
     if (alignment != kStoreAlignment) throwIoError(path, "unsupported brick alignment");

@@ -243,6 +243,9 @@ void validateOptions(const VolumeInfo& info, const StoreWriteOptions& options,
         if (info.dims[a] < 2)
             throwIoError(sourceName, "every axis needs at least 2 samples to hold cells");
     requireVolumeDims(sourceName, info.dims);
+    if (const std::string problem = brickLayoutProblem(BrickLayout(info.dims, options.brickSize));
+        !problem.empty())
+        throwIoError(sourceName, problem);
 }
 
 }  // namespace

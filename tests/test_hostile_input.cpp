@@ -257,5 +257,37 @@ TEST_F(HostileStore, EntryOffsetThatWrapsIsRefused) {
     EXPECT_NE(msg.find("index entry of brick 3 is invalid"), std::string::npos) << msg;
 }
 
+// Class 3: 131073 x 2 x 2 samples with --brick 2 make 65,536 bricks along x, one more than the
+// min/max tree indexes; extract aborted on a VDISO_CHECK. Refused at convert, before any output.
+TEST(HostileInput, MoreThan65535BricksOnAnAxisAreRefusedAtConvert) {
+    ScratchDir dir;
+    test::writeFile(dir.file("long.raw"), std::string(131073 * 2 * 2, '\x07'));
+    const auto r = runVdiso("convert " + dir.file("long.raw") + " " + dir.file("long.vdiso") +
+                            " --dims 131073,2,2 --type u8 --brick 2");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("long.raw"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("65536 bricks along x"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("use larger bricks"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("long.vdiso")));
+    // One brick fewer is within the limit, and extracts.
+    test::writeFile(dir.file("ok.raw"), std::string(131071 * 2 * 2, '\x07'));
+    const auto ok = runVdiso("convert " + dir.file("ok.raw") + " " + dir.file("ok.vdiso") +
+                             " --dims 131071,2,2 --type u8 --brick 2");
+    ASSERT_EQ(ok.exitCode, 0) << ok.output;
+    const BrickStoreReader store(dir.file("ok.vdiso"));
+    EXPECT_EQ(store.layout().brickCounts[0], 65535);
+}
+
+// Class 3, at open: a store (valid checksums) whose header says 131073 x 2 x 2 in bricks of 2.
+TEST_F(HostileStore, MoreThan65535BricksOnAnAxisAreRefusedAtOpen) {
+    patchHeader<uint64_t>(16, 131073);
+    patchHeader<uint64_t>(24, 2);
+    patchHeader<uint64_t>(32, 2);
+    patchHeader<uint32_t>(92, 2);
+    const std::string msg = openError();
+    EXPECT_NE(msg.find("bad.vdiso"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("65536 bricks along x"), std::string::npos) << msg;
+}
+
 }  // namespace
 }  // namespace vdiso
