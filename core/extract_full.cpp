@@ -157,7 +157,9 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     mesh.positions.reserve(mesh.positions.size() + expectVertices);
     mesh.normals.reserve(mesh.positions.capacity());
     auto report = [&](size_t done) {
-        if (progress) progress(progressStart + (1.0 - progressStart) * double(done) / double(items.size()));
+        // No items (an isovalue outside the volume's range) is all done, not 0/0.
+        const double part = items.empty() ? 1.0 : double(done) / double(items.size());
+        if (progress) progress(progressStart + (1.0 - progressStart) * part);
     };
     auto acquireTimed = [&](const Item& item) {
         const auto start = Clock::now();

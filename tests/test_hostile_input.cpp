@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -287,6 +289,35 @@ TEST_F(HostileStore, MoreThan65535BricksOnAnAxisAreRefusedAtOpen) {
     const std::string msg = openError();
     EXPECT_NE(msg.find("bad.vdiso"), std::string::npos) << msg;
     EXPECT_NE(msg.find("65536 bricks along x"), std::string::npos) << msg;
+}
+
+// Output of `command` run under a pseudo-terminal (util-linux script), at most `limit` bytes.
+std::string runOnTerminal(const std::string& command, size_t limit) {
+    const std::string line = "timeout 60 script -qec '" + command + "' /dev/null 2>&1 | head -c " +
+                             std::to_string(limit);
+    std::string out;
+    FILE* pipe = ::popen(line.c_str(), "r");
+    if (!pipe) return out;
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
+    ::pclose(pipe);
+    return out;
+}
+
+// Class 6: on a terminal, extract --threads 2 with an isovalue outside the volume's range
+// reported progress 0/0 = NaN, and the bar wrote 2 GiB of spaces.
+TEST(HostileInput, ProgressOfNothingToDoDrawsOneBar) {
+    if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no script(1)";
+    ScratchDir dir;
+    test::writeFile(dir.file("v.raw"), std::string(20 * 20 * 20, '\x07'));
+    ASSERT_EQ(runVdiso("convert " + dir.file("v.raw") + " " + dir.file("v.vdiso") +
+                       " --dims 20,20,20 --type u8").exitCode, 0);
+    const std::string out = runOnTerminal(std::string(VDISO_BINARY) + " extract " +
+                                              dir.file("v.vdiso") + " --iso 200 --threads 2 -o " +
+                                              dir.file("v.ply"), 1 << 20);
+    EXPECT_LT(out.size(), 4096u) << out.substr(0, 400);
+    EXPECT_NE(out.find("100%"), std::string::npos) << out.substr(0, 400);
 }
 
 }  // namespace

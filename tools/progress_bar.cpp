@@ -1,8 +1,10 @@
 #include "tools/progress_bar.h"
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 
 #include <unistd.h>
@@ -46,6 +48,9 @@ ProgressFn progressBar(const std::string& label, double bytesTotal, bool quiet) 
             throw IoError(state->label + ": interrupted; no output written");
         }
         if (!state->draw) return;
+        // The bar's width and percentage come from the fraction: keep it in [0, 1] whatever a
+        // caller passes (NaN as 0), so that no int conversion is undefined or huge.
+        fraction = fraction >= 0 ? std::min(fraction, 1.0) : 0.0;
         const auto now = std::chrono::steady_clock::now();
         if (fraction < 1.0 && now - state->lastDraw < std::chrono::milliseconds(100)) return;
         state->lastDraw = now;
