@@ -33,7 +33,7 @@ size_t ClientChunks::KeyHash::operator()(const Key& k) const {
     return size_t(h);
 }
 
-size_t ClientChunks::flushRefsLocked(Outbox& outbox) {
+size_t ClientChunks::flushRefsLocked(Outbox& outbox, bool* refused) {
     if (pendingRefs.empty()) return 0;
     OutMessage m;
     m.bytes = std::make_shared<const std::vector<uint8_t>>(encodeRefs(pendingFrame, pendingRefs));
@@ -41,7 +41,7 @@ size_t ClientChunks::flushRefsLocked(Outbox& outbox) {
     pendingRefs.clear();
     const size_t bytes = m.bytes->size();
     // Never waits for room: an eviction's answer, queued under the same lock, must follow it.
-    outbox.push(std::move(m), false);
+    if (!outbox.push(std::move(m), false) && refused) *refused = true;
     return bytes;
 }
 
@@ -51,6 +51,16 @@ FrameStream::FrameStream(ClientChunks& client, Outbox& outbox, uint32_t frame, u
     : mClient(client), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
       mSuperseded(superseded), mStart(start) {}
 
+void FrameStream::push(OutMessage m, bool waitForRoom) {
+    if (!mOutbox.push(std::move(m), waitForRoom)) mRefused = true;
+}
+
+void FrameStream::flushRefsLocked() {
+    bool refused = false;
+    queued(mClient.flushRefsLocked(mOutbox, &refused));
+    if (refused) mRefused = true;
+}
+
 void FrameStream::queued(size_t bytes) {
     mCounters.bytes += bytes;
     if (bytes && mCounters.firstChunkSeconds < 0)
@@ -59,7 +69,7 @@ void FrameStream::queued(size_t bytes) {
 }
 
 bool FrameStream::beginBrick(int64_t brick, double cellPixels, Use& use) {
-    if (mSuperseded.load(std::memory_order_relaxed) || mOutbox.closed()) return false;
+    if (mSuperseded.load(std::memory_order_relaxed) || mRefused.load() || mOutbox.closed()) return false;
     const uint32_t b = uint32_t(brick);
     std::scoped_lock lock(mClient.mutex, mMutex);
     if (mWhole.contains(b) || mReferred.contains(b) || mClient.held.contains({mStore, mIso, b}))
@@ -92,12 +102,12 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
         {
             std::scoped_lock lock(mClient.mutex, mMutex);
             mClient.pendingFrame = mFrame;
-            queued(mClient.flushRefsLocked(mOutbox));
+            flushRefsLocked();
             ++mCounters.chunks;
             mCounters.triangles += mesh.triangleCount();
             queued(bytes);
         }
-        mOutbox.push(std::move(m));  // waits while the client is behind
+        push(std::move(m), true);  // waits while the client is behind
         return;
     }
     if (use == Use::Held) {
@@ -111,7 +121,7 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
             mClient.pendingFrame = mFrame;
             mClient.pendingRefs.push_back(b);
             const size_t batch = mCounters.firstChunkSeconds < 0 ? kRefsInFirstBatch : kRefsPerBatch;
-            if (mClient.pendingRefs.size() >= batch) queued(mClient.flushRefsLocked(mOutbox));
+            if (mClient.pendingRefs.size() >= batch) flushRefsLocked();
             return;
         }
         // Evicted since beginBrick: what was made for it this frame goes as transient geometry.
@@ -146,19 +156,19 @@ void FrameStream::pushTransient(bool force) {
     m.frame = mFrame;
     {
         std::scoped_lock lock(mClient.mutex, mMutex);
-        queued(mClient.flushRefsLocked(mOutbox));
+        flushRefsLocked();
         ++mCounters.chunks;
         mCounters.triangles += mesh.triangleCount();
         mCounters.points += points.size();
         queued(m.bytes->size());
     }
-    mOutbox.push(std::move(m));
+    push(std::move(m), true);
 }
 
 void FrameStream::finish() {
     pushTransient(true);
     std::scoped_lock lock(mClient.mutex, mMutex);
-    queued(mClient.flushRefsLocked(mOutbox));
+    flushRefsLocked();
 }
 
 FrameCounters FrameStream::counters() {

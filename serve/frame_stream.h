@@ -46,8 +46,9 @@ struct ClientChunks {
     std::vector<uint32_t> pendingRefs;
     uint64_t pendingRefBytes = 0;
 
-    // Queues the pending REFs as one REFS message (caller holds `mutex`); returns its bytes.
-    size_t flushRefsLocked(Outbox& outbox);
+    // Queues the pending REFs as one REFS message (caller holds `mutex`); returns its bytes,
+    // and sets *refused when the outbox refused it.
+    size_t flushRefsLocked(Outbox& outbox, bool* refused = nullptr);
 };
 
 struct FrameCounters {
@@ -66,16 +67,22 @@ public:
     // Queues what is still batched. Call once, after the extraction.
     void finish();
     FrameCounters counters();
+    // A message of this frame could not be queued (superseded, closed, or the client stopped
+    // reading): the frame is not whole, and the traversal stops at its next brick.
+    bool incomplete() const { return mRefused.load(); }
 
 private:
     void pushTransient(bool force);
     void queued(size_t bytes);  // counts bytes queued; notes the first
+    void push(OutMessage m, bool waitForRoom);  // notes a refusal
+    void flushRefsLocked();                      // the client's pending REFs; holds both locks
 
     ClientChunks& mClient;
     Outbox& mOutbox;
     const uint32_t mFrame, mStore;
     const double mIso;
     const std::atomic<bool>& mSuperseded;
+    std::atomic<bool> mRefused{false};
     const std::chrono::steady_clock::time_point mStart;
     std::mutex mMutex;  // below; taken after mClient.mutex when both are held
     std::unordered_set<uint32_t> mWhole, mReferred;  // bricks of this frame, by use

@@ -19,8 +19,9 @@ bool Outbox::push(OutMessage m, bool waitForRoom) {
         std::unique_lock lock(mMutex);
         auto superseded = [&] { return m.frame != OutMessage::kControl && mHasFrame && m.frame < mNewestFrame; };
         // Control messages are small and never wait; frame messages wait for room.
-        if (m.frame != OutMessage::kControl && waitForRoom)
-            mDrained.wait(lock, [&] { return mClosed || superseded() || mBytes <= mLimit; });
+        if (m.frame != OutMessage::kControl && waitForRoom &&
+            !mDrained.wait_for(lock, kPushPatience, [&] { return mClosed || superseded() || mBytes <= mLimit; }))
+            return false;
         if (mClosed || superseded()) return false;
         mBytes += m.bytes->size();
         mQueue.push_back(std::move(m));
@@ -36,7 +37,12 @@ void Outbox::beginFrame(uint32_t frame) {
         mNewestFrame = std::max(mNewestFrame, frame);
         std::erase_if(mQueue, [&](const OutMessage& m) {
             const bool drop = m.frame != OutMessage::kControl && m.frame < mNewestFrame;
-            if (drop) mBytes -= m.bytes->size();
+            if (drop) {
+                mBytes -= m.bytes->size();
+                if (std::find(mIncompleteFrames.begin(), mIncompleteFrames.end(), m.frame) == mIncompleteFrames.end())
+                    mIncompleteFrames.push_back(m.frame);
+                if (mIncompleteFrames.size() > 64) mIncompleteFrames.erase(mIncompleteFrames.begin());
+            }
             return drop;
         });
     }
@@ -51,6 +57,13 @@ std::optional<OutMessage> Outbox::pop() {
         m = std::move(mQueue.front());
         mQueue.pop_front();
         mBytes -= m->bytes->size();
+        if (m->ends != OutMessage::kControl) {
+            const auto dropped = std::find(mIncompleteFrames.begin(), mIncompleteFrames.end(), m->ends);
+            if (dropped != mIncompleteFrames.end()) {
+                mIncompleteFrames.erase(dropped);
+                if (m->ifIncomplete) m->bytes = m->ifIncomplete;
+            }
+        }
     }
     mDrained.notify_all();
     return m;

@@ -10,6 +10,7 @@
 // message) of memory, never more. Thread-safe.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -22,10 +23,14 @@
 namespace vdiso::serve {
 
 struct OutMessage {
-    static constexpr uint32_t kControl = UINT32_MAX;
+    static constexpr uint32_t kControl = UINT32_MAX;  // VIEW refuses this seq (serve/protocol.h)
     std::shared_ptr<const std::vector<uint8_t>> bytes;
     bool text = false;
     uint32_t frame = kControl;  // the frame it belongs to, or kControl
+    // A frame's end (a control message): `bytes` says the frame is complete, `ifIncomplete`
+    // what is written instead when a message of frame `ends` was dropped after all.
+    uint32_t ends = kControl;
+    std::shared_ptr<const std::vector<uint8_t>> ifIncomplete;
     // A cacheable chunk: once written, the client holds (store, iso, brick).
     bool cacheable = false;
     uint32_t store = 0, brick = 0, triangles = 0;
@@ -40,9 +45,11 @@ public:
     Outbox(size_t byteLimit, std::function<void()> wake);
 
     // Queues `m`; a frame message first waits while the queue is over its limit, unless
-    // `waitForRoom` is false (small messages queued under a lock the writer may need).
-    // Returns false, queuing nothing, when the outbox is closed or m's frame is older than the
-    // newest begun.
+    // `waitForRoom` is false (small messages queued under a lock the writer may need), and at
+    // most kPushPatience. Returns false, queuing nothing, when the outbox is closed, m's frame
+    // is older than the newest begun, or the wait ran out (a client that stopped reading: the
+    // frame is abandoned rather than holding its pinned bricks and its frame slot).
+    static constexpr std::chrono::seconds kPushPatience{5};
     bool push(OutMessage m, bool waitForRoom = true);
     // Drops queued messages of frames before `frame`, and wakes a push blocked for them.
     void beginFrame(uint32_t frame);
@@ -52,6 +59,9 @@ public:
     void close();
     bool closed() const;
     size_t queuedBytes() const;
+    // More is queued than the limit: the connection stops reading the client's messages until
+    // it drains (control messages, which never wait, stay bounded so).
+    bool backlogged() const { return queuedBytes() > mLimit; }
 
 private:
     const size_t mLimit;
@@ -63,6 +73,7 @@ private:
     bool mClosed = false;
     bool mHasFrame = false;
     uint32_t mNewestFrame = 0;
+    std::vector<uint32_t> mIncompleteFrames;  // frames a message was dropped from
 };
 
 }  // namespace vdiso::serve

@@ -80,7 +80,8 @@ ViewMessage parseView(std::span<const uint8_t> message) {
     v.target = loadVec(p + 48);
     v.up = loadVec(p + 72);
     v.fovYDegrees = load<double>(p + 96);
-    v.iso = load<double>(p + 104);
+    v.iso = load<double>(p + 104) + 0.0;  // -0 is 0: isovalues key cached chunks
+    if (v.seq > kMaxSeq) throw ProtocolError("VIEW: seq must be at most " + std::to_string(kMaxSeq));
     for (const uint32_t size : {v.width, v.height})
         if (size < uint32_t(kMinViewport) || size > uint32_t(kMaxViewport))
             throw ProtocolError("VIEW: viewport " + std::to_string(v.width) + "x" +
@@ -97,7 +98,7 @@ ViewMessage parseView(std::span<const uint8_t> message) {
         throw ProtocolError("VIEW: eye and target must differ");
     const double upLength = glm::length(v.up);
     if (!(upLength > 0.0) || !std::isfinite(upLength) ||
-        glm::length(glm::cross(forward / distance, v.up / upLength)) < 1e-6)
+        glm::length(glm::cross(forward / distance, v.up / upLength)) < 1e-9)
         throw ProtocolError("VIEW: up must be non-zero and not parallel to target - eye");
     return v;
 }
@@ -112,7 +113,7 @@ EvictMessage parseEvict(std::span<const uint8_t> message) {
     e.seq = load<uint32_t>(p + 4);
     e.store = load<uint32_t>(p + 8);
     const uint32_t count = load<uint32_t>(p + 12);
-    e.iso = load<double>(p + 16);
+    e.iso = load<double>(p + 16) + 0.0;
     if (count > kMaxEvictCount)
         throw ProtocolError("EVICT: count " + std::to_string(count) + " is above " +
                             std::to_string(kMaxEvictCount));

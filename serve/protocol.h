@@ -23,6 +23,7 @@ constexpr size_t kMaxClientMessageBytes = size_t(1) << 20;
 constexpr int kMinViewport = 16, kMaxViewport = 8192;
 constexpr uint32_t kMaxEvictCount = 65536;
 constexpr uint32_t kNoBrick = 0xFFFFFFFFu;
+constexpr uint32_t kMaxSeq = 0xFFFFFFFEu;  // a VIEW's seq (0xFFFFFFFF marks control messages)
 
 enum class MessageType : uint8_t { View = 1, Evict = 2, Chunk = 16, Refs = 17 };
 

@@ -60,13 +60,19 @@ struct Server::Impl {
     SessionSettings settings;
     FrameGate gate;
     std::string token;
+    uint16_t port = 0;
+    std::mutex mutex;
+    std::list<std::weak_ptr<WsSession>> sessions;
+    // Sessions whose connection is gone, their workers stopping: joined off the I/O thread
+    // (when the next connection comes, and at the end of run()), not where the socket closed.
+    std::vector<std::unique_ptr<ViewerSession>> retired;
+    std::atomic<uint64_t> sessionsOpened{0}, httpRequests{0}, httpRefused{0};
+    std::atomic<bool> stopping{false};
+    // Last, so destroyed first: its pending handlers hold connections, whose destructors
+    // retire sessions into the members above.
     net::io_context ioc{1};
     tcp::acceptor acceptor{ioc};
     net::signal_set signals{ioc};
-    std::mutex mutex;
-    std::list<std::weak_ptr<WsSession>> sessions;
-    std::atomic<uint64_t> sessionsOpened{0}, httpRequests{0}, httpRefused{0};
-    std::atomic<bool> stopping{false};
 
     explicit Impl(const ServeOptions& o)
         : options(o), stores(o.stores, o.cacheBytes, o.iso), web(o.webRoot),
@@ -75,6 +81,9 @@ struct Server::Impl {
 
     void accept();
     void shutdown();
+    void retire(std::unique_ptr<ViewerSession> session);
+    void joinRetired(bool all);
+    std::string cookieName() const { return "vdiso_token_" + std::to_string(port); }
     bool authorized(const http::request<http::string_body>& request, bool& fromQuery) const;
 };
 
@@ -85,7 +94,9 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 public:
     WsSession(tcp::socket&& socket, Server::Impl& server) : mWs(std::move(socket)), mServer(server) {}
 
-    ~WsSession() { mViewer.reset(); }  // joins the worker
+    ~WsSession() {
+        if (mViewer) mServer.retire(std::move(mViewer));
+    }
 
     void run(http::request<http::string_body> request) {
         // Small messages (REFS, frame ends) go at once: Nagle's algorithm would hold them for
@@ -145,7 +156,12 @@ private:
             mBuffer.consume(mBuffer.size());
             mMessageBytes = 0;
         }
-        readPiece();
+        // A client that sends but does not read gets no more replies queued than the limit:
+        // its messages wait in the socket until the outbox drains.
+        if (mViewer->backlogged())
+            mReadPaused = true;
+        else
+            readPiece();
     }
 
     // Writes the next queued message unless one is being written.
@@ -166,6 +182,10 @@ private:
             mViewer->close();
             return;
         }
+        if (mReadPaused && !mViewer->backlogged()) {
+            mReadPaused = false;
+            readPiece();
+        }
         pump();
     }
 
@@ -176,6 +196,7 @@ private:
     std::unique_ptr<ViewerSession> mViewer;
     std::optional<OutMessage> mCurrent;
     bool mWriting = false;
+    bool mReadPaused = false;
 };
 
 // One HTTP connection: the viewer's files, or the upgrade to a WebSocket.
@@ -213,8 +234,9 @@ private:
         const bool allowed = mServer.authorized(request, fromQuery);
         if (websocket::is_upgrade(request)) {
             const std::string target(request.target());
-            // A browser says which page opens a socket: only this server's own page may (a
-            // page of another site, or of a rebound host name, is refused even with a token).
+            // A browser says which page opens a socket: only this server's own page may. The
+            // token is what protects the server (a rebound host name controls Host and Origin
+            // alike); this keeps other sites' pages off it even where a token has leaked.
             const auto origin = request.find(http::field::origin);
             const auto host = request.find(http::field::host);
             const bool sameOrigin = origin == request.end() ||
@@ -282,7 +304,8 @@ private:
         http::response<http::string_body> r = reply(http::status::ok, body.str(), version, keepAlive, file->contentType);
         // A page opened with the token in its URL gets it as a cookie, for its modules and socket.
         if (fromQuery)
-            r.set(http::field::set_cookie, "vdiso_token=" + mServer.token + "; HttpOnly; SameSite=Strict; Path=/");
+            r.set(http::field::set_cookie,
+                  mServer.cookieName() + "=" + mServer.token + "; HttpOnly; SameSite=Strict; Path=/");
         if (request.method() == http::verb::head) {
             r.body().clear();
             r.content_length(body.str().size());
@@ -321,7 +344,8 @@ bool Server::Impl::authorized(const http::request<http::string_body>& request, b
     }
     const auto cookie = request.find(http::field::cookie);
     if (cookie != request.end()) {
-        const std::optional<std::string> given = findParameter(std::string(cookie->value()), "vdiso_token", ';');
+        // Named by the port: cookies are per host, not per port, and two servers may run.
+        const std::optional<std::string> given = findParameter(std::string(cookie->value()), cookieName(), ';');
         if (given && constantTimeEquals(*given, token)) return true;
     }
     return false;
@@ -329,10 +353,34 @@ bool Server::Impl::authorized(const http::request<http::string_body>& request, b
 
 void Server::Impl::accept() {
     acceptor.async_accept(net::make_strand(ioc), [this](beast::error_code error, tcp::socket socket) {
-        if (error) return;  // closed: stopping
-        std::make_shared<HttpSession>(std::move(socket), *this)->run();
+        if (stopping || error == net::error::operation_aborted) return;
+        if (!error) {
+            joinRetired(false);
+            std::make_shared<HttpSession>(std::move(socket), *this)->run();
+        }
+        // Other errors (out of file descriptors, a connection reset before it was accepted)
+        // pass: the server keeps accepting.
         accept();
     });
+}
+
+void Server::Impl::retire(std::unique_ptr<ViewerSession> session) {
+    session->close();
+    std::lock_guard lock(mutex);
+    retired.push_back(std::move(session));
+}
+
+void Server::Impl::joinRetired(bool all) {
+    std::vector<std::unique_ptr<ViewerSession>> done;
+    {
+        std::lock_guard lock(mutex);
+        std::erase_if(retired, [&](std::unique_ptr<ViewerSession>& s) {
+            if (!all && !s->stopped()) return false;
+            done.push_back(std::move(s));
+            return true;
+        });
+    }
+    done.clear();  // joins (at once, unless `all`)
 }
 
 void Server::Impl::shutdown() {
@@ -368,6 +416,7 @@ Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(optio
             if (!e) mImpl->shutdown();
         });
     }
+    s.port = s.acceptor.local_endpoint(error).port();
     s.accept();
 }
 
@@ -375,10 +424,7 @@ Server::~Server() {
     stop();
 }
 
-uint16_t Server::port() const {
-    beast::error_code ignored;
-    return mImpl->acceptor.is_open() ? mImpl->acceptor.local_endpoint(ignored).port() : 0;
-}
+uint16_t Server::port() const { return mImpl->port; }
 
 const std::string& Server::token() const { return mImpl->token; }
 
@@ -402,6 +448,7 @@ void Server::run() {
             s->stop();
             s->join();
         }
+    mImpl->joinRetired(true);
 }
 
 void Server::stop() {

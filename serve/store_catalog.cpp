@@ -11,6 +11,18 @@ namespace vdiso::serve {
 
 namespace {
 
+bool isUtf8(const std::string& text) {
+    for (size_t i = 0; i < text.size();) {
+        const unsigned char c = static_cast<unsigned char>(text[i]);
+        const int extra = c < 0x80 ? 0 : (c >> 5) == 6 ? 1 : (c >> 4) == 14 ? 2 : (c >> 3) == 30 ? 3 : -1;
+        if (extra < 0 || i + size_t(extra) > text.size() - 1) return false;
+        for (int k = 1; k <= extra; ++k)
+            if ((static_cast<unsigned char>(text[i + size_t(k)]) >> 6) != 2) return false;
+        i += size_t(extra) + 1;
+    }
+    return true;
+}
+
 std::string vec3(const glm::dvec3& v) {
     const double values[3] = {v.x, v.y, v.z};
     return jsonArray(values);
@@ -30,9 +42,11 @@ std::string describe(const ServedStore& s) {
     o.addRaw("spacing", vec3(v.spacing)).addRaw("origin", vec3(v.origin));
     o.addRaw("boundsMin", vec3(v.origin)).addRaw("boundsMax", vec3(v.worldMax()));
     o.add("type", scalarTypeName(v.type));
-    o.add("valueMin", h.valueMin).add("valueMax", h.valueMax).add("iso", s.defaultIso);
+    // Exact: the page sends these back as isovalues, which the server checks against the range.
+    o.addExact("valueMin", h.valueMin).addExact("valueMax", h.valueMax).addExact("iso", s.defaultIso);
     o.add("brickSize", int64_t(h.brickSize)).add("bricks", s.reader->layout().brickCount());
-    o.addRaw("histogram", JsonObject().add("lo", histogram.lo).add("hi", histogram.hi).addRaw("counts", counts).str());
+    o.addRaw("histogram",
+             JsonObject().addExact("lo", histogram.lo).addExact("hi", histogram.hi).addRaw("counts", counts).str());
     return o.str();
 }
 
@@ -45,6 +59,10 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
     for (const std::string& path : paths) {
         ServedStore s;
         s.name = std::filesystem::path(path).stem().string();
+        // Names go to browsers in text messages, which must be UTF-8 (one bad byte and the
+        // browser drops the connection).
+        if (!isUtf8(s.name))
+            throw IoError(path + ": the store's name is not UTF-8; rename the file to serve it");
         for (const ServedStore& other : mStores)
             if (other.name == s.name)
                 throw IoError(path + ": a store named '" + s.name + "' is served already");

@@ -75,9 +75,15 @@ void ViewerClient::sendRaw(const std::vector<uint8_t>& bytes, bool text) {
 
 std::string ViewerClient::readText() {
     std::vector<uint8_t> message;
-    while (!read(message)) {
-    }
+    while (!read(message))
+        if (!message.empty() && message[0] == uint8_t(MessageType::Chunk)) keep(decodeChunk(message), message.size());
     return std::string(message.begin(), message.end());
+}
+
+void ViewerClient::keep(DecodedChunk chunk, size_t bytes) {
+    const auto key = std::make_tuple(chunk.header.store, chunk.header.iso, chunk.header.brick);
+    mCacheBytes[key] = bytes;
+    mCache[key] = std::move(chunk);
 }
 
 void ViewerClient::sendView(const ViewMessage& view) {
@@ -116,16 +122,16 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
         if (message.empty()) throw ProtocolError("empty binary message");
         if (message[0] == uint8_t(MessageType::Chunk)) {
             DecodedChunk chunk = decodeChunk(message);
-            if (chunk.header.frame != frame) continue;  // an older frame's, still in flight
-            if (f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();
-            f.binaryBytes += message.size();
-            if (chunk.header.flags & kChunkCacheable) {
-                f.chunks.push_back(chunk.header.brick);
-                mCacheBytes[{chunk.header.store, chunk.header.iso, chunk.header.brick}] = message.size();
-                mCache[{chunk.header.store, chunk.header.iso, chunk.header.brick}] = std::move(chunk);
-            } else {
+            const bool cacheable = chunk.header.flags & kChunkCacheable;
+            const bool ours = chunk.header.frame == frame;
+            if (ours && f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();
+            if (ours) f.binaryBytes += message.size();
+            if (ours && cacheable) f.chunks.push_back(chunk.header.brick);
+            // An older frame's cacheable chunk is held all the same: the server counts it so.
+            if (cacheable)
+                keep(std::move(chunk), message.size());
+            else if (ours)
                 f.transient.push_back(std::move(chunk));
-            }
         } else if (message[0] == uint8_t(MessageType::Refs)) {
             uint32_t refsFrame = 0;
             const std::vector<uint32_t> bricks = decodeRefs(message, refsFrame);

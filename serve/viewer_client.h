@@ -75,6 +75,8 @@ private:
     struct Connection;
     // One message; true when it is text.
     bool read(std::vector<uint8_t>& message);
+    // Caches a cacheable chunk under what it holds.
+    void keep(DecodedChunk chunk, size_t bytes);
 
     std::unique_ptr<Connection> mConnection;
     std::string mHello;

@@ -45,7 +45,10 @@ void ViewerSession::join() {
 
 void ViewerSession::start() {
     mOutbox.push(OutMessage::control(mStores.hello()));
-    mWorker = std::thread([this] { work(); });
+    mWorker = std::thread([this] {
+        work();
+        mWorkerDone = true;
+    });
 }
 
 void ViewerSession::close() {
@@ -142,7 +145,11 @@ void ViewerSession::work() {
             mPending.reset();
             mSuperseded = false;
         }
-        runFrame(view, arrival);
+        try {
+            runFrame(view, arrival);
+        } catch (const std::exception& e) {  // never past the worker: the server stays up
+            reply("frame " + std::to_string(view.seq) + ": " + e.what(), view.seq);
+        }
     }
 }
 
@@ -176,27 +183,36 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
             PointSet unusedPoints;
             stats = extractViewDependent(*store.cache, camera, options, unused, unusedPoints);
             if (stats.abandoned) status = "superseded";
-        } catch (const std::exception& e) {
+        } catch (const std::exception& e) {  // a brick that cannot be read, say
             status = "error";
             error = e.what();
         }
         mGate.leave();
     }
     stream.finish();
-    if (!error.empty()) reply("frame " + std::to_string(view.seq) + ": " + error);
+    if (status == "complete" && stream.incomplete()) status = "superseded";
+    if (!error.empty()) reply("frame " + std::to_string(view.seq) + ": " + error, view.seq);
     const FrameCounters c = stream.counters();
     const CacheCounters after = store.cache->counters();
     const double seconds = std::chrono::duration<double>(Clock::now() - arrival).count();
-    JsonObject end;
-    end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", status);
-    end.add("chunks", c.chunks).add("refs", c.refs).add("triangles", c.triangles);
-    end.add("points", c.points).add("bytes", c.bytes);
-    // The cache is shared: misses while this frame ran, whoever caused them.
-    end.add("bricksRead", after.misses - before.misses);
-    end.add("bricksVisited", stats.bricksAcquired);
-    end.add("serverMs", seconds * 1e3);
-    end.add("firstChunkMs", c.firstChunkSeconds < 0 ? -1.0 : c.firstChunkSeconds * 1e3);
-    mOutbox.push(OutMessage::control(end.str()));
+    auto frameEnd = [&](const std::string& said) {
+        JsonObject end;
+        end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", said);
+        end.add("chunks", c.chunks).add("refs", c.refs).add("triangles", c.triangles);
+        end.add("points", c.points).add("bytes", c.bytes);
+        // The cache is shared: misses while this frame ran, whoever caused them.
+        end.add("bricksRead", after.misses - before.misses);
+        end.add("bricksVisited", stats.bricksAcquired);
+        end.add("serverMs", seconds * 1e3);
+        end.add("firstChunkMs", c.firstChunkSeconds < 0 ? -1.0 : c.firstChunkSeconds * 1e3);
+        return end.str();
+    };
+    // If a newer frame drops any of this one's messages before they are written, the end
+    // says so (serve/outbox.h).
+    OutMessage end = OutMessage::control(frameEnd(status));
+    end.ends = view.seq;
+    if (status == "complete") end.ifIncomplete = OutMessage::control(frameEnd("superseded")).bytes;
+    mOutbox.push(std::move(end));
 }
 
 }  // namespace vdiso::serve

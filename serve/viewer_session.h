@@ -65,6 +65,9 @@ public:
     void close();
     // Waits for the worker to stop (after close()).
     void join();
+    // The worker has finished (after close()): join() returns at once.
+    bool stopped() const { return mWorkerDone.load() || !mWorker.joinable(); }
+    bool backlogged() const { return mOutbox.backlogged(); }
 
 private:
     void work();
@@ -85,6 +88,7 @@ private:
     bool mClosing = false;
     std::atomic<bool> mSuperseded{false};
     std::mutex mJoinMutex;
+    std::atomic<bool> mWorkerDone{false};
     std::thread mWorker;
 };
 

@@ -100,6 +100,12 @@ TEST(ServeProtocol, RefusesBadViews) {
     v = validView();
     v.iso = NAN;
     EXPECT_NE(viewError(v).find("iso"), std::string::npos);
+    v = validView();
+    v.seq = UINT32_MAX;  // the outbox's mark of control messages
+    EXPECT_NE(viewError(v).find("seq"), std::string::npos);
+    v = validView();
+    v.iso = -0.0;
+    EXPECT_FALSE(std::signbit(parseView(encodeView(v)).iso));  // one key for 0 and -0
 
     std::vector<uint8_t> bytes = encodeView(validView());
     bytes.pop_back();
@@ -201,6 +207,31 @@ TEST(ServeOutbox, NewerFrameDropsOlderAndReleasesBlockedPush) {
     EXPECT_EQ(box.queuedBytes(), 0u);
     box.close();
     EXPECT_FALSE(box.push(frameMessage(2, 10)));
+}
+
+TEST(ServeOutbox, AFrameEndSaysSupersededWhenItsMessagesWereDropped) {
+    Outbox box(1 << 20, [] {});
+    box.beginFrame(1);
+    ASSERT_TRUE(box.push(frameMessage(1, 100)));
+    OutMessage end = OutMessage::control("complete");
+    end.ends = 1;
+    end.ifIncomplete = OutMessage::control("superseded").bytes;
+    ASSERT_TRUE(box.push(end));
+    box.beginFrame(2);  // frame 1's chunk had not been written: dropped
+    const std::optional<OutMessage> m = box.pop();
+    ASSERT_TRUE(m);
+    EXPECT_EQ(std::string(m->bytes->begin(), m->bytes->end()), "superseded");
+
+    // A frame whose messages all went out ends complete.
+    box.beginFrame(3);
+    ASSERT_TRUE(box.push(frameMessage(3, 100)));
+    end.ends = 3;
+    ASSERT_TRUE(box.push(end));
+    EXPECT_TRUE(box.pop());
+    box.beginFrame(4);
+    const std::optional<OutMessage> e = box.pop();
+    ASSERT_TRUE(e);
+    EXPECT_EQ(std::string(e->bytes->begin(), e->bytes->end()), "complete");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -418,6 +449,25 @@ TEST(ServeSession, NearbyCameraSendsOnlyMissingChunks) {
     EXPECT_TRUE(d.refs.empty());
 }
 
+TEST(ServeSession, TwoStripsSendEachBrickOnce) {
+    ServerFixture fixture(uint64_t(256) << 20, 2);
+    auto client = fixture.client();
+    for (uint32_t seq = 1; seq <= 3; ++seq) {
+        const Camera camera = presetFor(fixture.storePath, ViewPreset::Normal, 192, 10.0 * (seq - 1));
+        const ClientFrame f = client->requestFrame(viewOf(camera, seq));
+        ASSERT_EQ(f.status, "complete") << f.frameEnd;
+        EXPECT_EQ(f.missingRefs, 0u);
+        std::vector<uint32_t> named = f.chunks;
+        named.insert(named.end(), f.refs.begin(), f.refs.end());
+        std::sort(named.begin(), named.end());
+        EXPECT_TRUE(std::adjacent_find(named.begin(), named.end()) == named.end()) << "a brick named twice";
+        TriangleMesh mesh;
+        PointSet points;
+        client->assemble(f, mesh, points);
+        EXPECT_GT(agreementWithFullSurface(fixture.storePath, camera, mesh, points), 0.99);
+    }
+}
+
 TEST(ServeSession, NewerCameraAbandonsTheFrameInFlight) {
     ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160});
     auto client = fixture.client();
@@ -438,6 +488,13 @@ TEST(ServeSession, NewerCameraAbandonsTheFrameInFlight) {
     for (uint32_t seq = 3; seq < 8; ++seq) client->sendView(viewOf(presetFor(fixture.storePath, ViewPreset::Closeup, 1024, seq), seq));
     const ClientFrame last = client->readFrame(7);
     EXPECT_EQ(last.status, "complete");
+    EXPECT_EQ(last.missingRefs, 0u);
+    TriangleMesh lastMesh;
+    PointSet lastPoints;
+    client->assemble(last, lastMesh, lastPoints);
+    EXPECT_GT(agreementWithFullSurface(fixture.storePath, presetFor(fixture.storePath, ViewPreset::Closeup, 1024, 7),
+                                       lastMesh, lastPoints),
+              0.99);
 }
 
 TEST(ServeSession, BadMessagesGetAnErrorAndTheConnectionStays) {
@@ -525,13 +582,14 @@ TEST(ServeHttp, TokenIsRequiredAndOnlyTheViewersFilesAreServed) {
     std::string body, cookie;
     EXPECT_EQ(httpGet(port, "/?token=" + token, "", &body, &cookie), 200);
     EXPECT_NE(body.find("viewer"), std::string::npos);
-    EXPECT_NE(cookie.find("vdiso_token=" + token), std::string::npos);
+    EXPECT_NE(cookie.find("vdiso_token_" + std::to_string(port) + "=" + token), std::string::npos);
     EXPECT_NE(cookie.find("HttpOnly"), std::string::npos);
-    const std::string jar = "vdiso_token=" + token;
+    const std::string jar = "vdiso_token_" + std::to_string(port) + "=" + token;
     EXPECT_EQ(httpGet(port, "/src/main.js", jar, &body), 200);
     EXPECT_NE(body.find("main"), std::string::npos);
     EXPECT_EQ(httpGet(port, "/vendor/three.module.js", jar), 200);
-    EXPECT_EQ(httpGet(port, "/src/main.js", "vdiso_token=nope"), 403);
+    EXPECT_EQ(httpGet(port, "/src/main.js", "vdiso_token_" + std::to_string(port) + "=nope"), 403);
+    EXPECT_EQ(httpGet(port, "/src/main.js", "vdiso_token=" + token), 403);  // another port's cookie
     for (const char* path : {"/../secret.txt", "/src/../../secret.txt", "/%2e%2e/secret.txt", "/src/",
                              "/src", "/node_modules/three/package.json", "/vendor/", "/web/index.html",
                              "//etc/passwd", "/index.html/../../secret.txt"})

@@ -53,8 +53,8 @@ int runServe(int argc, char** argv) {
             o.metaCellSize = int(parseInt(a, args.value(a), 1, 32));
         } else if (a == "--token") {
             o.token = args.value(a);
-            if (o.token.size() < 8 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos)
-                throw UsageError("--token expects at least 8 hex digits, '-' or '_'");
+            if (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos)
+                throw UsageError("--token expects at least 16 characters of hex digits, '-' or '_'");
         } else if (a == "--web") {
             o.webRoot = args.value(a);
         } else if (!a.empty() && a[0] == '-') {

@@ -53,7 +53,9 @@ function checkCamera({ eye, target, up, fov }) {
   if (!(fov > 0 && fov < 180)) throw new Error(`camera fov must be in (0, 180) degrees, got ${fov}`);
   const forward = new THREE.Vector3(...target).sub(new THREE.Vector3(...eye));
   if (forward.lengthSq() === 0) throw new Error('camera eye and target must differ');
-  if (forward.cross(new THREE.Vector3(...up)).lengthSq() === 0) throw new Error('camera up must not be parallel to target - eye');
+  // The server's test (serve/protocol.cpp): unit vectors whose cross product is under 1e-9.
+  const side = forward.normalize().cross(new THREE.Vector3(...up).normalize());
+  if (!(side.length() >= 1e-9)) throw new Error('camera up must not be parallel to target - eye');
 }
 
 // Owns the three.js camera's placement: OrbitControls for the user, set() for scripts and
@@ -89,6 +91,10 @@ export class CameraController {
       this.controls?.dispose();
       this.camera.up.set(...up);
       this.controls = new OrbitControls(this.camera, this.domElement);
+      // Short of the poles by a margin: at OrbitControls' own clamp (1e-6 rad) the view is
+      // parallel to up within rounding, a camera the server refuses.
+      this.controls.minPolarAngle = 1e-3;
+      this.controls.maxPolarAngle = Math.PI - 1e-3;
       this.controls.addEventListener('change', () => this.onChange());
       this.up = [...up];
     }
