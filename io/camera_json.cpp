@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/error.h"
+#include "io/text_file.h"
 
 namespace vdiso {
 
@@ -18,13 +19,11 @@ using nlohmann::json;
 
 constexpr int kMaxImageSide = 16384;
 
+// A camera path of 16 MiB holds some 80,000 cameras; more is not a camera file.
+constexpr size_t kMaxCameraFileBytes = size_t(16) << 20;
+
 std::string readText(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throwSystemError(path, "cannot open", errno);
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throwSystemError(path, "cannot read", errno);
-    return text.str();
+    return readBoundedText(path, kMaxCameraFileBytes, "a camera file");
 }
 
 json parseJson(const std::string& text, const std::string& name) {

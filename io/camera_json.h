@@ -8,6 +8,8 @@
 // far, both or neither; without them the clip planes are derived later, see core/camera.h).
 // Unknown fields are errors, so that a misspelt "fovy" does not silently do nothing.
 // A camera path is a JSON array of such objects, or {"cameras": [...]}, with at least one.
+// A camera file holds at most 16 MiB; a larger or endless one (/dev/zero) is refused after
+// reading that much.
 //
 // Errors throw IoError naming the file, where in it, and what is wrong
 // ("cam.json: 'eye' must be an array of 3 numbers", "path.json: cameras[2]: 'fov' missing").

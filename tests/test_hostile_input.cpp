@@ -21,6 +21,7 @@
 #include "io/error.h"
 #include "io/store_format.h"
 #include "io/store_writer.h"
+#include "io/text_file.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -318,6 +319,28 @@ TEST(HostileInput, ProgressOfNothingToDoDrawsOneBar) {
                                               dir.file("v.ply"), 1 << 20);
     EXPECT_LT(out.size(), 4096u) << out.substr(0, 400);
     EXPECT_NE(out.find("100%"), std::string::npos) << out.substr(0, 400);
+}
+
+// Class 10: --camera /dev/zero and --path /dev/zero read the whole (endless) file into memory.
+TEST(HostileInput, CameraAndPathFilesAreReadWithABound) {
+    ScratchDir dir;
+    test::writeFile(dir.file("v.raw"), std::string(10 * 10 * 10, '\x07'));
+    ASSERT_EQ(runVdiso("convert " + dir.file("v.raw") + " " + dir.file("v.vdiso") +
+                       " --dims 10,10,10 --type u8").exitCode, 0);
+    for (const std::string flag : {"--camera", "--path"}) {
+        const std::string rest = flag == "--camera" ? " --method sage -o " + dir.file("v.ply")
+                                                    : " --png " + dir.file("f_%04d.png");
+        const auto r = runVdiso("extract " + dir.file("v.vdiso") + " --iso 3 " + flag +
+                                " /dev/zero" + rest);
+        EXPECT_NE(r.exitCode, 0) << flag;
+        EXPECT_NE(r.output.find("/dev/zero: is larger than 16777216 bytes"), std::string::npos)
+            << flag << ": " << r.output;
+    }
+    // A file of the bound plus one byte, and the bound's own size is read (and parsed).
+    test::writeFile(dir.file("big.json"), std::string((size_t(16) << 20) + 1, ' '));
+    EXPECT_THROW(readBoundedText(dir.file("big.json"), size_t(16) << 20, "a camera file"), IoError);
+    EXPECT_EQ(readBoundedText(dir.file("big.json"), (size_t(16) << 20) + 1, "x").size(),
+              (size_t(16) << 20) + 1);
 }
 
 }  // namespace
