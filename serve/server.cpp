@@ -44,7 +44,12 @@ int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
         const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
         if (bricks >= uint64_t(stores[i].reader->layout().brickCount())) continue;
         const uint64_t perFrame = uint64_t(settings.prefetchBricks + 4 * settings.threads);
-        slots = std::min<int>(slots, int(std::max<uint64_t>(1, bricks / (2 * perFrame))));
+        if (bricks < 2 * perFrame)
+            throw IoError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
+                          " bricks cannot hold what one frame pins (" + std::to_string(2 * perFrame) +
+                          " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
+                          " KB with --threads " + std::to_string(settings.threads) + "): raise --cache-mb");
+        slots = std::min<int>(slots, int(bricks / (2 * perFrame)));
     }
     return slots;
 }

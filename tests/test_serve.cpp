@@ -732,6 +732,20 @@ TEST(ServeServer, RefusesWhatItCannotServe) {
     s.stores = {dir.file("a.vdiso")};
     s.host = "not-an-address";
     EXPECT_THROW(Server{s}, IoError);
+    s.host = "127.0.0.1";
+    SynthParams bigger;
+    bigger.dims = {200, 200, 40};
+    StoreWriteOptions eight;
+    eight.brickSize = 8;
+    writeBrickStore(*openSynthVolume(bigger), dir.file("b.vdiso"), eight);
+    s.stores = {dir.file("b.vdiso")};
+    s.cacheBytes = 10 * 11 * 11 * 11 * 2;  // 10 bricks: less than a frame pins
+    try {
+        Server server(s);
+        ADD_FAILURE() << "a cache smaller than a frame's pins was accepted";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("--cache-mb"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace
