@@ -157,6 +157,24 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     if (const std::string problem = brickLayoutProblem(BrickLayout(h.volume.dims, h.brickSize));
         !problem.empty())
         throwIoError(path, problem);
+    static const char* kAxis[3] = {"x", "y", "z"};
+    for (int a = 0; a < 3; ++a) {
+        // Spacing 0 gives NaN normals; a negative or non-finite one, no volume at all.
+        if (!(std::isfinite(h.volume.spacing[a]) && h.volume.spacing[a] > 0))
+            throwIoError(path, std::string("header's spacing along ") + kAxis[a] + " is " +
+                                   std::to_string(h.volume.spacing[a]) +
+                                   "; it must be a finite number above 0");
+        if (!std::isfinite(h.volume.origin[a]))
+            throwIoError(path, std::string("header's origin along ") + kAxis[a] + " is " +
+                                   std::to_string(h.volume.origin[a]) + "; it must be finite");
+        if (!std::isfinite(h.volume.worldMax()[a]))
+            throwIoError(path, std::string("header's spacing and origin along ") + kAxis[a] +
+                                   " put the volume's far end beyond the range of numbers");
+    }
+    // The value range is never NaN (docs/store-format.md, "Non-finite samples").
+    if (!(h.valueMin <= h.valueMax))
+        throwIoError(path, "header's value range [" + std::to_string(h.valueMin) + ", " +
+                               std::to_string(h.valueMax) + "] is invalid");
     if (ghostBefore != kGhostBefore || ghostAfter != kGhostAfter)
         throwIoError(path, "unsupported ghost layout");
     if (alignment != kStoreAlignment) throwIoError(path, "unsupported brick alignment");
@@ -240,12 +258,14 @@ void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header
                         e.storedBytes <= header.indexOffset - e.offset &&
                         (e.compressed || e.storedBytes == rawBytes) &&
                         (e.compressed == false || header.compression != Compression::None) &&
-                        !(e.minValue > e.maxValue);
+                        e.minValue <= e.maxValue;  // false for NaN too
         if (!ok) throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
     }
     histogram.lo = r.get<double>();
     histogram.hi = r.get<double>();
-    if (r.get<uint32_t>() != kHistogramBins) throwIoError(path, "index histogram is invalid");
+    if (r.get<uint32_t>() != kHistogramBins || !std::isfinite(histogram.lo) ||
+        !std::isfinite(histogram.hi) || !(histogram.lo <= histogram.hi))
+        throwIoError(path, "index histogram is invalid");
     r.skip(4);
     for (uint64_t& c : histogram.counts) c = r.get<uint64_t>();
     if (r.get<uint32_t>() != kSubBlocksPerAxis) throwIoError(path, "index sub-block ranges are invalid");

@@ -343,5 +343,57 @@ TEST(HostileInput, CameraAndPathFilesAreReadWithABound) {
               (size_t(16) << 20) + 1);
 }
 
+// Class 11: spacing and origin were never checked at open: 0 (NaN normals), negative, NaN, inf.
+TEST_F(HostileStore, SpacingAndOriginOutOfRangeAreRefused) {
+    const auto good = bytes;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const double spacing : {0.0, -1.0, nan, inf, -inf}) {
+        bytes = good;
+        patchHeader<double>(40 + 8, spacing);  // spacing along y
+        const std::string msg = openError();
+        EXPECT_NE(msg.find("bad.vdiso: header's spacing"), std::string::npos)
+            << spacing << ": " << msg;
+        EXPECT_NE(msg.find("along y"), std::string::npos) << spacing << ": " << msg;
+    }
+    for (const double origin : {nan, inf, -inf}) {
+        bytes = good;
+        patchHeader<double>(64 + 16, origin);  // origin along z
+        const std::string msg = openError();
+        EXPECT_NE(msg.find("bad.vdiso: header's origin along z"), std::string::npos)
+            << origin << ": " << msg;
+    }
+    bytes = good;
+    patchHeader<double>(64, 1e308);  // finite, but the far end is not
+    patchHeader<double>(40, 1e307);
+    EXPECT_NE(openError().find("far end"), std::string::npos);
+    bytes = good;
+    EXPECT_EQ(openError(), "");  // the unpatched store opens: the checks above are the cause
+}
+
+// Class 11: NaN value ranges (header, brick entry, histogram) were accepted at open.
+TEST_F(HostileStore, NaNRangesAreRefused) {
+    const auto good = bytes;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    patchHeader<double>(136, nan);
+    EXPECT_NE(openError().find("bad.vdiso: header's value range"), std::string::npos);
+    bytes = good;
+    patchHeader<double>(144, -1e9);  // max below min
+    EXPECT_NE(openError().find("bad.vdiso: header's value range"), std::string::npos);
+    for (const size_t field : {16u, 20u}) {  // entry min, max
+        bytes = good;
+        patchIndex<float>(16 + 32 * 5 + field, kNaN);
+        const std::string msg = openError();
+        EXPECT_NE(msg.find("bad.vdiso: index entry of brick 5 is invalid"), std::string::npos)
+            << field << ": " << msg;
+    }
+    const size_t histogram = 16 + 32 * size_t(BrickStoreReader(path).layout().brickCount());
+    for (const size_t field : {0u, 8u}) {  // histogram lo, hi
+        bytes = good;
+        patchIndex<double>(histogram + field, nan);
+        EXPECT_NE(openError().find("bad.vdiso: index histogram is invalid"), std::string::npos);
+    }
+}
+
 }  // namespace
 }  // namespace vdiso
