@@ -15,17 +15,31 @@ namespace vdiso {
 
 namespace {
 
-bool pathExists(const std::string& path) {
-    struct stat st;
-    return ::stat(path.c_str(), &st) == 0;
+// What may stand at an output path: nothing, or a regular file (directly or through links) that is
+// none of the inputs. Throws otherwise.
+void checkReplaceable(const std::string& path, bool overwrite, const std::vector<std::string>& inputs) {
+    struct stat link;
+    if (::lstat(path.c_str(), &link) != 0) return;  // nothing there (or a dangling path)
+    if (!overwrite) throwIoError(path, "already exists (pass --force to replace it)");
+    struct stat target;
+    const bool resolved = ::stat(path.c_str(), &target) == 0;
+    if (!S_ISREG(link.st_mode) && !(S_ISLNK(link.st_mode) && (!resolved || S_ISREG(target.st_mode))))
+        throwIoError(path, "is not a regular file (a device, FIFO, socket or directory); vdiso "
+                           "replaces only regular files, even with --force");
+    if (!resolved) return;
+    for (const std::string& input : inputs) {
+        struct stat in;
+        if (::stat(input.c_str(), &in) == 0 && in.st_dev == target.st_dev && in.st_ino == target.st_ino)
+            throwIoError(path, "is the input " + input + " under another name; not replaced");
+    }
 }
 
 }  // namespace
 
-AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite)
+AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite,
+                                   const std::vector<std::string>& inputs)
     : mPath(std::move(path)), mOverwrite(overwrite) {
-    if (!mOverwrite && pathExists(mPath))
-        throwIoError(mPath, "already exists (pass --force to replace it)");
+    checkReplaceable(mPath, mOverwrite, inputs);
     // Unique per process and per object: two writers of one path never share a temporary.
     static std::atomic<unsigned> counter{0};
     mTempPath = mPath + ".partial." + std::to_string(::getpid()) + "." + std::to_string(counter++);

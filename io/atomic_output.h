@@ -9,13 +9,17 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace vdiso {
 
 class AtomicOutputFile {
 public:
-    // Creates the temporary file; throws IoError naming `path` if it cannot be written.
-    AtomicOutputFile(std::string path, bool overwrite);
+    // Creates the temporary file; throws IoError naming `path` if it cannot be written. Also
+    // refuses, even with `overwrite`, to replace anything but a regular file (a device, a FIFO,
+    // a directory; through a symbolic link too) or a file that is one of `inputs` under another
+    // name (compared by device and inode: "./vol.nrrd", a link to it, a header's data file).
+    AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs = {});
     ~AtomicOutputFile();
     AtomicOutputFile(const AtomicOutputFile&) = delete;
     AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;

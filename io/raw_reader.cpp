@@ -55,6 +55,7 @@ public:
             throwIoError(mIn->path(), "holds more data than its header describes");
     }
     std::string name() const override { return mName; }
+    std::vector<std::string> files() const override { return {mName, mIn->path()}; }
 
 private:
     std::string mName;

@@ -11,6 +11,9 @@
 
 #include "core/volume.h"
 
+#include <string>
+#include <vector>
+
 namespace vdiso {
 
 class SliceReader {
@@ -30,6 +33,10 @@ public:
 
     // Where the samples come from, for messages ("head.nii.gz", "synth:head").
     virtual std::string name() const = 0;
+
+    // The files the volume is read from (a header and its data file, when they differ); none
+    // for generated or in-memory volumes. A writer refuses to replace any of them.
+    virtual std::vector<std::string> files() const { return {}; }
 };
 
 }  // namespace vdiso

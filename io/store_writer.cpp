@@ -259,7 +259,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     const size_t sampleBytes = scalarSize(info.type);
     const int B = options.brickSize;
 
-    AtomicOutputFile out(outPath, options.overwrite);
+    AtomicOutputFile out(outPath, options.overwrite, source.files());
     uint64_t fileEnd = kStoreHeaderBytes;  // the header is written last, at offset 0
 
     SliceRing ring;

@@ -88,6 +88,7 @@ public:
     VdbSliceReader& operator=(const VdbSliceReader&) = delete;
 
     const VolumeInfo& info() const override { return mInfo; }
+    std::vector<std::string> files() const override { return {mPath}; }
 
     void read(void* dst, int64_t count) override {
         if (count < 0 || mNextZ + count > mInfo.dims[2])

@@ -4,6 +4,8 @@
 // hang, a runaway allocation or lost input.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -393,6 +395,60 @@ TEST_F(HostileStore, NaNRangesAreRefused) {
         patchIndex<double>(histogram + field, nan);
         EXPECT_NE(openError().find("bad.vdiso: index histogram is invalid"), std::string::npos);
     }
+}
+
+// Class 7: --force replaced the input itself when the output named it differently. Each case
+// must be refused with the output named, and leave the input's bytes as they were.
+TEST(HostileInput, ForceNeverReplacesTheInput) {
+    ScratchDir dir;
+    const std::string raw(4 * 3 * 2, '\x05');
+    test::writeFile(dir.file("vol.raw"), raw);
+    std::filesystem::create_symlink(dir.file("vol.raw"), dir.file("link.raw"));
+    test::writeFile(dir.file("vol.nhdr"), "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\n"
+                                          "encoding: raw\ndata file: vol.raw\n\n");
+    const std::string rawArgs = " --dims 4,3,2 --type u8 --force";
+    const std::string d = dir.path().string();
+    struct Case {
+        std::string input, output, args;
+    };
+    const Case cases[] = {
+        {d + "/vol.raw", d + "/./vol.raw", rawArgs},   // the same file, another spelling
+        {d + "/link.raw", d + "/vol.raw", rawArgs},    // the input is a link to the output
+        {d + "/vol.raw", d + "/link.raw", rawArgs},    // the output is a link to the input
+        {d + "/vol.nhdr", d + "/vol.raw", " --force"}, // the header's data file is the output
+    };
+    for (const Case& c : cases) {
+        const auto r = runVdiso("convert " + c.input + " " + c.output + c.args);
+        EXPECT_NE(r.exitCode, 0) << c.input << " -> " << c.output;
+        EXPECT_NE(r.output.find(c.output + ": is the input"), std::string::npos)
+            << c.input << " -> " << c.output << ": " << r.output;
+        const auto bytes = test::readFile(dir.file("vol.raw"));
+        EXPECT_EQ(std::string(bytes.begin(), bytes.end()), raw) << c.input << " -> " << c.output;
+        EXPECT_TRUE(std::filesystem::is_symlink(dir.file("link.raw")));
+    }
+    // Another file is replaced as before.
+    test::writeFile(dir.file("other.vdiso"), "old");
+    EXPECT_EQ(runVdiso("convert " + dir.file("vol.raw") + " " + dir.file("other.vdiso") + rawArgs)
+                  .exitCode, 0);
+    EXPECT_NO_THROW(BrickStoreReader(dir.file("other.vdiso")));
+}
+
+// Class 7: as root, --force renamed over a device (/dev/null became a regular file). A FIFO
+// stands in for the device: any non-regular file, directly or through a link, is refused.
+TEST(HostileInput, ForceNeverReplacesANonRegularFile) {
+    ScratchDir dir;
+    test::writeFile(dir.file("vol.raw"), std::string(8, '\x05'));
+    ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0644), 0);
+    std::filesystem::create_symlink(dir.file("fifo"), dir.file("fifo-link"));
+    for (const std::string out : {"fifo", "fifo-link"}) {
+        const auto r = runVdiso("convert " + dir.file("vol.raw") + " " + dir.file(out) +
+                                " --dims 2,2,2 --type u8 --force");
+        EXPECT_NE(r.exitCode, 0) << out;
+        EXPECT_NE(r.output.find(dir.file(out) + ": is not a regular file"), std::string::npos)
+            << r.output;
+        EXPECT_TRUE(std::filesystem::is_fifo(dir.file("fifo")));
+    }
+    EXPECT_TRUE(std::filesystem::is_symlink(dir.file("fifo-link")));
 }
 
 }  // namespace
