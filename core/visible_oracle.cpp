@@ -46,7 +46,11 @@ VisibleSurfaceOracle visibleSurfaceOracle(BrickSource& source, const Camera& cam
     }
     oracle.bricks = cellsOfBrick.size();
     const int side = layout.side();
-    for (const auto& [brick, cells] : cellsOfBrick) {
+    // Not a structured binding: the lambda below captures `cells`, which clang before 16
+    // refuses for bindings (C++20 allows it).
+    for (const auto& entry : cellsOfBrick) {
+        const int64_t brick = entry.first;
+        const auto& cells = entry.second;
         const BrickHandle handle = source.acquire(brick);
         visitScalarType(v.type, [&](auto zero) {
             using T = decltype(zero);
