@@ -1,5 +1,6 @@
 #include "io/byte_stream.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -8,6 +9,7 @@
 #include <sys/stat.h>
 #include <zlib.h>
 
+#include "core/interrupt.h"
 #include "io/error.h"
 
 namespace vdiso {
@@ -16,6 +18,7 @@ void ByteStream::skip(uint64_t n) {
     std::vector<char> scratch(1 << 16);
     while (n > 0) {
         size_t chunk = size_t(std::min<uint64_t>(n, scratch.size()));
+        throwIfInterrupted(mPath);  // a skip of many GB, or over an endless stream
         size_t got = read(scratch.data(), chunk);
         if (got == 0) throwIoError(mPath, "ends before the data it declares");
         n -= got;
@@ -25,7 +28,9 @@ void ByteStream::skip(uint64_t n) {
 void ByteStream::readExact(void* dst, size_t n, const char* what) {
     size_t got = 0;
     while (got < n) {
-        size_t r = read(static_cast<char*>(dst) + got, n - got);
+        throwIfInterrupted(mPath);
+        // At most 16 MiB a read, so that a large slab still yields to an interrupt.
+        size_t r = read(static_cast<char*>(dst) + got, std::min<size_t>(n - got, size_t(16) << 20));
         if (r == 0)
             throwIoError(mPath, "ends after " + std::to_string(got) + " of " + std::to_string(n) +
                                     " bytes of " + what);

@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/interrupt.h"
 #include "io/byte_stream.h"
 #include "io/error.h"
 #include "io/raw_reader.h"
@@ -280,6 +281,7 @@ bool readHeaderLine(const std::string& path, std::istream& in, std::string& line
             break;
         }
         ++consumed;
+        if ((consumed & 0xfffff) == 0) throwIfInterrupted(path);  // endless headers
         if (c == '\n') break;
         line += char(c);
         if (line.size() > kMaxHeaderLine)
@@ -423,6 +425,9 @@ uint64_t skipLines(const std::string& path, uint64_t offset, int64_t lines) {
                 throwIoError(path, "ends within the " + std::to_string(lines) +
                                        " lines the header's 'line skip' skips");
             ++offset;
+            // Lines may be many, long or endless (a data file of /dev/zero): yield to Ctrl-C
+            // every MiB.
+            if ((offset & 0xfffff) == 0) throwIfInterrupted(path);
             if (c == '\n') break;
         }
     }

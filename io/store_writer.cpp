@@ -16,6 +16,7 @@
 #include <lz4.h>
 #include <zstd.h>
 
+#include "core/interrupt.h"
 #include "core/iso.h"
 #include "core/sub_blocks.h"
 #include "io/atomic_output.h"
@@ -287,6 +288,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     readSlices(source, ring, 0, lastSliceOfLayer(0) + 1);
     int64_t groupIndex = 0;
     for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
+        throwIfInterrupted(source.name());  // also without a progress callback
         std::future<void> prefetch;
         if (bk + 1 < layout.brickCounts[2])
             prefetch = std::async(std::launch::async, readSlices, std::ref(source), std::ref(ring),

@@ -451,5 +451,33 @@ TEST(HostileInput, ForceNeverReplacesANonRegularFile) {
     EXPECT_TRUE(std::filesystem::is_symlink(dir.file("fifo-link")));
 }
 
+// Class 5: NRRD 'line skip' over an endless stream (data file /dev/zero, which has no newline)
+// looped forever, and SIGINT was seen only by the progress bar. It must stop within a second.
+TEST(HostileInput, LineSkipOverAnEndlessStreamYieldsToCtrlC) {
+    ScratchDir dir;
+    test::writeFile(dir.file("endless.nhdr"), "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\n"
+                                              "encoding: raw\nline skip: 1\ndata file: /dev/zero\n\n");
+    // The shell starts the conversion, interrupts it after 0.5 s, and reports its exit code and
+    // how long the wait after the signal took; a hard limit kills it if it ignores the signal.
+    const std::string script =
+        "timeout -s KILL 20 sh -c '" + std::string(VDISO_BINARY) + " convert " +
+        dir.file("endless.nhdr") + " " + dir.file("out.vdiso") +
+        " & pid=$!; sleep 0.5; kill -INT $pid; start=$(date +%s%N); wait $pid; rc=$?; "
+        "echo; echo rc=$rc ms=$(( ($(date +%s%N) - start) / 1000000 ))' 2>&1";
+    std::string out;
+    FILE* pipe = ::popen(script.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
+    ::pclose(pipe);
+    EXPECT_NE(out.find("rc=130"), std::string::npos) << out;
+    EXPECT_NE(out.find("/dev/zero: interrupted"), std::string::npos) << out;
+    const size_t ms = out.find("ms=");
+    ASSERT_NE(ms, std::string::npos) << out;
+    EXPECT_LT(std::stoi(out.substr(ms + 3)), 1000) << out;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("out.vdiso")));
+}
+
 }  // namespace
 }  // namespace vdiso

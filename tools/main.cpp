@@ -4,6 +4,7 @@
 #include <exception>
 #include <string>
 
+#include "core/interrupt.h"
 #include "io/error.h"
 #include "tools/args.h"
 #include "tools/commands.h"
@@ -48,6 +49,10 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "vdiso %s: %s (see 'vdiso %s --help')\n", command.c_str(), e.what(),
                      command.c_str());
         return 2;
+    } catch (const vdiso::Interrupted& e) {
+        // Ctrl-C or SIGTERM, seen by a library loop: its output was removed on the way out.
+        std::fprintf(stderr, "\nvdiso %s: %s; no output written\n", command.c_str(), e.what());
+        return 130;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "vdiso %s: error: %s\n", command.c_str(), e.what());
         return 1;

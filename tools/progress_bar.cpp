@@ -9,15 +9,15 @@
 
 #include <unistd.h>
 
+#include "core/interrupt.h"
 #include "io/error.h"
 
 namespace vdiso::cli {
 
 namespace {
 
-volatile std::sig_atomic_t gInterrupted = 0;
-
-void onInterrupt(int) { gInterrupted = 1; }
+// The library's long loops poll the same flag (core/interrupt.h).
+void onInterrupt(int) { requestInterrupt(); }
 
 struct BarState {
     std::string label;
@@ -43,7 +43,7 @@ ProgressFn progressBar(const std::string& label, double bytesTotal, bool quiet) 
     state->bytesTotal = bytesTotal;
     state->draw = !quiet && ::isatty(STDERR_FILENO);
     return [state](double fraction) {
-        if (gInterrupted) {
+        if (interruptRequested()) {
             if (state->draw) std::fputs("\n", stderr);
             throw IoError(state->label + ": interrupted; no output written");
         }
