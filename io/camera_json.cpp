@@ -29,7 +29,8 @@ std::string readText(const std::string& path) {
 json parseJson(const std::string& text, const std::string& name) {
     try {
         return json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {
+        // A syntax error, or a number beyond double's range (1e400: out_of_range.406).
         // Drop nlohmann's "[json.exception.parse_error.101] " tag: it means nothing to users.
         std::string what = e.what();
         if (size_t tagEnd = what.find("] "); what.rfind("[json.", 0) == 0 && tagEnd != what.npos)

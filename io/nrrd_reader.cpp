@@ -228,6 +228,9 @@ bool parseNrrdEndian(const std::string& path, std::string_view value) {
 std::string parseDataFile(const std::string& path, std::string_view value) {
     const std::vector<std::string_view> words = splitWords(value);
     if (words.empty()) throwIoError(path, "'data file' names no file");
+    // A file name cannot hold a NUL byte; the C library would open what precedes it.
+    if (value.find('\0') != std::string_view::npos)
+        throwIoError(path, "'data file' name holds a NUL byte");
     if (words[0] == "LIST")
         throwIoError(path, "multi-file NRRD data ('data file: LIST') is not supported");
     const bool isFormatForm = words.size() >= 4 && words[0].find('%') != std::string_view::npos &&

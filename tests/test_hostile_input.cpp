@@ -20,6 +20,7 @@
 #include "core/iso.h"
 #include "core/mc_tables.h"
 #include "io/brick_store.h"
+#include "io/camera_json.h"
 #include "io/error.h"
 #include "io/store_format.h"
 #include "io/store_writer.h"
@@ -477,6 +478,29 @@ TEST(HostileInput, LineSkipOverAnEndlessStreamYieldsToCtrlC) {
     ASSERT_NE(ms, std::string::npos) << out;
     EXPECT_LT(std::stoi(out.substr(ms + 3)), 1000) << out;
     EXPECT_FALSE(std::filesystem::exists(dir.file("out.vdiso")));
+}
+
+// Class 9: a JSON number beyond double's range (1e400) gave nlohmann's own tagged message, and a
+// 'data file' name holding a NUL byte gave an empty message. Each must name the file in words.
+TEST(HostileInput, MessagesNameTheFileForJsonOverflowAndNulInDataFile) {
+    ScratchDir dir;
+    test::writeFile(dir.file("cam.json"),
+                    R"({"eye": [1e400, 0, 0], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 30})");
+    try {
+        readCameraJson(dir.file("cam.json"), 64, 64);
+        ADD_FAILURE() << "1e400 accepted";
+    } catch (const IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.rfind(dir.file("cam.json") + ": not valid JSON: ", 0), 0u) << msg;
+        EXPECT_EQ(msg.find("[json."), std::string::npos) << msg;
+    }
+    const std::string header = std::string("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\n"
+                                           "encoding: raw\ndata file: a") + '\0' + "b.raw\n\n";
+    test::writeFile(dir.file("nul.nhdr"), header);
+    const auto r = runVdiso("convert " + dir.file("nul.nhdr") + " " + dir.file("nul.vdiso"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find(dir.file("nul.nhdr") + ": 'data file' name holds a NUL byte"),
+              std::string::npos) << r.output;
 }
 
 }  // namespace
