@@ -8,6 +8,8 @@
 #include <functional>
 #include <future>
 #include <limits>
+#include <memory>
+#include <new>
 #include <stdexcept>
 
 #include <tbb/blocked_range2d.h>
@@ -75,15 +77,17 @@ KeyKind fineKeyKind(ScalarType type, uint32_t key) {
     return KeyKind::Finite;
 }
 
-// Slices held in memory: a ring of 2B+3, slice z in slot z mod 2B+3. A layer of bricks needs
-// B+3 consecutive slices; the other B slots receive the next layer's new slices while this
-// layer is encoded, so reading overlaps compression.
+// Slices held in memory: a ring of 2B+3 (or of the volume's depth, if smaller), slice z in slot
+// z mod slots. A layer of bricks needs B+3 consecutive slices; the other B slots receive the
+// next layer's new slices while this layer is encoded, so reading overlaps compression. The
+// ring's memory is not zeroed, so its pages are touched only as slices arrive: a header that
+// promises more data than its (compressed) file holds costs the memory of what it does hold.
 struct SliceRing {
-    std::vector<unsigned char> bytes;
+    std::unique_ptr<unsigned char[]> bytes;
     size_t sliceBytes = 0;
     int64_t slots = 0;
-    const unsigned char* slice(int64_t z) const { return bytes.data() + size_t(z % slots) * sliceBytes; }
-    unsigned char* slice(int64_t z) { return bytes.data() + size_t(z % slots) * sliceBytes; }
+    const unsigned char* slice(int64_t z) const { return bytes.get() + size_t(z % slots) * sliceBytes; }
+    unsigned char* slice(int64_t z) { return bytes.get() + size_t(z % slots) * sliceBytes; }
 };
 
 // Reads slices [z0, z1) from the source into their ring slots, in runs that do not wrap.
@@ -265,8 +269,17 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
 
     SliceRing ring;
     ring.sliceBytes = size_t(info.sliceSamples()) * sampleBytes;
-    ring.slots = 2 * int64_t(B) + kGhostBefore + kGhostAfter;
-    ring.bytes.resize(size_t(ring.slots) * ring.sliceBytes);
+    ring.slots = std::min<int64_t>(2 * int64_t(B) + kGhostBefore + kGhostAfter, info.dims[2]);
+    const uint64_t ringBytes = checkedMul(uint64_t(ring.slots), uint64_t(ring.sliceBytes));
+    try {
+        ring.bytes.reset(new unsigned char[size_t(ringBytes)]);  // default-initialised: untouched
+    } catch (const std::bad_alloc&) {
+        throwIoError(source.name(), "converting it needs " + std::to_string(ringBytes >> 20) +
+                                        " MiB for " + std::to_string(ring.slots) + " slices of " +
+                                        std::to_string(info.dims[0]) + " x " +
+                                        std::to_string(info.dims[1]) +
+                                        " samples, more memory than the process may allocate");
+    }
 
     std::vector<BrickEntry> entries(size_t(layout.brickCount()));
     std::vector<SubBlockCode> subBlocks(entries.size() * kSubBlocksPerBrick);

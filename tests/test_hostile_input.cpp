@@ -25,6 +25,7 @@
 #include "io/store_format.h"
 #include "io/store_writer.h"
 #include "io/text_file.h"
+#include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -501,6 +502,51 @@ TEST(HostileInput, MessagesNameTheFileForJsonOverflowAndNulInDataFile) {
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find(dir.file("nul.nhdr") + ": 'data file' name holds a NUL byte"),
               std::string::npos) << r.output;
+}
+
+// Output of a shell command line (stderr with stdout).
+std::string runShell(const std::string& line) {
+    std::string out;
+    FILE* pipe = ::popen(("( " + line + " ) 2>&1").c_str(), "r");
+    if (!pipe) return out;
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
+    ::pclose(pipe);
+    return out;
+}
+
+// Class 4: the converter allocated its ring of 2B+3 slices before reading a sample: a real
+// 4096 x 4096 x 2 volume (32 MiB) took 67 slices, 1.1 GB. The ring is now the volume's depth
+// when that is smaller: under a 768 MiB address-space limit the conversion succeeds.
+TEST(HostileInput, ConversionMemoryFollowsTheVolumesDepth) {
+    ScratchDir dir;
+    test::writeFile(dir.file("flat.raw"), std::string(size_t(4096) * 4096 * 2, '\x09'));
+    const std::string out = runShell("ulimit -v 786432; " + std::string(VDISO_BINARY) +
+                                     " convert " + dir.file("flat.raw") + " " +
+                                     dir.file("flat.vdiso") + " --dims 4096,4096,2 --type u8; "
+                                     "echo rc=$?");
+    EXPECT_NE(out.find("rc=0"), std::string::npos) << out;
+    EXPECT_NO_THROW(BrickStoreReader(dir.file("flat.vdiso")));
+}
+
+// Class 4: a 209-byte gzip NRRD header asked for 17.9 GB before reading a sample. Under an
+// address-space limit the refusal is clean and names the file (never a bare std::bad_alloc);
+// without one, the data ends and that is said.
+TEST(HostileInput, GzipHeaderPromisingHugeSlicesFailsCleanly) {
+    ScratchDir dir;
+    const std::string header = "NRRD0004\ntype: uint16\ndimension: 3\nsizes: 16384 16384 64\n"
+                               "endian: little\nencoding: gzip\n\n";
+    test::writeFile(dir.file("huge.nrrd"), header + test::gzipBytes(std::string(1000, '\0')));
+    for (const std::string limit : {"ulimit -v 4194304; ", ""}) {
+        const std::string out = runShell(limit + std::string(VDISO_BINARY) + " convert " +
+                                         dir.file("huge.nrrd") + " " + dir.file("huge.vdiso") +
+                                         "; echo rc=$?");
+        EXPECT_NE(out.find("rc=1"), std::string::npos) << limit << out;
+        EXPECT_NE(out.find("huge.nrrd: "), std::string::npos) << limit << out;
+        EXPECT_EQ(out.find("bad_alloc"), std::string::npos) << limit << out;
+        EXPECT_FALSE(std::filesystem::exists(dir.file("huge.vdiso")));
+    }
 }
 
 }  // namespace
