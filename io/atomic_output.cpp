@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <filesystem>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -40,11 +41,23 @@ AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite,
                                    const std::vector<std::string>& inputs)
     : mPath(std::move(path)), mOverwrite(overwrite) {
     checkReplaceable(mPath, mOverwrite, inputs);
-    // Unique per process and per object: two writers of one path never share a temporary.
-    static std::atomic<unsigned> counter{0};
-    mTempPath = mPath + ".partial." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    // An unnamed file in the output's directory: nothing to leave behind if the process dies
+    // (SIGKILL, the OOM killer), since the file system frees it with its last descriptor.
+    const std::string directory = std::filesystem::path(mPath).parent_path().string();
+    mFd = ::open(directory.empty() ? "." : directory.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0644);
+    if (mFd >= 0) return;
+    if (errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL)
+        throwSystemError(mPath, "cannot write", errno);
+    // File systems without O_TMPFILE: a named temporary, removed on any failure we live through.
+    mTempPath = temporaryName();
     mFd = ::open(mTempPath.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (mFd < 0) throwSystemError(mPath, "cannot write", errno);
+}
+
+std::string AtomicOutputFile::temporaryName() const {
+    // Unique per process and per object: two writers of one path never share a temporary.
+    static std::atomic<unsigned> counter{0};
+    return mPath + ".partial." + std::to_string(::getpid()) + "." + std::to_string(counter++);
 }
 
 AtomicOutputFile::~AtomicOutputFile() {
@@ -75,6 +88,27 @@ void AtomicOutputFile::startWriteback(uint64_t offset, uint64_t n) {
 
 void AtomicOutputFile::commit() {
     if (::fsync(mFd) != 0) throwSystemError(mPath, "cannot flush", errno);
+    if (mTempPath.empty()) {
+        // The unnamed file gets its name. Without overwrite, linkat itself refuses an existing
+        // file; with it, the file is linked under a temporary name and renamed over the old one
+        // (the temporary exists for the moment between the two calls only).
+        const std::string self = "/proc/self/fd/" + std::to_string(mFd);
+        const std::string name = mOverwrite ? temporaryName() : mPath;
+        if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, name.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+            if (errno == EEXIST && !mOverwrite)
+                throwIoError(mPath, "appeared while it was being written; not replaced");
+            throwSystemError(mPath, "cannot give the finished file its name", errno);
+        }
+        if (mOverwrite && ::rename(name.c_str(), mPath.c_str()) != 0) {
+            const int error = errno;
+            ::unlink(name.c_str());
+            throwSystemError(mPath, "cannot rename the finished file into place", error);
+        }
+        const int fd = mFd;
+        mFd = -1;
+        if (::close(fd) != 0) throwSystemError(mPath, "cannot close", errno);
+        return;
+    }
     int fd = mFd;
     mFd = -1;
     if (::close(fd) != 0) throwSystemError(mPath, "cannot close", errno);

@@ -1,9 +1,13 @@
 // An output file that appears under its final name only when complete.
 //
-// The file is written under a temporary name in the same directory; commit() renames it into
-// place. If the object is destroyed without commit() (an exception, an interrupt), the
-// temporary file is removed, so a failed write never leaves a half file nor touches an existing
-// one. Without `overwrite`, an existing destination is refused up front and again at commit.
+// The file is written unnamed (O_TMPFILE) in the output's directory, and commit() links it
+// into place (with `overwrite`, under a temporary name renamed over the old file). If the
+// process dies before that, even by SIGKILL or the OOM killer, nothing is left behind: the file
+// system frees an unnamed file with its last descriptor. On file systems without O_TMPFILE the
+// file is written under a temporary name (OUTPUT.partial.<pid>.<n>) and renamed into place;
+// there, only an exception or an interrupt removes it, and a killed process leaves it.
+// A failed write never leaves a half file nor touches an existing one. Without `overwrite`, an
+// existing destination is refused up front and again at commit.
 #pragma once
 
 #include <cstddef>
@@ -41,7 +45,10 @@ public:
     void commit();
 
 private:
-    std::string mPath, mTempPath;
+    std::string temporaryName() const;
+
+    std::string mPath;
+    std::string mTempPath;  // empty while the file is unnamed (O_TMPFILE)
     bool mOverwrite;
     int mFd = -1;
     uint64_t mSize = 0;

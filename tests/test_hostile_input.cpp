@@ -549,5 +549,27 @@ TEST(HostileInput, GzipHeaderPromisingHugeSlicesFailsCleanly) {
     }
 }
 
+// Class 8: SIGKILL (or a crash, or the OOM killer) left OUTPUT.partial.<pid>.<n> files that
+// nothing removed. The output is now unnamed until committed: killed mid-conversion (its gzip
+// input stalled on a FIFO after the first slices), vdiso leaves nothing in the directory, and
+// shows nothing there while it runs.
+TEST(HostileInput, KilledConversionLeavesNoPartialFile) {
+    ScratchDir dir;
+    const std::string header = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 64 64 64\n"
+                               "encoding: gzip\ndata file: data.fifo\n\n";
+    test::writeFile(dir.file("v.nhdr"), header);
+    test::writeFile(dir.file("part.gz"), test::gzipBytes(std::string(64 * 64 * 64, '\x03')).substr(0, 200));
+    ASSERT_EQ(::mkfifo(dir.file("data.fifo").c_str(), 0644), 0);
+    std::filesystem::create_directory(dir.file("out"));
+    const std::string d = dir.path().string();
+    const std::string out = runShell(
+        "cd " + d + " && { (cat part.gz; sleep 10) > data.fifo 2>/dev/null & w=$!; " + VDISO_BINARY +
+        " convert v.nhdr out/v.vdiso --quiet & p=$!; sleep 1; echo during: $(ls out); "
+        "kill -0 $p && echo still running; kill -KILL $p; wait $p; kill $w; echo after: $(ls out); }");
+    EXPECT_NE(out.find("still running"), std::string::npos) << out;  // killed mid-conversion
+    EXPECT_NE(out.find("during:\n"), std::string::npos) << out;
+    EXPECT_NE(out.find("after:\n"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace vdiso
