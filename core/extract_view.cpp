@@ -109,8 +109,12 @@ struct Traversal {
     // all of the image for a box crossing the near plane.
     PixelRect pixelRect(const ScreenBox& box) const {
         if (box.crossesNearPlane) return {0, 0, camera.width - 1, camera.height - 1};
-        return {int(std::ceil(box.left - 0.5)), int(std::ceil(box.top - 0.5)),
-                int(std::floor(box.right - 0.5)), int(std::floor(box.bottom - 0.5))};
+        // Clamped a pixel beyond the image before the conversion: a box far off it has
+        // coordinates no int holds. (NaN boxes never get here: cullScreenBox culls them.)
+        auto column = [&](double x) { return int(std::clamp(x, -1.0, double(camera.width))); };
+        auto row = [&](double y) { return int(std::clamp(y, -1.0, double(camera.height))); };
+        return {column(std::ceil(box.left - 0.5)), row(std::ceil(box.top - 0.5)),
+                column(std::floor(box.right - 0.5)), row(std::floor(box.bottom - 0.5))};
     }
 
     // Tests 2-3 of the header for the box [a, b]: the first that culls it, or None (a box
@@ -121,6 +125,9 @@ struct Traversal {
     }
     Cull cullScreenBox(const ScreenBox& box) const {
         if (box.crossesNearPlane) return Cull::None;  // refined, never culled
+        // A camera whose numbers overflow the projection (an eye at 1e300, a fov of 1e-300
+        // degrees) gives boxes of NaN: nothing of them can be drawn.
+        if (!(box.left <= box.right && box.top <= box.bottom)) return Cull::Frustum;
         if (box.right < 0.5 || box.left > camera.width - 0.5 || box.bottom < 0.5 ||
             box.top > camera.height - 0.5)
             return Cull::Frustum;
@@ -208,7 +215,8 @@ struct Traversal {
         for (int k = 0; k < count; ++k) {
             const glm::vec3& p = t.mesh.positions[vertices[k] - t.mesh.firstVertex];
             const glm::dvec3 s = t.pixels.project(glm::dvec3(p));
-            if (!(s.z >= 0.0 && s.z <= 1.0)) return true;  // behind the eye or clipped: mark nothing
+            // Behind the eye, clipped, or off any image a double can place: mark nothing.
+            if (!(s.z >= 0.0 && s.z <= 1.0) || !std::isfinite(s.x) || !std::isfinite(s.y)) return true;
             v[k] = glm::dvec2(s.x, s.y);
         }
         bool coversNew = false;
@@ -262,10 +270,12 @@ struct Traversal {
         const double xMax = std::max({p0.x, p1.x, p2.x}) + kRasterSlack;
         const double yMin = std::min({p0.y, p1.y, p2.y}) - kRasterSlack;
         const double yMax = std::max({p0.y, p1.y, p2.y}) + kRasterSlack;
-        const int x0 = std::max(int(std::ceil(xMin - 0.5)), 0);
-        const int x1 = std::min(int(std::floor(xMax - 0.5)), camera.width - 1);
-        const int y0 = std::max(int(std::ceil(yMin - 0.5)), 0);
-        const int y1 = std::min(int(std::floor(yMax - 0.5)), camera.height - 1);
+        // Clamped to the image before the conversion (a vertex far off it holds no int).
+        const double w = camera.width, h = camera.height;
+        const int x0 = int(std::clamp(std::ceil(xMin - 0.5), 0.0, w));
+        const int x1 = int(std::clamp(std::floor(xMax - 0.5), -1.0, w - 1));
+        const int y0 = int(std::clamp(std::ceil(yMin - 0.5), 0.0, h));
+        const int y1 = int(std::clamp(std::floor(yMax - 0.5), -1.0, h - 1));
         if (x0 > x1 || y0 > y1 || pyramid.isOccluded(x0, y0, x1, y1)) return false;
         for (int y = y0; y <= y1; ++y)
             for (int x = x0; x <= x1; ++x) {

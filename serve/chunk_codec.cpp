@@ -132,10 +132,16 @@ std::vector<uint8_t> encodeChunk(ChunkHeader header, const TriangleMesh& mesh, c
     header.pointBytes = uint32_t(pointData.size());
     std::vector<uint8_t> out(kChunkHeaderBytes + header.vertexBytes + header.indexBytes + header.pointBytes);
     writeChunkHeader(header, out.data());
+    // Copies only what there is: an empty part may have no buffer at all (memcpy from null is
+    // undefined even for 0 bytes).
     uint8_t* p = out.data() + kChunkHeaderBytes;
-    std::memcpy(p, vertexData.data(), header.vertexBytes);
-    std::memcpy(p + header.vertexBytes, indexData.data(), header.indexBytes);
-    std::memcpy(p + header.vertexBytes + header.indexBytes, pointData.data(), header.pointBytes);
+    auto put = [&](const std::vector<unsigned char>& part, uint32_t bytes) {
+        if (bytes) std::memcpy(p, part.data(), bytes);
+        p += bytes;
+    };
+    put(vertexData, header.vertexBytes);
+    put(indexData, header.indexBytes);
+    put(pointData, header.pointBytes);
     return out;
 }
 

@@ -95,7 +95,7 @@ ViewMessage parseView(std::span<const uint8_t> message) {
     const glm::dvec3 forward = v.target - v.eye;
     const double distance = glm::length(forward);
     if (!(distance > 0.0) || !std::isfinite(distance))
-        throw ProtocolError("VIEW: eye and target must differ");
+        throw ProtocolError("VIEW: eye and target must differ, by a distance a double holds");
     const double upLength = glm::length(v.up);
     if (!(upLength > 0.0) || !std::isfinite(upLength) ||
         glm::length(glm::cross(forward / distance, v.up / upLength)) < 1e-9)

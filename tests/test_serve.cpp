@@ -180,6 +180,19 @@ TEST(ServeChunkCodec, RoundTripsWithinQuantization) {
     EXPECT_THROW(decodeChunk(std::span<const uint8_t>(message.data(), message.size() - 1)), ProtocolError);
 }
 
+TEST(ServeChunkCodec, EmptyPartsEncode) {
+    // Found by fuzz_protocol (UBSan): a chunk of points only copied its empty vertex data from a
+    // null buffer.
+    PointSet points;
+    points.positions = {{1, 2, 3}};
+    points.normals = {{0, 0, 1}};
+    const DecodedChunk onlyPoints = decodeChunk(encodeChunk(ChunkHeader{}, TriangleMesh{}, points));
+    EXPECT_EQ(onlyPoints.points.size(), 1u);
+    EXPECT_EQ(onlyPoints.mesh.triangleCount(), 0u);
+    const DecodedChunk nothing = decodeChunk(encodeChunk(ChunkHeader{}, TriangleMesh{}, PointSet{}));
+    EXPECT_EQ(nothing.points.size() + nothing.mesh.positions.size(), 0u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The outbox
 
@@ -510,6 +523,7 @@ TEST(ServeSession, BadMessagesGetAnErrorAndTheConnectionStays) {
     };
     const Camera camera = presetFor(fixture.storePath, ViewPreset::Normal, 128);
     ViewMessage v = viewOf(camera, 1);
+    uint32_t oddSeq = 0;
     expectError({'{', 'x'}, true, "text message");
     expectError({1, 2, 3}, false, "shorter than a header");
     expectError({42, 1, 0, 0, 0, 0}, false, "unknown message type");
@@ -541,10 +555,29 @@ TEST(ServeSession, BadMessagesGetAnErrorAndTheConnectionStays) {
     e.store = 9;
     expectError(encodeEvict(e), false, "unknown store");
 
+    // Cameras at the edge of what doubles hold (found by fuzz_protocol: NaN and huge screen
+    // boxes reached int conversions): each is refused or gets a frame, nothing crashes.
+    for (const auto& [eye, fov] : {std::pair{glm::dvec3(1e300, -1e300, 1e300), 30.0},
+                                   std::pair{glm::dvec3(1e150, -1e150, 1e150), 30.0},
+                                   std::pair{camera.eye, 1e-300}, std::pair{camera.eye, 179.9999999}}) {
+        ViewMessage odd = viewOf(camera, ++oddSeq);
+        odd.eye = eye;
+        odd.fovYDegrees = fov;
+        client->sendView(odd);
+        while (true) {
+            const nlohmann::json j = nlohmann::json::parse(client->readText());
+            if (j["type"] == "error" && j.value("seq", -1) == int(odd.seq)) break;
+            if (j["type"] == "frameEnd" && j["frame"] == odd.seq) {
+                EXPECT_NE(j["status"], "error") << j;
+                break;
+            }
+        }
+    }
+
     // Still serving: a good view gets its frame, and a stale sequence number is refused.
-    const ClientFrame frame = client->requestFrame(viewOf(camera, 5));
+    const ClientFrame frame = client->requestFrame(viewOf(camera, 5 + oddSeq));
     EXPECT_EQ(frame.status, "complete");
-    expectError(encodeView(viewOf(camera, 5)), false, "seq");
+    expectError(encodeView(viewOf(camera, 5 + oddSeq)), false, "seq");
 }
 
 // One HTTP request; returns the status code, with the body and the Set-Cookie header.
