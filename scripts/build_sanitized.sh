@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Configures and builds the sanitizer build in build-fuzz/: clang, ASan + UBSan (with
+# float-cast-overflow, halting on the first report), libFuzzer's instrumentation, the tests and
+# the fuzz targets. Arguments name targets to build (default: all).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_COMPILER=clang++ -DVDISO_FUZZ=ON -DVDISO_BUILD_BENCH=OFF >/dev/null
+if [ $# -gt 0 ]; then
+  cmake --build build-fuzz -j "$(nproc)" --target "$@"
+else
+  cmake --build build-fuzz -j "$(nproc)"
+fi
