@@ -112,12 +112,11 @@ public:
         mWs.set_option(websocket::stream_base::decorator(
             [](websocket::response_type& r) { r.set(http::field::server, kServerName); }));
         mWs.read_message_max(0);  // sizes are checked as pieces arrive (readPiece)
+        // Holds no executor: the session may be retired (serve/server.cpp, retire) and outlive
+        // the I/O context, and an executor must not.
         std::weak_ptr<WsSession> weak = weak_from_this();
-        auto executor = mWs.get_executor();
-        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.gate, [weak, executor] {
-            net::post(executor, [weak] {
-                if (auto self = weak.lock()) self->pump();
-            });
+        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.gate, [weak] {
+            if (auto self = weak.lock()) net::post(self->mWs.get_executor(), [self] { self->pump(); });
         });
         mWs.async_accept(request, beast::bind_front_handler(&WsSession::onAccept, shared_from_this()));
     }
