@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+
+#include <sys/mman.h>
 #include <functional>
 #include <future>
 #include <limits>
@@ -80,14 +82,31 @@ KeyKind fineKeyKind(ScalarType type, uint32_t key) {
 // Slices held in memory: a ring of 2B+3 (or of the volume's depth, if smaller), slice z in slot
 // z mod slots. A layer of bricks needs B+3 consecutive slices; the other B slots receive the
 // next layer's new slices while this layer is encoded, so reading overlaps compression. The
-// ring's memory is not zeroed, so its pages are touched only as slices arrive: a header that
-// promises more data than its (compressed) file holds costs the memory of what it does hold.
+// ring's memory is address space mapped without reserving memory (MAP_NORESERVE), so its pages
+// are only taken as slices arrive: a header that promises more data than its (compressed) file
+// holds costs the memory of what it does hold. (An allocation from the heap would be the same
+// on Linux, but a sanitizer's heap takes its size at its word.)
 struct SliceRing {
-    std::unique_ptr<unsigned char[]> bytes;
+    unsigned char* bytes = nullptr;
+    size_t mappedBytes = 0;
     size_t sliceBytes = 0;
     int64_t slots = 0;
-    const unsigned char* slice(int64_t z) const { return bytes.get() + size_t(z % slots) * sliceBytes; }
-    unsigned char* slice(int64_t z) { return bytes.get() + size_t(z % slots) * sliceBytes; }
+    SliceRing() = default;
+    SliceRing(const SliceRing&) = delete;
+    SliceRing& operator=(const SliceRing&) = delete;
+    ~SliceRing() {
+        if (bytes) ::munmap(bytes, mappedBytes);
+    }
+    // False when the address space is not there (an address-space limit).
+    bool map(size_t n) {
+        void* p = ::mmap(nullptr, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+        if (p == MAP_FAILED) return false;
+        bytes = static_cast<unsigned char*>(p);
+        mappedBytes = n;
+        return true;
+    }
+    const unsigned char* slice(int64_t z) const { return bytes + size_t(z % slots) * sliceBytes; }
+    unsigned char* slice(int64_t z) { return bytes + size_t(z % slots) * sliceBytes; }
 };
 
 // Reads slices [z0, z1) from the source into their ring slots, in runs that do not wrap.
@@ -271,9 +290,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     ring.sliceBytes = size_t(info.sliceSamples()) * sampleBytes;
     ring.slots = std::min<int64_t>(2 * int64_t(B) + kGhostBefore + kGhostAfter, info.dims[2]);
     const uint64_t ringBytes = checkedMul(uint64_t(ring.slots), uint64_t(ring.sliceBytes));
-    try {
-        ring.bytes.reset(new unsigned char[size_t(ringBytes)]);  // default-initialised: untouched
-    } catch (const std::bad_alloc&) {
+    if (ringBytes > SIZE_MAX || !ring.map(size_t(ringBytes))) {
         throwIoError(source.name(), "converting it needs " + std::to_string(ringBytes >> 20) +
                                         " MiB for " + std::to_string(ring.slots) + " slices of " +
                                         std::to_string(info.dims[0]) + " x " +
