@@ -12,6 +12,19 @@
 #include "io/brick_store.h"
 #include "io/slice_reader.h"
 
+// Built with AddressSanitizer: its shadow memory takes terabytes of address space, so tests that
+// run under an address-space limit (ulimit -v) cannot run.
+#if defined(__SANITIZE_ADDRESS__)
+#define VDISO_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define VDISO_UNDER_ASAN 1
+#endif
+#endif
+#ifndef VDISO_UNDER_ASAN
+#define VDISO_UNDER_ASAN 0
+#endif
+
 namespace vdiso::test {
 
 // A fresh directory under the system temp dir, removed with the object.
