@@ -12,6 +12,7 @@ packages=(
   libboost-dev libmeshoptimizer-dev       # vdiso serve: Beast (HTTP, WebSocket), geometry codecs
   chromium                                # the viewer's end-to-end test (headless)
   libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
+  clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
 )
 
 missing=()
