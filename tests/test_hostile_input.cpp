@@ -298,16 +298,8 @@ TEST_F(HostileStore, MoreThan65535BricksOnAnAxisAreRefusedAtOpen) {
 
 // Output of `command` run under a pseudo-terminal (util-linux script), at most `limit` bytes.
 std::string runOnTerminal(const std::string& command, size_t limit) {
-    const std::string line = "timeout 60 script -qec '" + command + "' /dev/null 2>&1 | head -c " +
-                             std::to_string(limit);
-    std::string out;
-    FILE* pipe = ::popen(line.c_str(), "r");
-    if (!pipe) return out;
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
-    ::pclose(pipe);
-    return out;
+    return test::runCommand("timeout 60 script -qec '" + command + "' /dev/null 2>&1 | head -c " +
+                            std::to_string(limit)).output;
 }
 
 // Class 6: on a terminal, extract --threads 2 with an isovalue outside the volume's range
@@ -505,16 +497,7 @@ TEST(HostileInput, MessagesNameTheFileForJsonOverflowAndNulInDataFile) {
 }
 
 // Output of a shell command line (stderr with stdout).
-std::string runShell(const std::string& line) {
-    std::string out;
-    FILE* pipe = ::popen(("( " + line + " ) 2>&1").c_str(), "r");
-    if (!pipe) return out;
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
-    ::pclose(pipe);
-    return out;
-}
+std::string runShell(const std::string& line) { return test::runCommand(line).output; }
 
 // Class 4: the converter allocated its ring of 2B+3 slices before reading a sample: a real
 // 4096 x 4096 x 2 volume (32 MiB) took 67 slices, 1.1 GB. The ring is now the volume's depth

@@ -35,8 +35,8 @@ std::vector<unsigned char> readFile(const std::string& path) {
     return std::vector<unsigned char>(std::istreambuf_iterator<char>(f), {});
 }
 
-CommandResult runVdiso(const std::string& args) {
-    const std::string command = std::string(VDISO_BINARY) + " " + args + " 2>&1";
+CommandResult runCommand(const std::string& line) {
+    const std::string command = "( " + line + " ) 2>&1";
     CommandResult r;
     FILE* pipe = ::popen(command.c_str(), "r");
     if (!pipe) throw std::runtime_error("cannot run " + command);
@@ -47,6 +47,8 @@ CommandResult runVdiso(const std::string& args) {
     r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
 }
+
+CommandResult runVdiso(const std::string& args) { return runCommand(std::string(VDISO_BINARY) + " " + args); }
 
 double testSampleValue(ScalarType type, uint64_t i) {
     uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;

@@ -49,6 +49,8 @@ struct CommandResult {
     int exitCode = -1;
     std::string output;  // stdout and stderr together
 };
+// Runs a shell command line, stdout and stderr together.
+CommandResult runCommand(const std::string& line);
 // Runs build/bin/vdiso with `args` (a shell-quoted string).
 CommandResult runVdiso(const std::string& args);
 
