@@ -1,15 +1,13 @@
 #include "io/png_image.h"
 
-#include <cerrno>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <stdexcept>
 
 #include <png.h>
 
 #include "io/atomic_output.h"
 #include "io/error.h"
+#include "io/text_file.h"
 
 namespace vdiso {
 
@@ -30,13 +28,15 @@ struct PngImageGuard {
     PngImageGuard& operator=(const PngImageGuard&) = delete;
 };
 
+// The largest PNG file read: vdiso's own pictures (at most 8192 x 8192) are far smaller, and an
+// endless file is refused after this much.
+constexpr size_t kMaxPngBytes = size_t(256) << 20;
+
 std::vector<uint8_t> readBytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throwSystemError(path, "cannot open", errno);
-    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                               std::istreambuf_iterator<char>());
-    if (in.bad()) throwSystemError(path, "cannot read", errno);
-    return bytes;
+    // Through the bounded reader: a directory, a device or an endless file gets a message that
+    // names it, never a stream library's own.
+    const std::string text = readBoundedText(path, kMaxPngBytes, "PNG file");
+    return std::vector<uint8_t>(text.begin(), text.end());
 }
 
 }  // namespace

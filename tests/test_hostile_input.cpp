@@ -496,6 +496,20 @@ TEST(HostileInput, MessagesNameTheFileForJsonOverflowAndNulInDataFile) {
               std::string::npos) << r.output;
 }
 
+// Class 9: `vdiso compare` on a directory said "basic_filebuf::underflow error reading the
+// file", naming nothing; an endless file was read whole.
+TEST(HostileInput, PngReadsNameTheFileAndAreBounded) {
+    ScratchDir dir;
+    std::filesystem::create_directories(dir.file("pictures"));
+    const auto r = runVdiso("compare " + dir.file("pictures") + " " + dir.file("pictures"));
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find(dir.file("pictures") + ": "), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("basic_filebuf"), std::string::npos) << r.output;
+    const auto endless = runVdiso("compare /dev/zero /dev/zero");
+    EXPECT_EQ(endless.exitCode, 1) << endless.output;
+    EXPECT_NE(endless.output.find("/dev/zero: "), std::string::npos) << endless.output;
+}
+
 // Output of a shell command line (stderr with stdout).
 std::string runShell(const std::string& line) { return test::runCommand(line).output; }
 
