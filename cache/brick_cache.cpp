@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <new>
-
-#include <sys/mman.h>
 #include <stdexcept>
 #include <string>
+
+#include <sys/mman.h>
+
+#include "io/error.h"
 
 namespace vdiso {
 
@@ -49,7 +51,17 @@ size_t BrickCache::takeFreeSlot() {
         const size_t within = mSlotsAllocated % mSlotsPerChunk;
         if (within == 0) {
             const size_t slots = std::min(mSlotsPerChunk, mSlotCount - mSlotsAllocated);
-            mChunks.push_back(std::make_unique<Chunk>(slots * mBrickBytes));
+            try {
+                mChunks.push_back(std::make_unique<Chunk>(slots * mBrickBytes));
+            } catch (const std::bad_alloc&) {  // said in words, with the store and the budget
+                throwIoError(mStore.path(), "the brick cache cannot get " +
+                                                std::to_string((slots * mBrickBytes) >> 20) +
+                                                " MB more memory, at " +
+                                                std::to_string((mSlotsAllocated * mBrickBytes) >> 20) +
+                                                " MB of its budget of " +
+                                                std::to_string((mSlotCount * mBrickBytes) >> 20) +
+                                                " MB: lower --cache-mb");
+            }
         }
         mSlots[mSlotsAllocated].samples = mChunks.back()->bytes + within * mBrickBytes;
         return mSlotsAllocated++;

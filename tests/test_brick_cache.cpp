@@ -3,10 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
+
+#include <sys/resource.h>
 
 #include "cache/brick_cache.h"
 #include "io/error.h"
 #include "io/store_writer.h"
+#include "io/volume_open.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -113,6 +117,42 @@ TEST_F(BrickCacheTest, ColdReadOfATruncatedStoreFailsAtOpen) {
     bytes.resize(bytes.size() - 100);
     test::writeFile(path, bytes.data(), bytes.size());
     EXPECT_THROW(BrickStoreReader(path, ReadMode::Cold), IoError);
+}
+
+// Memory the cache cannot get is said in words, naming the store and the budget (it was a bare
+// std::bad_alloc). The address space is limited to what the process holds once the cache has
+// its first chunk, so the next chunk's mapping fails.
+TEST(BrickCache, MemoryItCannotGetIsSaidWithTheStore) {
+    if (VDISO_UNDER_ASAN) GTEST_SKIP() << "an address-space limit and AddressSanitizer exclude each other";
+    test::ScratchDir dir;
+    SynthParams p;
+    p.dims = {256, 256, 256};
+    writeBrickStore(*openSynthVolume(p), dir.file("h.vdiso"), StoreWriteOptions{});
+    const BrickStoreReader store(dir.file("h.vdiso"));
+    BrickCache cache(store, uint64_t(1) << 30);
+    cache.acquire(0).release();  // the first chunk: about 390 bricks' room
+    auto vmBytes = [] {
+        std::ifstream status("/proc/self/status");
+        for (std::string line; std::getline(status, line);)
+            if (line.rfind("VmSize:", 0) == 0) return uint64_t(std::stoull(line.substr(7))) << 10;
+        return uint64_t(0);
+    };
+    rlimit old{};
+    ::getrlimit(RLIMIT_AS, &old);
+    rlimit limited = old;
+    limited.rlim_cur = vmBytes() + (uint64_t(8) << 20);
+    ASSERT_EQ(::setrlimit(RLIMIT_AS, &limited), 0);
+    std::string message;
+    try {
+        for (int64_t id = 1; id < store.layout().brickCount(); ++id) cache.acquire(id).release();
+    } catch (const IoError& e) {
+        message = e.what();
+    } catch (const std::exception& e) {
+        message = std::string("not an IoError: ") + e.what();
+    }
+    ::setrlimit(RLIMIT_AS, &old);
+    EXPECT_EQ(message.rfind(dir.file("h.vdiso") + ": the brick cache cannot get", 0), 0u) << message;
+    EXPECT_NE(message.find("--cache-mb"), std::string::npos) << message;
 }
 
 }  // namespace
