@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cstring>
 
+#include "io/brick_store.h"
 #include "io/error.h"
+#include "tests/test_util.h"
 
 namespace vdiso::test {
 
@@ -130,6 +132,21 @@ void expectIoError(const std::function<void()>& f, std::initializer_list<std::st
             EXPECT_NE(what.find(part), std::string::npos)
                 << "message '" << what << "' lacks '" << part << "'";
     }
+}
+
+std::string storeOpenError(const std::string& path, const std::vector<unsigned char>& bytes) {
+    writeFile(path, bytes.data(), bytes.size());
+    try {
+        BrickStoreReader store(path);
+        std::vector<unsigned char> brick(store.brickBytes());
+        for (int64_t id = 0; id < store.layout().brickCount(); ++id) store.readBrick(id, brick.data());
+    } catch (const IoError& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << "not an IoError: " << e.what();
+        return e.what();
+    }
+    return "";
 }
 
 }  // namespace vdiso::test

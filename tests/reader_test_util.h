@@ -47,6 +47,10 @@ void expectDoubleEq(const glm::dvec3& got, const glm::dvec3& want);
 // Expects `f` to throw IoError with a message containing every one of `parts`.
 void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts);
 
+// Writes `bytes` as the store `path`, opens it and reads every brick: the IoError message that
+// gives, or "" if none. Any other exception is a test failure (every refusal names the file).
+std::string storeOpenError(const std::string& path, const std::vector<unsigned char>& bytes);
+
 // A test that writes its input files into a fresh scratch directory.
 class ReaderFileTest : public ::testing::Test {
 protected:

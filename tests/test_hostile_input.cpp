@@ -187,22 +187,7 @@ protected:
     }
     // The message opening the patched store (and reading every brick) gives; "" if none. Any
     // exception other than IoError is a failure: every refusal must name the file.
-    std::string openError() {
-        const std::string bad = dir.file("bad.vdiso");
-        test::writeFile(bad, bytes.data(), bytes.size());
-        try {
-            BrickStoreReader store(bad);
-            std::vector<unsigned char> brick(store.brickBytes());
-            for (int64_t id = 0; id < store.layout().brickCount(); ++id)
-                store.readBrick(id, brick.data());
-        } catch (const IoError& e) {
-            return e.what();
-        } catch (const std::exception& e) {
-            ADD_FAILURE() << "not an IoError: " << e.what();
-            return e.what();
-        }
-        return "";
-    }
+    std::string openError() { return test::storeOpenError(dir.file("bad.vdiso"), bytes); }
     ScratchDir dir;
     std::string path;
     std::vector<unsigned char> bytes;

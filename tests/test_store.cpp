@@ -15,6 +15,7 @@
 #include "io/store_format.h"
 #include "io/store_writer.h"
 #include "io/volume_open.h"
+#include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -118,16 +119,7 @@ protected:
     }
     // Writes `b` as a new file and returns the IoError message opening + reading it gives.
     std::string openError(const std::vector<unsigned char>& b) {
-        const std::string bad = dir.file("bad.vdiso");
-        test::writeFile(bad, b.data(), b.size());
-        try {
-            BrickStoreReader store(bad);
-            std::vector<unsigned char> brick(store.brickBytes());
-            for (int64_t id = 0; id < store.layout().brickCount(); ++id) store.readBrick(id, brick.data());
-        } catch (const IoError& e) {
-            return e.what();
-        }
-        return "";
+        return test::storeOpenError(dir.file("bad.vdiso"), b);
     }
     ScratchDir dir;
     std::string path;
