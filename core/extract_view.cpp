@@ -567,13 +567,10 @@ struct Traversal {
             extractor.beginBrick(brick, handle.samples());
             const int n = extractor.metaCellsPerAxis();
             const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
-            const uint32_t firstVertex = mesh.nextVertex();
             wholeBrick = use == ViewStream::Use::Whole;
             visitMetaCells(brick, lo, hi);
             wholeBrick = false;
             if (options.stream) {
-                if (options.cellTests && use != ViewStream::Use::Whole)
-                    dropUnreferencedVertices(mesh, firstVertex);
                 stats.triangles += mesh.triangleCount();
                 options.stream->endBrick(brick, use, mesh, points);
                 mesh.firstVertex = mesh.nextVertex();

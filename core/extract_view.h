@@ -44,7 +44,9 @@ namespace vdiso {
 //          to mark the occlusion pyramid, and handed over to be dropped.
 //   Part:  what SAGE makes of it for this camera: points and the triangles of visible cells.
 // endBrick then gets that output: mesh.positions hold the vertices numbered mesh.firstVertex
-// onwards, mesh.indices refer to those only (bricks share no vertices in streaming), points
+// onwards (with per-cell tests, also some no kept triangle refers to: a consumer that packs
+// vertices drops them anyway), mesh.indices refer to those only (bricks share no vertices in
+// streaming), points
 // hold its points; both are cleared after the call. Calls come from the strip's thread, so an
 // implementation used with threads > 1 must be thread-safe; a brick showing in two strips
 // is offered by both.
