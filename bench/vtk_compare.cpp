@@ -1,7 +1,7 @@
 // vdiso's full extraction against VTK's, on the same volume and isovalue.
 //
-//   vdiso_vtk_compare FILE.vdiso --iso V [--vtk-threads N] [--repeat R] [--json]
-//                     [--no-marching-cubes]
+//   vdiso_vtk_compare FILE.vdiso --iso V [--vtk-threads N] [--threads N] [--repeat R] [--json]
+//                     [--no-marching-cubes] [--views distant,normal,closeup] [--size N]
 //
 // Measures, per method, the median wall time of R extractions, the throughput in volume
 // samples per second, and what came out: triangles, vertices and surface area (the sum of the
@@ -10,6 +10,12 @@
 //   vdiso octree               the same with every brick already decoded (extraction alone)
 //   vtkFlyingEdges3D           on the whole volume in a vtkImageData, vtkSMPTools on N threads
 //   vtkMarchingCubes           the same volume; serial
+//   vdiso sage VIEW            with --views: SAGE (default options, --threads strips) from the
+//                              view preset at N x N, every brick decoded already (in memory,
+//                              as VTK's volume is)
+//   vdiso sage VIEW from store the same from an empty brick cache each run: bricks read (page
+//                              cache warm) and decoded, as `vdiso extract` does
+// vdiso's octree rows use --threads too (default 1).
 // VTK gets the volume fully in memory with the store's scalar type, spacing and origin, and
 // computes normals as vdiso does (no gradients, no scalars), so the work is comparable.
 //
@@ -51,7 +57,9 @@
 #include <vtkType.h>
 
 #include "cache/brick_cache.h"
+#include "core/camera.h"
 #include "core/extract_full.h"
+#include "core/extract_view.h"
 #include "core/mesh.h"
 #include "core/scalar_type.h"
 #include "io/brick_store.h"
@@ -69,6 +77,9 @@ struct Options {
     int repeat = 3;
     bool json = false;
     bool marchingCubes = true;
+    int threads = 1;  // vdiso's
+    std::vector<std::string> views;
+    int size = 1024;
 };
 
 // What one method produced and how long it took.
@@ -85,8 +96,8 @@ struct MethodResult {
 [[noreturn]] void usage(const std::string& problem) {
     std::fprintf(stderr,
                  "vdiso_vtk_compare: %s\n"
-                 "usage: vdiso_vtk_compare FILE.vdiso --iso V [--vtk-threads N] [--repeat R] [--json]\n"
-                 "                         [--no-marching-cubes]\n",
+                 "usage: vdiso_vtk_compare FILE.vdiso --iso V [--vtk-threads N] [--threads N] [--repeat R]\n"
+                 "                         [--json] [--no-marching-cubes] [--views LIST] [--size N]\n",
                  problem.c_str());
     std::exit(2);
 }
@@ -105,6 +116,18 @@ Options parseOptions(int argc, char** argv) {
                 o.haveIso = true;
             } else if (arg == "--vtk-threads") {
                 o.vtkThreads = std::stoi(value());
+            } else if (arg == "--threads") {
+                o.threads = std::stoi(value());
+            } else if (arg == "--views") {
+                const std::string list = value();
+                for (size_t at = 0; at <= list.size();) {
+                    const size_t comma = std::min(list.find(',', at), list.size());
+                    o.views.push_back(list.substr(at, comma - at));
+                    parseViewPreset(o.views.back());
+                    at = comma + 1;
+                }
+            } else if (arg == "--size") {
+                o.size = std::stoi(value());
             } else if (arg == "--repeat") {
                 o.repeat = std::stoi(value());
             } else if (arg == "--json") {
@@ -118,6 +141,8 @@ Options parseOptions(int argc, char** argv) {
             } else {
                 usage("more than one input file");
             }
+        } catch (const std::invalid_argument& e) {
+            usage(arg == "--views" ? e.what() : "bad number after " + arg);
         } catch (const std::logic_error&) {
             usage("bad number after " + arg);
         }
@@ -126,6 +151,8 @@ Options parseOptions(int argc, char** argv) {
     if (!o.haveIso) usage("--iso is required");
     if (o.vtkThreads < 1) usage("--vtk-threads must be at least 1");
     if (o.repeat < 1) usage("--repeat must be at least 1");
+    if (o.threads < 1) usage("--threads must be at least 1");
+    if (o.size < 16 || o.size > 8192) usage("--size must be in 16..8192");
     return o;
 }
 
@@ -234,19 +261,51 @@ void fillImage(BrickSource& source, vtkImageData* image) {
     image->GetPointData()->GetScalars()->Modified();
 }
 
-MethodResult runVdiso(BrickCache& cache, double iso, int repeat, bool cold) {
+MethodResult runVdiso(BrickCache& cache, double iso, int threads, int repeat, bool cold) {
     MethodResult r;
     r.method = cold ? "vdiso octree incl. decode" : "vdiso octree";
+    r.threads = threads;
     r.runs = cold ? 1 : repeat;
     std::vector<double> seconds;
     for (int run = 0; run < r.runs; ++run) {
         TriangleMesh mesh;  // fresh each run, as VTK allocates a fresh output
-        seconds.push_back(secondsOf([&] { extractOctree(cache, {iso, kDefaultMetaCellSize}, mesh); }));
+        seconds.push_back(
+            secondsOf([&] { extractOctree(cache, {iso, kDefaultMetaCellSize, threads}, mesh); }));
         if (run + 1 == r.runs) {
             r.triangles = int64_t(mesh.triangleCount());
             r.vertices = int64_t(mesh.vertexCount());
             r.area = surfaceArea(mesh);
         }
+    }
+    r.seconds = median(seconds);
+    return r;
+}
+
+// SAGE from a view preset: in memory (`cache` holds every brick decoded), or from the store
+// (a fresh cache per run, as large as `cache`). Points count as triangles in the row.
+MethodResult runSage(const BrickStoreReader& store, BrickCache& cache, const Options& o,
+                     const std::string& view, bool fromStore) {
+    const VolumeInfo& volume = store.volume();
+    Camera camera = presetCamera(parseViewPreset(view), volume.origin, volume.worldMax(), o.size, o.size);
+    fitClipPlanes(camera, volume.origin, volume.worldMax());
+    ViewExtractOptions options = ViewExtractOptions::sage(o.iso);
+    options.threads = o.threads;
+    MethodResult r;
+    r.method = "vdiso sage " + view + (fromStore ? " from store" : "");
+    r.threads = o.threads;
+    r.runs = o.repeat;
+    std::vector<double> seconds;
+    for (int run = 0; run < r.runs; ++run) {
+        TriangleMesh mesh;
+        PointSet points;
+        if (fromStore) {
+            BrickCache fresh(store, cache.budgetBytes());
+            seconds.push_back(secondsOf([&] { extractViewDependent(fresh, camera, options, mesh, points); }));
+        } else {
+            seconds.push_back(secondsOf([&] { extractViewDependent(cache, camera, options, mesh, points); }));
+        }
+        r.triangles = int64_t(mesh.triangleCount() + points.positions.size());
+        r.vertices = int64_t(mesh.vertexCount() + points.positions.size());
     }
     r.seconds = median(seconds);
     return r;
@@ -309,7 +368,7 @@ int main(int argc, char** argv) {
 
         BrickCache cache(store, cacheBytes);
         std::vector<MethodResult> results;
-        results.push_back(runVdiso(cache, options.iso, options.repeat, /*cold=*/true));
+        results.push_back(runVdiso(cache, options.iso, options.threads, options.repeat, /*cold=*/true));
 
         // Loading the image acquires every brick, so the warm runs below decode nothing.
         vtkNew<vtkImageData> image;
@@ -318,7 +377,11 @@ int main(int argc, char** argv) {
         image->SetOrigin(volume.origin.x, volume.origin.y, volume.origin.z);
         image->AllocateScalars(vtkScalarTypeOf(volume.type), 1);
         const double loadSeconds = secondsOf([&] { fillImage(cache, image); });
-        results.push_back(runVdiso(cache, options.iso, options.repeat, /*cold=*/false));
+        results.push_back(runVdiso(cache, options.iso, options.threads, options.repeat, /*cold=*/false));
+        for (const std::string& view : options.views) {
+            results.push_back(runSage(store, cache, options, view, /*fromStore=*/false));
+            results.push_back(runSage(store, cache, options, view, /*fromStore=*/true));
+        }
 
         auto& vtkSmp = vtk::detail::smp::vtkSMPToolsAPI::GetInstance();
         vtkSmp.Initialize(options.vtkThreads);  // what vtkSMPTools::Initialize(N) does
@@ -337,10 +400,11 @@ int main(int argc, char** argv) {
 
         const double voxels = double(volume.sampleCount());
         const MethodResult& reference = results[1];
-        std::printf("%s: %lld x %lld x %lld %s, spacing %g %g %g, iso %g; image filled from bricks in %.3f s\n",
+        std::printf("%s: %lld x %lld x %lld %s, spacing %g %g %g, iso %g; image filled from bricks in %.3f s; "
+                    "VTK SMP backend %s\n",
                     options.path.c_str(), (long long)volume.dims[0], (long long)volume.dims[1],
                     (long long)volume.dims[2], scalarTypeName(volume.type), volume.spacing.x, volume.spacing.y,
-                    volume.spacing.z, options.iso, loadSeconds);
+                    volume.spacing.z, options.iso, loadSeconds, vtkSmp.GetBackend());
         std::printf("%-26s %7s %4s %9s %10s %11s %11s %14s %10s %10s\n", "method", "threads", "runs", "seconds",
                     "Mvoxels/s", "triangles", "vertices", "area", "area ratio", "tri ratio");
         for (const MethodResult& r : results) {
@@ -350,6 +414,7 @@ int main(int argc, char** argv) {
                         double(r.triangles) / double(reference.triangles));
         }
         for (const MethodResult& r : results) {
+            if (r.method.starts_with("vdiso sage")) continue;  // a view's surface, not the whole
             const double areaRatio = r.area / reference.area;
             if (std::abs(areaRatio - 1) > 0.005)
                 std::printf("warning: %s area differs from vdiso's by %.2f%%\n", r.method.c_str(),

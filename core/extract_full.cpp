@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "core/brick_prefetcher.h"
+#include "core/edge_vertex_map.h"
 #include "core/iso.h"
 #include "core/minmax_tree.h"
 #include "core/span_space.h"
@@ -35,64 +36,6 @@ struct ChunkOutput {
     TriangleMesh mesh;
     EdgeVertexMap seams;
     KernelCounters counters;
-};
-
-// The bricks whose extraction is still to come, so that the map of brick-face vertices can
-// forget the faces no extraction will meet again: without that it holds a key for every vertex
-// on a brick face of the whole surface (64 MB at 2048^3); with it, about those on the faces
-// between finished and pending bricks. Trimmed whenever the map has doubled since the last
-// trim, so the cost is linear in what is inserted.
-class SeamTrimmer {
-public:
-    SeamTrimmer(const VolumeInfo& volume, const BrickLayout& layout, std::span<const int64_t> bricks,
-                size_t firstTrim)
-        : mDims(volume.dims), mLayout(layout), mPending(size_t(layout.brickCount()), 0),
-          mFirstTrim(firstTrim), mTrimAt(firstTrim) {
-        for (int64_t id : bricks) mPending[size_t(id)] = 1;
-    }
-    void finished(int64_t brick) { mPending[size_t(brick)] = 0; }
-
-    void maybeTrim(EdgeVertexMap& seams) {
-        if (seams.size() < mTrimAt) return;
-        seams.retainIf([&](uint64_t key) { return touchesPendingBrick(key); });
-        mTrimAt = std::max(mFirstTrim, 2 * seams.size());
-    }
-
-private:
-    // Whether a brick holding edge `key` (core/brick_extractor.cpp's encoding: the edge's first
-    // corner in global samples, then its axis) is still to be extracted.
-    bool touchesPendingBrick(uint64_t key) const {
-        const int axis = int(key % 3);
-        key /= 3;
-        const int64_t p[3] = {int64_t(key % uint64_t(mDims[0])),
-                              int64_t(key / uint64_t(mDims[0]) % uint64_t(mDims[1])),
-                              int64_t(key / (uint64_t(mDims[0]) * uint64_t(mDims[1])))};
-        // Bricks per axis owning the edge: along its axis the one owning its cell; across it,
-        // the one or two whose cell corners include p.
-        int64_t candidates[3][2];
-        int count[3];
-        const int B = mLayout.brickSize;
-        for (int a = 0; a < 3; ++a) {
-            count[a] = 0;
-            if (a == axis) {
-                candidates[a][count[a]++] = std::min(p[a] / B, mLayout.brickCounts[a] - 1);
-                continue;
-            }
-            if (p[a] % B == 0 && p[a] > 0) candidates[a][count[a]++] = p[a] / B - 1;
-            if (p[a] / B < mLayout.brickCounts[a]) candidates[a][count[a]++] = p[a] / B;
-        }
-        for (int k = 0; k < count[2]; ++k)
-            for (int j = 0; j < count[1]; ++j)
-                for (int i = 0; i < count[0]; ++i)
-                    if (mPending[size_t(mLayout.brickId(candidates[0][i], candidates[1][j], candidates[2][k]))])
-                        return true;
-        return false;
-    }
-
-    Dims3 mDims;
-    BrickLayout mLayout;
-    std::vector<uint8_t> mPending;
-    size_t mFirstTrim, mTrimAt;
 };
 
 // Appends a chunk's mesh to `out`, merging its brick-face vertices with those already there.

@@ -5,13 +5,15 @@
 // Flat array of 32-byte nodes in depth-first order (pbrt's LinearBVHNode): the first child of
 // an interior node is the next node, the second is at `secondChild`. Splits halve the longest
 // axis of the box in brick units, so visiting the child on the eye's side of the split plane
-// first is an exact front-to-back order (used by the view-dependent traversal).
+// first is an exact front-to-back order (pushChildrenFarFirst; the view-dependent traversal).
 // Immutable after construction; traversals are thread-safe.
 #pragma once
 
 #include <cstdint>
 #include <span>
 #include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "core/brick_layout.h"
 #include "core/brick_source.h"
@@ -38,6 +40,18 @@ public:
     const BrickLayout& layout() const { return mLayout; }
     int64_t brickOf(const MinMaxNode& leaf) const {
         return mLayout.brickId(leaf.lo[0], leaf.lo[1], leaf.lo[2]);
+    }
+
+    // Pushes the children of interior node `index` on `stack`, the far one first, so that the
+    // one on the eye's side of the split plane pops first: with the eye in brick coordinates
+    // (grid coordinates / brickSize), the front-to-back order.
+    template <class Stack>
+    void pushChildrenFarFirst(Stack& stack, uint32_t index, const glm::dvec3& eyeInBricks) const {
+        const MinMaxNode& node = mNodes[index];
+        const int axis = node.splitAxis;
+        const bool lowerIsNear = eyeInBricks[axis] < double(mNodes[index + 1].hi[axis]);
+        stack.push_back(lowerIsNear ? node.secondChild : index + 1);
+        stack.push_back(lowerIsNear ? index + 1 : node.secondChild);
     }
 
     // Calls visit(brickId) for each brick whose range holds iso, depth first; counts the nodes

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/edge_function.h"
 #include "core/scan_convert.h"
 
 namespace vdiso {
@@ -198,25 +199,14 @@ bool OcclusionPyramid::insertTriangleTopDown(const glm::dvec2 (&v)[3]) {
     t.edgeCount = detail::buildScanEdges(v, 3, t.edges, yMin, yMax);
     if (t.edgeCount < 2) return false;  // not finite, or flat: the scan converter covers nothing
 
-    const double area2 = (v[1].x - v[0].x) * (v[2].y - v[0].y) -
-                         (v[1].y - v[0].y) * (v[2].x - v[0].x);
-    const double orientation = area2 < 0.0 ? -1.0 : 1.0;
-    t.canBeInside = area2 != 0.0;
+    const TriangleEdgeFunctions f = TriangleEdgeFunctions::of(v[0], v[1], v[2]);
+    t.canBeInside = !f.degenerate;
     double extent = std::max(mWidth, mHeight);
     for (int e = 0; e < 3; ++e) {
-        const glm::dvec2 p = v[e], q = v[(e + 1) % 3];
-        const double ex = q.x - p.x, ey = q.y - p.y;
-        const double length = std::sqrt(ex * ex + ey * ey);
-        if (length == 0.0) {  // a repeated vertex: the triangle is degenerate anyway
-            t.a[e] = t.b[e] = 0.0;
-            t.c[e] = 1.0;
-            t.canBeInside = false;
-            continue;
-        }
-        t.a[e] = -ey * orientation / length;
-        t.b[e] = ex * orientation / length;
-        t.c[e] = -(t.a[e] * p.x + t.b[e] * p.y);
-        extent = std::max({extent, std::abs(p.x), std::abs(p.y)});
+        t.a[e] = f.a[e];
+        t.b[e] = f.b[e];
+        t.c[e] = f.c[e];
+        extent = std::max({extent, std::abs(v[e].x), std::abs(v[e].y)});
     }
     // Far above the rounding of both the edge functions and the scan converter's crossings.
     t.margin = 1e-9 * (1.0 + extent);

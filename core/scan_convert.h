@@ -162,6 +162,29 @@ void scanConvertPolygon(std::span<const glm::dvec2> vertices, int width, int hei
     }
 }
 
+// Whether the polygon covers the pixel centre (x + 0.5, y + 0.5): by the rules above (the
+// winding of the crossings of row y at or left of the centre, each computed as scanRow
+// computes it), so it agrees with scanConvertPolygon exactly. For polygons whose box holds a
+// single pixel centre, the common case where cells are about a pixel, this is all the scan
+// conversion there is to do.
+inline bool coversCentre(const glm::dvec2* v, size_t n, int x, int y) {
+    const double yc = y + 0.5, xc = x + 0.5;
+    int winding = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const glm::dvec2 a = v[i];
+        const glm::dvec2 b = v[i + 1 == n ? 0 : i + 1];
+        if (!std::isfinite(a.x) || !std::isfinite(a.y)) return false;
+        if (a.y == b.y) continue;
+        const bool down = a.y < b.y;
+        const glm::dvec2 top = down ? a : b;
+        const glm::dvec2 bottom = down ? b : a;
+        if (!(top.y <= yc && yc < bottom.y)) continue;
+        const double crossing = top.x + (yc - top.y) * (bottom.x - top.x) / (bottom.y - top.y);
+        if (crossing <= xc) winding += down ? 1 : -1;
+    }
+    return winding != 0;
+}
+
 // Convenience: covers the polygon's pixels in the pyramid's bottom level (coverSpan); the
 // caller runs pyramid.propagate() before the next query. Returns whether the polygon covered
 // a pixel centre that was not covered before.

@@ -1,0 +1,78 @@
+#include "core/brick_look_ahead.h"
+
+#include <algorithm>
+
+namespace vdiso {
+
+BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewCuller& culler,
+                               size_t depth, int readers)
+    : mTree(tree), mCuller(culler), mDepth(depth), mPrefetcher(source, depth, readers) {
+    if (mDepth > 0 && !tree.nodes().empty()) mStack.push_back(0);
+}
+
+bool BrickLookAhead::findNext() {
+    while (!mStack.empty()) {
+        const uint32_t index = mStack.back();
+        mStack.pop_back();
+        ScreenBox box;
+        if (!mCuller.passes(mTree, index, box)) continue;
+        const MinMaxNode& node = mTree.nodes()[index];
+        if (!node.isLeaf()) {
+            mTree.pushChildrenFarFirst(mStack, index, mCuller.eyeInBricks());
+            continue;
+        }
+        mAhead.push_back({index, mTree.brickOf(node), mCuller.pixelRect(box)});
+        return true;
+    }
+    return false;
+}
+
+int64_t BrickLookAhead::pixelsOf(const PixelRect& r) const {
+    const Camera& camera = mCuller.camera();
+    const int64_t w = std::min(r.x1, camera.width - 1) - std::max(r.x0, 0) + 1;
+    const int64_t h = std::min(r.y1, camera.height - 1) - std::max(r.y0, 0) + 1;
+    return w > 0 && h > 0 ? w * h : int64_t(0);
+}
+
+void BrickLookAhead::beforeAcquire(int64_t brick) {
+    if (mDepth == 0) return;
+    while (true) {
+        while (!mAhead.empty() && mAhead.front().brick != brick) mAhead.pop_front();
+        if (!mAhead.empty() || !findNext()) break;
+    }
+    const Camera& camera = mCuller.camera();
+    PixelRect current{0, 0, camera.width - 1, camera.height - 1};
+    if (!mAhead.empty()) {
+        current = mAhead.front().rect;
+        if (mAhead.front().item != kNotPushed) mPrefetcher.consumed(mAhead.front().item);
+        mAhead.pop_front();
+    }
+    std::erase_if(mAhead, [&](const AheadBrick& ahead) {
+        ScreenBox box;
+        if (mCuller.passes(mTree, ahead.node, box)) return false;
+        if (ahead.item != kNotPushed) mPrefetcher.cancel(ahead.item);
+        return true;
+    });
+    while (mAhead.size() < mDepth && findNext()) {
+    }
+    // Most of a brick's box lies in the current brick's: it is likely behind, and hidden once
+    // the current one is drawn (closeups), so it is not read on speculation.
+    auto mostlyBehind = [&](const PixelRect& a, const PixelRect& b) {
+        return a.overlaps(b) && 2 * pixelsOf(a.intersection(b)) > pixelsOf(a);
+    };
+    auto harmless = [&](const PixelRect& a, const PixelRect& b) {
+        if (!a.overlaps(b)) return true;
+        const PixelRect both = a.intersection(b);
+        return mCuller.occluded(both);
+    };
+    for (size_t k = 0; k < mAhead.size(); ++k) {
+        AheadBrick& ahead = mAhead[k];
+        if (ahead.item != kNotPushed) continue;
+        bool settled = harmless(ahead.rect, current);
+        for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, mAhead[j].rect);
+        if (!settled && (k >= kNearBricks || mostlyBehind(ahead.rect, current))) break;
+        ahead.item = mPrefetcher.push(ahead.brick);
+    }
+}
+
+}  // namespace vdiso

@@ -1,0 +1,68 @@
+// Prefetch scheduling for the view-dependent traversal: which bricks to read ahead of it, and
+// when (DESIGN.md, "Out of core").
+//
+// A second cursor runs over the same front-to-back order as the traversal, ahead of it, with
+// tests 1-3 against the pyramid as it is now (the same ViewCuller). Coverage only grows, so
+// every brick the traversal will acquire is found by the look-ahead first; a brick it finds may
+// still be hidden by the time the traversal gets there (then it was read for nothing, and
+// counted by readUnused).
+//
+// Each time the traversal is about to acquire a brick (beforeAcquire), bricks found ahead that
+// it skipped are hidden by now and their pins go; those still ahead are tested again and
+// dropped once hidden (cancelled if not read yet); the cursor moves on to keep `depth` bricks
+// found; and bricks are handed to the reader threads, in order, while each is settled: where
+// its screen box meets this brick's or any earlier one's, every pixel is covered already, so
+// nothing drawn before its turn can hide it and reading it now cannot be wasted. The next
+// kNearBricks go regardless, so reads keep ahead where boxes overlap, unless most of one's box
+// lies in this brick's (closeups: it is likely behind this one and hidden by it).
+// One look-ahead per traversal thread.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "core/brick_prefetcher.h"
+#include "core/brick_source.h"
+#include "core/minmax_tree.h"
+#include "core/view_culler.h"
+
+namespace vdiso {
+
+class BrickLookAhead {
+public:
+    static constexpr size_t kNearBricks = 2;
+
+    // depth 0: nothing is read ahead (every call does nothing).
+    BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewCuller& culler,
+                   size_t depth, int readers = BrickPrefetcher::kDefaultReaders);
+
+    // The traversal is about to acquire `brick` (it acquires it itself).
+    void beforeAcquire(int64_t brick);
+    // The traversal has ended: reading stops and every pin goes.
+    void stop() { mPrefetcher.stop(); }
+    // Bricks read ahead and then not used: hidden before the traversal came.
+    size_t readUnused() const { return mPrefetcher.skippedLoaded(); }
+
+private:
+    static constexpr size_t kNotPushed = SIZE_MAX;
+    struct AheadBrick {
+        uint32_t node;
+        int64_t brick;
+        PixelRect rect;
+        size_t item = kNotPushed;  // in the prefetcher's list, once handed to it
+    };
+    // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
+    bool findNext();
+    int64_t pixelsOf(const PixelRect& r) const;
+
+    const MinMaxTree& mTree;
+    const ViewCuller& mCuller;
+    size_t mDepth;
+    BrickPrefetcher mPrefetcher;
+    std::vector<uint32_t> mStack;       // the cursor: nodes still to visit, nearest on top
+    std::deque<AheadBrick> mAhead;      // found, in the traversal's order
+};
+
+}  // namespace vdiso
