@@ -117,12 +117,19 @@ void BrickExtractor::beginBrick(int64_t id, const void* samples) {
     mCurrentBrick = id;
     mCurrentSamples = samples;
     forgetBrickVertices();
-    metaCellRanges(id, samples, mRanges);
+    mRangesCurrent = false;
+}
+
+const std::vector<BrickRange>& BrickExtractor::currentRanges() {
+    if (!mRangesCurrent) metaCellRanges(mCurrentBrick, mCurrentSamples, mRanges);
+    mRangesCurrent = true;
+    return mRanges;
 }
 
 void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
                                   EdgeVertexMap& seams) {
     forgetBrickVertices();
+    mRangesCurrent = false;
     metaCellRanges(id, samples, mRanges);
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);

@@ -57,11 +57,13 @@ public:
                           EdgeVertexMap& seams);
 
     // One meta-cell at a time, for traversals that decide per meta-cell (SAGE): beginBrick
-    // makes `samples` the current brick (its vertices are shared across its meta-cells) and
-    // computes its meta-cell ranges; a BrickKernel (core/brick_kernel.h) made after it then
-    // extracts meta-cells one by one under the traversal's cell policy.
+    // makes `samples` the current brick (its vertices are shared across its meta-cells); a
+    // BrickKernel (core/brick_kernel.h) made after it then extracts meta-cells one by one
+    // under the traversal's cell policy. currentRanges: the ranges of all its meta-cells,
+    // computed on the first call (a view visits a few meta-cells of most bricks, and can take
+    // their ranges one by one from the kernel instead).
     void beginBrick(int64_t id, const void* samples);
-    const std::vector<BrickRange>& currentRanges() const { return mRanges; }
+    const std::vector<BrickRange>& currentRanges();
     int metaCellsPerAxis() const { return mMetaPerAxis; }
 
     const KernelCounters& counters() const { return mCounters; }
@@ -86,6 +88,7 @@ private:
     uint32_t mVerticesMade = 0;                   // the largest entry written
     void forgetBrickVertices();  // a new brick: forget the vertices of the last one
     std::vector<BrickRange> mRanges;
+    bool mRangesCurrent = false;  // mRanges are the current brick's
     int64_t mCurrentBrick = -1;
     const void* mCurrentSamples = nullptr;
     KernelCounters mCounters;

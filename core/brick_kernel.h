@@ -212,8 +212,16 @@ struct BrickKernel {
         // per cell: most cells of an active meta-cell are empty.
         const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
         uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
+        const int edgeRow = x.mLayout.brickSize + 1;
         for (int z = 0; z <= nz; ++z)
             for (int y = 0; y <= ny; ++y) {
+                // The vertex slots of this corner row's edges, asked for below: requested now,
+                // all rows at once, their misses overlap instead of stalling one by one (a
+                // view visits a brick's meta-cells scattered, so the slots are rarely cached).
+                const uint32_t* slots =
+                    x.mEdgeVertex.data() + ((size_t(lo[2] + z) * edgeRow + size_t(lo[1] + y)) * edgeRow + size_t(lo[0])) * 3;
+                __builtin_prefetch(slots);
+                __builtin_prefetch(slots + 3 * nx + 2);
                 const T* row = s + sampleIndex(lo[0], lo[1] + y, lo[2] + z);
                 uint64_t bits = 0;
                 for (int i = 0; i <= nx; ++i) bits |= uint64_t(threshold.above(row[i])) << i;

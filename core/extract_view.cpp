@@ -135,7 +135,8 @@ struct BrickVisit {
                 // Where a non-planar polygon's projection folds over itself its winding cancels,
                 // yet its fan triangles, which are what gets drawn, cover those centres: before
                 // dropping it, ask them (they mark only what they draw).
-                for (int k = 2; k < count && !coversNew && cellTests; ++k) {
+                const bool askFans = cellTests && !coversNew && folds(v, count);
+                for (int k = 2; k < count && !coversNew && askFans; ++k) {
                     const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
                     coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), pyramid);
                 }
@@ -176,12 +177,27 @@ struct BrickVisit {
         return !r.empty() && !pyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
     }
 
+    // Whether the projected polygon folds over itself: its fan triangles wind both ways. If
+    // not, its winding number is nonzero wherever one of them covers, and asking them after
+    // the polygon would find nothing more.
+    static bool folds(const glm::dvec2* v, int count) {
+        bool positive = false, negative = false;
+        for (int k = 2; k < count; ++k) {
+            const glm::dvec2 a = v[k - 1] - v[0], b = v[k] - v[0];
+            const double area2 = a.x * b.y - a.y * b.x;
+            positive |= area2 > 0.0;
+            negative |= area2 < 0.0;
+        }
+        return positive && negative;
+    }
+
     // What the scan conversion of the polygon (or of its fan triangles, as in keepPolygon)
     // marks when its box holds the one centre (x, y), not yet covered.
     bool coversSingleCentre(const glm::dvec2* v, int count, int x, int y) {
         const bool scanPolygons = t.mOptions.scanPolygons;
         bool covered = scanPolygons && coversCentre(v, size_t(count), x, y);
-        for (int k = 2; k < count && !covered && (cellTests || !scanPolygons); ++k) {
+        const bool askFans = !scanPolygons || (cellTests && !covered && folds(v, count));
+        for (int k = 2; k < count && !covered && askFans; ++k) {
             const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
             covered = coversCentre(triangle, 3, x, y);
         }
@@ -271,14 +287,7 @@ struct BrickVisit {
     // The meta-cells [lo, hi) of the brick, front to back by halving the longest side.
     void visitMetaCells(const int lo[3], const int hi[3]) {
         const int n = t.mExtractor.metaCellsPerAxis(), M = t.mExtractor.metaCellSize();
-        const std::vector<BrickRange>& ranges = t.mExtractor.currentRanges();
-        BrickRange range{std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
-        for (int z = lo[2]; z < hi[2]; ++z)
-            for (int y = lo[1]; y < hi[1]; ++y)
-                for (int x = lo[0]; x < hi[0]; ++x) {
-                    const BrickRange& r = ranges[size_t((z * n + y) * n + x)];
-                    range = {std::min(range.minValue, r.minValue), std::max(range.maxValue, r.maxValue)};
-                }
+        const BrickRange range = rangeOf(lo, hi);
         const BrickLayout& layout = t.mSource.layout();
         const Dims3 c = layout.brickCoord(brick);
         int64_t cellLo[3], cellHi[3];
@@ -328,6 +337,22 @@ struct BrickVisit {
             visitMetaCells(secondLo, hi);
             visitMetaCells(lo, firstHi);
         }
+    }
+
+    // The range of meta-cells [lo, hi). (Taking the sub-block ranges of the store's index for
+    // boxes of several meta-cells instead, and computing a brick's meta-cell ranges only for
+    // those visited, was slower: the coarser ranges let more boxes through to the screen tests.)
+    BrickRange rangeOf(const int lo[3], const int hi[3]) {
+        const int n = t.mExtractor.metaCellsPerAxis();
+        const std::vector<BrickRange>& ranges = t.mExtractor.currentRanges();
+        BrickRange range{std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
+        for (int z = lo[2]; z < hi[2]; ++z)
+            for (int y = lo[1]; y < hi[1]; ++y)
+                for (int x = lo[0]; x < hi[0]; ++x) {
+                    const BrickRange& r = ranges[size_t((z * n + y) * n + x)];
+                    range = {std::min(range.minValue, r.minValue), std::max(range.maxValue, r.maxValue)};
+                }
+        return range;
     }
 
     // The surface of the active meta-cells [lo, hi), which do not show: made for a whole
