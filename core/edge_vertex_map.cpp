@@ -17,29 +17,36 @@ void SeamTrimmer::maybeTrim(EdgeVertexMap& seams) {
     mTrimAt = std::max(mFirstTrim, 2 * seams.size());
 }
 
-bool SeamTrimmer::touchesPendingBrick(uint64_t key) const {
-    const EdgeOfKey edge = decodeEdgeKey(mDims, key);
-    const int axis = edge.axis;
+int bricksOnEdge(const Dims3& dims, const BrickLayout& layout, uint64_t key, int64_t bricks[4]) {
+    const EdgeOfKey edge = decodeEdgeKey(dims, key);
     const int64_t* p = edge.corner;
-    // Bricks per axis owning the edge: along its axis the one owning its cell; across it,
-    // the one or two whose cell corners include p.
+    // Bricks per axis: along the edge, the one owning its cell; across it, the one or two
+    // whose cells have p as a corner.
     int64_t candidates[3][2];
     int count[3];
-    const int B = mLayout.brickSize;
+    const int B = layout.brickSize;
     for (int a = 0; a < 3; ++a) {
         count[a] = 0;
-        if (a == axis) {
-            candidates[a][count[a]++] = std::min(p[a] / B, mLayout.brickCounts[a] - 1);
+        if (a == edge.axis) {
+            candidates[a][count[a]++] = std::min(p[a] / B, layout.brickCounts[a] - 1);
             continue;
         }
         if (p[a] % B == 0 && p[a] > 0) candidates[a][count[a]++] = p[a] / B - 1;
-        if (p[a] / B < mLayout.brickCounts[a]) candidates[a][count[a]++] = p[a] / B;
+        if (p[a] / B < layout.brickCounts[a]) candidates[a][count[a]++] = p[a] / B;
     }
+    int n = 0;
     for (int k = 0; k < count[2]; ++k)
         for (int j = 0; j < count[1]; ++j)
             for (int i = 0; i < count[0]; ++i)
-                if (mPending[size_t(mLayout.brickId(candidates[0][i], candidates[1][j], candidates[2][k]))])
-                    return true;
+                bricks[n++] = layout.brickId(candidates[0][i], candidates[1][j], candidates[2][k]);
+    return n;
+}
+
+bool SeamTrimmer::touchesPendingBrick(uint64_t key) const {
+    int64_t bricks[4];
+    const int n = bricksOnEdge(mDims, mLayout, key, bricks);
+    for (int i = 0; i < n; ++i)
+        if (mPending[size_t(bricks[i])]) return true;
     return false;
 }
 

@@ -34,6 +34,11 @@ inline EdgeOfKey decodeEdgeKey(const Dims3& dims, uint64_t key) {
             axis};
 }
 
+// The bricks with a cell on edge `key` (1, 2 or 4 of them, written to `bricks`); returns how
+// many. Each of them makes the edge's vertex when the surface crosses the edge (the cell's
+// range, its meta-cell's and its brick's all hold the isovalue then).
+int bricksOnEdge(const Dims3& dims, const BrickLayout& layout, uint64_t key, int64_t bricks[4]);
+
 // Vertex numbers by edge key.
 // Open addressing with linear probing on a power-of-two table (keys are stored plus one, so
 // zero marks an empty slot); it grows at half full.

@@ -60,6 +60,71 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) 
     for (uint32_t i : chunk.mesh.indices) out.indices.push_back(remap[i]);
 }
 
+// Appends the chunks' meshes to `out`, in parallel, giving the mesh mergeChunk gives chunk by
+// chunk: a brick-face vertex belongs to the first chunk holding a brick with a cell on its
+// edge (each such brick makes it), and later chunks refer to that one; each chunk's own
+// vertices follow the earlier chunks', written into place after a prefix sum of their counts
+// (Flying Edges' way). Only the chunks' seam entries are looked up; no pass over the mesh is
+// serial. `chunkOfBrick`: the chunk extracting each brick, -1 for none. Frees the chunks.
+void mergeChunksParallel(std::vector<ChunkOutput>& chunks, const std::vector<int32_t>& chunkOfBrick,
+                         const VolumeInfo& volume, const BrickLayout& layout, TriangleMesh& out) {
+    constexpr uint32_t kWelded = UINT32_MAX;
+    struct Weld {
+        uint32_t vertex, ownerChunk, ownerVertex;
+    };
+    const size_t count = chunks.size();
+    std::vector<std::vector<uint32_t>> final(count);  // chunk vertex -> out vertex number
+    std::vector<std::vector<Weld>> welds(count);
+    tbb::parallel_for(size_t(0), count, [&](size_t c) {
+        final[c].assign(chunks[c].mesh.vertexCount(), 0);
+        chunks[c].seams.forEach([&](uint64_t key, uint32_t v) {
+            int64_t bricks[4];
+            const int n = bricksOnEdge(volume.dims, layout, key, bricks);
+            int32_t owner = int32_t(c);
+            for (int i = 0; i < n; ++i) {
+                const int32_t o = chunkOfBrick[size_t(bricks[i])];
+                if (o >= 0 && o < owner) owner = o;
+            }
+            if (owner == int32_t(c)) return;
+            const uint32_t w = chunks[size_t(owner)].seams.find(key);
+            if (w == UINT32_MAX) return;  // cannot happen (see bricksOnEdge); then it stays unwelded
+            final[c][v] = kWelded;
+            welds[c].push_back({v, uint32_t(owner), w});
+        });
+    });
+    std::vector<size_t> vertexBase(count + 1), indexBase(count + 1);
+    vertexBase[0] = out.positions.size();
+    indexBase[0] = out.indices.size();
+    for (size_t c = 0; c < count; ++c) {
+        vertexBase[c + 1] = vertexBase[c] + chunks[c].mesh.vertexCount() - welds[c].size();
+        indexBase[c + 1] = indexBase[c] + chunks[c].mesh.indices.size();
+    }
+    const uint32_t firstNumber = out.nextVertex() - uint32_t(out.positions.size());
+    out.positions.resize(vertexBase[count]);
+    out.normals.resize(vertexBase[count]);
+    out.indices.resize(indexBase[count]);
+    tbb::parallel_for(size_t(0), count, [&](size_t c) {
+        const TriangleMesh& m = chunks[c].mesh;
+        size_t next = vertexBase[c];
+        for (size_t v = 0; v < final[c].size(); ++v) {
+            if (final[c][v] == kWelded) continue;
+            final[c][v] = firstNumber + uint32_t(next);
+            out.positions[next] = m.positions[v];
+            out.normals[next] = m.normals[v];
+            ++next;
+        }
+    });
+    tbb::parallel_for(size_t(0), count, [&](size_t c) {
+        for (const Weld& w : welds[c]) final[c][w.vertex] = final[w.ownerChunk][w.ownerVertex];
+    });
+    tbb::parallel_for(size_t(0), count, [&](size_t c) {
+        const MeshArray<uint32_t>& indices = chunks[c].mesh.indices;
+        uint32_t* to = out.indices.data() + indexBase[c];
+        for (size_t i = 0; i < indices.size(); ++i) to[i] = final[c][indices[i]];
+    });
+    tbb::parallel_for(size_t(0), count, [&](size_t c) { chunks[c] = ChunkOutput(); });
+}
+
 int64_t brickOf(int64_t id) { return id; }
 
 // NOISE's unit of work: one brick and the range of its active meta-cells in a shared list.
@@ -140,6 +205,10 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         tbb::parallel_for(size_t(0), chunkCount, [&](size_t c) {
             BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
             const size_t begin = items.size() * c / chunkCount, end = items.size() * (c + 1) / chunkCount;
+            TriangleMesh& chunkMesh = chunks[c].mesh;
+            chunkMesh.indices.reserve((end - begin) * perBrick * 6);
+            chunkMesh.positions.reserve((end - begin) * perBrick);
+            chunkMesh.normals.reserve((end - begin) * perBrick);
             for (size_t i = begin; i < end; ++i) {
                 const BrickHandle brick = acquireTimed(items[i]);
                 extractItem(extractor, items[i], brick.samples(), chunks[c].mesh, chunks[c].seams);
@@ -153,19 +222,29 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         });
     });
     KernelCounters total;
-    EdgeVertexMap seams;
-    for (size_t c = 0; c < chunkCount; ++c) {
-        ChunkOutput& chunk = chunks[c];
+    for (const ChunkOutput& chunk : chunks) {
         total.metaCellsTested += chunk.counters.metaCellsTested;
         total.metaCellsActive += chunk.counters.metaCellsActive;
         total.cellsVisited += chunk.counters.cellsVisited;
         total.cellsActive += chunk.counters.cellsActive;
-        mergeChunk(chunk, mesh, seams);
-        chunk = ChunkOutput();  // free the chunk's memory as soon as it is merged
-        for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
-            trimmer.finished(bricks[i]);
-        trimmer.maybeTrim(seams);
-        stream(false);
+    }
+    if (!options.sink) {
+        std::vector<int32_t> chunkOfBrick(size_t(source.layout().brickCount()), -1);
+        for (size_t c = 0; c < chunkCount; ++c)
+            for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
+                chunkOfBrick[size_t(bricks[i])] = int32_t(c);
+        arena.execute([&] { mergeChunksParallel(chunks, chunkOfBrick, source.volume(), source.layout(), mesh); });
+    } else {
+        // Streamed: chunk by chunk, so that memory holds a piece of the mesh, not all of it.
+        EdgeVertexMap seams;
+        for (size_t c = 0; c < chunkCount; ++c) {
+            mergeChunk(chunks[c], mesh, seams);
+            chunks[c] = ChunkOutput();  // free the chunk's memory as soon as it is merged
+            for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
+                trimmer.finished(bricks[i]);
+            trimmer.maybeTrim(seams);
+            stream(false);
+        }
     }
     finish();
     report(items.size());

@@ -27,7 +27,8 @@ struct FullExtractOptions {
     // Threads extracting bricks. 1 runs on the calling thread alone. More split the active
     // bricks into contiguous chunks (the same chunks for any thread count above 1, so the
     // output does not depend on scheduling), each with its own mesh, merged in order with
-    // vertices on chunk borders welded.
+    // vertices on chunk borders welded: in parallel, written into place after a prefix sum of
+    // the chunks' counts (with a sink, chunk by chunk instead, to keep memory bounded).
     int threads = 1;
     // When set, the surface is streamed: every streamPieceVertices vertices, what the mesh holds is
     // handed to the sink and dropped (drainInto), and at the end the mesh is empty. Memory then

@@ -1,6 +1,7 @@
 #include "io/mesh_writer.h"
 
 #include <cstdio>
+#include <span>
 #include <cstring>
 #include <stdexcept>
 
@@ -36,8 +37,8 @@ private:
     std::vector<unsigned char> mBuffer;
 };
 
-void putVertices(BufferedAppender& w, const std::vector<glm::vec3>& positions,
-                 const std::vector<glm::vec3>& normals) {
+void putVertices(BufferedAppender& w, std::span<const glm::vec3> positions,
+                 std::span<const glm::vec3> normals) {
     for (size_t i = 0; i < positions.size(); ++i) {
         float v[6] = {positions[i].x, positions[i].y, positions[i].z,
                       normals[i].x,   normals[i].y,   normals[i].z};

@@ -1,6 +1,7 @@
 #include "io/renderer.h"
 
 #include <algorithm>
+#include <span>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -118,7 +119,7 @@ struct CurrentContext {
     CurrentContext& operator=(const CurrentContext&) = delete;
 };
 
-void boundsOf(const std::vector<glm::vec3>& positions, glm::dvec3& lo, glm::dvec3& hi) {
+void boundsOf(std::span<const glm::vec3> positions, glm::dvec3& lo, glm::dvec3& hi) {
     for (const glm::vec3& p : positions) {
         lo = glm::min(lo, glm::dvec3(p));
         hi = glm::max(hi, glm::dvec3(p));
