@@ -139,7 +139,7 @@ int64_t brickOf(const BrickWork& w) { return w.id; }
 template <class Item, class ExtractItem>
 KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             const FullExtractOptions& options, TriangleMesh& mesh,
-                            FullExtractStats& stats, const ProgressFn& progress,
+                            ExtractStats& stats, const ProgressFn& progress,
                             double progressStart, ExtractItem&& extractItem) {
     const uint32_t firstVertex = mesh.nextVertex();
     uint64_t trianglesStreamed = 0;
@@ -253,11 +253,11 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
 
 }  // namespace
 
-FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
+ExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
                                TriangleMesh& mesh, const ProgressFn& progress) {
     requireFiniteIso(options.iso);
     const auto start = Clock::now();
-    FullExtractStats stats;
+    ExtractStats stats;
     const MinMaxTree tree(source.layout(), source.brickRanges());
     std::vector<int64_t> bricks;
     stats.nodesVisited =
@@ -273,10 +273,10 @@ FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& op
     return stats;
 }
 
-FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options,
+ExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options,
                               TriangleMesh& mesh, const ProgressFn& progress) {
     requireFiniteIso(options.iso);
-    FullExtractStats stats;
+    ExtractStats stats;
     const BrickLayout& layout = source.layout();
     BrickExtractor rangeExtractor(source.volume(), layout, options.metaCellSize);
     const uint32_t perBrick = uint32_t(rangeExtractor.metaCellsPerBrick());

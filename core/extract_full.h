@@ -16,6 +16,7 @@
 #include "core/brick_extractor.h"
 #include "core/brick_prefetcher.h"
 #include "core/brick_source.h"
+#include "core/extract_stats.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 
@@ -46,21 +47,10 @@ struct FullExtractOptions {
     size_t seamTrimEntries = size_t(1) << 16;
 };
 
-struct FullExtractStats {
-    uint64_t triangles = 0, vertices = 0;  // produced in all (streamed or held)
-    int64_t nodesVisited = 0;     // octree: min/max tree nodes; noise: span-space answers
-    int64_t bricksActive = 0;     // bricks acquired for extraction
-    int64_t metaCellsActive = 0;
-    int64_t cellsActive = 0;
-    double preprocessSeconds = 0;  // noise: building the meta-cell span space
-    double extractSeconds = 0;     // everything else, brick reads included
-    double brickWaitSeconds = 0;   // of which waiting for bricks (reads and decodes not hidden)
-};
-
-FullExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
+ExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
                                TriangleMesh& mesh, const ProgressFn& progress = {});
 
-FullExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options,
+ExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options,
                               TriangleMesh& mesh, const ProgressFn& progress = {});
 
 }  // namespace vdiso

@@ -38,7 +38,7 @@ class ViewTraversal {
 public:
     ViewTraversal(BrickSource& source, const MinMaxTree& tree, const Camera& camera,
                   const ViewExtractOptions& options, TriangleMesh& mesh, PointSet& points,
-                  ViewExtractStats& stats, int column0, int column1)
+                  ExtractStats& stats, int column0, int column1)
         : mSource(source), mTree(tree), mCamera(camera), mOptions(options), mMesh(mesh), mPoints(points),
           mStats(stats), mPixels(camera), mPyramid(camera.width, camera.height),
           mCuller(source, camera, mPyramid, options.iso, options.estimateBox),
@@ -68,7 +68,7 @@ private:
     const ViewExtractOptions& mOptions;
     TriangleMesh& mMesh;
     PointSet& mPoints;
-    ViewExtractStats& mStats;
+    ExtractStats& mStats;
     PixelProjector mPixels;
     OcclusionPyramid mPyramid;
     ViewCuller mCuller;
@@ -106,7 +106,7 @@ struct BrickVisit {
     bool keepCell(int64_t x, int64_t y, int64_t z) {
         if (!cellTests) return true;
         const bool keep = t.mCuller.cullScreenBox(t.mCuller.cellBox(x, y, z)) == Cull::None;
-        t.mStats.cellsCulled += !keep;
+        t.mStats.view.cellsCulled += !keep;
         return keep;
     }
 
@@ -152,7 +152,7 @@ struct BrickVisit {
         // an edge may fall the other way there: such a polygon is kept as well (it marks
         // nothing; only coverage this side of the rounding is ever marked).
         for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
-        t.mStats.polygonsHidden += !coversNew;
+        t.mStats.view.polygonsHidden += !coversNew;
         return coversNew;
     }
 
@@ -254,14 +254,14 @@ struct BrickVisit {
         const Camera& camera = t.mCamera;
         if (p->x < 0 || p->y < 0 || p->x >= camera.width || p->y >= camera.height ||
             t.mPyramid.isCovered(p->x, p->y) || !rayHit(*p, a, b, position, normal)) {
-            ++t.mStats.droppedSubPixel;
+            ++t.mStats.view.droppedSubPixel;
             return Verdict::Culled;
         }
         t.mPoints.positions.push_back(position);
         t.mPoints.normals.push_back(normal);
         t.mPyramid.coverSpan(p->y, p->x, p->x);
         t.mPyramid.propagate();
-        ++t.mStats.points;
+        ++t.mStats.view.points;
         return Verdict::Done;
     }
 
@@ -303,7 +303,7 @@ struct BrickVisit {
             // Every active meta-cell is made; only those that show are scan-converted.
             ++t.mStats.nodesVisited;
             if (!rangeHoldsIso(range.minValue, range.maxValue, t.mOptions.iso)) {
-                ++t.mStats.culledByRange;
+                ++t.mStats.view.culledByRange;
                 return;
             }
             if (t.mCuller.cullScreenBox(t.mCuller.screenBox(a, b)) != Cull::None) {
@@ -318,9 +318,9 @@ struct BrickVisit {
             // polygon; a clock read per polygon would cost more than it measures).
             const auto start = Clock::now();
             kernel.extractMetaCell((lo[2] * n + lo[1]) * n + lo[0], *this, &eyeCell);
-            ++t.mStats.metaCellsExtracted;
+            ++t.mStats.metaCellsActive;
             if (t.mOptions.bottomUp) t.mPyramid.propagate();
-            t.mStats.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
+            t.mStats.view.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
             return;
         }
         int axis = 0;
@@ -380,10 +380,10 @@ struct BrickVisit {
 
 void ViewTraversal::count(Cull cull) {
     switch (cull) {
-        case Cull::Range: ++mStats.culledByRange; break;
-        case Cull::Frustum: ++mStats.culledByFrustum; break;
-        case Cull::SubPixel: ++mStats.droppedSubPixel; break;
-        case Cull::Occlusion: ++mStats.culledByOcclusion; break;
+        case Cull::Range: ++mStats.view.culledByRange; break;
+        case Cull::Frustum: ++mStats.view.culledByFrustum; break;
+        case Cull::SubPixel: ++mStats.view.droppedSubPixel; break;
+        case Cull::Occlusion: ++mStats.view.culledByOcclusion; break;
         case Cull::None: break;
     }
 }
@@ -430,7 +430,7 @@ std::vector<int64_t> ViewTraversal::run() {
         }
         const int64_t brick = mTree.brickOf(node);
         if (!mCuller.subBlocksShow(brick)) {
-            ++mStats.bricksCulledBySubBlocks;
+            ++mStats.view.bricksCulledBySubBlocks;
             continue;
         }
         ViewStream::Use use = ViewStream::Use::Part;
@@ -440,7 +440,7 @@ std::vector<int64_t> ViewTraversal::run() {
                 box.crossesNearPlane ? INFINITY
                                      : std::max(box.right - box.left, box.bottom - box.top) / double(layout.brickSize);
             if (!mOptions.stream->beginBrick(brick, cellPixels, use)) {
-                mStats.abandoned = true;
+                mStats.view.abandoned = true;
                 break;
             }
             // A chunk stands alone: no vertex is welded to another brick's.
@@ -450,7 +450,7 @@ std::vector<int64_t> ViewTraversal::run() {
         const auto start = Clock::now();
         const BrickHandle handle = mSource.acquire(brick);  // only now: it passed 1-3
         mStats.brickWaitSeconds += std::chrono::duration<double>(Clock::now() - start).count();
-        ++mStats.bricksAcquired;
+        ++mStats.bricksActive;
         acquired.push_back(brick);
         mExtractor.beginBrick(brick, handle.samples());
         visitScalarType(mSource.volume().type, [&](auto zero) {
@@ -458,6 +458,7 @@ std::vector<int64_t> ViewTraversal::run() {
         });
         if (mOptions.stream) {
             mStats.triangles += mMesh.triangleCount();
+            mStats.vertices += mMesh.vertexCount();
             mOptions.stream->endBrick(brick, use, mMesh, mPoints);
             mMesh.firstVertex = mMesh.nextVertex();
             mMesh.clear();
@@ -467,19 +468,20 @@ std::vector<int64_t> ViewTraversal::run() {
     }
     mLookAhead.stop();
     mStats.cellsActive = mExtractor.counters().cellsActive;
-    mStats.bricksPrefetchedUnused = int64_t(mLookAhead.readUnused());
+    mStats.view.bricksPrefetchedUnused = int64_t(mLookAhead.readUnused());
     return acquired;
 }
 
 }  // namespace
 
-ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
+ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                                       const ViewExtractOptions& options, TriangleMesh& mesh,
                                       PointSet& points, const ProgressFn& progress) {
     requireFiniteIso(options.iso);
     const auto start = Clock::now();
-    ViewExtractStats stats;
+    ExtractStats stats;
     const uint64_t trianglesBefore = mesh.triangleCount();
+    const uint32_t verticesBefore = mesh.nextVertex();
     const int strips = std::clamp(options.threads, 1, camera.width);
     const MinMaxTree tree(source.layout(), source.brickRanges());
     // What is visible scales with the image, not the volume: room for a couple of triangles
@@ -514,7 +516,10 @@ ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
         });
         stats = mergeStrips(outputs, mesh, points);
     }
-    if (!options.stream) stats.triangles = mesh.triangleCount() - trianglesBefore;
+    if (!options.stream) {
+        stats.triangles = mesh.triangleCount() - trianglesBefore;
+        stats.vertices = mesh.nextVertex() - verticesBefore;
+    }
     stats.extractSeconds = std::chrono::duration<double>(Clock::now() - start).count();
     if (progress) progress(1.0);
     return stats;

@@ -29,6 +29,7 @@
 #include "core/brick_source.h"
 #include "core/brick_prefetcher.h"
 #include "core/camera.h"
+#include "core/extract_stats.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 
@@ -101,53 +102,11 @@ struct ViewExtractOptions {
     }
 };
 
-struct ViewExtractStats {
-    int64_t nodesVisited = 0;  // tree nodes and meta-cells tested
-    int64_t culledByRange = 0, culledByFrustum = 0, culledByOcclusion = 0;
-    int64_t droppedSubPixel = 0;  // sub-pixel nodes covering no free pixel centre
-    int64_t metaCellsExtracted = 0;
-    int64_t cellsActive = 0;  // cells of extracted meta-cells whose polygons were made
-    int64_t cellsCulled = 0;  // by the per-cell test
-    int64_t polygonsHidden = 0;  // scan-converted without covering a new pixel centre
-    int64_t bricksAcquired = 0;
-    int64_t bricksCulledBySubBlocks = 0;  // box passed, no sub-block did: not read
-    int64_t bricksPrefetchedUnused = 0;  // read ahead, then hidden before the traversal came
-    // In acquire: reads and decodes not hidden. Summed over strips, where a strip also waits
-    // for a brick another strip is loading.
-    double brickWaitSeconds = 0;
-    uint64_t triangles = 0, points = 0;
-    bool abandoned = false;  // a stream's beginBrick returned false
-    double scanSeconds = 0;     // extracting visible meta-cells, with their projection and scan
-                                // conversion into the pyramid (interleaved per polygon)
-    double extractSeconds = 0;  // everything, brick reads included
-
-    // Sums the counters and seconds (not triangles, bricksAcquired, extractSeconds: the
-    // caller knows those of the whole).
-    ViewExtractStats& operator+=(const ViewExtractStats& o) {
-        points += o.points;
-        nodesVisited += o.nodesVisited;
-        culledByRange += o.culledByRange;
-        culledByFrustum += o.culledByFrustum;
-        culledByOcclusion += o.culledByOcclusion;
-        droppedSubPixel += o.droppedSubPixel;
-        metaCellsExtracted += o.metaCellsExtracted;
-        cellsActive += o.cellsActive;
-        cellsCulled += o.cellsCulled;
-        polygonsHidden += o.polygonsHidden;
-        bricksCulledBySubBlocks += o.bricksCulledBySubBlocks;
-        bricksPrefetchedUnused += o.bricksPrefetchedUnused;
-        brickWaitSeconds += o.brickWaitSeconds;
-        abandoned |= o.abandoned;
-        scanSeconds += o.scanSeconds;
-        return *this;
-    }
-};
-
 // Appends the surface visible from `camera` to `mesh` and sub-pixel points to `points`.
 // Culling is conservative: rendered from the same camera, the result looks like the full
 // surface. options.threads strips run in parallel; the source must then be thread-safe (a
 // BrickCache is).
-ViewExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
+ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                                       const ViewExtractOptions& options, TriangleMesh& mesh,
                                       PointSet& points, const ProgressFn& progress = {});
 

@@ -41,7 +41,7 @@ void coverOutsideStrip(OcclusionPyramid& pyramid, int column0, int column1) {
     pyramid.propagate();
 }
 
-ViewExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points) {
+ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points) {
     size_t vertices = 0, indices = 0;
     for (const StripOutput& part : outputs) {
         vertices += part.triangles.positions.size();
@@ -50,7 +50,7 @@ ViewExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& me
     mesh.positions.reserve(mesh.positions.size() + vertices);
     mesh.normals.reserve(mesh.normals.size() + vertices);
     mesh.indices.reserve(mesh.indices.size() + indices);
-    ViewExtractStats stats;
+    ExtractStats stats;
     std::vector<int64_t> acquired;
     for (StripOutput& part : outputs) {
         const uint32_t offset = mesh.nextVertex();
@@ -60,12 +60,13 @@ ViewExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& me
         for (uint32_t v : m.indices) mesh.indices.push_back(v + offset);
         points.positions.insert(points.positions.end(), part.points.positions.begin(), part.points.positions.end());
         points.normals.insert(points.normals.end(), part.points.normals.begin(), part.points.normals.end());
-        stats += part.stats;
+        stats.addPart(part.stats);
         stats.triangles += part.stats.triangles;
+        stats.vertices += part.stats.vertices;
         acquired.insert(acquired.end(), part.acquired.begin(), part.acquired.end());
     }
     std::sort(acquired.begin(), acquired.end());
-    stats.bricksAcquired = int64_t(std::unique(acquired.begin(), acquired.end()) - acquired.begin());
+    stats.bricksActive = int64_t(std::unique(acquired.begin(), acquired.end()) - acquired.begin());
     return stats;
 }
 

@@ -29,7 +29,7 @@ void coverOutsideStrip(OcclusionPyramid& pyramid, int column0, int column1);
 struct StripOutput {
     TriangleMesh triangles;
     PointSet points;
-    ViewExtractStats stats;
+    ExtractStats stats;
     std::vector<int64_t> acquired;  // bricks, in the order extracted
     std::exception_ptr error;
 };
@@ -40,8 +40,8 @@ template <class Strip>
 void runStrips(std::vector<StripOutput>& outputs, Strip&& strip);
 
 // Appends the strips' meshes and points in strip order; returns their statistics summed, with
-// bricksAcquired counting a brick read by two strips once.
-ViewExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points);
+// bricksActive counting a brick read by two strips once.
+ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points);
 
 }  // namespace vdiso
 

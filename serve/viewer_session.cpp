@@ -174,7 +174,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
     options.stream = &stream;
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;
-    ViewExtractStats stats;
+    ExtractStats stats;
     if (!mGate.enter([&] { return mSuperseded.load(); })) {
         status = "superseded";
     } else {
@@ -182,7 +182,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
             TriangleMesh unused;
             PointSet unusedPoints;
             stats = extractViewDependent(*store.cache, camera, options, unused, unusedPoints);
-            if (stats.abandoned) status = "superseded";
+            if (stats.view.abandoned) status = "superseded";
         } catch (const std::exception& e) {  // a brick that cannot be read, say
             status = "error";
             error = e.what();
@@ -202,7 +202,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
         end.add("points", c.points).add("bytes", c.bytes);
         // The cache is shared: misses while this frame ran, whoever caused them.
         end.add("bricksRead", after.misses - before.misses);
-        end.add("bricksVisited", stats.bricksAcquired);
+        end.add("bricksVisited", stats.bricksActive);
         end.add("serverMs", seconds * 1e3);
         end.add("firstChunkMs", c.firstChunkSeconds < 0 ? -1.0 : c.firstChunkSeconds * 1e3);
         return end.str();

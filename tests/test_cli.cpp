@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <string>
+#include <thread>
 
 #include <zlib.h>
 
@@ -217,7 +219,7 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     ASSERT_EQ(test::runVdiso("synth " + bricks + " --kind head --size 200 --brick 16 --quiet").exitCode, 0);
     const auto strips = test::runVdiso("extract " + bricks + " --iso 600.5 --method sage --cache-mb 1 --threads 20");
     EXPECT_EQ(strips.exitCode, 2);
-    EXPECT_NE(strips.output.find("--threads 20 needs a brick cache of 80 bricks; --cache-mb 1 holds 76"),
+    EXPECT_NE(strips.output.find("--threads 20 needs a brick cache of 80 bricks; it holds 76 of 13 KB (--cache-mb 1)"),
               std::string::npos) << strips.output;
     EXPECT_EQ(test::runVdiso("extract " + bricks + " --iso 600.5 --method sage --cache-mb 1 --threads 19").exitCode, 0);
     const auto r = test::runVdiso("extract " + dir.file("missing.vdiso") + " --iso 1");
@@ -225,6 +227,25 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     EXPECT_NE(r.output.find("missing.vdiso: cannot open"), std::string::npos) << r.output;
 }
 
+
+// Without --threads every core works, for every method; --threads 1 is the one-thread path; a
+// cache too small for a strip per core gets fewer strips, not an error.
+TEST(CliExtract, ThreadsDefaultToTheMachinesCores) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 64 --brick 16 --quiet").exitCode, 0);
+    const std::string cores = "\"threads\": " + std::to_string(std::max(1u, std::thread::hardware_concurrency()));
+    for (const char* method : {"octree", "noise", "sage", "wise"}) {
+        const auto r = test::runVdiso("extract " + store + " --iso 600.5 --method " + method + " --stats -");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find(cores), std::string::npos) << method << ": " << r.output;
+        const auto one = test::runVdiso("extract " + store + " --iso 600.5 --method " + method + " --threads 1 --stats -");
+        EXPECT_NE(one.output.find("\"threads\": 1,"), std::string::npos) << method << ": " << one.output;
+    }
+    // 1 MB holds 76 bricks of 16 cells (13.7 KB): 19 strips; the default takes what fits.
+    const auto small = test::runVdiso("extract " + store + " --iso 600.5 --method sage --cache-mb 1 --stats -");
+    EXPECT_EQ(small.exitCode, 0) << small.output;
+}
 
 TEST(CliExtract, OrbitPathWritesAStatsLineAndAPicturePerFrame) {
     test::ScratchDir dir;

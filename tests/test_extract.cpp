@@ -43,7 +43,7 @@ TEST(ExtractOctree, BallIsClosedAcrossBricksWithAnalyticAreaAndVolume) {
         });
         TriangleMesh mesh;
         const double iso = (type == ScalarType::F32 ? 100.0 : 5000.0) + 0.5;
-        const FullExtractStats stats = extractOctree(source, {iso, 4}, mesh);
+        const ExtractStats stats = extractOctree(source, {iso, 4}, mesh);
         ASSERT_GT(mesh.triangleCount(), 1000u);
         EXPECT_EQ(test::checkClosedOriented(mesh), "") << scalarTypeName(type);
         // The surface is the sphere of radius ~13 (linear interpolation error is small).
@@ -78,7 +78,7 @@ TEST(ExtractOctree, NoiseGivesTheSameTriangles) {
         for (int metaCell : {2, 4, 8}) {
             TriangleMesh octree, noise;
             extractOctree(source, {iso, metaCell}, octree);
-            const FullExtractStats ns = extractNoise(source, {iso, metaCell}, noise);
+            const ExtractStats ns = extractNoise(source, {iso, metaCell}, noise);
             ASSERT_GT(octree.triangleCount(), 100u);
             EXPECT_EQ(octree.triangleCount(), noise.triangleCount()) << iso << " M=" << metaCell;
             EXPECT_EQ(octree.vertexCount(), noise.vertexCount());
@@ -289,12 +289,12 @@ TEST(ExtractStreaming, StreamedPiecesRebuildTheHeldMesh) {
     const double iso = turbulenceIso(ScalarType::U16);
     for (int threads : {1, 2}) {
         TriangleMesh held, streamedRest;
-        const FullExtractStats heldStats = extractOctree(*source, {iso, 4, threads}, held);
+        const ExtractStats heldStats = extractOctree(*source, {iso, 4, threads}, held);
         CollectingSink sink;
         FullExtractOptions o{iso, 4, threads};
         o.sink = &sink;
         o.streamPieceVertices = 5000;
-        const FullExtractStats s = extractOctree(*source, o, streamedRest);
+        const ExtractStats s = extractOctree(*source, o, streamedRest);
         EXPECT_GT(sink.pieces, 5) << "not streamed in pieces";
         EXPECT_EQ(streamedRest.vertexCount(), 0u);
         EXPECT_EQ(s.triangles, heldStats.triangles);
@@ -364,7 +364,7 @@ TEST(ExtractPrefetch, ViewDependentLookAheadReadsOnlyBricksThatPassedTheTests) {
         const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
         TriangleMesh without, with;
         PointSet pointsWithout, pointsWith;
-        ViewExtractStats plain, ahead;
+        ExtractStats plain, ahead;
         {
             BrickCache cache(store, 64 * store.brickBytes());
             plain = extractViewDependent(cache, camera, ViewExtractOptions::sage(kHeadSkinIso),
@@ -382,13 +382,13 @@ TEST(ExtractPrefetch, ViewDependentLookAheadReadsOnlyBricksThatPassedTheTests) {
             EXPECT_EQ(with.positions, without.positions) << label;
             EXPECT_EQ(with.indices, without.indices) << label;
             EXPECT_EQ(pointsWith.positions, pointsWithout.positions) << label;
-            EXPECT_EQ(ahead.bricksAcquired, plain.bricksAcquired) << label;
+            EXPECT_EQ(ahead.bricksActive, plain.bricksActive) << label;
             // Read: the traversal's bricks and the ones found ahead then hidden, each once.
-            const double expected = double(ahead.bricksAcquired + ahead.bricksPrefetchedUnused);
+            const double expected = double(ahead.bricksActive + ahead.view.bricksPrefetchedUnused);
             expectEachReadOnce(cache, expected, expected, label);
             // Hidden after being found: bounded by the look-ahead's reach each time the picture
             // grows, and here, bricks of 8 cells and a near camera, never more than were used.
-            EXPECT_LE(ahead.bricksPrefetchedUnused, ahead.bricksAcquired) << label;
+            EXPECT_LE(ahead.view.bricksPrefetchedUnused, ahead.bricksActive) << label;
         }
     }
 }
@@ -402,7 +402,7 @@ TEST(ExtractView, StripsOnThreadsReadEachBrickOnce) {
     const VolumeInfo& v = store.volume();
     for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup}) {
         const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
-        ViewExtractStats whole, strips;
+        ExtractStats whole, strips;
         TriangleMesh wholeMesh, stripsMesh;
         PointSet points;
         {
@@ -416,11 +416,11 @@ TEST(ExtractView, StripsOnThreadsReadEachBrickOnce) {
         options.prefetchBricks = 32;
         strips = extractViewDependent(cache, camera, options, stripsMesh, points);
         const char* label = viewPresetName(preset);
-        EXPECT_LE(strips.bricksAcquired, whole.bricksAcquired) << label;
-        EXPECT_GE(double(strips.bricksAcquired), 0.9 * double(whole.bricksAcquired)) << label;
+        EXPECT_LE(strips.bricksActive, whole.bricksActive) << label;
+        EXPECT_GE(double(strips.bricksActive), 0.9 * double(whole.bricksActive)) << label;
         // A brick one strip found ahead and another used is one read: at least those used.
-        expectEachReadOnce(cache, double(strips.bricksAcquired),
-                           double(strips.bricksAcquired + strips.bricksPrefetchedUnused), label);
+        expectEachReadOnce(cache, double(strips.bricksActive),
+                           double(strips.bricksActive + strips.view.bricksPrefetchedUnused), label);
         // Cells kept by both strips at their border: a small share.
         EXPECT_LE(double(stripsMesh.triangleCount()), 1.05 * double(wholeMesh.triangleCount())) << label;
     }

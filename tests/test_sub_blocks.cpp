@@ -168,18 +168,18 @@ TEST(SubBlocks, ViewDependentExtractionReadsFewerBricksForTheSameSurface) {
             const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 600, 600);
             TriangleMesh a, b;
             PointSet pa, pb;
-            const ViewExtractStats with = extractViewDependent(*head, camera, ViewExtractOptions::sage(iso), a, pa);
-            const ViewExtractStats without = extractViewDependent(plain, camera, ViewExtractOptions::sage(iso), b, pb);
+            const ExtractStats with = extractViewDependent(*head, camera, ViewExtractOptions::sage(iso), a, pa);
+            const ExtractStats without = extractViewDependent(plain, camera, ViewExtractOptions::sage(iso), b, pb);
             const std::string label = std::string(viewPresetName(preset)) + " " + std::to_string(iso);
             // A brick none of whose sub-blocks passes has no meta-cell that would.
             EXPECT_EQ(a.positions, b.positions) << label;
             EXPECT_EQ(a.indices, b.indices) << label;
             EXPECT_EQ(pa.positions, pb.positions) << label;
-            EXPECT_EQ(with.bricksAcquired + with.bricksCulledBySubBlocks, without.bricksAcquired) << label;
-            EXPECT_EQ(without.bricksCulledBySubBlocks, 0) << label;
-            readWith += with.bricksAcquired;
-            readWithout += without.bricksAcquired;
-            culled += with.bricksCulledBySubBlocks;
+            EXPECT_EQ(with.bricksActive + with.view.bricksCulledBySubBlocks, without.bricksActive) << label;
+            EXPECT_EQ(without.view.bricksCulledBySubBlocks, 0) << label;
+            readWith += with.bricksActive;
+            readWithout += without.bricksActive;
+            culled += with.view.bricksCulledBySubBlocks;
         }
     EXPECT_GT(culled, 0);
     EXPECT_LT(readWith, readWithout);

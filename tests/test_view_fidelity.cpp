@@ -38,8 +38,8 @@ FidelityResult compareWithFull(BrickSource& source, double iso, ViewPreset prese
     const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 800, 800);  // vdiso extract's default
     TriangleMesh full, view;
     PointSet points;
-    const FullExtractStats f = extractOctree(source, {iso, 4}, full);
-    const ViewExtractStats s = extractViewDependent(source, camera, options, view, points);
+    const ExtractStats f = extractOctree(source, {iso, 4}, full);
+    const ExtractStats s = extractViewDependent(source, camera, options, view, points);
     const RenderResult a = renderSurface(full, PointSet{}, camera);
     const RenderResult b = renderSurface(view, points, camera);
     std::vector<uint8_t> used(view.vertexCount(), 0);
@@ -49,7 +49,7 @@ FidelityResult compareWithFull(BrickSource& source, double iso, ViewPreset prese
             view.triangleCount(),
             points.size(),
             f.bricksActive,
-            s.bricksAcquired,
+            s.bricksActive,
             visibleSurfaceOracle(source, camera, a.depth, iso),
             std::find(used.begin(), used.end(), 0) == used.end()};
 }
@@ -129,7 +129,7 @@ TEST(VisibleOracle, BoundsWhatAViewDependentExtractionNeeds) {
     TriangleMesh full, view;
     PointSet points;
     extractOctree(*head, {kHeadSkinIso, 4}, full);
-    const ViewExtractStats s = extractViewDependent(*head, camera, ViewExtractOptions::sage(kHeadSkinIso), view, points);
+    const ExtractStats s = extractViewDependent(*head, camera, ViewExtractOptions::sage(kHeadSkinIso), view, points);
     const RenderResult r = renderSurface(full, PointSet{}, camera);
     const VisibleSurfaceOracle oracle = visibleSurfaceOracle(*head, camera, r.depth, kHeadSkinIso);
     uint64_t covered = 0;
@@ -139,7 +139,7 @@ TEST(VisibleOracle, BoundsWhatAViewDependentExtractionNeeds) {
     EXPECT_LE(oracle.cells, oracle.pixels);
     EXPECT_LT(oracle.triangles, full.triangleCount() / 2);  // a closed surface hides its back
     // What the extraction read and produced covers the picture, so it is not below the least.
-    EXPECT_GE(uint64_t(s.bricksAcquired), oracle.bricks);
+    EXPECT_GE(uint64_t(s.bricksActive), oracle.bricks);
     EXPECT_GE(view.triangleCount() + points.size(), oracle.cells / 2);
 }
 

@@ -1,8 +1,10 @@
 #include "tools/args.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <sstream>
+#include <thread>
 
 namespace vdiso::cli {
 
@@ -27,6 +29,8 @@ std::vector<std::string> splitCommas(const std::string& text) {
 }
 
 }  // namespace
+
+int machineThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
 
 int64_t parseInt(const std::string& flag, const std::string& text, int64_t lo, int64_t hi) {
     int64_t v = 0;

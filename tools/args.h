@@ -34,6 +34,9 @@ private:
     size_t mAt = 0;
 };
 
+// The default for --threads: the machine's cores (at least 1).
+int machineThreads();
+
 int64_t parseInt(const std::string& flag, const std::string& text, int64_t lo, int64_t hi);
 double parseDouble(const std::string& flag, const std::string& text);
 // "N" (a cube) or "X,Y,Z".

@@ -5,14 +5,15 @@
 #include <string>
 
 #include "cache/brick_cache.h"
+#include "cache/cache_plan.h"
 #include "core/camera.h"
 #include "core/extract_full.h"
 #include "core/extract_view.h"
-#include "core/visible_oracle.h"
 #include "io/atomic_output.h"
 #include "io/camera_json.h"
 #include "io/json.h"
 #include "io/mesh_writer.h"
+#include "io/oracle_comparison.h"
 #include "io/png_image.h"
 #include "io/process_stats.h"
 #include "io/renderer.h"
@@ -62,8 +63,8 @@ constexpr const char* kHelp =
     "  --size WxH                image size (default 800x800)\n"
     "  --stats STATS.json        write one JSON object of statistics ('-' for stdout)\n"
     "  --metacell M              meta-cell size in cells, 1 to 32 (default 4)\n"
-    "  --threads N               extraction threads (default 1); sage and wise split the image\n"
-    "                            into N vertical strips, one traversal each\n"
+    "  --threads N               extraction threads (default: the machine's cores); sage and\n"
+    "                            wise split the image into N vertical strips, one traversal each\n"
     "  --prefetch N              bricks a reader thread loads ahead of the extraction\n"
     "                            (default 32; 0: none): for sage/wise those a look-ahead finds\n"
     "                            visible; for octree/noise the active bricks, with --threads 1\n"
@@ -90,7 +91,7 @@ struct ExtractOptions {
     bool viewGiven = false;
     int width = 800, height = 800;
     int metaCellSize = kDefaultMetaCellSize;
-    int threads = 1;
+    int threads = 0;  // 0: the machine's cores (as many as the cache allows strips for)
     int prefetch = 32;
     int readers = BrickPrefetcher::kDefaultReaders;
     uint64_t cacheMb = 1024;
@@ -253,18 +254,6 @@ void checkOutputsWritable(const ExtractOptions& o) {
 
 namespace {
 
-CacheCounters minus(const CacheCounters& a, const CacheCounters& b) {
-    CacheCounters d;
-    d.requests = a.requests - b.requests;
-    d.hits = a.hits - b.hits;
-    d.misses = a.misses - b.misses;
-    d.evictions = a.evictions - b.evictions;
-    d.bytesRead = a.bytesRead - b.bytesRead;
-    d.readSeconds = a.readSeconds - b.readSeconds;
-    d.decodeSeconds = a.decodeSeconds - b.decodeSeconds;
-    return d;
-}
-
 // "frame_%04d.png" with frame k; refuses names without exactly one integer conversion.
 std::string framePath(const std::string& pattern, int frame) {
     char buffer[4096];
@@ -280,30 +269,20 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
                         const std::string& pngPath, const std::string& pointsPath,
                         const ProgressFn& progress, std::string& summary) {
     const CacheCounters before = cache.counters();
+    CachePlan plan;
+    try {
+        plan = planCacheUse(cache, isViewDependent(o.method), o.prefetch, o.threads, machineThreads());
+    } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
+    }
     // Without a picture to draw, the mesh goes to its file as it is extracted: memory holds a
     // bounded part of it. A picture needs the whole mesh, so then it is held.
     TriangleMesh mesh;
     std::optional<MeshFileWriter> streamed;
     if (!meshPath.empty() && pngPath.empty() && !isViewDependent(o.method))
         streamed.emplace(meshPath, o.overwrite);
-    FullExtractOptions extract{*o.iso, o.metaCellSize, o.threads};
-    if (streamed) extract.sink = &*streamed;
-    // The prefetcher must not evict what it loaded before use: half the cache at most.
-    const uint64_t slots = cache.budgetBytes() / store.brickBytes();
-    extract.prefetchBricks = int(std::min<uint64_t>(uint64_t(o.prefetch), slots / 2));
-    // Each image strip pins its brick and its share of that half (plus one being read): with
-    // at most a quarter of the cache's bricks in strips, pins never fill the cache. A cache
-    // holding every brick never needs to evict.
-    if (isViewDependent(o.method) && uint64_t(o.threads) * 4 > slots &&
-        slots < uint64_t(store.layout().brickCount()))
-        throw UsageError("--threads " + std::to_string(o.threads) + " needs a brick cache of " +
-                         std::to_string(4 * o.threads) + " bricks; --cache-mb " +
-                         std::to_string(o.cacheMb) + " holds " + std::to_string(slots) +
-                         " of " + std::to_string(store.brickBytes() >> 10) + " KB");
-    extract.prefetchReaders = o.readers;
     PointSet points;
-    FullExtractStats stats;
-    std::optional<ViewExtractStats> view;
+    ExtractStats stats;
     if (isViewDependent(o.method)) {
         ViewExtractOptions v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso)
                                                   : ViewExtractOptions::wise(*o.iso);
@@ -313,23 +292,19 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.points) v.points = *o.points;
         if (o.bottomUp) v.bottomUp = *o.bottomUp;
         if (o.cellTests) v.cellTests = *o.cellTests;
-        v.prefetchBricks = extract.prefetchBricks;
-        v.prefetchReaders = extract.prefetchReaders;
-        v.threads = o.threads;
-        view = extractViewDependent(cache, *camera, v, mesh, points, progress);
-        stats.triangles = view->triangles;
-        stats.vertices = mesh.vertexCount();
-        stats.extractSeconds = view->extractSeconds;
-        stats.bricksActive = view->bricksAcquired;
-        stats.nodesVisited = view->nodesVisited;
-        stats.metaCellsActive = view->metaCellsExtracted;
-        stats.brickWaitSeconds = view->brickWaitSeconds;
-        stats.cellsActive = view->cellsActive;
+        v.prefetchBricks = plan.prefetchBricks;
+        v.prefetchReaders = o.readers;
+        v.threads = plan.threads;
+        stats = extractViewDependent(cache, *camera, v, mesh, points, progress);
     } else {
+        FullExtractOptions extract{*o.iso, o.metaCellSize, plan.threads};
+        if (streamed) extract.sink = &*streamed;
+        extract.prefetchBricks = plan.prefetchBricks;
+        extract.prefetchReaders = o.readers;
         stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
                                     : extractOctree(cache, extract, mesh, progress);
     }
-    const CacheCounters io = minus(cache.counters(), before);
+    const CacheCounters io = cache.counters() - before;
 
     if (streamed)
         streamed->finish();
@@ -346,14 +321,14 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     const VolumeInfo& volume = store.volume();
     JsonObject s;
     s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
-    s.add("metacell", o.metaCellSize).add("threads", o.threads);
+    s.add("metacell", o.metaCellSize).add("threads", plan.threads);
     s.add("triangles", stats.triangles).add("points", uint64_t(points.size()));
     s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
-    s.add("prefetch", extract.threads > 1 && !isViewDependent(o.method) ? 0 : extract.prefetchBricks);
-    s.add("readers", extract.prefetchReaders);
+    s.add("prefetch", plan.threads > 1 && !isViewDependent(o.method) ? 0 : plan.prefetchBricks);
+    s.add("readers", o.readers);
     // I/O the extraction did not wait for: read and decode time spent ahead of it (summed over
     // the reader threads, as io_s and decode_s are). With image strips a lower bound: a strip
     // waiting for a brick another strip loads counts as waiting, the read only once.
@@ -363,27 +338,26 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("bricks_active", stats.bricksActive).add("bytes_read", io.bytesRead);
     s.add("nodes_visited", stats.nodesVisited).add("meta_cells_active", stats.metaCellsActive);
     s.add("cells_active", stats.cellsActive);
-    if (view) {
-        s.add("culled_range", view->culledByRange).add("culled_frustum", view->culledByFrustum);
-        s.add("culled_occlusion", view->culledByOcclusion);
-        s.add("dropped_subpixel", view->droppedSubPixel);
-        s.add("meta_cells_extracted", view->metaCellsExtracted).add("scan_s", view->scanSeconds);
-        s.add("cells_culled", view->cellsCulled);
-        s.add("bricks_prefetched_unused", view->bricksPrefetchedUnused);
-        s.add("bricks_culled_by_sub_blocks", view->bricksCulledBySubBlocks);
-        s.add("polygons_hidden", view->polygonsHidden);
+    if (isViewDependent(o.method)) {
+        const ViewCounters& view = stats.view;
+        s.add("culled_range", view.culledByRange).add("culled_frustum", view.culledByFrustum);
+        s.add("culled_occlusion", view.culledByOcclusion);
+        s.add("dropped_subpixel", view.droppedSubPixel);
+        s.add("meta_cells_extracted", stats.metaCellsActive).add("scan_s", view.scanSeconds);
+        s.add("cells_culled", view.cellsCulled);
+        s.add("bricks_prefetched_unused", view.bricksPrefetchedUnused);
+        s.add("bricks_culled_by_sub_blocks", view.bricksCulledBySubBlocks);
+        s.add("polygons_hidden", view.polygonsHidden);
     }
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
     if (o.oracle && camera) {
         // After this frame's figures are taken: the full surface from the same camera.
-        TriangleMesh full;
-        extractOctree(cache, {*o.iso, o.metaCellSize, o.threads}, full);
-        const RenderResult r = renderSurface(full, PointSet{}, *camera);
-        const VisibleSurfaceOracle v = visibleSurfaceOracle(cache, *camera, r.depth, *o.iso);
+        const OracleComparison c = compareWithOracle(cache, *camera, *o.iso, o.metaCellSize, plan.threads);
+        const VisibleSurfaceOracle& v = c.oracle;
         s.add("oracle_pixels", v.pixels).add("oracle_cells", v.cells);
         s.add("oracle_triangles", v.triangles).add("oracle_bricks", v.bricks);
-        s.add("full_triangles", uint64_t(full.triangleCount()));
+        s.add("full_triangles", c.fullTriangles);
         s.add("triangles_over_oracle", double(stats.triangles) / double(std::max<uint64_t>(1, v.triangles)));
         s.add("bricks_over_oracle", double(io.misses) / double(std::max<uint64_t>(1, v.bricks)));
         s.add("primitives_per_pixel",

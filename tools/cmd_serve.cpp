@@ -22,7 +22,8 @@ constexpr const char* kHelp =
     "  --host ADDRESS      the address to listen on (default 127.0.0.1: this machine only)\n"
     "  --port N            the port (default 8080; 0: any free port)\n"
     "  --cache-mb N        brick cache shared by every client, in MB (default 1024)\n"
-    "  --threads N         extraction threads per frame: image strips (default 1)\n"
+    "  --threads N         extraction threads per frame: image strips (default: the\n"
+    "                      machine's cores)\n"
     "  --metacell M        meta-cell size in cells, 1 to 32 (default 4)\n"
     "  --token T           the access token (default: random at each start)\n"
     "  --web DIR           the viewer's folder (default: the source tree's web/)\n";
@@ -34,6 +35,7 @@ int runServe(int argc, char** argv) {
     serve::ServeOptions o;
     o.webRoot = VDISO_WEB_DIR;
     o.handleSignals = true;
+    o.threads = machineThreads();
     while (!args.done()) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {
