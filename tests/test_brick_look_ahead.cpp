@@ -1,0 +1,150 @@
+// The look-ahead that schedules reads for the view-dependent traversal (core/brick_look_ahead.h),
+// driven by hand: which bricks it hands to the readers, in which order, and that it drops
+// what becomes hidden.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "core/brick_look_ahead.h"
+#include "core/camera.h"
+#include "core/minmax_tree.h"
+#include "core/occlusion_pyramid.h"
+#include "core/synth.h"
+#include "core/view_culler.h"
+#include "tests/extract_test_util.h"
+
+namespace vdiso {
+namespace {
+
+constexpr double kSkin = 600.5;
+
+// Records the bricks acquired through it (by the look-ahead's reader threads), in order.
+class RecordingSource final : public BrickSource {
+public:
+    explicit RecordingSource(BrickSource& inner) : mInner(inner) {}
+    const VolumeInfo& volume() const override { return mInner.volume(); }
+    const BrickLayout& layout() const override { return mInner.layout(); }
+    std::span<const BrickRange> brickRanges() const override { return mInner.brickRanges(); }
+    std::span<const SubBlockCode> subBlockCodes() const override { return mInner.subBlockCodes(); }
+    BrickHandle acquire(int64_t id) override {
+        {
+            std::lock_guard lock(mMutex);
+            mIds.push_back(id);
+        }
+        return mInner.acquire(id);  // released to the inner source, which pins
+    }
+    std::vector<int64_t> ids() const {
+        std::lock_guard lock(mMutex);
+        return mIds;
+    }
+protected:
+    void release(int64_t) override {}
+
+private:
+    BrickSource& mInner;
+    mutable std::mutex mMutex;
+    std::vector<int64_t> mIds;
+};
+
+// The bricks passing tests 1-3 against `culler` as it is, in the tree's front-to-back order.
+std::vector<int64_t> bricksInOrder(const MinMaxTree& tree, const ViewCuller& culler) {
+    std::vector<int64_t> bricks;
+    std::vector<uint32_t> stack{0};
+    while (!stack.empty()) {
+        const uint32_t index = stack.back();
+        stack.pop_back();
+        ScreenBox box;
+        if (!culler.passes(tree, index, box)) continue;
+        if (tree.nodes()[index].isLeaf())
+            bricks.push_back(tree.brickOf(tree.nodes()[index]));
+        else
+            tree.pushChildrenFarFirst(stack, index, culler.eyeInBricks());
+    }
+    return bricks;
+}
+
+struct Scene {
+    std::unique_ptr<test::MemoryBrickSource> memory = test::synthBrickSource({SynthKind::Head, {64, 64, 64}}, 8);
+    RecordingSource source{*memory};
+    MinMaxTree tree{source.layout(), source.brickRanges()};
+    Camera camera = presetCamera(ViewPreset::Normal, source.volume().origin, source.volume().worldMax(), 200, 200);
+    OcclusionPyramid pyramid{200, 200};
+    ViewCuller culler{source, camera, pyramid, kSkin, true};
+    Scene() { fitClipPlanes(camera, source.volume().origin, source.volume().worldMax()); }
+};
+
+// Driven through a whole traversal (nothing drawn, so nothing becomes hidden): the readers get
+// bricks the traversal visits, in its order, each once, never one it has passed.
+TEST(BrickLookAhead, ReadsBricksOfTheTraversalInItsOrderEachOnce) {
+    Scene s;
+    const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
+    ASSERT_GT(order.size(), 10u);
+    std::vector<int64_t> read;
+    {
+        BrickLookAhead ahead(s.source, s.tree, s.culler, 4, 1);
+        for (int64_t b : order) {
+            ahead.beforeAcquire(b);
+            // Let the reader catch up, so the reads show what was handed over when.
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        read = s.source.ids();
+        ahead.stop();
+    }
+    EXPECT_EQ(s.memory->pinned(), 0);  // stop released every pin
+    ASSERT_FALSE(read.empty());
+    size_t at = 0;
+    for (const int64_t b : read) {
+        const auto it = std::find(order.begin() + ptrdiff_t(at), order.end(), b);
+        ASSERT_NE(it, order.end()) << "brick " << b << " read out of order or twice";
+        at = size_t(it - order.begin()) + 1;
+    }
+}
+
+TEST(BrickLookAhead, HiddenBricksAreNotRead) {
+    Scene s;
+    const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
+    ASSERT_GT(order.size(), 10u);
+    BrickLookAhead ahead(s.source, s.tree, s.culler, 16, 1);
+    // The whole image is covered before the look-ahead starts: every brick after the first is
+    // hidden, so nothing is read ahead.
+    for (int y = 0; y < 200; ++y) s.pyramid.coverSpan(y, 0, 199);
+    s.pyramid.propagate();
+    ahead.beforeAcquire(order[0]);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    EXPECT_TRUE(s.source.ids().empty());
+    ahead.stop();
+    EXPECT_EQ(ahead.readUnused(), 0u);
+}
+
+TEST(BrickLookAhead, BricksHiddenAfterTheyWereFoundAreDropped) {
+    Scene s;
+    const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
+    BrickLookAhead ahead(s.source, s.tree, s.culler, 16, 1);
+    ahead.beforeAcquire(order[0]);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const size_t before = s.source.ids().size();
+    // Now everything is covered: bricks found but not handed over are cancelled, and moving on
+    // to the next brick hands nothing more to the readers.
+    for (int y = 0; y < 200; ++y) s.pyramid.coverSpan(y, 0, 199);
+    s.pyramid.propagate();
+    ahead.beforeAcquire(order[1]);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    EXPECT_EQ(s.source.ids().size(), before);
+    ahead.stop();
+}
+
+TEST(BrickLookAhead, DepthZeroReadsNothing) {
+    Scene s;
+    const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
+    BrickLookAhead ahead(s.source, s.tree, s.culler, 0);
+    for (int64_t b : order) ahead.beforeAcquire(b);
+    ahead.stop();
+    EXPECT_TRUE(s.source.ids().empty());
+}
+
+}  // namespace
+}  // namespace vdiso
