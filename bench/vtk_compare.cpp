@@ -11,10 +11,12 @@
 //   vtkFlyingEdges3D           on the whole volume in a vtkImageData, vtkSMPTools on N threads
 //   vtkMarchingCubes           the same volume; serial
 //   vdiso sage VIEW            with --views: SAGE (default options, --threads strips) from the
-//                              view preset at N x N, every brick decoded already (in memory,
-//                              as VTK's volume is)
-//   vdiso sage VIEW from store the same from an empty brick cache each run: bricks read (page
-//                              cache warm) and decoded, as `vdiso extract` does
+//                              view preset at N x N, every brick decoded already and its
+//                              meta-cell ranges kept from the run before (in memory, as VTK's
+//                              volume is, and as a viewer's frames are)
+//   vdiso sage VIEW from store the same from an empty brick cache and no ranges each run:
+//                              bricks read (page cache warm) and decoded, as a first frame of
+//                              `vdiso extract` does
 // vdiso's octree rows use --threads too (default 1).
 // VTK gets the volume fully in memory with the store's scalar type, spacing and origin, and
 // computes normals as vdiso does (no gradients, no scalars), so the work is comparable.
@@ -295,6 +297,8 @@ MethodResult runSage(const BrickStoreReader& store, BrickCache& cache, const Opt
     r.threads = o.threads;
     r.runs = o.repeat;
     std::vector<double> seconds;
+    MetaCellRangeCache kept(size_t(store.layout().brickCount()));
+    if (!fromStore) options.rangeCache = &kept;
     for (int run = 0; run < r.runs; ++run) {
         TriangleMesh mesh;
         PointSet points;

@@ -95,12 +95,17 @@ struct BrickVisit {
     bool whole;
     bool cellTests;  // per-cell tests on and not whole
     glm::dvec3 eyeCell;
+    MetaCellRangeCache::Ranges kept;         // from the options' range cache, if any
+    const std::vector<BrickRange>& ranges;  // of the brick's meta-cells
 
     BrickVisit(ViewTraversal& traversal, int64_t id, const void* samples, bool wholeBrick)
         : t(traversal), brick(id),
           kernel(traversal.mExtractor, id, samples, traversal.mOptions.iso, traversal.mMesh, traversal.mSeams),
           whole(wholeBrick), cellTests(traversal.mOptions.cellTests && !wholeBrick),
-          eyeCell(kernel.eyeInCells(traversal.mCamera.eye)) {}
+          eyeCell(kernel.eyeInCells(traversal.mCamera.eye)),
+          kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(id, traversal.mExtractor, samples)
+                                             : nullptr),
+          ranges(kept ? *kept : traversal.mExtractor.currentRanges()) {}
 
     // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
     bool keepCell(int64_t x, int64_t y, int64_t z) {
@@ -344,7 +349,6 @@ struct BrickVisit {
     // those visited, was slower: the coarser ranges let more boxes through to the screen tests.)
     BrickRange rangeOf(const int lo[3], const int hi[3]) {
         const int n = t.mExtractor.metaCellsPerAxis();
-        const std::vector<BrickRange>& ranges = t.mExtractor.currentRanges();
         BrickRange range{std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
         for (int z = lo[2]; z < hi[2]; ++z)
             for (int y = lo[1]; y < hi[1]; ++y)
@@ -359,7 +363,6 @@ struct BrickVisit {
     // brick's chunk, not scan-converted.
     void extractUnseen(const int lo[3], const int hi[3]) {
         const int n = t.mExtractor.metaCellsPerAxis();
-        const std::vector<BrickRange>& ranges = t.mExtractor.currentRanges();
         AllCells all;
         for (int z = lo[2]; z < hi[2]; ++z)
             for (int y = lo[1]; y < hi[1]; ++y)

@@ -31,6 +31,7 @@
 #include "core/camera.h"
 #include "core/extract_stats.h"
 #include "core/mesh.h"
+#include "core/meta_cell_range_cache.h"
 #include "core/progress.h"
 
 namespace vdiso {
@@ -89,6 +90,9 @@ struct ViewExtractOptions {
     int threads = 1;
     // When set, output goes brick by brick to the stream instead of the mesh and points.
     ViewStream* stream = nullptr;
+    // When set, bricks' meta-cell ranges are kept there from one extraction to the next (frames
+    // of a moving camera over the same source and meta-cell size).
+    MetaCellRangeCache* rangeCache = nullptr;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {

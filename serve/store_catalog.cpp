@@ -76,6 +76,7 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
                           std::to_string(h.valueMin) + ", " + std::to_string(h.valueMax) + "]");
         s.defaultIso = iso ? *iso : s.reader->histogram().otsuThreshold();
         s.cache = std::make_unique<BrickCache>(*s.reader, cacheBytes / paths.size());
+        s.ranges = std::make_unique<MetaCellRangeCache>(s.cache->budgetBytes() / s.reader->brickBytes());
         s.description = describe(s);
         mStores.push_back(std::move(s));
     }

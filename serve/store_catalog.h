@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cache/brick_cache.h"
+#include "core/meta_cell_range_cache.h"
 #include "io/brick_store.h"
 
 namespace vdiso::serve {
@@ -18,6 +19,9 @@ struct ServedStore {
     std::string name;  // the file name without its directory and ".vdiso"
     std::unique_ptr<BrickStoreReader> reader;
     std::unique_ptr<BrickCache> cache;
+    // The meta-cell ranges of its bricks, kept across frames and clients (as many bricks as the
+    // cache holds).
+    std::unique_ptr<MetaCellRangeCache> ranges;
     double defaultIso = 0;  // --iso, else Otsu's threshold of the histogram
     std::string description;  // the store's JSON object in `hello`
 };

@@ -172,6 +172,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
     options.threads = mSettings.threads;
     options.prefetchBricks = mSettings.prefetchBricks;
     options.stream = &stream;
+    options.rangeCache = store.ranges.get();
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;
     ExtractStats stats;

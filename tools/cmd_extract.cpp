@@ -267,7 +267,7 @@ std::string framePath(const std::string& pattern, int frame) {
 JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, BrickCache& cache,
                         const std::optional<Camera>& camera, const std::string& meshPath,
                         const std::string& pngPath, const std::string& pointsPath,
-                        const ProgressFn& progress, std::string& summary) {
+                        MetaCellRangeCache& ranges, const ProgressFn& progress, std::string& summary) {
     const CacheCounters before = cache.counters();
     CachePlan plan;
     try {
@@ -295,6 +295,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         v.prefetchBricks = plan.prefetchBricks;
         v.prefetchReaders = o.readers;
         v.threads = plan.threads;
+        v.rangeCache = &ranges;
         stats = extractViewDependent(cache, *camera, v, mesh, points, progress);
     } else {
         FullExtractOptions extract{*o.iso, o.metaCellSize, plan.threads};
@@ -403,6 +404,8 @@ int runExtract(int argc, char** argv) {
         if (!c.hasClipPlanes()) fitClipPlanes(c, boundsMin, boundsMax);
     const bool path = o.orbitFrames > 0 || !o.pathFile.empty();
 
+    // Meta-cell ranges are kept across the frames of a path, for as many bricks as the cache.
+    MetaCellRangeCache ranges(cache.budgetBytes() / store.brickBytes());
     std::string statsText, summary;
     const ProgressFn progress = progressBar("extract", 0, o.quiet || path);
     const size_t frames = std::max<size_t>(1, cameras.size());
@@ -411,7 +414,7 @@ int runExtract(int argc, char** argv) {
             cameras.empty() ? std::nullopt : std::optional<Camera>(cameras[f]);
         const std::string png = path && !o.pngPath.empty() ? framePath(o.pngPath, int(f)) : o.pngPath;
         JsonObject s = extractFrame(o, store, cache, camera, path ? "" : o.meshPath, png,
-                                    path ? "" : o.pointsPath, progress, summary);
+                                    path ? "" : o.pointsPath, ranges, progress, summary);
         if (path) s.add("frame", int64_t(f));
         else if (camera)
             s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());
