@@ -14,6 +14,7 @@
 // may use one.
 #pragma once
 
+#include <limits>
 #include <optional>
 
 #include <glm/mat4x4.hpp>
@@ -51,21 +52,44 @@ public:
     ScreenBox estimateBox(const glm::dvec3& lo, const glm::dvec3& hi) const;
     // estimateBox(lo, lo + 1): a unit cube (a grid cell, with the grid's map in the matrix),
     // its half-extent terms computed once.
-    ScreenBox estimateUnitBox(const glm::dvec3& lo) const;
+    ScreenBox estimateUnitBox(const glm::dvec3& lo) const {
+        return estimate(lo + 0.5, mUnitX, mUnitY, mUnitW, mUnitNear);
+    }
 
     int width() const { return mWidth; }
     int height() const { return mHeight; }
 
+    static double apply(const glm::dvec4& r, const glm::dvec3& p) { return r.x * p.x + r.y * p.y + r.z * p.z + r.w; }
+    static ScreenBox nearPlaneBox() {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        return {-inf, inf, -inf, inf, true};
+    }
+
 private:
-    ScreenBox fromNdc(double xMin, double xMax, double yMin, double yMax) const;
+    // NDC y points up, pixel y down: the largest NDC y is the top (smallest pixel y).
+    ScreenBox fromNdc(double xMin, double xMax, double yMin, double yMax) const {
+        const double halfW = 0.5 * mWidth, halfH = 0.5 * mHeight;
+        return {(xMin + 1.0) * halfW, (xMax + 1.0) * halfW, (1.0 - yMax) * halfH, (1.0 - yMin) * halfH, false};
+    }
 
     // Rows of the view-projection matrix (clip x, y, w, and z + w: >= 0 in front of the near
     // plane) and their elementwise absolute values for the half extents.
     glm::dvec4 mRowX, mRowY, mRowW, mRowNear;
     glm::dvec3 mAbsX, mAbsY, mAbsW, mAbsNear;
     double mUnitX, mUnitY, mUnitW, mUnitNear;  // |row| . (0.5, 0.5, 0.5)
-    ScreenBox estimate(const glm::dvec3& centre, double dmx, double dmy, double dmw,
-                       double dmNear) const;
+    // Inline: the per-cell test of every visible meta-cell's cells asks for it.
+    ScreenBox estimate(const glm::dvec3& p, double dmx, double dmy, double dmw, double dmNear) const {
+        const double pmw = apply(mRowW, p);
+        // The smallest w and z + w over the corners, exactly: each is linear in the corner.
+        if (!(pmw - dmw > 0.0) || !(apply(mRowNear, p) - dmNear > 0.0)) return nearPlaneBox();
+        const double fNear = 1.0 / (pmw - dmw), fFar = 1.0 / (pmw + dmw);
+        const double pmx = apply(mRowX, p), pmy = apply(mRowY, p);
+        // Fig. 6: a positive numerator is farthest from zero over the smallest w, a negative
+        // one nearest to zero over the largest, and conversely for the minimum.
+        auto over = [](double t, double f1, double f2) { return t > 0.0 ? t * f1 : t * f2; };
+        return fromNdc(over(pmx - dmx, fFar, fNear), over(pmx + dmx, fNear, fFar), over(pmy - dmy, fFar, fNear),
+                       over(pmy + dmy, fNear, fFar));
+    }
     int mWidth, mHeight;
 };
 
