@@ -77,6 +77,12 @@ size_t BrickCache::takeFreeSlot() {
     return slot;
 }
 
+bool BrickCache::isResident(int64_t id) const {
+    std::lock_guard lock(mMutex);
+    const auto found = mSlotOfBrick.find(id);
+    return found != mSlotOfBrick.end() && !mSlots[found->second].loading;
+}
+
 BrickHandle BrickCache::acquire(int64_t id) {
     std::unique_lock lock(mMutex);
     ++mCounters.requests;

@@ -41,6 +41,7 @@ public:
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
     std::span<const SubBlockCode> subBlockCodes() const override;
     BrickHandle acquire(int64_t id) override;
+    bool isResident(int64_t id) const override;
 
     CacheCounters counters() const;
     uint64_t budgetBytes() const { return mSlotCount * mBrickBytes; }

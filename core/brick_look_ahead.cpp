@@ -6,7 +6,7 @@ namespace vdiso {
 
 BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewCuller& culler,
                                size_t depth, int readers)
-    : mTree(tree), mCuller(culler), mDepth(depth), mPrefetcher(source, depth, readers) {
+    : mSource(source), mTree(tree), mCuller(culler), mDepth(depth), mPrefetcher(source, depth, readers) {
     if (mDepth > 0 && !tree.nodes().empty()) mStack.push_back(0);
 }
 
@@ -44,13 +44,13 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     PixelRect current{0, 0, camera.width - 1, camera.height - 1};
     if (!mAhead.empty()) {
         current = mAhead.front().rect;
-        if (mAhead.front().item != kNotPushed) mPrefetcher.consumed(mAhead.front().item);
+        if (pushed(mAhead.front().item)) mPrefetcher.consumed(mAhead.front().item);
         mAhead.pop_front();
     }
     std::erase_if(mAhead, [&](const AheadBrick& ahead) {
         ScreenBox box;
         if (mCuller.passes(mTree, ahead.node, box)) return false;
-        if (ahead.item != kNotPushed) mPrefetcher.cancel(ahead.item);
+        if (pushed(ahead.item)) mPrefetcher.cancel(ahead.item);
         return true;
     });
     while (mAhead.size() < mDepth && findNext()) {
@@ -71,7 +71,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         bool settled = harmless(ahead.rect, current);
         for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, mAhead[j].rect);
         if (!settled && (k >= kNearBricks || mostlyBehind(ahead.rect, current))) break;
-        ahead.item = mPrefetcher.push(ahead.brick);
+        ahead.item = mSource.isResident(ahead.brick) ? kResident : mPrefetcher.push(ahead.brick);
     }
 }
 

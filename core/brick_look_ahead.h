@@ -14,7 +14,9 @@
 // its screen box meets this brick's or any earlier one's, every pixel is covered already, so
 // nothing drawn before its turn can hide it and reading it now cannot be wasted. The next
 // kNearBricks go regardless, so reads keep ahead where boxes overlap, unless most of one's box
-// lies in this brick's (closeups: it is likely behind this one and hidden by it).
+// lies in this brick's (closeups: it is likely behind this one and hidden by it). A brick the
+// source holds in memory already when its turn comes is not handed over (a warm cache would
+// otherwise wake a reader per brick for nothing).
 // One look-ahead per traversal thread.
 #pragma once
 
@@ -47,16 +49,19 @@ public:
 
 private:
     static constexpr size_t kNotPushed = SIZE_MAX;
+    static constexpr size_t kResident = SIZE_MAX - 1;  // in memory when its turn came: not read
+    static bool pushed(size_t item) { return item < kResident; }
     struct AheadBrick {
         uint32_t node;
         int64_t brick;
         PixelRect rect;
-        size_t item = kNotPushed;  // in the prefetcher's list, once handed to it
+        size_t item = kNotPushed;  // in the prefetcher's list, once handed to it (or kResident)
     };
     // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
     bool findNext();
     int64_t pixelsOf(const PixelRect& r) const;
 
+    BrickSource& mSource;
     const MinMaxTree& mTree;
     const ViewCuller& mCuller;
     size_t mDepth;

@@ -61,6 +61,9 @@ public:
     virtual std::span<const SubBlockCode> subBlockCodes() const { return {}; }
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
     virtual BrickHandle acquire(int64_t id) = 0;
+    // Whether acquire(id) would find the brick in memory now (a hint: it may be gone by then).
+    // Readers ahead skip such bricks. False when the source cannot tell.
+    virtual bool isResident(int64_t) const { return false; }
 
 protected:
     friend class BrickHandle;

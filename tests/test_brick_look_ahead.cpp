@@ -37,6 +37,8 @@ public:
         }
         return mInner.acquire(id);  // released to the inner source, which pins
     }
+    bool isResident(int64_t) const override { return resident; }
+    bool resident = false;  // what isResident says of every brick
     std::vector<int64_t> ids() const {
         std::lock_guard lock(mMutex);
         return mIds;
@@ -134,6 +136,18 @@ TEST(BrickLookAhead, BricksHiddenAfterTheyWereFoundAreDropped) {
     ahead.beforeAcquire(order[1]);
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     EXPECT_EQ(s.source.ids().size(), before);
+    ahead.stop();
+}
+
+// Bricks already in memory when their turn comes are not handed to the readers.
+TEST(BrickLookAhead, ResidentBricksAreNotReadAhead) {
+    Scene s;
+    s.source.resident = true;
+    const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
+    BrickLookAhead ahead(s.source, s.tree, s.culler, 8, 1);
+    for (int64_t b : order) ahead.beforeAcquire(b);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_TRUE(s.source.ids().empty());
     ahead.stop();
 }
 
