@@ -292,6 +292,7 @@ MethodResult runSage(const BrickStoreReader& store, BrickCache& cache, const Opt
     fitClipPlanes(camera, volume.origin, volume.worldMax());
     ViewExtractOptions options = ViewExtractOptions::sage(o.iso);
     options.threads = o.threads;
+    options.prefetchBricks = 32;  // vdiso extract's default: reads ahead on 2 reader threads
     MethodResult r;
     r.method = "vdiso sage " + view + (fromStore ? " from store" : "");
     r.threads = o.threads;

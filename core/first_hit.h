@@ -1,86 +1,129 @@
-// Where a pixel's ray first meets the isosurface inside one brick: the position and normal of
-// a SAGE point (§3.3), which stands for the triangles of a sub-pixel box and must shade as they
-// would.
+// Where a pixel's ray first meets the extracted surface inside one brick: the position and
+// normal of a SAGE point (§3.3), which stands for the triangles of a sub-pixel box and must
+// draw as they would.
 //
 // The ray is origin + t * direction (world units), t in [tEnter, tExit], a segment that lies
-// within the kernel's brick. It is marched through the trilinear interpolant in quarter-sample
-// steps; the first sign change is refined by linear interpolation. The normal is minus the
-// gradient there: the kernel's central differences at the cell's corners, interpolated, which
-// is how vertex normals are estimated too. Returns false when the segment does not cross.
+// within the kernel's brick. Its cells are walked front to back (a 3-D DDA); in each crossed
+// cell the ray is intersected with the cell's own marching-cubes triangles (the fan form the
+// mesh has, vertices interpolated as the kernel does), and the first hit wins. The normal is
+// the hit triangle's vertex normals (the kernel's edge normals) interpolated at the hit, as a
+// rasterizer interpolates them at that pixel centre: so a point shades as the triangle drawn
+// there. (Marching the trilinear interpolant and taking its gradient instead shaded 3% of a
+// distant view of the MRI differently from its triangles.) Returns false when no triangle of
+// the segment's cells is hit.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 
 #include "core/brick_kernel.h"
+#include "core/mc_tables.h"
 
 namespace vdiso {
+
+namespace detail {
+
+// Möller-Trumbore: the ray parameter of the hit of p + t d with triangle (a, b, c) and the
+// barycentric weights of b and c there, or false.
+inline bool rayTriangle(const glm::dvec3& p, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
+                        const glm::dvec3& c, double& t, double& u, double& v) {
+    const glm::dvec3 e1 = b - a, e2 = c - a;
+    const glm::dvec3 q = glm::cross(d, e2);
+    const double det = glm::dot(e1, q);
+    if (!(std::abs(det) > 1e-300)) return false;
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = p - a;
+    u = glm::dot(s, q) * inv;
+    if (u < 0.0 || u > 1.0) return false;
+    const glm::dvec3 r = glm::cross(s, e1);
+    v = glm::dot(d, r) * inv;
+    if (v < 0.0 || u + v > 1.0) return false;
+    t = glm::dot(e2, r) * inv;
+    return true;
+}
+
+}  // namespace detail
 
 template <class T>
 bool firstHit(const BrickKernel<T>& kernel, const glm::dvec3& origin, const glm::dvec3& direction,
               double tEnter, double tExit, glm::vec3& position, glm::vec3& normal) {
     const VolumeInfo& volume = kernel.volume();
-    const T* s = kernel.s;
+    // The ray in this brick's cell coordinates (cell (i, j, k) spans [i, i + 1] on each axis).
+    glm::dvec3 p, d;
+    for (int a = 0; a < 3; ++a) {
+        p[a] = (origin[a] - volume.origin[a]) / volume.spacing[a] - double(kernel.corner0[a]);
+        d[a] = direction[a] / volume.spacing[a];
+    }
+    // The DDA over cells from tEnter to tExit.
+    const glm::dvec3 start = p + d * tEnter;
+    int cell[3], step[3];
+    double tNext[3], tDelta[3];
+    for (int a = 0; a < 3; ++a) {
+        cell[a] = std::clamp(int(std::floor(start[a])), 0, kernel.cells[a] - 1);
+        step[a] = d[a] > 0 ? 1 : -1;
+        if (d[a] == 0.0) {
+            tNext[a] = tDelta[a] = std::numeric_limits<double>::infinity();
+        } else {
+            const double boundary = double(cell[a] + (d[a] > 0 ? 1 : 0));
+            tNext[a] = (boundary - p[a]) / d[a];
+            tDelta[a] = std::abs(1.0 / d[a]);
+        }
+    }
     const int side = kernel.side;
-    const size_t dy = size_t(side), dz = size_t(side) * side;
-    // Sample-array coordinates of a world point (ghost offset included).
-    auto toLocal = [&](const glm::dvec3& w) {
-        glm::dvec3 l;
-        for (int a = 0; a < 3; ++a)
-            l[a] = (w[a] - volume.origin[a]) / volume.spacing[a] - double(kernel.corner0[a]) + kGhostBefore;
-        return l;
-    };
-    auto field = [&](const glm::dvec3& l) {
-        int i[3];
-        double f[3];
-        for (int a = 0; a < 3; ++a) {
-            const double x = std::clamp(l[a], 0.0, double(side - 1) - 1e-9);
-            i[a] = std::min(int(x), side - 2);
-            f[a] = x - i[a];
+    const size_t strides[3] = {1, size_t(side), size_t(side) * side};
+    for (int guard = 0; guard < 3 * (kernel.cells[0] + kernel.cells[1] + kernel.cells[2]) + 3; ++guard) {
+        const size_t base = kernel.sampleIndex(cell[0], cell[1], cell[2]);
+        int caseIndex = 0;
+        for (int c = 0; c < 8; ++c) {
+            const int8_t* o = kCornerOffset[c];
+            caseIndex |= int(kernel.threshold.above(kernel.s[base + o[0] * strides[0] + o[1] * strides[1] + o[2] * strides[2]])) << c;
         }
-        const size_t base = (size_t(i[2]) * side + size_t(i[1])) * side + size_t(i[0]);
-        auto at = [&](size_t o) { return double(s[base + o]); };
-        const double x00 = at(0) + f[0] * (at(1) - at(0));
-        const double x10 = at(dy) + f[0] * (at(dy + 1) - at(dy));
-        const double x01 = at(dz) + f[0] * (at(dz + 1) - at(dz));
-        const double x11 = at(dz + dy) + f[0] * (at(dz + dy + 1) - at(dz + dy));
-        const double y0 = x00 + f[1] * (x10 - x00), y1 = x01 + f[1] * (x11 - x01);
-        return y0 + f[2] * (y1 - y0);
-    };
-    const double samples = glm::length(toLocal(origin + direction * tExit) - toLocal(origin + direction * tEnter));
-    const int steps = std::max(2, int(std::ceil(samples * 4)));
-    double tPrevious = tEnter;
-    double previous = field(toLocal(origin + direction * tEnter));
-    for (int k = 1; k <= steps; ++k) {
-        const double t = tEnter + (tExit - tEnter) * k / steps;
-        const double value = field(toLocal(origin + direction * t));
-        if (isAbove(previous, kernel.iso) != isAbove(value, kernel.iso)) {
-            const double u = crossingFraction(previous, value, kernel.iso);
-            const glm::dvec3 w = origin + direction * (tPrevious + u * (t - tPrevious));
-            const glm::dvec3 l = toLocal(w);
-            int i[3];
-            double f[3];
-            for (int a = 0; a < 3; ++a) {
-                const double x = std::clamp(l[a], 1.0, double(side - 2) - 1e-9);
-                i[a] = std::min(int(x), side - 3);
-                f[a] = x - i[a];
+        if (caseIndex != 0 && caseIndex != 255) {
+            const McPolygonCase& pc = mcPolygonCase(caseIndex);
+            double best = std::numeric_limits<double>::infinity();
+            glm::dvec3 bestNormal(0.0);
+            glm::dvec3 at[kMcMaxPolygonVertices];
+            glm::vec3 atNormal[kMcMaxPolygonVertices];
+            for (int poly = 0, first = 0; poly < pc.polygonCount; first += pc.vertexCount[poly++]) {
+                const int count = pc.vertexCount[poly];
+                for (int k = 0; k < count; ++k) {
+                    const int e = pc.edges[first + k];
+                    const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+                    const int axis = mcEdgeAxis(e);
+                    const size_t i0 = kernel.sampleIndex(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
+                    const double t = crossingFraction(double(kernel.s[i0]), double(kernel.s[i0 + strides[axis]]), kernel.iso);
+                    at[k] = glm::dvec3(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
+                    at[k][axis] += t;
+                    atNormal[k] = kernel.edgeNormal(i0, strides[axis], axis);
+                }
+                for (int k = 2; k < count; ++k) {
+                    double t, u, v;
+                    if (detail::rayTriangle(p, d, at[0], at[k - 1], at[k], t, u, v) && t >= tEnter && t <= tExit &&
+                        t < best) {
+                        best = t;
+                        bestNormal = (1.0 - u - v) * glm::dvec3(atNormal[0]) + u * glm::dvec3(atNormal[k - 1]) +
+                                     v * glm::dvec3(atNormal[k]);
+                    }
+                }
             }
-            glm::dvec3 gradient(0.0);
-            for (int corner = 0; corner < 8; ++corner) {
-                const int o[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
-                const size_t at = (size_t(i[2] + o[2]) * side + size_t(i[1] + o[1])) * side + size_t(i[0] + o[0]);
-                const double weight = (o[0] ? f[0] : 1 - f[0]) * (o[1] ? f[1] : 1 - f[1]) * (o[2] ? f[2] : 1 - f[2]);
-                gradient += weight * kernel.gradientAt(at);
+            if (best < std::numeric_limits<double>::infinity()) {
+                const double length = glm::length(bestNormal);
+                position = glm::vec3(origin + direction * best);
+                normal = length > 0 ? glm::vec3(bestNormal / length) : glm::vec3(0.0f);
+                return true;
             }
-            const double length = glm::length(gradient);
-            position = glm::vec3(w);
-            normal = length > 0 ? glm::vec3(-gradient / length) : glm::vec3(0.0f);
-            return true;
         }
-        previous = value;
-        tPrevious = t;
+        // The next cell along the ray, unless the segment ends in this one.
+        int axis = 0;
+        if (tNext[1] < tNext[axis]) axis = 1;
+        if (tNext[2] < tNext[axis]) axis = 2;
+        if (tNext[axis] > tExit) return false;
+        cell[axis] += step[axis];
+        if (cell[axis] < 0 || cell[axis] >= kernel.cells[axis]) return false;
+        tNext[axis] += tDelta[axis];
     }
     return false;
 }
