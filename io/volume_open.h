@@ -11,15 +11,21 @@
 
 namespace vdiso {
 
-enum class InputFormat { Raw, Nrrd, Nifti, Vdb };
+enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff };
 
 struct InputOptions {
     std::optional<RawOptions> raw;  // given: read `path` as raw with these options
     std::string grid;               // OpenVDB grid name (empty: the first float grid)
+    // Replaces the spacing the input states (or lacks: TIFF has none); raw input takes its
+    // spacing from `raw` instead.
+    std::optional<glm::dvec3> spacing;
 };
 
-// Raw when options.raw is set; otherwise from the name: .nrrd/.nhdr, .nii/.nii.gz/.hdr, .vdb.
-// Throws IoError for a name it does not recognise, saying how to read it as raw.
+// Raw when options.raw is set; otherwise from the name: .nrrd/.nhdr, .nii/.nii.gz/.hdr, .vdb,
+// .tif/.tiff; a folder by what it holds (.tif/.tiff files: a TIFF stack); a glob pattern that
+// names no file (quoted on the command line) is a stack of TIFF slices. A file with another
+// name whose bytes start like a TIFF is read as one. Throws IoError for an input it does not
+// recognise, saying how to read it as raw.
 InputFormat detectInputFormat(const std::string& path, const InputOptions& options);
 
 // Opens `path` in its format. Throws IoError naming the file on any problem.

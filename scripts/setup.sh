@@ -13,6 +13,7 @@ packages=(
   chromium                                # the viewer's end-to-end test (headless)
   libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
   clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
+  libtiff-dev                             # TIFF stacks (io/tiff_reader.h)
 )
 
 missing=()

@@ -17,13 +17,16 @@ constexpr const char* kHelp =
     "Converts a volume into a brick store, streaming: memory stays a few slabs whatever the\n"
     "volume's size. The output appears only when complete; a failure leaves none.\n"
     "\n"
-    "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .vdb (OpenVDB);\n"
-    "anything else is raw and needs --dims and --type.\n"
+    "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .vdb (OpenVDB),\n"
+    ".tif .tiff (a multi-page TIFF or BigTIFF); a folder of .tif slices, or a quoted glob such\n"
+    "as 'scan/slice_*.tif' (slices in natural order: slice_2 before slice_10); anything else is\n"
+    "raw and needs --dims and --type.\n"
     "\n"
+    "any input:\n"
+    "  --spacing S | X,Y,Z     sample spacing, replacing the file's (TIFF has none: default 1)\n"
     "raw input:\n"
     "  --dims X,Y,Z            samples per axis (x fastest in the file)\n"
     "  --type T                u8, i16, u16, f32 (also i8, i32, u32, f64: stored as i16/f32)\n"
-    "  --spacing S | X,Y,Z     sample spacing (default 1)\n"
     "  --endian little|big     byte order (default little)\n"
     "  --header-bytes N        bytes to skip before the samples (default 0)\n"
     "OpenVDB input:\n"
@@ -70,7 +73,7 @@ int runConvert(int argc, char** argv) {
             typeGiven = true;
         } else if (a == "--spacing") {
             raw.spacing = parseSpacing(a, args.value(a));
-            rawOnlyGiven = true;
+            input.spacing = raw.spacing;
         } else if (a == "--endian") {
             const std::string e = args.value(a);
             if (e != "little" && e != "big") throw UsageError("--endian expects little or big");
@@ -93,8 +96,8 @@ int runConvert(int argc, char** argv) {
     if (positional.size() != 2) throw UsageError("expects INPUT and OUTPUT");
     if (dimsGiven != typeGiven) throw UsageError("raw input needs both --dims and --type");
     if (rawOnlyGiven && !dimsGiven)
-        throw UsageError("--spacing, --endian and --header-bytes apply to raw input, which "
-                         "needs --dims and --type");
+        throw UsageError("--endian and --header-bytes apply to raw input, which needs --dims "
+                         "and --type");
     if (dimsGiven) input.raw = raw;
     const std::string& inPath = positional[0];
     const std::string& outPath = positional[1];
