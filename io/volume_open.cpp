@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "io/dicom_reader.h"
 #include "io/error.h"
 #include "io/file_list.h"
 #include "io/file_names.h"
@@ -56,11 +57,12 @@ private:
 };
 
 const char* const kKnownInputs =
-    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .vdb, .tif/.tiff, or a folder of TIFF "
-    "slices; for a raw file give --dims and --type";
+    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .vdb, .tif/.tiff, .dcm, a DICOMDIR, or a "
+    "folder of TIFF slices or DICOM files; for a raw file give --dims and --type";
 
 InputFormat detectFolderFormat(const std::string& path) {
     if (!listFolder(path, {".tif", ".tiff"}).empty()) return InputFormat::Tiff;
+    if (looksLikeDicomFolder(path)) return InputFormat::Dicom;
     throwIoError(path, std::string("is a folder holding no volume vdiso reads (") + kKnownInputs +
                            ")");
 }
@@ -76,11 +78,14 @@ InputFormat detectInputFormat(const std::string& path, const InputOptions& optio
     if (endsWithIgnoreCase(path, ".vdb")) return InputFormat::Vdb;
     for (const char* suffix : {".tif", ".tiff", ".btf", ".tf8"})
         if (endsWithIgnoreCase(path, suffix)) return InputFormat::Tiff;
+    for (const char* suffix : {".dcm", ".dicom", ".ima", "/DICOMDIR"})
+        if (endsWithIgnoreCase(path, suffix) || path == "DICOMDIR") return InputFormat::Dicom;
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) return detectFolderFormat(path);
     const bool exists = std::filesystem::exists(path, ec);
     if (!exists && isGlobPattern(path)) return InputFormat::Tiff;
     if (exists && hasTiffMagic(path)) return InputFormat::Tiff;
+    if (exists && hasDicomMagic(path)) return InputFormat::Dicom;
     throwIoError(path, std::string("unknown input format (") + kKnownInputs + ")");
 }
 
@@ -92,17 +97,47 @@ std::unique_ptr<SliceReader> openInFormat(const std::string& path, const InputOp
         case InputFormat::Nrrd: return openNrrdVolume(path);
         case InputFormat::Nifti: return openNiftiVolume(path);
         case InputFormat::Tiff: return openTiffVolume(path);
+        case InputFormat::Dicom: return openDicomVolume(path, options.series);
         case InputFormat::Vdb: break;
     }
     return openVdbVolume(path, options.grid);
 }
 
+std::unique_ptr<SliceReader> withOptions(std::unique_ptr<SliceReader> reader,
+                                         const InputOptions& options) {
+    if (!options.spacing || options.raw) return reader;
+    return std::make_unique<SpacingOverride>(std::move(reader), *options.spacing);
+}
+
+void requireSeriesOnlyForDicom(const std::string& path, InputFormat format,
+                               const InputOptions& options) {
+    if (!options.series.empty() && format != InputFormat::Dicom)
+        throwIoError(path, "is not DICOM: --series applies to DICOM input only");
+}
+
 }  // namespace
 
 std::unique_ptr<SliceReader> openVolume(const std::string& path, const InputOptions& options) {
-    auto reader = openInFormat(path, options);
-    if (!options.spacing || options.raw) return reader;
-    return std::make_unique<SpacingOverride>(std::move(reader), *options.spacing);
+    requireSeriesOnlyForDicom(path, detectInputFormat(path, options), options);
+    return withOptions(openInFormat(path, options), options);
+}
+
+std::unique_ptr<SliceReader> openVolume(const std::vector<std::string>& paths,
+                                        const InputOptions& options) {
+    if (paths.size() == 1) return openVolume(paths.front(), options);
+    if (paths.empty()) throw IoError("no input given");
+    if (options.raw) throwIoError(paths.front(), "raw input is one file, not a list");
+    const InputFormat format = detectInputFormat(paths.front(), options);
+    for (const std::string& p : paths)
+        if (detectInputFormat(p, options) != format)
+            throwIoError(p, "is in another format than " + paths.front() +
+                                ": a list of inputs must be slices of one volume");
+    requireSeriesOnlyForDicom(paths.front(), format, options);
+    if (format == InputFormat::Dicom)
+        return withOptions(openDicomFiles(paths, options.series), options);
+    if (format == InputFormat::Tiff) return withOptions(openTiffSlices(paths), options);
+    throwIoError(paths.front(), "is one volume: only DICOM files and TIFF slices may be given as a "
+                                "list");
 }
 
 std::unique_ptr<SliceReader> openSynthVolume(const SynthParams& params) {

@@ -11,7 +11,7 @@
 
 namespace vdiso {
 
-enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff };
+enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff, Dicom };
 
 struct InputOptions {
     std::optional<RawOptions> raw;  // given: read `path` as raw with these options
@@ -19,17 +19,24 @@ struct InputOptions {
     // Replaces the spacing the input states (or lacks: TIFF has none); raw input takes its
     // spacing from `raw` instead.
     std::optional<glm::dvec3> spacing;
+    std::string series;  // DICOM: the SeriesInstanceUID to read (empty: the only series)
 };
 
 // Raw when options.raw is set; otherwise from the name: .nrrd/.nhdr, .nii/.nii.gz/.hdr, .vdb,
-// .tif/.tiff; a folder by what it holds (.tif/.tiff files: a TIFF stack); a glob pattern that
+// .tif/.tiff, .dcm/.ima or DICOMDIR; a folder by what it holds (.tif/.tiff files: a TIFF stack;
+// DICOM files, in it or its subfolders: a DICOM series); a glob pattern that
 // names no file (quoted on the command line) is a stack of TIFF slices. A file with another
-// name whose bytes start like a TIFF is read as one. Throws IoError for an input it does not
+// name whose bytes start like a TIFF or a DICOM file is read as one. Throws IoError for an input it does not
 // recognise, saying how to read it as raw.
 InputFormat detectInputFormat(const std::string& path, const InputOptions& options);
 
 // Opens `path` in its format. Throws IoError naming the file on any problem.
 std::unique_ptr<SliceReader> openVolume(const std::string& path, const InputOptions& options);
+
+// Opens one input (as openVolume) or a list of files that are each one slice or part of one:
+// DICOM files of a series, or single-page TIFF slices (in the order given).
+std::unique_ptr<SliceReader> openVolume(const std::vector<std::string>& paths,
+                                        const InputOptions& options);
 
 // The synthetic generators of core/synth.h as a source ("synth:head").
 std::unique_ptr<SliceReader> openSynthVolume(const SynthParams& params);

@@ -14,6 +14,7 @@ packages=(
   libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
   clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
   libtiff-dev                             # TIFF stacks (io/tiff_reader.h)
+  libgdcm-dev                             # DICOM series (io/dicom_reader.h)
 )
 
 missing=()
