@@ -8,6 +8,7 @@
 #include "io/error.h"
 #include "io/file_list.h"
 #include "io/file_names.h"
+#include "io/metaimage_reader.h"
 #include "io/nifti_reader.h"
 #include "io/nrrd_reader.h"
 #include "io/tiff_reader.h"
@@ -57,8 +58,8 @@ private:
 };
 
 const char* const kKnownInputs =
-    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .vdb, .tif/.tiff, .dcm, a DICOMDIR, or a "
-    "folder of TIFF slices or DICOM files; for a raw file give --dims and --type";
+    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .mha/.mhd, .vdb, .tif/.tiff, .dcm, a "
+    "DICOMDIR, or a folder of TIFF slices or DICOM files; for a raw file give --dims and --type";
 
 InputFormat detectFolderFormat(const std::string& path) {
     if (!listFolder(path, {".tif", ".tiff"}).empty()) return InputFormat::Tiff;
@@ -76,6 +77,8 @@ InputFormat detectInputFormat(const std::string& path, const InputOptions& optio
     for (const char* suffix : {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"})
         if (endsWithIgnoreCase(path, suffix)) return InputFormat::Nifti;
     if (endsWithIgnoreCase(path, ".vdb")) return InputFormat::Vdb;
+    if (endsWithIgnoreCase(path, ".mha") || endsWithIgnoreCase(path, ".mhd"))
+        return InputFormat::MetaImage;
     for (const char* suffix : {".tif", ".tiff", ".btf", ".tf8"})
         if (endsWithIgnoreCase(path, suffix)) return InputFormat::Tiff;
     for (const char* suffix : {".dcm", ".dicom", ".ima", "/DICOMDIR"})
@@ -98,6 +101,7 @@ std::unique_ptr<SliceReader> openInFormat(const std::string& path, const InputOp
         case InputFormat::Nifti: return openNiftiVolume(path);
         case InputFormat::Tiff: return openTiffVolume(path);
         case InputFormat::Dicom: return openDicomVolume(path, options.series);
+        case InputFormat::MetaImage: return openMetaImageVolume(path);
         case InputFormat::Vdb: break;
     }
     return openVdbVolume(path, options.grid);
