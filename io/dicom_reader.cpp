@@ -2,8 +2,6 @@
 
 #include <gdcmDataSet.h>
 #include <gdcmFile.h>
-#include <gdcmImage.h>
-#include <gdcmImageReader.h>
 #include <gdcmReader.h>
 #include <gdcmSequenceOfItems.h>
 #include <gdcmStringFilter.h>
@@ -20,6 +18,7 @@
 #include <utility>
 
 #include "core/interrupt.h"
+#include "io/dicom_decoder.h"
 #include "io/dicom_series.h"
 #include "io/dicom_structure.h"
 #include "io/error.h"
@@ -252,43 +251,15 @@ public:
 private:
     void readSlice(const DicomHeader& h, unsigned char* dst) {
         checkDicomStructure(h.path, true);  // also when it was sound at open: it may have changed
-        gdcm::ImageReader reader;
-        reader.SetFileName(h.path.c_str());
-        bool ok = false;
-        try {
-            ok = reader.Read();
-        } catch (const std::exception& e) {
-            throwIoError(h.path, std::string("cannot be read as a DICOM image: ") + e.what());
-        }
-        if (!ok)
-            throwIoError(h.path, "cannot be read as a DICOM image (transfer syntax " +
-                                     h.transferSyntax + ")");
-        const gdcm::Image& image = reader.GetImage();
-        const gdcm::PixelFormat& format = image.GetPixelFormat();
-        const size_t sampleBytes = fileScalarSize(h.pixelType);
-        if (image.GetDimension(0) != h.columns || image.GetDimension(1) != h.rows ||
-            (image.GetNumberOfDimensions() > 2 && image.GetDimension(2) != 1) ||
-            format.GetSamplesPerPixel() != 1 || format.GetBitsAllocated() != sampleBytes * 8)
-            throwIoError(h.path, "its pixel data is not the " + std::to_string(h.columns) + " x " +
-                                     std::to_string(h.rows) + " " + fileScalarName(h.pixelType) +
-                                     " image its header describes");
+        DicomPixelRequest request;
+        request.path = h.path;
+        request.transferSyntax = h.transferSyntax;
+        request.rows = h.rows;
+        request.columns = h.columns;
+        request.bitsAllocated = uint32_t(fileScalarSize(h.pixelType) * 8);
         const size_t samples = size_t(h.rows) * h.columns;
-        if (image.GetBufferLength() != samples * sampleBytes)
-            throwIoError(h.path, "its pixel data is " + std::to_string(image.GetBufferLength()) +
-                                     " bytes where " + std::to_string(samples) + " samples need " +
-                                     std::to_string(samples * sampleBytes));
-        mScratch.resize(samples * sampleBytes);
-        bool decoded = false;
-        try {
-            decoded = image.GetBuffer(reinterpret_cast<char*>(mScratch.data()));
-        } catch (const std::exception&) {
-        }
-        if (!decoded) {
-            const gdcm::TransferSyntax& ts = image.GetTransferSyntax();
-            throwIoError(h.path, "its pixel data (transfer syntax " + h.transferSyntax + ", " +
-                                     (ts.GetString() ? ts.GetString() : "unknown") +
-                                     ") cannot be decoded by this GDCM, or is damaged");
-        }
+        mScratch.resize(samples * fileScalarSize(h.pixelType));
+        mDecoder.decode(request, mScratch.data());
         decodeSamples(mScratch.data(), h.pixelType, false, samples, dst, mVolume.info.type,
                       mVolume.scaled, h.slope, h.intercept);
     }
@@ -296,6 +267,7 @@ private:
     std::string mName;
     DicomVolume mVolume;
     std::vector<unsigned char> mScratch;
+    DicomPixelDecoder mDecoder;
     int64_t mNext = 0;
 };
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 
 #include "io/byte_stream.h"
 #include "io/error.h"
@@ -44,6 +45,16 @@ bool hasLongLength(const char vr[2]) {
     return false;
 }
 
+bool isKnownVR(const char vr[2]) {
+    static const char* const kVRs[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT", "FL", "FD",
+                                       "IS", "LO", "LT", "OB", "OD", "OF", "OL", "OV", "OW",
+                                       "PN", "SH", "SL", "SQ", "SS", "ST", "SV", "TM", "UC",
+                                       "UI", "UL", "UN", "UR", "US", "UT", "UV"};
+    for (const char* v : kVRs)
+        if (vr[0] == v[0] && vr[1] == v[1]) return true;
+    return false;
+}
+
 class Walker {
 public:
     Walker(const std::string& path, bool throughPixelData)
@@ -57,14 +68,22 @@ public:
         if (mSize < 132 || !readAt(128, magic, 4) || std::memcmp(magic, "DICM", 4) != 0)
             throwIoError(mPath, "is not a DICOM Part 10 file (no DICM signature at byte 128)");
         DicomStructure s;
-        // The meta header: explicit VR little endian, group 0002 only.
+        // The meta header: explicit VR little endian, group 0002 only. GDCM falls back to its
+        // group length (0002,0000) when the elements do not parse, so that must agree too.
         uint64_t at = 132;
         const Encoding meta;
+        std::optional<uint64_t> groupEnd;
         while (at < mSize) {
             uint16_t group = 0;
             if (!readNumber(at, 2, meta, group) || group != 0x0002) break;
             const Element e = readElement(at, mSize, meta);
             if (e.length == kUndefinedLength) fail(at, e, "has an undefined length in the meta header");
+            if (e.element == 0x0000) {
+                uint32_t length = 0;
+                if (at != 132 || !e.isVR("UL") || e.length != 4 || !readNumber(e.value, 4, meta, length))
+                    fail(at, e, "is not the meta header's group length (UL, first)");
+                groupEnd = e.value + 4 + uint64_t(length);
+            }
             if (e.element == 0x0010) {
                 std::string uid(e.length, '\0');
                 readAt(e.value, uid.data(), e.length);
@@ -73,6 +92,10 @@ public:
             }
             at = e.value + e.length;
         }
+        if (groupEnd && *groupEnd != at)
+            throwIoError(mPath, "its meta header's group length (0002,0000) says it ends at byte " +
+                                    std::to_string(*groupEnd) + ", its elements end at " +
+                                    std::to_string(at));
         if (s.transferSyntax.empty())
             throwIoError(mPath, "its meta header names no transfer syntax (0002,0010)");
         if (s.transferSyntax == "1.2.840.10008.1.2.1.99") return s;  // deflated: GDCM inflates
@@ -117,6 +140,7 @@ private:
         const bool itemTag = e.group == kItemGroup;
         if (enc.explicitVR && !itemTag) {
             readAt(at + 4, e.vr, 2);
+            if (!isKnownVR(e.vr)) fail(at, e, "has an unknown VR");
             if (hasLongLength(e.vr)) {
                 if (at + 12 > end || !readNumber(at + 8, 4, enc, e.length))
                     fail(at, e, "is cut off in its header");
