@@ -8,6 +8,7 @@
 #include "io/error.h"
 #include "io/file_list.h"
 #include "io/file_names.h"
+#include "io/hdf5_reader.h"
 #include "io/metaimage_reader.h"
 #include "io/nifti_reader.h"
 #include "io/nrrd_reader.h"
@@ -58,8 +59,9 @@ private:
 };
 
 const char* const kKnownInputs =
-    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .mha/.mhd, .vdb, .tif/.tiff, .dcm, a "
-    "DICOMDIR, or a folder of TIFF slices or DICOM files; for a raw file give --dims and --type";
+    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .mha/.mhd, .h5[:/dataset], .vdb, "
+    ".tif/.tiff, .dcm, a DICOMDIR, or a folder of TIFF slices or DICOM files; for a raw file give "
+    "--dims and --type";
 
 InputFormat detectFolderFormat(const std::string& path) {
     if (!listFolder(path, {".tif", ".tiff"}).empty()) return InputFormat::Tiff;
@@ -79,6 +81,7 @@ InputFormat detectInputFormat(const std::string& path, const InputOptions& optio
     if (endsWithIgnoreCase(path, ".vdb")) return InputFormat::Vdb;
     if (endsWithIgnoreCase(path, ".mha") || endsWithIgnoreCase(path, ".mhd"))
         return InputFormat::MetaImage;
+    if (splitHdf5Path(path)) return InputFormat::Hdf5;
     for (const char* suffix : {".tif", ".tiff", ".btf", ".tf8"})
         if (endsWithIgnoreCase(path, suffix)) return InputFormat::Tiff;
     for (const char* suffix : {".dcm", ".dicom", ".ima", "/DICOMDIR"})
@@ -102,6 +105,7 @@ std::unique_ptr<SliceReader> openInFormat(const std::string& path, const InputOp
         case InputFormat::Tiff: return openTiffVolume(path);
         case InputFormat::Dicom: return openDicomVolume(path, options.series);
         case InputFormat::MetaImage: return openMetaImageVolume(path);
+        case InputFormat::Hdf5: return openHdf5Volume(path);
         case InputFormat::Vdb: break;
     }
     return openVdbVolume(path, options.grid);

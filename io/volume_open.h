@@ -11,7 +11,7 @@
 
 namespace vdiso {
 
-enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff, Dicom, MetaImage };
+enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff, Dicom, MetaImage, Hdf5 };
 
 struct InputOptions {
     std::optional<RawOptions> raw;  // given: read `path` as raw with these options
@@ -23,7 +23,7 @@ struct InputOptions {
 };
 
 // Raw when options.raw is set; otherwise from the name: .nrrd/.nhdr, .nii/.nii.gz/.hdr, .vdb,
-// .mha/.mhd,
+// .mha/.mhd, .h5/.hdf5 (FILE.h5:/dataset),
 // .tif/.tiff, .dcm/.ima or DICOMDIR; a folder by what it holds (.tif/.tiff files: a TIFF stack;
 // DICOM files, in it or its subfolders: a DICOM series); a glob pattern that
 // names no file (quoted on the command line) is a stack of TIFF slices. A file with another

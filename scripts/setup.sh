@@ -15,6 +15,7 @@ packages=(
   clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
   libtiff-dev                             # TIFF stacks (io/tiff_reader.h)
   libgdcm-dev                             # DICOM series (io/dicom_reader.h)
+  libhdf5-dev                             # HDF5 datasets (io/hdf5_reader.h)
 )
 
 missing=()
