@@ -12,9 +12,9 @@
 // per file, in any transfer syntax this GDCM decodes (uncompressed, deflate, RLE, JPEG baseline
 // and lossless, JPEG-LS, JPEG 2000); one it cannot is refused naming the syntax and the file.
 // Colour, multi-frame (enhanced) files and 12-bit packed pixels are refused with a message
-// saying so. Only headers are read at open; each slice is decoded as it is read (in a helper
-// process, io/dicom_decoder.h says why), so memory is one slice whatever the series' length.
-// GDCM's own diagnostics are silenced: every problem is an IoError naming the file.
+// saying so. Only headers are read at open; each slice is decoded as it is read, so memory is
+// one slice whatever the series' length. GDCM runs in a helper process (io/gdcm_process.h says
+// why) with its diagnostics silenced: every problem is an IoError naming the file.
 #pragma once
 
 #include <memory>
