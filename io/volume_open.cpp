@@ -13,6 +13,7 @@
 #include "io/nifti_reader.h"
 #include "io/nrrd_reader.h"
 #include "io/tiff_reader.h"
+#include "io/zarr_reader.h"
 #include "io/vdb_reader.h"
 
 namespace vdiso {
@@ -60,10 +61,11 @@ private:
 
 const char* const kKnownInputs =
     "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .mha/.mhd, .h5[:/dataset], .vdb, "
-    ".tif/.tiff, .dcm, a DICOMDIR, or a folder of TIFF slices or DICOM files; for a raw file give "
-    "--dims and --type";
+    ".tif/.tiff, .dcm, a DICOMDIR, a Zarr or OME-Zarr folder, or a folder of TIFF slices or "
+    "DICOM files; for a raw file give --dims and --type";
 
 InputFormat detectFolderFormat(const std::string& path) {
+    if (looksLikeZarr(path)) return InputFormat::Zarr;
     if (!listFolder(path, {".tif", ".tiff"}).empty()) return InputFormat::Tiff;
     if (looksLikeDicomFolder(path)) return InputFormat::Dicom;
     throwIoError(path, std::string("is a folder holding no volume vdiso reads (") + kKnownInputs +
@@ -106,6 +108,7 @@ std::unique_ptr<SliceReader> openInFormat(const std::string& path, const InputOp
         case InputFormat::Dicom: return openDicomVolume(path, options.series);
         case InputFormat::MetaImage: return openMetaImageVolume(path);
         case InputFormat::Hdf5: return openHdf5Volume(path);
+        case InputFormat::Zarr: return openZarrVolume(path, options.scaleLevel);
         case InputFormat::Vdb: break;
     }
     return openVdbVolume(path, options.grid);
@@ -117,16 +120,18 @@ std::unique_ptr<SliceReader> withOptions(std::unique_ptr<SliceReader> reader,
     return std::make_unique<SpacingOverride>(std::move(reader), *options.spacing);
 }
 
-void requireSeriesOnlyForDicom(const std::string& path, InputFormat format,
+void requireFormatOptions(const std::string& path, InputFormat format,
                                const InputOptions& options) {
     if (!options.series.empty() && format != InputFormat::Dicom)
         throwIoError(path, "is not DICOM: --series applies to DICOM input only");
+    if (options.scaleLevel != 0 && format != InputFormat::Zarr)
+        throwIoError(path, "is not Zarr: --scale-level applies to OME-Zarr input only");
 }
 
 }  // namespace
 
 std::unique_ptr<SliceReader> openVolume(const std::string& path, const InputOptions& options) {
-    requireSeriesOnlyForDicom(path, detectInputFormat(path, options), options);
+    requireFormatOptions(path, detectInputFormat(path, options), options);
     return withOptions(openInFormat(path, options), options);
 }
 
@@ -140,7 +145,7 @@ std::unique_ptr<SliceReader> openVolume(const std::vector<std::string>& paths,
         if (detectInputFormat(p, options) != format)
             throwIoError(p, "is in another format than " + paths.front() +
                                 ": a list of inputs must be slices of one volume");
-    requireSeriesOnlyForDicom(paths.front(), format, options);
+    requireFormatOptions(paths.front(), format, options);
     if (format == InputFormat::Dicom)
         return withOptions(openDicomFiles(paths, options.series), options);
     if (format == InputFormat::Tiff) return withOptions(openTiffSlices(paths), options);

@@ -11,7 +11,7 @@
 
 namespace vdiso {
 
-enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff, Dicom, MetaImage, Hdf5 };
+enum class InputFormat { Raw, Nrrd, Nifti, Vdb, Tiff, Dicom, MetaImage, Hdf5, Zarr };
 
 struct InputOptions {
     std::optional<RawOptions> raw;  // given: read `path` as raw with these options
@@ -20,12 +20,14 @@ struct InputOptions {
     // spacing from `raw` instead.
     std::optional<glm::dvec3> spacing;
     std::string series;  // DICOM: the SeriesInstanceUID to read (empty: the only series)
+    int scaleLevel = 0;  // OME-Zarr: the multiscales level to read (0: the finest)
 };
 
 // Raw when options.raw is set; otherwise from the name: .nrrd/.nhdr, .nii/.nii.gz/.hdr, .vdb,
 // .mha/.mhd, .h5/.hdf5 (FILE.h5:/dataset),
-// .tif/.tiff, .dcm/.ima or DICOMDIR; a folder by what it holds (.tif/.tiff files: a TIFF stack;
-// DICOM files, in it or its subfolders: a DICOM series); a glob pattern that
+// .tif/.tiff, .dcm/.ima or DICOMDIR; a folder by what it holds (Zarr metadata: a Zarr array or
+// OME-Zarr image; .tif/.tiff files: a TIFF stack; DICOM files, in it or its subfolders: a DICOM
+// series); a glob pattern that
 // names no file (quoted on the command line) is a stack of TIFF slices. A file with another
 // name whose bytes start like a TIFF or a DICOM file is read as one. Throws IoError for an input it does not
 // recognise, saying how to read it as raw.

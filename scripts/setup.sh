@@ -16,6 +16,7 @@ packages=(
   libtiff-dev                             # TIFF stacks (io/tiff_reader.h)
   libgdcm-dev                             # DICOM series (io/dicom_reader.h)
   libhdf5-dev                             # HDF5 datasets (io/hdf5_reader.h)
+  libblosc-dev                            # Zarr chunks (io/zarr_array.h)
 )
 
 missing=()

@@ -20,7 +20,7 @@ constexpr const char* kHelp =
     "\n"
     "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .mha .mhd\n"
     "(MetaImage), .h5 .hdf5 (HDF5: FILE.h5:/path/to/dataset, or the file if it holds one 3-D\n"
-    "dataset), .vdb (OpenVDB),\n"
+    "dataset), .vdb (OpenVDB), a Zarr array or OME-Zarr image folder (v2 or v3),\n"
     ".tif .tiff (a multi-page TIFF or BigTIFF); a folder of .tif slices, or a quoted glob such\n"
     "as 'scan/slice_*.tif' (slices in natural order: slice_2 before slice_10); DICOM: a folder\n"
     "(with its subfolders), a DICOMDIR, one .dcm file (its series) or a list of files; anything\n"
@@ -36,6 +36,9 @@ constexpr const char* kHelp =
     "DICOM input:\n"
     "  --series UID            the series to convert, when the input holds several (the error\n"
     "                          lists them)\n"
+    "OME-Zarr input:\n"
+    "  --scale-level N         the multiscales level to read (default 0, the finest); named\n"
+    "                          so because --level is the store's zstd level\n"
     "OpenVDB input:\n"
     "  --grid NAME             the float grid to convert (default: the first)\n"
     "other:\n"
@@ -91,6 +94,8 @@ int runConvert(int argc, char** argv) {
             rawOnlyGiven = true;
         } else if (a == "--series") {
             input.series = args.value(a);
+        } else if (a == "--scale-level") {
+            input.scaleLevel = int(parseInt(a, args.value(a), 0, 64));
         } else if (a == "--grid") {
             input.grid = args.value(a);
         } else if (takeStoreWriteOption(a, args, store)) {
