@@ -9,8 +9,9 @@
 //
 // The child is forked at the first request and serves requests over a socket until the object
 // goes; if it dies, the request fails with an IoError naming the file and how the child ended,
-// and the next request starts a new child. The cost: one fork, and one copy of each slice's
-// samples through the socket. Not thread-safe: one reader, one process.
+// and the next request starts a new child. Its data memory is bounded (1 GiB more than at the
+// fork), since GDCM allocates what a file's lengths claim. The cost: one fork, and one copy of
+// each slice's samples through the socket. Not thread-safe: one reader, one process.
 #pragma once
 
 #include <sys/types.h>
