@@ -185,14 +185,16 @@ ZarrArrayMeta parseZarrArrayMeta(const std::string& text, int format, const std:
     if (!j.is_object()) throwIoError(where, "is not a JSON object");
     ZarrArrayMeta m;
     m.format = format;
+    // Compared as JSON, not converted: nlohmann converts a float to int unchecked (3e93 was
+    // undefined behaviour, found by fuzz_zarr).
+    const auto version = j.find("zarr_format");
+    if (version == j.end() || !version->is_number_integer() || *version != format)
+        throwIoError(where, "zarr_format is not " + std::to_string(format));
     try {
-        if (format == 2) {
-            if (j.value("zarr_format", 0) != 2) throwIoError(where, "zarr_format is not 2");
+        if (format == 2)
             parseV2(j, m, where);
-        } else {
-            if (j.value("zarr_format", 0) != 3) throwIoError(where, "zarr_format is not 3");
+        else
             parseV3(j, m, where);
-        }
     } catch (const json::exception& e) {
         throwIoError(where, std::string("has a field of the wrong kind: ") + e.what());
     }

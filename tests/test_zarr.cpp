@@ -285,6 +285,8 @@ TEST_F(ZarrErrors, UnsupportedAndMalformedMetadataAreNamed) {
         {R"({"zarr_format": 2, "shape": "big"})", "not an array"},
         {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "fill_value": "0x7fc00000"})", "fill_value"},
         {R"({"zarr_format": 2, "shape": [9, 10, 13], )", "not valid JSON"},
+        // fuzz_zarr's finding, literally: a float zarr_format was converted to int unchecked.
+        {R"({"zarr_format": 3333333333333333333333333333333333333333333333333333333333333333333333333333333333333333333332, "shape": [4, 6, 8], "chunks": [2, 4, 4], "dtype": "<u1", "cofilters": null})", "zarr_format is not 2"},
     };
     for (const auto& [json, part] : cases) {
         SCOPED_TRACE(part);
