@@ -10,12 +10,6 @@
 #include <gdcmTrace.h>
 #include <gdcmTransferSyntax.h>
 
-#include <fcntl.h>
-#include <sys/resource.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -28,108 +22,12 @@
 #include <string_view>
 
 #include "io/error.h"
-
-#if defined(__SANITIZE_ADDRESS__)
-#define VDISO_GDCM_HAS_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define VDISO_GDCM_HAS_ASAN 1
-#endif
-#endif
-#ifndef VDISO_GDCM_HAS_ASAN
-#define VDISO_GDCM_HAS_ASAN 0
-#endif
+#include "io/helper_process.h"
 
 namespace vdiso {
 namespace {
 
-bool sendAll(int fd, const void* data, size_t n) {
-    const auto* p = static_cast<const char*>(data);
-    while (n > 0) {
-        const ssize_t sent = ::send(fd, p, n, MSG_NOSIGNAL);  // a dead peer: an error, no SIGPIPE
-        if (sent < 0 && errno == EINTR) continue;
-        if (sent <= 0) return false;
-        p += sent;
-        n -= size_t(sent);
-    }
-    return true;
-}
-
-bool receiveAll(int fd, void* data, size_t n) {
-    auto* p = static_cast<char*>(data);
-    while (n > 0) {
-        const ssize_t got = ::recv(fd, p, n, 0);
-        if (got < 0 && errno == EINTR) continue;
-        if (got <= 0) return false;
-        p += got;
-        n -= size_t(got);
-    }
-    return true;
-}
-
-// Messages between the processes: fixed-size numbers and length-prefixed strings, in the
-// order written (both ends are this program on this machine).
-class Writer {
-public:
-    template <class T>
-    Writer& put(const T& v) {
-        static_assert(std::is_trivially_copyable_v<T>);
-        mBytes.append(reinterpret_cast<const char*>(&v), sizeof(T));
-        return *this;
-    }
-    Writer& put(const std::string& s) {
-        put(uint64_t(s.size()));
-        mBytes += s;
-        return *this;
-    }
-    template <class T>
-    Writer& put(const std::optional<T>& v) {
-        put(uint8_t(v.has_value()));
-        if (v) put(*v);
-        return *this;
-    }
-    const std::string& bytes() const { return mBytes; }
-
-private:
-    std::string mBytes;
-};
-
-class Reader {
-public:
-    explicit Reader(const std::string& bytes) : mBytes(bytes) {}
-    template <class T>
-    void get(T& v) {
-        static_assert(std::is_trivially_copyable_v<T>);
-        need(sizeof(T));
-        std::memcpy(&v, mBytes.data() + mAt, sizeof(T));
-        mAt += sizeof(T);
-    }
-    void get(std::string& s) {
-        uint64_t n = 0;
-        get(n);
-        need(n);
-        s.assign(mBytes.data() + mAt, size_t(n));
-        mAt += size_t(n);
-    }
-    template <class T>
-    void get(std::optional<T>& v) {
-        uint8_t has = 0;
-        get(has);
-        if (!has) return v.reset();
-        T x{};
-        get(x);
-        v = x;
-    }
-
-private:
-    void need(uint64_t n) const {
-        if (n > mBytes.size() - mAt) throw std::runtime_error("GDCM helper: a short message");
-    }
-    const std::string& mBytes;
-    size_t mAt = 0;
-};
-
-void putHeader(Writer& w, const DicomHeader& h) {
+void putHeader(WireWriter& w, const DicomHeader& h) {
     w.put(h.seriesUid).put(h.seriesDescription).put(h.modality).put(h.transferSyntax);
     w.put(h.rows).put(h.columns).put(uint8_t(h.pixelType)).put(int32_t(h.bitsStored));
     w.put(h.position).put(h.orientation).put(h.pixelSpacing).put(h.sliceSpacing);
@@ -137,7 +35,7 @@ void putHeader(Writer& w, const DicomHeader& h) {
 }
 
 DicomHeader getHeader(const std::string& bytes, const std::string& path) {
-    Reader r(bytes);
+    WireReader r(bytes);
     DicomHeader h;
     h.path = path;
     uint8_t type = 0;
@@ -342,44 +240,18 @@ std::string decodeHere(const std::string& path, const DicomHeader& h, std::strin
 
 // The helper's loop. A request: kind ('H' header, 'D' DICOMDIR, 'P' pixels), path, body. A
 // reply: status (0 ok, 1 error message, 2 none) and body. Ends when the socket closes.
-// The helper's data memory now, from /proc/self/status (VmData, in kB); 0 if unknown.
-uint64_t dataBytes() {
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line))
-        if (line.rfind("VmData:", 0) == 0) return std::strtoull(line.c_str() + 7, nullptr, 10) * 1024;
-    return 0;
-}
-
-[[noreturn]] void serve(int fd) {
-    // A fatal signal ends the helper as the signal would, whatever handlers vdiso (or a fuzzer)
-    // installed: the parent reports it.
-    for (int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGILL, SIGFPE}) std::signal(sig, SIG_DFL);
-#if !VDISO_GDCM_HAS_ASAN
-    // GDCM's assertions print before they abort; the parent says what happened instead. (Under
-    // AddressSanitizer the helper's reports are kept.)
-    const int devNull = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
-    if (devNull >= 0) ::dup2(devNull, STDERR_FILENO);
-    // GDCM allocates what a file's lengths say before reading it; a bound on the helper's data
-    // makes a hostile length a failed allocation (an error naming the file), not gigabytes
-    // taken from the machine. (AddressSanitizer's shadow memory rules this out under ASan.)
-    const uint64_t have = dataBytes();
-    if (have > 0) {
-        const rlimit limit{rlim_t(have + (uint64_t(1) << 30)), rlim_t(have + (uint64_t(1) << 30))};
-        ::setrlimit(RLIMIT_DATA, &limit);
-    }
-#endif
+void serve(int fd) {
     gdcm::Trace::SetDebug(false);
     gdcm::Trace::SetWarning(false);
     gdcm::Trace::SetError(false);
     for (;;) {
         char kind = 0;
         uint64_t sizes[2] = {0, 0};
-        if (!receiveAll(fd, &kind, 1) || !receiveAll(fd, sizes, sizeof(sizes))) ::_exit(0);
+        if (!receiveAll(fd, &kind, 1) || !receiveAll(fd, sizes, sizeof(sizes))) return;
         std::string path(size_t(sizes[0]), '\0'), request(size_t(sizes[1]), '\0');
         if (!receiveAll(fd, path.data(), path.size()) ||
             !receiveAll(fd, request.data(), request.size()))
-            ::_exit(0);
+            return;
         uint8_t status = 0;
         std::string body;
         try {
@@ -387,12 +259,12 @@ uint64_t dataBytes() {
                 const std::optional<DicomHeader> h = readHeaderHere(path);
                 if (!h) status = 2;
                 else {
-                    Writer w;
+                    WireWriter w;
                     putHeader(w, *h);
                     body = w.bytes();
                 }
             } else if (kind == 'D') {
-                Writer w;
+                WireWriter w;
                 const std::vector<std::string> files = dicomdirFilesHere(path);
                 w.put(uint64_t(files.size()));
                 for (const std::string& f : files) w.put(f);
@@ -413,81 +285,38 @@ uint64_t dataBytes() {
             status = 1;
             body = std::string("GDCM failed on it: ") + e.what();
         }
-        const uint64_t size = body.size();
-        if (!sendAll(fd, &status, 1) || !sendAll(fd, &size, sizeof(size)) ||
-            !sendAll(fd, body.data(), body.size()))
-            ::_exit(0);
+        if (!sendReply(fd, status, body)) return;
     }
 }
 
 }  // namespace
 
-GdcmProcess::~GdcmProcess() {
-    if (mSocket >= 0) ::close(mSocket);  // the helper sees the end and exits
-    if (mChild > 0) {
-        int status = 0;
-        while (::waitpid(mChild, &status, 0) < 0 && errno == EINTR) {
-        }
-    }
-}
-
-void GdcmProcess::start() {
-    int fds[2];
-    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
-        throwSystemError("GDCM helper", "cannot create its socket", errno);
-    const pid_t pid = ::fork();
-    if (pid < 0) {
-        const int e = errno;
-        ::close(fds[0]);
-        ::close(fds[1]);
-        throwSystemError("GDCM helper", "cannot start its process", e);
-    }
-    if (pid == 0) {
-        ::close(fds[0]);
-        serve(fds[1]);
-    }
-    ::close(fds[1]);
-    mSocket = fds[0];
-    mChild = pid;
-}
-
-void GdcmProcess::childDied(const std::string& path) {
-    ::close(mSocket);
-    mSocket = -1;
-    int status = 0;
-    while (::waitpid(mChild, &status, 0) < 0 && errno == EINTR) {
-    }
-    mChild = -1;
-    const std::string how = WIFSIGNALED(status)
-                                ? "was ended by signal " + std::to_string(WTERMSIG(status)) +
-                                      (WTERMSIG(status) == SIGABRT ? " (an assertion)" : "")
-                                : "exited";
-    throwIoError(path, "GDCM " + how + " reading it: the file is damaged or in a form GDCM "
-                       "cannot handle");
-}
-
 int GdcmProcess::call(char kind, const std::string& path, const std::string& request,
                       std::string& body, void* dst, size_t dstBytes) {
-    if (mChild < 0) start();
+    if (!mHelper.running()) mHelper.start(path, serve);
+    const int fd = mHelper.socket();
     const uint64_t sizes[2] = {path.size(), request.size()};
     uint8_t status = 0;
-    uint64_t size = 0;
-    if (!sendAll(mSocket, &kind, 1) || !sendAll(mSocket, sizes, sizeof(sizes)) ||
-        !sendAll(mSocket, path.data(), path.size()) ||
-        !sendAll(mSocket, request.data(), request.size()) || !receiveAll(mSocket, &status, 1) ||
-        !receiveAll(mSocket, &size, sizeof(size)))
-        childDied(path);
-    if (status == 0 && dst) {
-        if (size != dstBytes) {
-            // Cannot happen with this program at both ends; said rather than assumed.
-            childDied(path);
+    bool ok = sendAll(fd, &kind, 1) && sendAll(fd, sizes, sizeof(sizes)) &&
+              sendAll(fd, path.data(), path.size()) && sendAll(fd, request.data(), request.size());
+    if (ok && dst) {
+        // Pixels arrive straight into dst: a status, a length that must be dstBytes, the samples.
+        uint64_t size = 0;
+        ok = receiveAll(fd, &status, 1) && receiveAll(fd, &size, sizeof(size));
+        if (ok && status == 0) {
+            if (size == dstBytes && receiveAll(fd, dst, dstBytes)) return 0;
+            ok = false;
+        } else if (ok) {
+            ok = size < (uint64_t(1) << 20);
+            body.resize(ok ? size_t(size) : 0);
+            ok = ok && receiveAll(fd, body.data(), body.size());
         }
-        if (!receiveAll(mSocket, dst, dstBytes)) childDied(path);
-        return 0;
+    } else if (ok) {
+        ok = receiveReply(fd, status, body);
     }
-    if (size > (uint64_t(1) << 32)) childDied(path);
-    body.resize(size_t(size));
-    if (!receiveAll(mSocket, body.data(), body.size())) childDied(path);
+    if (!ok)
+        throwIoError(path, "GDCM " + mHelper.reap() +
+                               " reading it: the file is damaged or in a form GDCM cannot handle");
     if (status == 1) throwIoError(path, body);
     return status;
 }
@@ -501,7 +330,7 @@ std::optional<DicomHeader> GdcmProcess::readHeader(const std::string& path) {
 std::vector<std::string> GdcmProcess::dicomdirFiles(const std::string& path) {
     std::string body;
     call('D', path, "", body);
-    Reader r(body);
+    WireReader r(body);
     uint64_t n = 0;
     r.get(n);
     std::vector<std::string> files;
@@ -514,7 +343,7 @@ std::vector<std::string> GdcmProcess::dicomdirFiles(const std::string& path) {
 }
 
 void GdcmProcess::decodePixels(const DicomHeader& h, void* dst) {
-    Writer w;
+    WireWriter w;
     putHeader(w, h);
     std::string body;
     call('P', h.path, w.bytes(), body, dst, size_t(h.rows) * h.columns * fileScalarSize(h.pixelType));

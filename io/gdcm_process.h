@@ -1,5 +1,6 @@
-// GDCM in a helper process: every call into GDCM (headers, DICOMDIR records, pixel data) runs
-// in a child process, so that GDCM failing on a file refuses that file and leaves vdiso running.
+// GDCM in a helper process (io/helper_process.h): every call into GDCM (headers, DICOMDIR
+// records, pixel data) runs in a child process, so that GDCM failing on a file refuses that file
+// and leaves vdiso running.
 //
 // Why: Debian builds GDCM with its assertions on, and they fire on damaged input. fuzz_dicom
 // found aborts in gdcm::ReadExplicitDataElement (meta header), gdcm::BasicOffsetTable::Read
@@ -9,12 +10,10 @@
 //
 // The child is forked at the first request and serves requests over a socket until the object
 // goes; if it dies, the request fails with an IoError naming the file and how the child ended,
-// and the next request starts a new child. Its data memory is bounded (1 GiB more than at the
+// and the next request starts a new child. Its data memory stays bounded (1 GiB more than at the
 // fork), since GDCM allocates what a file's lengths claim. The cost: one fork, and one copy of
 // each slice's samples through the socket. Not thread-safe: one reader, one process.
 #pragma once
-
-#include <sys/types.h>
 
 #include <cstdint>
 #include <optional>
@@ -22,13 +21,13 @@
 #include <vector>
 
 #include "io/dicom_series.h"
+#include "io/helper_process.h"
 
 namespace vdiso {
 
 class GdcmProcess {
 public:
     GdcmProcess() = default;
-    ~GdcmProcess();
     GdcmProcess(const GdcmProcess&) = delete;
     GdcmProcess& operator=(const GdcmProcess&) = delete;
 
@@ -51,10 +50,7 @@ private:
     // if the child died. A pixel reply's body goes to `dst` when given.
     int call(char kind, const std::string& path, const std::string& request, std::string& body,
              void* dst = nullptr, size_t dstBytes = 0);
-    void start();
-    [[noreturn]] void childDied(const std::string& path);
-    int mSocket = -1;
-    pid_t mChild = -1;
+    HelperProcess mHelper;
 };
 
 }  // namespace vdiso

@@ -10,9 +10,11 @@
 // Spacing: 1, or the dataset's "element_size_um" attribute (z, y, x) as Fiji and ilastik
 // write it; --spacing overrides either.
 //
-// Streaming: z-slices are read as hyperslabs, a slab at a time; for chunked data the chunk
-// cache holds one layer of chunks, so each chunk is decoded once. HDF5's own error printing is
-// turned off; its innermost message becomes part of the IoError.
+// Streaming: z-slices are read as hyperslabs; for chunked data the chunk cache holds one layer of
+// chunks, so each chunk is decoded once. HDF5's own error printing is turned off; its innermost
+// message becomes part of the IoError. libhdf5 runs in a helper process (io/isolated_reader.h):
+// it allocates and fills what a damaged file's metadata claims, so a hostile file must not cost
+// vdiso its memory.
 #pragma once
 
 #include <memory>

@@ -201,6 +201,25 @@ TEST_F(Hdf5Errors, PathsThatAreNotA3DDatasetAreNamed) {
     expectIoError([&] { openHdf5Volume(path("two.h5")); }, {"several 3-D datasets", "/other", "/volume"});
 }
 
+// fuzz_hdf5's finding, literally (hex): a superblock that makes libhdf5 1.10.8 allocate and fill
+// 4 GB in H5F__super_read. libhdf5 now runs in a helper process whose memory is bounded while it
+// opens a file: the file is refused by name, and this process does not grow.
+const char* const kHugeSuperblock =
+    "894844460d0a1a0a000000000008080004001000000000270000000000000000ffff008048440000000000000000"
+    "00004600000000000000000008080004001000000000270000000000000000ffff00804844000000000000000000"
+    "0046000000";
+
+TEST_F(Hdf5Errors, HugeSuperblockIsRefusedWithoutTheMemory) {
+    std::string bytes;
+    for (size_t i = 0; kHugeSuperblock[i] && kHugeSuperblock[i + 1]; i += 2)
+        bytes += char(std::stoi(std::string(kHugeSuperblock + i, 2), nullptr, 16));
+    const std::string p = write("huge.h5", bytes);
+    const auto r = test::runVdiso("convert " + p + " " + path("huge.vdiso"));
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find(p + ": "), std::string::npos) << r.output;
+    expectIoError([&] { openHdf5Dataset(p, ""); }, {p});
+}
+
 // Every truncation of a small chunked file is refused by name.
 TEST_F(Hdf5Errors, EveryTruncation) {
     hid_t f = create("t.h5");
