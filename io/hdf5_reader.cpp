@@ -338,13 +338,15 @@ std::unique_ptr<SliceReader> openDatasetHere(const std::string& file, const std:
     requireVolumeDims(where, info.dims);
     info.type = storeTypeFor(*shape.type, false);
     if (const auto spacing = elementSize(d.get())) info.spacing = *spacing;
-    // Reopened with a chunk cache that holds a layer of chunks.
+    // Reopened with a chunk cache that holds a layer of chunks. Closed first: a dataset opened
+    // twice shares one object, whose cache is the one its first opening made (1 MiB), and
+    // reading 64^3 chunks slice by slice through that ran at 5 MB/s.
     Handle dapl(H5Pcreate(H5P_DATASET_ACCESS), H5Pclose);
     if (dapl.valid()) {
         sizeChunkCache(dcpl.get(), dapl.get(), shape);
-        Handle cached(H5Dopen2(f.get(), name.c_str(), dapl.get()), H5Dclose);
-        if (cached.valid()) d = std::move(cached);
-        H5Eclear2(H5E_DEFAULT);
+        d = Handle(-1, H5Dclose);
+        d = Handle(H5Dopen2(f.get(), name.c_str(), dapl.get()), H5Dclose);
+        if (!d.valid()) throwIoError(where, "cannot be reopened: " + hdf5Message());
     }
     return std::make_unique<Hdf5SliceReader>(where, file, std::move(f), std::move(d), info,
                                              *shape.type);
