@@ -229,7 +229,7 @@ TEST_F(Hdf5Errors, EveryTruncation) {
     addDataset(f, s, test::incompressibleU16Values());
     H5Fclose(f);
     const std::vector<unsigned char> bytes = test::readFile(path("t.h5"));
-    for (size_t n = 0; n < bytes.size(); n += 11) {
+    for (size_t n = 0; n < bytes.size(); n += 29) {  // a helper process per open: every 29th
         SCOPED_TRACE(n);
         test::writeFile(path("cut.h5"), bytes.data(), n);
         try {
