@@ -1,11 +1,19 @@
 #include "io/volume_open.h"
 
+#include <filesystem>
 #include <stdexcept>
+#include <utility>
 
+#include "io/dicom_reader.h"
 #include "io/error.h"
+#include "io/file_list.h"
 #include "io/file_names.h"
+#include "io/hdf5_reader.h"
+#include "io/metaimage_reader.h"
 #include "io/nifti_reader.h"
 #include "io/nrrd_reader.h"
+#include "io/tiff_reader.h"
+#include "io/zarr_reader.h"
 #include "io/vdb_reader.h"
 
 namespace vdiso {
@@ -33,6 +41,37 @@ private:
     int64_t mNextZ = 0;
 };
 
+// A reader whose spacing is the user's (--spacing), not the file's.
+class SpacingOverride final : public SliceReader {
+public:
+    SpacingOverride(std::unique_ptr<SliceReader> inner, const glm::dvec3& spacing)
+        : mInner(std::move(inner)), mInfo(mInner->info()) {
+        mInfo.spacing = spacing;
+    }
+    const VolumeInfo& info() const override { return mInfo; }
+    void read(void* dst, int64_t count) override { mInner->read(dst, count); }
+    void finish() override { mInner->finish(); }
+    std::string name() const override { return mInner->name(); }
+    std::vector<std::string> files() const override { return mInner->files(); }
+
+private:
+    std::unique_ptr<SliceReader> mInner;
+    VolumeInfo mInfo;
+};
+
+const char* const kKnownInputs =
+    "expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img, .mha/.mhd, .h5[:/dataset], .vdb, "
+    ".tif/.tiff, .dcm, a DICOMDIR, a Zarr or OME-Zarr folder, or a folder of TIFF slices or "
+    "DICOM files; for a raw file give --dims and --type";
+
+InputFormat detectFolderFormat(const std::string& path) {
+    if (looksLikeZarr(path)) return InputFormat::Zarr;
+    if (!listFolder(path, {".tif", ".tiff"}).empty()) return InputFormat::Tiff;
+    if (looksLikeDicomFolder(path)) return InputFormat::Dicom;
+    throwIoError(path, std::string("is a folder holding no volume vdiso reads (") + kKnownInputs +
+                           ")");
+}
+
 }  // namespace
 
 InputFormat detectInputFormat(const std::string& path, const InputOptions& options) {
@@ -42,18 +81,76 @@ InputFormat detectInputFormat(const std::string& path, const InputOptions& optio
     for (const char* suffix : {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz"})
         if (endsWithIgnoreCase(path, suffix)) return InputFormat::Nifti;
     if (endsWithIgnoreCase(path, ".vdb")) return InputFormat::Vdb;
-    throwIoError(path, "unknown input format (expected .nrrd, .nhdr, .nii, .nii.gz, .hdr/.img "
-                       "or .vdb; for a raw file give --dims and --type)");
+    if (endsWithIgnoreCase(path, ".mha") || endsWithIgnoreCase(path, ".mhd"))
+        return InputFormat::MetaImage;
+    if (splitHdf5Path(path)) return InputFormat::Hdf5;
+    for (const char* suffix : {".tif", ".tiff", ".btf", ".tf8"})
+        if (endsWithIgnoreCase(path, suffix)) return InputFormat::Tiff;
+    for (const char* suffix : {".dcm", ".dicom", ".ima", "/DICOMDIR"})
+        if (endsWithIgnoreCase(path, suffix) || path == "DICOMDIR") return InputFormat::Dicom;
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return detectFolderFormat(path);
+    const bool exists = std::filesystem::exists(path, ec);
+    if (!exists && isGlobPattern(path)) return InputFormat::Tiff;
+    if (exists && hasTiffMagic(path)) return InputFormat::Tiff;
+    if (exists && hasDicomMagic(path)) return InputFormat::Dicom;
+    throwIoError(path, std::string("unknown input format (") + kKnownInputs + ")");
 }
 
-std::unique_ptr<SliceReader> openVolume(const std::string& path, const InputOptions& options) {
+namespace {
+
+std::unique_ptr<SliceReader> openInFormat(const std::string& path, const InputOptions& options) {
     switch (detectInputFormat(path, options)) {
         case InputFormat::Raw: return openRawVolume(path, *options.raw);
         case InputFormat::Nrrd: return openNrrdVolume(path);
         case InputFormat::Nifti: return openNiftiVolume(path);
+        case InputFormat::Tiff: return openTiffVolume(path);
+        case InputFormat::Dicom: return openDicomVolume(path, options.series);
+        case InputFormat::MetaImage: return openMetaImageVolume(path);
+        case InputFormat::Hdf5: return openHdf5Volume(path);
+        case InputFormat::Zarr: return openZarrVolume(path, options.scaleLevel);
         case InputFormat::Vdb: break;
     }
     return openVdbVolume(path, options.grid);
+}
+
+std::unique_ptr<SliceReader> withOptions(std::unique_ptr<SliceReader> reader,
+                                         const InputOptions& options) {
+    if (!options.spacing || options.raw) return reader;
+    return std::make_unique<SpacingOverride>(std::move(reader), *options.spacing);
+}
+
+void requireFormatOptions(const std::string& path, InputFormat format,
+                               const InputOptions& options) {
+    if (!options.series.empty() && format != InputFormat::Dicom)
+        throwIoError(path, "is not DICOM: --series applies to DICOM input only");
+    if (options.scaleLevel != 0 && format != InputFormat::Zarr)
+        throwIoError(path, "is not Zarr: --scale-level applies to OME-Zarr input only");
+}
+
+}  // namespace
+
+std::unique_ptr<SliceReader> openVolume(const std::string& path, const InputOptions& options) {
+    requireFormatOptions(path, detectInputFormat(path, options), options);
+    return withOptions(openInFormat(path, options), options);
+}
+
+std::unique_ptr<SliceReader> openVolume(const std::vector<std::string>& paths,
+                                        const InputOptions& options) {
+    if (paths.size() == 1) return openVolume(paths.front(), options);
+    if (paths.empty()) throw IoError("no input given");
+    if (options.raw) throwIoError(paths.front(), "raw input is one file, not a list");
+    const InputFormat format = detectInputFormat(paths.front(), options);
+    for (const std::string& p : paths)
+        if (detectInputFormat(p, options) != format)
+            throwIoError(p, "is in another format than " + paths.front() +
+                                ": a list of inputs must be slices of one volume");
+    requireFormatOptions(paths.front(), format, options);
+    if (format == InputFormat::Dicom)
+        return withOptions(openDicomFiles(paths, options.series), options);
+    if (format == InputFormat::Tiff) return withOptions(openTiffSlices(paths), options);
+    throwIoError(paths.front(), "is one volume: only DICOM files and TIFF slices may be given as a "
+                                "list");
 }
 
 std::unique_ptr<SliceReader> openSynthVolume(const SynthParams& params) {

@@ -13,6 +13,10 @@ packages=(
   chromium                                # the viewer's end-to-end test (headless)
   libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
   clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
+  libtiff-dev                             # TIFF stacks (io/tiff_reader.h)
+  libgdcm-dev                             # DICOM series (io/dicom_reader.h)
+  libhdf5-dev                             # HDF5 datasets (io/hdf5_reader.h)
+  libblosc-dev                            # Zarr chunks (io/zarr_array.h)
 )
 
 missing=()

@@ -13,19 +13,32 @@ namespace {
 
 constexpr const char* kHelp =
     "usage: vdiso convert INPUT OUTPUT.vdiso [options]\n"
+    "       vdiso convert SLICE... OUTPUT.vdiso [options]   (DICOM files, TIFF slices)\n"
     "\n"
     "Converts a volume into a brick store, streaming: memory stays a few slabs whatever the\n"
     "volume's size. The output appears only when complete; a failure leaves none.\n"
     "\n"
-    "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .vdb (OpenVDB);\n"
-    "anything else is raw and needs --dims and --type.\n"
+    "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .mha .mhd\n"
+    "(MetaImage), .h5 .hdf5 (HDF5: FILE.h5:/path/to/dataset, or the file if it holds one 3-D\n"
+    "dataset), .vdb (OpenVDB), a Zarr array or OME-Zarr image folder (v2 or v3),\n"
+    ".tif .tiff (a multi-page TIFF or BigTIFF); a folder of .tif slices, or a quoted glob such\n"
+    "as 'scan/slice_*.tif' (slices in natural order: slice_2 before slice_10); DICOM: a folder\n"
+    "(with its subfolders), a DICOMDIR, one .dcm file (its series) or a list of files; anything\n"
+    "else is raw and needs --dims and --type.\n"
     "\n"
+    "any input:\n"
+    "  --spacing S | X,Y,Z     sample spacing, replacing the file's (TIFF has none: default 1)\n"
     "raw input:\n"
     "  --dims X,Y,Z            samples per axis (x fastest in the file)\n"
     "  --type T                u8, i16, u16, f32 (also i8, i32, u32, f64: stored as i16/f32)\n"
-    "  --spacing S | X,Y,Z     sample spacing (default 1)\n"
     "  --endian little|big     byte order (default little)\n"
     "  --header-bytes N        bytes to skip before the samples (default 0)\n"
+    "DICOM input:\n"
+    "  --series UID            the series to convert, when the input holds several (the error\n"
+    "                          lists them)\n"
+    "OME-Zarr input:\n"
+    "  --scale-level N         the multiscales level to read (default 0, the finest); named\n"
+    "                          so because --level is the store's zstd level\n"
     "OpenVDB input:\n"
     "  --grid NAME             the float grid to convert (default: the first)\n"
     "other:\n"
@@ -70,7 +83,7 @@ int runConvert(int argc, char** argv) {
             typeGiven = true;
         } else if (a == "--spacing") {
             raw.spacing = parseSpacing(a, args.value(a));
-            rawOnlyGiven = true;
+            input.spacing = raw.spacing;
         } else if (a == "--endian") {
             const std::string e = args.value(a);
             if (e != "little" && e != "big") throw UsageError("--endian expects little or big");
@@ -79,6 +92,10 @@ int runConvert(int argc, char** argv) {
         } else if (a == "--header-bytes") {
             raw.headerBytes = uint64_t(parseInt(a, args.value(a), 0, int64_t(1) << 50));
             rawOnlyGiven = true;
+        } else if (a == "--series") {
+            input.series = args.value(a);
+        } else if (a == "--scale-level") {
+            input.scaleLevel = int(parseInt(a, args.value(a), 0, 64));
         } else if (a == "--grid") {
             input.grid = args.value(a);
         } else if (takeStoreWriteOption(a, args, store)) {
@@ -90,17 +107,20 @@ int runConvert(int argc, char** argv) {
             positional.push_back(a);
         }
     }
-    if (positional.size() != 2) throw UsageError("expects INPUT and OUTPUT");
+    if (positional.size() < 2) throw UsageError("expects INPUT and OUTPUT");
     if (dimsGiven != typeGiven) throw UsageError("raw input needs both --dims and --type");
     if (rawOnlyGiven && !dimsGiven)
-        throw UsageError("--spacing, --endian and --header-bytes apply to raw input, which "
-                         "needs --dims and --type");
+        throw UsageError("--endian and --header-bytes apply to raw input, which needs --dims "
+                         "and --type");
     if (dimsGiven) input.raw = raw;
-    const std::string& inPath = positional[0];
-    const std::string& outPath = positional[1];
-    if (inPath == outPath) throw UsageError("INPUT and OUTPUT are the same file");
+    const std::string outPath = positional.back();
+    positional.pop_back();
+    for (const std::string& inPath : positional)
+        if (inPath == outPath) throw UsageError("INPUT and OUTPUT are the same file");
+    if (positional.size() > 1 && dimsGiven)
+        throw UsageError("raw input is one file: expects INPUT and OUTPUT");
 
-    auto source = openVolume(inPath, input);
+    auto source = openVolume(positional, input);
     const VolumeInfo& info = source->info();
     const StoreWriteSummary s = writeBrickStore(
         *source, outPath, store, progressBar("convert", double(info.byteSize()), quiet));

@@ -1,0 +1,310 @@
+// Zarr reader: stores written here by hand after the Zarr v2/v3 and OME-Zarr v0.4/v0.5
+// specifications (blosc, zstd, gzip, no compressor; "." and "/" keys; partial edge chunks; an
+// image with two levels) and read back sample for sample; missing chunks as the fill value; and
+// what it must refuse by name (a corrupt chunk, a level that is not there, unsupported codecs).
+#include <gtest/gtest.h>
+
+#include <blosc.h>
+#include <zstd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "io/brick_store.h"
+#include "io/error.h"
+#include "io/sample_decode.h"
+#include "io/volume_open.h"
+#include "io/zarr_array.h"
+#include "io/zarr_reader.h"
+#include "tests/reader_test_util.h"
+
+namespace vdiso {
+namespace {
+
+using test::expectIoError;
+
+// Values of a volume: sample (x, y, z) of an nx x ny x nz u16 volume.
+double value(int64_t x, int64_t y, int64_t z) { return double((x * 7 + y * 131 + z * 1031) % 65536); }
+
+std::vector<double> volumeValues(const Dims3& d, int step = 1) {
+    std::vector<double> v;
+    for (int64_t z = 0; z < d[2]; ++z)
+        for (int64_t y = 0; y < d[1]; ++y)
+            for (int64_t x = 0; x < d[0]; ++x) v.push_back(value(x * step, y * step, z * step));
+    return v;
+}
+
+enum class Codec { None, Blosc, Zstd, Gzip };
+
+std::string compress(const std::string& raw, Codec codec) {
+    switch (codec) {
+        case Codec::None: return raw;
+        case Codec::Gzip: return test::gzipBytes(raw);
+        case Codec::Zstd: {
+            std::string out(ZSTD_compressBound(raw.size()), '\0');
+            out.resize(ZSTD_compress(out.data(), out.size(), raw.data(), raw.size(), 3));
+            return out;
+        }
+        case Codec::Blosc: {
+            std::string out(raw.size() + BLOSC_MAX_OVERHEAD, '\0');
+            const int n = blosc_compress_ctx(5, BLOSC_SHUFFLE, 2, raw.size(), raw.data(), out.data(),
+                                             out.size(), "lz4", 0, 1);
+            out.resize(size_t(n));
+            return out;
+        }
+    }
+    return raw;
+}
+
+// An array of u16 samples (x, y, z) = value(x*step, ...), shape (z, y, x) with leading axes of
+// size 1 when `extraAxes`, chunked by `chunk` (z, y, x); `skip` says which chunks to leave out.
+struct ArraySpec {
+    int format = 2;
+    Dims3 dims{13, 10, 9};           // x, y, z
+    std::vector<int64_t> chunk{4, 4, 5};  // z, y, x
+    Codec codec = Codec::Blosc;
+    char separator = '.';
+    bool bigEndian = false;
+    int extraAxes = 0;
+    int step = 1;
+    double fill = 0;
+    std::function<bool(int64_t, int64_t, int64_t)> skip;
+};
+
+std::string codecJsonV2(Codec c) {
+    switch (c) {
+        case Codec::None: return "null";
+        case Codec::Blosc: return R"({"id": "blosc", "cname": "lz4", "clevel": 5, "shuffle": 1, "blocksize": 0})";
+        case Codec::Zstd: return R"({"id": "zstd", "level": 3})";
+        case Codec::Gzip: return R"({"id": "gzip", "level": 6})";
+    }
+    return "null";
+}
+
+std::string codecJsonV3(Codec c) {
+    switch (c) {
+        case Codec::None: return "";
+        case Codec::Blosc: return R"(, {"name": "blosc", "configuration": {"cname": "lz4", "clevel": 5, "shuffle": "shuffle", "typesize": 2, "blocksize": 0}})";
+        case Codec::Zstd: return R"(, {"name": "zstd", "configuration": {"level": 3, "checksum": false}})";
+        case Codec::Gzip: return R"(, {"name": "gzip", "configuration": {"level": 6}})";
+    }
+    return "";
+}
+
+std::string joinInts(const std::vector<int64_t>& v) {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+    return s;
+}
+
+void writeArray(const std::filesystem::path& dir, const ArraySpec& a) {
+    std::filesystem::create_directories(dir);
+    std::vector<int64_t> shape(size_t(a.extraAxes), 1), chunks(size_t(a.extraAxes), 1);
+    shape.insert(shape.end(), {a.dims[2], a.dims[1], a.dims[0]});
+    chunks.insert(chunks.end(), a.chunk.begin(), a.chunk.end());
+    if (a.format == 2) {
+        test::writeFile((dir / ".zarray").string(),
+                        std::string(R"({"zarr_format": 2, "shape": [)") + joinInts(shape) +
+                            R"(], "chunks": [)" + joinInts(chunks) + R"(], "dtype": ")" +
+                            (a.bigEndian ? ">u2" : "<u2") + R"(", "compressor": )" +
+                            codecJsonV2(a.codec) + R"(, "fill_value": )" +
+                            std::to_string(int(a.fill)) + R"(, "order": "C", "filters": null, )" +
+                            R"("dimension_separator": ")" + std::string(1, a.separator) + "\"}");
+    } else {
+        test::writeFile((dir / "zarr.json").string(),
+                        std::string(R"({"zarr_format": 3, "node_type": "array", "shape": [)") +
+                            joinInts(shape) + R"(], "data_type": "uint16", "chunk_grid": {"name": )" +
+                            R"("regular", "configuration": {"chunk_shape": [)" + joinInts(chunks) +
+                            R"(]}}, "chunk_key_encoding": {"name": "default", "configuration": )" +
+                            R"({"separator": ")" + std::string(1, a.separator) + R"("}}, "fill_value": )" +
+                            std::to_string(int(a.fill)) + R"(, "codecs": [{"name": "bytes", )" +
+                            R"("configuration": {"endian": ")" + (a.bigEndian ? "big" : "little") +
+                            "\"}}" + codecJsonV3(a.codec) + "]}");
+    }
+    const int64_t cz = a.chunk[0], cy = a.chunk[1], cx = a.chunk[2];
+    for (int64_t kz = 0; kz * cz < a.dims[2]; ++kz)
+        for (int64_t ky = 0; ky * cy < a.dims[1]; ++ky)
+            for (int64_t kx = 0; kx * cx < a.dims[0]; ++kx) {
+                if (a.skip && a.skip(kx, ky, kz)) continue;
+                std::vector<double> samples;
+                for (int64_t z = kz * cz; z < (kz + 1) * cz; ++z)
+                    for (int64_t y = ky * cy; y < (ky + 1) * cy; ++y)
+                        for (int64_t x = kx * cx; x < (kx + 1) * cx; ++x)
+                            samples.push_back(x < a.dims[0] && y < a.dims[1] && z < a.dims[2]
+                                                  ? value(x * a.step, y * a.step, z * a.step)
+                                                  : 0.0);  // padding of edge chunks
+                std::vector<int64_t> index(size_t(a.extraAxes), 0);
+                index.insert(index.end(), {kz, ky, kx});
+                std::string key = a.format == 3 ? "c" : "";
+                for (int64_t i : index) key += (key.empty() ? "" : std::string(1, a.separator)) + std::to_string(i);
+                const std::filesystem::path file = dir / key;
+                std::filesystem::create_directories(file.parent_path());
+                test::writeFile(file.string(),
+                                compress(test::encodeSamples(samples, FileScalar::U16, a.bigEndian), a.codec));
+            }
+}
+
+class ZarrTest : public test::ReaderFileTest {};
+using ZarrReader = ZarrTest;
+using ZarrErrors = ZarrTest;
+
+TEST_F(ZarrReader, PlainArraysEveryCodecBothFormats) {
+    for (int format : {2, 3})
+        for (Codec codec : {Codec::None, Codec::Blosc, Codec::Zstd, Codec::Gzip})
+            for (char separator : {'.', '/'}) {
+                SCOPED_TRACE("v" + std::to_string(format) + " codec " + std::to_string(int(codec)) +
+                             " separator " + separator);
+                ArraySpec a;
+                a.format = format;
+                a.codec = codec;
+                a.separator = separator;
+                a.bigEndian = codec == Codec::Zstd;
+                const std::string dir = path("a" + std::to_string(format) + std::to_string(int(codec)) + (separator == '.' ? "d" : "s"));
+                writeArray(dir, a);
+                EXPECT_EQ(detectInputFormat(dir, {}), InputFormat::Zarr);
+                auto reader = openVolume(dir, {});
+                EXPECT_EQ(reader->info().dims, a.dims);
+                EXPECT_EQ(reader->info().type, ScalarType::U16);
+                EXPECT_EQ(reader->info().spacing, glm::dvec3(1.0));
+                test::expectValues(*reader, volumeValues(a.dims));
+            }
+}
+
+// An OME-Zarr image with two levels: level 1 is every other sample, at twice the spacing.
+void writeOmeImage(const std::filesystem::path& root, int format) {
+    ArraySpec full;
+    full.format = format;
+    full.extraAxes = 2;  // t, c
+    ArraySpec half = full;
+    half.dims = {7, 5, 5};
+    half.step = 2;
+    writeArray(root / "0", full);
+    writeArray(root / "1", half);
+    const std::string multiscales =
+        R"([{"version": ")" + std::string(format == 2 ? "0.4" : "0.5") + R"(", "name": "ct", "axes": [)"
+        R"({"name": "t", "type": "time"}, {"name": "c", "type": "channel"}, )"
+        R"({"name": "z", "type": "space", "unit": "micrometer"}, {"name": "y", "type": "space"}, )"
+        R"({"name": "x", "type": "space"}], "datasets": [)"
+        R"({"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1, 1, 2.0, 0.75, 0.5]}, )"
+        R"({"type": "translation", "translation": [0, 0, 30, 20, -10]}]}, )"
+        R"({"path": "1", "coordinateTransformations": [{"type": "scale", "scale": [1, 1, 4.0, 1.5, 1.0]}, )"
+        R"({"type": "translation", "translation": [0, 0, 31, 20.375, -9.75]}]}]}])";
+    if (format == 2) {
+        test::writeFile((root / ".zgroup").string(), R"({"zarr_format": 2})");
+        test::writeFile((root / ".zattrs").string(), R"({"multiscales": )" + multiscales + "}");
+    } else {
+        test::writeFile((root / "zarr.json").string(),
+                        R"({"zarr_format": 3, "node_type": "group", "attributes": {"ome": )"
+                        R"({"version": "0.5", "multiscales": )" + multiscales + "}}}");
+    }
+}
+
+TEST_F(ZarrReader, OmeZarrTwoLevelsBothVersions) {
+    for (int format : {2, 3}) {
+        SCOPED_TRACE(format == 2 ? "OME-Zarr 0.4" : "OME-Zarr 0.5");
+        const std::string root = path(format == 2 ? "v04.ome.zarr" : "v05.ome.zarr");
+        writeOmeImage(root, format);
+        EXPECT_EQ(detectInputFormat(root, {}), InputFormat::Zarr);
+        auto level0 = openZarrVolume(root, 0);
+        EXPECT_EQ(level0->info().dims, (Dims3{13, 10, 9}));
+        test::expectDoubleEq(level0->info().spacing, glm::dvec3(0.5, 0.75, 2.0));
+        test::expectDoubleEq(level0->info().origin, glm::dvec3(-10.0, 20.0, 30.0));
+        test::expectValues(*level0, volumeValues({13, 10, 9}));
+        InputOptions options;
+        options.scaleLevel = 1;
+        auto level1 = openVolume(root, options);
+        EXPECT_EQ(level1->info().dims, (Dims3{7, 5, 5}));
+        test::expectDoubleEq(level1->info().spacing, glm::dvec3(1.0, 1.5, 4.0));
+        test::expectDoubleEq(level1->info().origin, glm::dvec3(-9.75, 20.375, 31.0));
+        test::expectValues(*level1, volumeValues({7, 5, 5}, 2));
+        expectIoError([&] { openZarrVolume(root, 2); },
+                      {root, "no level 2", "0 (13 x 10 x 9), 1 (7 x 5 x 5)"});
+    }
+}
+
+TEST_F(ZarrReader, MissingChunksAreTheFillValue) {
+    ArraySpec a;
+    a.fill = 7;
+    a.skip = [](int64_t kx, int64_t ky, int64_t kz) { return kx == 1 && ky == 0 && kz == 1; };
+    writeArray(path("holes"), a);
+    std::vector<double> want;
+    for (int64_t z = 0; z < 9; ++z)
+        for (int64_t y = 0; y < 10; ++y)
+            for (int64_t x = 0; x < 13; ++x)
+                want.push_back(x / 5 == 1 && y / 4 == 0 && z / 4 == 1 ? 7.0 : value(x, y, z));
+    auto reader = openZarrVolume(path("holes"), 0);
+    test::expectValues(*reader, want);
+}
+
+TEST_F(ZarrReader, ConvertsFromTheCommandLine) {
+    writeOmeImage(path("img.zarr"), 3);
+    const auto r = test::runVdiso("convert " + path("img.zarr") + " " + path("img.vdiso") +
+                                  " --scale-level 1 --brick 4 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const BrickStoreReader store(path("img.vdiso"));
+    EXPECT_EQ(store.volume().spacing, glm::dvec3(1.0, 1.5, 4.0));
+    const std::string samples = test::encodeSamples(volumeValues({7, 5, 5}, 2), FileScalar::U16, false);
+    EXPECT_EQ(test::compareStoreWithSamples(store, std::vector<unsigned char>(samples.begin(), samples.end())), "");
+    const auto wrong = test::runVdiso("convert " + path("img.zarr") + "/0/zarr.json " + path("x.vdiso") + " --scale-level 1");
+    EXPECT_NE(wrong.exitCode, 0);
+}
+
+TEST_F(ZarrErrors, CorruptChunkIsNamed) {
+    for (Codec codec : {Codec::Blosc, Codec::Zstd, Codec::Gzip, Codec::None}) {
+        SCOPED_TRACE(int(codec));
+        ArraySpec a;
+        a.codec = codec;
+        const std::string dir = path("bad" + std::to_string(int(codec)));
+        writeArray(dir, a);
+        const std::string chunk = dir + "/1.2.0";
+        std::vector<unsigned char> bytes = test::readFile(chunk);
+        bytes.resize(bytes.size() / 2);  // cut in half
+        test::writeFile(chunk, bytes.data(), bytes.size());
+        expectIoError(
+            [&] {
+                auto reader = openZarrVolume(dir, 0);
+                test::readAllValues(*reader);
+            },
+            {chunk});
+    }
+}
+
+TEST_F(ZarrErrors, UnsupportedAndMalformedMetadataAreNamed) {
+    const std::pair<std::string, std::string> cases[] = {
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "compressor": null, "fill_value": 0, "order": "F"})", "order \"F\""},
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<i8", "compressor": null, "fill_value": 0, "order": "C"})", "<i8"},
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "compressor": {"id": "lzma"}, "fill_value": 0})", "compressor \"lzma\""},
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "compressor": null, "filters": [{"id": "delta"}]})", "filters"},
+        {R"({"zarr_format": 2, "shape": [10, 13], "chunks": [4, 5], "dtype": "<u2", "compressor": null})", "is 2-D"},
+        {R"({"zarr_format": 2, "shape": [2, 9, 10, 13], "chunks": [1, 4, 4, 5], "dtype": "<u2", "compressor": null})", "only one time point"},
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4096, 4096, 4096], "dtype": "<u2", "compressor": null})", "1 GiB"},
+        {R"({"zarr_format": 2, "shape": [9, 10], "chunks": [4, 4, 5], "dtype": "<u2"})", "differ in length"},
+        {R"({"zarr_format": 2, "shape": "big"})", "not an array"},
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "fill_value": "0x7fc00000"})", "fill_value"},
+        {R"({"zarr_format": 2, "shape": [9, 10, 13], )", "not valid JSON"},
+        // fuzz_zarr's finding, literally: a float zarr_format was converted to int unchecked.
+        {R"({"zarr_format": 3333333333333333333333333333333333333333333333333333333333333333333333333333333333333333333332, "shape": [4, 6, 8], "chunks": [2, 4, 4], "dtype": "<u1", "cofilters": null})", "zarr_format is not 2"},
+    };
+    for (const auto& [json, part] : cases) {
+        SCOPED_TRACE(part);
+        write("m/.zarray", json);
+        expectIoError(
+            [&] {
+                auto reader = openZarrVolume(path("m"), 0);
+                test::readAllValues(*reader);
+            },
+            {path("m"), part});
+    }
+    write("s/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "uint16", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [9, 10, 13]}}, "fill_value": 0, "codecs": [{"name": "sharding_indexed", "configuration": {}}]})");
+    expectIoError([&] { openZarrVolume(path("s"), 0); }, {"sharded"});
+    std::filesystem::create_directories(path("empty"));
+    expectIoError([&] { openZarrVolume(path("empty"), 0); }, {"no Zarr metadata"});
+    write("p/.zarray", R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "compressor": null})");
+    expectIoError([&] { openZarrVolume(path("p"), 1); }, {"plain Zarr array", "no level 1"});
+}
+
+}  // namespace
+}  // namespace vdiso
