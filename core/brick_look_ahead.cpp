@@ -21,7 +21,8 @@ bool BrickLookAhead::findNext() {
             mTree.pushChildrenFarFirst(mStack, index, mCuller.eyeInBricks());
             continue;
         }
-        mAhead.push_back({index, mTree.brickOf(node), mCuller.pixelRect(box)});
+        const int64_t brick = mTree.brickOf(node);
+        mAhead.push_back({index, brick, mCuller.pixelRect(box), mSource.isResident(brick) ? kResident : kNotPushed});
         return true;
     }
     return false;
@@ -48,6 +49,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         mAhead.pop_front();
     }
     std::erase_if(mAhead, [&](const AheadBrick& ahead) {
+        if (ahead.item == kResident) return false;  // nothing to cancel: not tested again
         ScreenBox box;
         if (mCuller.passes(mTree, ahead.node, box)) return false;
         if (pushed(ahead.item)) mPrefetcher.cancel(ahead.item);
@@ -71,7 +73,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         bool settled = harmless(ahead.rect, current);
         for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, mAhead[j].rect);
         if (!settled && (k >= kNearBricks || mostlyBehind(ahead.rect, current))) break;
-        ahead.item = mSource.isResident(ahead.brick) ? kResident : mPrefetcher.push(ahead.brick);
+        ahead.item = mPrefetcher.push(ahead.brick);
     }
 }
 

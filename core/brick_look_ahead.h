@@ -15,8 +15,9 @@
 // nothing drawn before its turn can hide it and reading it now cannot be wasted. The next
 // kNearBricks go regardless, so reads keep ahead where boxes overlap, unless most of one's box
 // lies in this brick's (closeups: it is likely behind this one and hidden by it). A brick the
-// source holds in memory already when its turn comes is not handed over (a warm cache would
-// otherwise wake a reader per brick for nothing).
+// source holds in memory already when it is found is neither handed over nor tested again (a
+// warm cache would otherwise wake a reader per brick, and re-test the bricks ahead at every
+// brick, for nothing); if it is evicted before its turn, the traversal reads it itself.
 // One look-ahead per traversal thread.
 #pragma once
 
