@@ -74,6 +74,24 @@ bool firstHit(const BrickKernel<T>& kernel, const glm::dvec3& origin, const glm:
     }
     const int side = kernel.side;
     const size_t strides[3] = {1, size_t(side), size_t(side) * side};
+    // Edge e of the current cell: its crossing (cell coordinates) and its vertex normal, as
+    // the kernel makes them.
+    auto edgeStart = [&](int e) {
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        return kernel.sampleIndex(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
+    };
+    auto edgePoint = [&](int e) {
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        const int axis = mcEdgeAxis(e);
+        const size_t i0 = edgeStart(e);
+        glm::dvec3 q(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
+        q[axis] += crossingFraction(double(kernel.s[i0]), double(kernel.s[i0 + strides[axis]]), kernel.iso);
+        return q;
+    };
+    auto edgeNormalOf = [&](int e) {
+        const int axis = mcEdgeAxis(e);
+        return glm::dvec3(kernel.edgeNormal(edgeStart(e), strides[axis], axis));
+    };
     for (int guard = 0; guard < 3 * (kernel.cells[0] + kernel.cells[1] + kernel.cells[2]) + 3; ++guard) {
         const size_t base = kernel.sampleIndex(cell[0], cell[1], cell[2]);
         int caseIndex = 0;
@@ -83,36 +101,32 @@ bool firstHit(const BrickKernel<T>& kernel, const glm::dvec3& origin, const glm:
         }
         if (caseIndex != 0 && caseIndex != 255) {
             const McPolygonCase& pc = mcPolygonCase(caseIndex);
-            double best = std::numeric_limits<double>::infinity();
-            glm::dvec3 bestNormal(0.0);
+            double best = std::numeric_limits<double>::infinity(), bestU = 0, bestV = 0;
+            int bestEdges[3] = {0, 0, 0};
             glm::dvec3 at[kMcMaxPolygonVertices];
-            glm::vec3 atNormal[kMcMaxPolygonVertices];
             for (int poly = 0, first = 0; poly < pc.polygonCount; first += pc.vertexCount[poly++]) {
                 const int count = pc.vertexCount[poly];
-                for (int k = 0; k < count; ++k) {
-                    const int e = pc.edges[first + k];
-                    const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
-                    const int axis = mcEdgeAxis(e);
-                    const size_t i0 = kernel.sampleIndex(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
-                    const double t = crossingFraction(double(kernel.s[i0]), double(kernel.s[i0 + strides[axis]]), kernel.iso);
-                    at[k] = glm::dvec3(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2]);
-                    at[k][axis] += t;
-                    atNormal[k] = kernel.edgeNormal(i0, strides[axis], axis);
-                }
+                for (int k = 0; k < count; ++k) at[k] = edgePoint(pc.edges[first + k]);
                 for (int k = 2; k < count; ++k) {
                     double t, u, v;
                     if (detail::rayTriangle(p, d, at[0], at[k - 1], at[k], t, u, v) && t >= tEnter && t <= tExit &&
                         t < best) {
                         best = t;
-                        bestNormal = (1.0 - u - v) * glm::dvec3(atNormal[0]) + u * glm::dvec3(atNormal[k - 1]) +
-                                     v * glm::dvec3(atNormal[k]);
+                        bestU = u;
+                        bestV = v;
+                        bestEdges[0] = pc.edges[first];
+                        bestEdges[1] = pc.edges[first + k - 1];
+                        bestEdges[2] = pc.edges[first + k];
                     }
                 }
             }
             if (best < std::numeric_limits<double>::infinity()) {
-                const double length = glm::length(bestNormal);
+                // Normals only for the triangle hit: they are most of a vertex's cost.
+                const glm::dvec3 n = (1.0 - bestU - bestV) * edgeNormalOf(bestEdges[0]) +
+                                     bestU * edgeNormalOf(bestEdges[1]) + bestV * edgeNormalOf(bestEdges[2]);
+                const double length = glm::length(n);
                 position = glm::vec3(origin + direction * best);
-                normal = length > 0 ? glm::vec3(bestNormal / length) : glm::vec3(0.0f);
+                normal = length > 0 ? glm::vec3(n / length) : glm::vec3(0.0f);
                 return true;
             }
         }
