@@ -210,9 +210,9 @@ void requireFilters(const std::string& where, hid_t dcpl) {
         if (H5Zfilter_avail(id) <= 0) {
             H5Eclear2(H5E_DEFAULT);
             fail(where, "is compressed with HDF5 filter " + std::to_string(id) +
-                                    (name[0] ? std::string(" (") + name + ")" : "") +
-                                    ", which this HDF5 cannot decode (is its plugin on "
-                                    "HDF5_PLUGIN_PATH?)");
+                            (name[0] ? std::string(" (") + name + ")" : "") +
+                            ", which this HDF5 cannot decode (is its plugin on "
+                            "HDF5_PLUGIN_PATH?)");
         }
     }
 }
@@ -262,11 +262,11 @@ std::unique_ptr<Dataset> openDataset(const std::string& file, const std::string&
             fail(file, "its groups cannot be listed: " + hdf5Message());
         if (search.volumes.size() != 1)
             fail(file, search.volumes.empty()
-                                   ? "holds no 3-D numeric dataset" +
-                                         (search.others.empty() ? std::string()
-                                                                : " (it holds " + listOf(search.others) + ")")
-                                   : "holds several 3-D datasets (" + listOf(search.volumes) +
-                                         "): name one as " + file + ":/path");
+                           ? "holds no 3-D numeric dataset" +
+                                 (search.others.empty() ? std::string()
+                                                        : " (it holds " + listOf(search.others) + ")")
+                           : "holds several 3-D datasets (" + listOf(search.volumes) +
+                                 "): name one as " + file + ":/path");
         name = search.volumes.front();
     }
     const std::string where = file + ":" + name;
@@ -298,9 +298,8 @@ std::unique_ptr<Dataset> openDataset(const std::string& file, const std::string&
     }
     Handle space(H5Dget_space(d.get()), H5Sclose);
     if (!space.valid()) fail(where, "cannot be read: " + hdf5Message());
-    auto result = std::make_unique<Dataset>(Dataset{where, std::move(f), std::move(d),
-                                                    std::move(space), dims, *shape.type, spacing});
-    return result;
+    return std::make_unique<Dataset>(
+        Dataset{where, std::move(f), std::move(d), std::move(space), dims, *shape.type, spacing});
 }
 
 void readSlab(Dataset& d, int64_t z, int64_t n, void* target) {
