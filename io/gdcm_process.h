@@ -13,6 +13,9 @@
 // and the next request starts a new child. Its data memory stays bounded (1 GiB more than at the
 // fork), since GDCM allocates what a file's lengths claim. The cost: one fork, and one copy of
 // each slice's samples through the socket. Not thread-safe: one reader, one process.
+//
+// GDCM itself is in a run-time module (io/gdcm_module/gdcm_module.h), loaded at the first
+// request; when it cannot be, the request fails with an IoError naming the file and the module.
 #pragma once
 
 #include <cstdint>

@@ -8,20 +8,6 @@
 
 namespace vdiso {
 
-size_t fileScalarSize(FileScalar t) {
-    switch (t) {
-        case FileScalar::I8:
-        case FileScalar::U8: return 1;
-        case FileScalar::I16:
-        case FileScalar::U16: return 2;
-        case FileScalar::I32:
-        case FileScalar::U32:
-        case FileScalar::F32: return 4;
-        case FileScalar::F64: return 8;
-    }
-    return 0;
-}
-
 const char* fileScalarName(FileScalar t) {
     switch (t) {
         case FileScalar::I8: return "int8";

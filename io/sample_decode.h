@@ -15,7 +15,20 @@ namespace vdiso {
 
 enum class FileScalar { I8, U8, I16, U16, I32, U32, F32, F64 };
 
-size_t fileScalarSize(FileScalar t);
+// Inline: the GDCM module (io/gdcm_module/gdcm_module.h) uses it without linking vdiso_io.
+inline size_t fileScalarSize(FileScalar t) {
+    switch (t) {
+        case FileScalar::I8:
+        case FileScalar::U8: return 1;
+        case FileScalar::I16:
+        case FileScalar::U16: return 2;
+        case FileScalar::I32:
+        case FileScalar::U32:
+        case FileScalar::F32: return 4;
+        case FileScalar::F64: return 8;
+    }
+    return 0;
+}
 const char* fileScalarName(FileScalar t);
 
 // The store type that holds every value of `t`; with `scaled` (slope/intercept), f32.

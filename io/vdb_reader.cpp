@@ -1,17 +1,12 @@
 #include "io/vdb_reader.h"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <array>
 #include <cerrno>
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <string>
-#include <vector>
 
 #include "io/error.h"
+#include "io/run_time_module.h"
 #include "io/vdb_module/vdb_module.h"
 
 namespace vdiso {
@@ -25,44 +20,17 @@ struct VdbModule {
     decltype(&vdiso_vdb_close) close = nullptr;
 };
 
-// Where the module is: in VDISO_MODULE_DIR when that is set; otherwise beside the running
-// executable (where the build puts it, next to vdiso), else in the build tree's directory for it.
-std::vector<std::string> moduleCandidates() {
-    std::vector<std::string> dirs;
-    if (const char* dir = std::getenv("VDISO_MODULE_DIR"))
-        return {std::string(dir) + "/" + kModuleName};
-    std::error_code ec;
-    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-    if (!ec) dirs.push_back(exe.parent_path().string());
-#ifdef VDISO_BUILD_MODULE_DIR
-    dirs.emplace_back(VDISO_BUILD_MODULE_DIR);
-#endif
-    std::vector<std::string> paths;
-    for (const std::string& d : dirs) paths.push_back(d + "/" + kModuleName);
-    return paths;
-}
-
-// Loaded on first use; throws IoError naming `path` (the file being read) when it cannot be.
-const VdbModule& vdbModule(const std::string& path) {
-    static const VdbModule* loaded = [] () -> const VdbModule* {
-        void* library = nullptr;
-        for (const std::string& candidate : moduleCandidates()) {
-            if (::access(candidate.c_str(), R_OK) != 0) continue;
-            library = ::dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
-            if (library) break;
-        }
-        if (!library) return nullptr;
-        static VdbModule m;
-        m.open = reinterpret_cast<decltype(m.open)>(::dlsym(library, "vdiso_vdb_open"));
-        m.read = reinterpret_cast<decltype(m.read)>(::dlsym(library, "vdiso_vdb_read"));
-        m.close = reinterpret_cast<decltype(m.close)>(::dlsym(library, "vdiso_vdb_close"));
-        return m.open && m.read && m.close ? &m : nullptr;
-    }();
-    if (!loaded)
-        throwIoError(path, std::string("reading OpenVDB files needs the module ") + kModuleName +
-                               ", which was not found or did not load (the build puts it beside "
-                               "vdiso; VDISO_MODULE_DIR says where else to look)");
-    return *loaded;
+// Loaded on first use (io/run_time_module.h); throws IoError naming `path` (the file being
+// read) when it cannot be.
+VdbModule vdbModule(const std::string& path) {
+    auto symbol = [&](const char* name) {
+        return runTimeModuleSymbol(kModuleName, name, path, "reading OpenVDB files");
+    };
+    VdbModule m;
+    m.open = reinterpret_cast<decltype(m.open)>(symbol("vdiso_vdb_open"));
+    m.read = reinterpret_cast<decltype(m.read)>(symbol("vdiso_vdb_read"));
+    m.close = reinterpret_cast<decltype(m.close)>(symbol("vdiso_vdb_close"));
+    return m;
 }
 
 class VdbSliceReader final : public SliceReader {
@@ -113,7 +81,7 @@ private:
     }
 
     std::string mPath;
-    const VdbModule& mModule;
+    VdbModule mModule;
     void* mHandle = nullptr;
     VolumeInfo mInfo;
     int64_t mNextZ = 0;

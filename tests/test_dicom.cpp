@@ -15,6 +15,7 @@
 #include <gdcmUIDGenerator.h>
 #include <gdcmWriter.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -264,6 +265,20 @@ TEST_F(DicomReader, ConvertsFromTheCommandLine) {
     EXPECT_EQ(test::compareStoreWithSamples(
                   store, std::vector<unsigned char>(bytes, bytes + samples.size() * 2)),
               "");
+}
+
+// GDCM is a module loaded at the first DICOM file (io/gdcm_module/gdcm_module.h): without it,
+// the command refuses the input naming it and the module, and writes nothing.
+TEST_F(DicomErrors, MissingModuleIsNamed) {
+    SliceSpec s;
+    writeSeries(path("ct"), s, 3);
+    ::setenv("VDISO_MODULE_DIR", "/nonexistent", 1);
+    const auto r = test::runVdiso("convert " + path("ct") + " " + path("ct.vdiso"));
+    ::unsetenv("VDISO_MODULE_DIR");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find(path("ct")), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("libvdiso_gdcm_module.so"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(path("ct.vdiso")));
 }
 
 TEST_F(DicomErrors, MixedSeriesWithoutSeriesOption) {

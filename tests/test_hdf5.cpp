@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -160,6 +162,24 @@ TEST_F(Hdf5Reader, ConvertsFromTheCommandLineChunkedAcrossSlabs) {
     EXPECT_EQ(test::compareStoreWithSamples(
                   store, std::vector<unsigned char>(samples.begin(), samples.end())),
               "");
+}
+
+// libhdf5 is a module loaded at the first HDF5 file (io/hdf5_module/hdf5_module.h): without
+// it, the command refuses the input naming it and the module, and writes nothing.
+TEST_F(Hdf5Errors, MissingModuleIsNamed) {
+    hid_t f = create("ct.h5");
+    DatasetSpec s;
+    s.name = "/ct";
+    s.dims = {3, 4, 5};
+    addDataset(f, s, std::vector<double>(60, 1.0));
+    H5Fclose(f);
+    ::setenv("VDISO_MODULE_DIR", "/nonexistent", 1);
+    const auto r = test::runVdiso("convert " + path("ct.h5") + ":/ct " + path("ct.vdiso"));
+    ::unsetenv("VDISO_MODULE_DIR");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find(path("ct.h5") + ":/ct"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("libvdiso_hdf5_module.so"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(path("ct.vdiso")));
 }
 
 TEST_F(Hdf5Errors, PathsThatAreNotA3DDatasetAreNamed) {
