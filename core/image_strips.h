@@ -8,6 +8,7 @@
 #pragma once
 
 #include <exception>
+#include <thread>
 #include <vector>
 
 #include "core/brick_source.h"
@@ -42,12 +43,6 @@ void runStrips(std::vector<StripOutput>& outputs, Strip&& strip);
 // Appends the strips' meshes and points in strip order; returns their statistics summed, with
 // bricksActive counting a brick read by two strips once.
 ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points);
-
-}  // namespace vdiso
-
-#include <thread>
-
-namespace vdiso {
 
 template <class Strip>
 void runStrips(std::vector<StripOutput>& outputs, Strip&& strip) {
