@@ -39,7 +39,7 @@ BrickCache::BrickCache(const BrickStoreReader& store, uint64_t budgetBytes)
                                     " MB cannot hold two bricks of " +
                                     std::to_string(mBrickBytes >> 10) + " KB");
     // Never more slots than bricks: a budget larger than the volume allocates only what it uses.
-    mSlotCount = std::min<size_t>(mSlotCount, size_t(store.layout().brickCount()));
+    mSlotCount = std::min<size_t>(mSlotCount, store.index().size());
     mSlots.resize(mSlotCount);
     mSlotsPerChunk = std::max<size_t>(1, (32u << 20) / mBrickBytes);
     mRanges.reserve(store.index().size());

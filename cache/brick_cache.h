@@ -38,6 +38,7 @@ public:
 
     const VolumeInfo& volume() const override { return mStore.volume(); }
     const BrickLayout& layout() const override { return mStore.layout(); }
+    int levelCount() const override { return mStore.header().levelCount; }
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
     std::span<const SubBlockCode> subBlockCodes() const override;
     BrickHandle acquire(int64_t id) override;

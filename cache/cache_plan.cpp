@@ -10,7 +10,7 @@ CachePlan planCacheUse(const BrickCache& cache, bool viewDependent, int prefetch
                        int defaultThreads) {
     const uint64_t brickBytes = cache.store().brickBytes();
     const uint64_t slots = cache.budgetBytes() / brickBytes;
-    const bool holdsAll = slots >= uint64_t(cache.layout().brickCount());
+    const bool holdsAll = slots >= uint64_t(cache.store().index().size());
     CachePlan plan;
     plan.prefetchBricks = int(std::min<uint64_t>(uint64_t(std::max(prefetch, 0)), slots / 2));
     const uint64_t maxStrips = holdsAll ? UINT64_MAX : std::max<uint64_t>(1, slots / 4);

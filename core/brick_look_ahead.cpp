@@ -4,9 +4,10 @@
 
 namespace vdiso {
 
-BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewCuller& culler,
+BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
                                size_t depth, int readers)
-    : mSource(source), mTree(tree), mCuller(culler), mDepth(depth), mPrefetcher(source, depth, readers) {
+    : mSource(source), mTree(tree), mLevels(levels), mCuller(levels.culler(0)), mDepth(depth),
+      mPrefetcher(source, depth, readers) {
     if (mDepth > 0 && !tree.nodes().empty()) mStack.push_back(0);
 }
 
@@ -14,18 +15,30 @@ bool BrickLookAhead::findNext() {
     while (!mStack.empty()) {
         const uint32_t index = mStack.back();
         mStack.pop_back();
-        ScreenBox box;
-        if (!mCuller.passes(mTree, index, box)) continue;
         const MinMaxNode& node = mTree.nodes()[index];
-        if (!node.isLeaf()) {
+        glm::dvec3 a, b;
+        mCuller.nodeBox(node, a, b);
+        ScreenBox box;
+        if (mCuller.cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) continue;
+        const int level = mLevels.levelOf(node, a, b);
+        if (level == 0 && !node.isLeaf()) {
             mTree.pushChildrenFarFirst(mStack, index, mCuller.eyeInBricks());
             continue;
         }
-        const int64_t brick = mTree.brickOf(node);
-        mAhead.push_back({index, brick, mCuller.pixelRect(box), mSource.isResident(brick) ? kResident : kNotPushed});
+        const ViewLevels::Brick at = mLevels.brickOf(node, level);
+        if (!mLevels.shows(at)) continue;
+        mAhead.push_back({index, at, at.id, mCuller.pixelRect(box), mSource.isResident(at.id) ? kResident : kNotPushed});
         return true;
     }
     return false;
+}
+
+bool BrickLookAhead::stillShows(const AheadBrick& ahead) const {
+    const MinMaxNode& node = mTree.nodes()[ahead.node];
+    glm::dvec3 a, b;
+    mCuller.nodeBox(node, a, b);
+    ScreenBox box;
+    return mCuller.cull({node.minValue, node.maxValue}, a, b, box) == Cull::None && mLevels.shows(ahead.at);
 }
 
 int64_t BrickLookAhead::pixelsOf(const PixelRect& r) const {
@@ -50,8 +63,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     }
     std::erase_if(mAhead, [&](const AheadBrick& ahead) {
         if (ahead.item == kResident) return false;  // nothing to cancel: not tested again
-        ScreenBox box;
-        if (mCuller.passes(mTree, ahead.node, box)) return false;
+        if (stillShows(ahead)) return false;
         if (pushed(ahead.item)) mPrefetcher.cancel(ahead.item);
         return true;
     });

@@ -2,7 +2,8 @@
 // when (DESIGN.md, "Out of core").
 //
 // A second cursor runs over the same front-to-back order as the traversal, ahead of it, with
-// tests 1-3 against the pyramid as it is now (the same ViewCuller). Coverage only grows, so
+// tests 1-3 against the pyramid as it is now, and the same choice of level per node (the same
+// ViewLevels and their cullers). Coverage only grows, so
 // every brick the traversal will acquire is found by the look-ahead first; a brick it finds may
 // still be hidden by the time the traversal gets there (then it was read for nothing, and
 // counted by readUnused).
@@ -30,6 +31,7 @@
 #include "core/brick_source.h"
 #include "core/minmax_tree.h"
 #include "core/view_culler.h"
+#include "core/view_levels.h"
 
 namespace vdiso {
 
@@ -38,7 +40,7 @@ public:
     static constexpr size_t kNearBricks = 2;
 
     // depth 0: nothing is read ahead (every call does nothing).
-    BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewCuller& culler,
+    BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
                    size_t depth, int readers = BrickPrefetcher::kDefaultReaders);
 
     // The traversal is about to acquire `brick` (it acquires it itself).
@@ -54,17 +56,21 @@ private:
     static bool pushed(size_t item) { return item < kResident; }
     struct AheadBrick {
         uint32_t node;
-        int64_t brick;
+        ViewLevels::Brick at;
+        int64_t brick;  // at.id
         PixelRect rect;
         size_t item = kNotPushed;  // in the prefetcher's list, once handed to it (or kResident)
     };
     // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
     bool findNext();
+    // Tests 1-3 now for a node found ahead, and its brick's sub-blocks.
+    bool stillShows(const AheadBrick& ahead) const;
     int64_t pixelsOf(const PixelRect& r) const;
 
     BrickSource& mSource;
     const MinMaxTree& mTree;
-    const ViewCuller& mCuller;
+    const ViewLevels& mLevels;
+    const ViewCuller& mCuller;  // level 0's: the tree's
     size_t mDepth;
     BrickPrefetcher mPrefetcher;
     std::vector<uint32_t> mStack;       // the cursor: nodes still to visit, nearest on top

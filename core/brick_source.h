@@ -9,7 +9,10 @@
 #include <cstdint>
 #include <span>
 
+#include <vector>
+
 #include "core/brick_layout.h"
+#include "core/brick_levels.h"
 #include "core/volume.h"
 
 namespace vdiso {
@@ -52,8 +55,13 @@ private:
 class BrickSource {
 public:
     virtual ~BrickSource() = default;
+    // Level 0: the volume and its bricks.
     virtual const VolumeInfo& volume() const = 0;
     virtual const BrickLayout& layout() const = 0;
+    // Levels of detail held, level 0 included (core/brick_levels.h). Brick ids, brickRanges()
+    // and subBlockCodes() run through every level, level 0's bricks first.
+    virtual int levelCount() const { return 1; }
+    std::vector<BrickLevel> levels() const { return brickLevels(volume(), layout().brickSize, levelCount()); }
     // Min and max of each brick's cell samples, indexed by brick id.
     virtual std::span<const BrickRange> brickRanges() const = 0;
     // The ranges of each brick's sub-blocks (core/sub_blocks.h), kSubBlocksPerBrick per brick

@@ -14,6 +14,7 @@ struct ViewCounters {
     int64_t polygonsHidden = 0;   // scan-converted without covering a new pixel centre
     int64_t bricksCulledBySubBlocks = 0;  // box passed, no sub-block did: not read
     int64_t bricksPrefetchedUnused = 0;   // read ahead, then hidden before the traversal came
+    int64_t coarseBricks = 0;  // of the bricks acquired, those of a coarser level of detail
     uint64_t points = 0;
     bool abandoned = false;  // a stream's beginBrick returned false
     double scanSeconds = 0;  // extracting visible meta-cells, with their projection and scan
@@ -28,6 +29,7 @@ struct ViewCounters {
         polygonsHidden += o.polygonsHidden;
         bricksCulledBySubBlocks += o.bricksCulledBySubBlocks;
         bricksPrefetchedUnused += o.bricksPrefetchedUnused;
+        coarseBricks += o.coarseBricks;
         points += o.points;
         abandoned |= o.abandoned;
         scanSeconds += o.scanSeconds;

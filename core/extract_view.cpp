@@ -18,6 +18,7 @@
 #include "core/scan_convert.h"
 #include "core/screen_box.h"
 #include "core/view_culler.h"
+#include "core/view_levels.h"
 
 namespace vdiso {
 
@@ -41,10 +42,15 @@ public:
                   ExtractStats& stats, int column0, int column1)
         : mSource(source), mTree(tree), mCamera(camera), mOptions(options), mMesh(mesh), mPoints(points),
           mStats(stats), mPixels(camera), mPyramid(camera.width, camera.height),
-          mCuller(source, camera, mPyramid, options.iso, options.estimateBox),
-          mExtractor(source.volume(), source.layout(), options.metaCellSize),
-          mLookAhead(source, tree, mCuller, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders) {
+          mLevels(source, tree, camera, mPyramid, options.iso, options.estimateBox, options.lodError),
+          mCuller(mLevels.culler(0)),
+          mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders) {
         coverOutsideStrip(mPyramid, column0, column1);
+        for (int l = 0; l < mLevels.count(); ++l) {
+            const LevelSource& level = mLevels.source(l);
+            mParts.push_back(std::make_unique<LevelParts>(
+                LevelParts{BrickExtractor(level.volume(), level.layout(), options.metaCellSize), {}}));
+        }
     }
 
     // Extracts; returns the bricks acquired, in order.
@@ -71,9 +77,15 @@ private:
     ExtractStats& mStats;
     PixelProjector mPixels;
     OcclusionPyramid mPyramid;
-    ViewCuller mCuller;
-    BrickExtractor mExtractor;
-    EdgeVertexMap mSeams;
+    ViewLevels mLevels;
+    const ViewCuller& mCuller;  // level 0's: the tree's
+    // What extracting a level's bricks needs: its kernel's scratch, and its own seam map (edge
+    // keys are the level's grid's; vertices are welded within a level only).
+    struct LevelParts {
+        BrickExtractor extractor;
+        EdgeVertexMap seams;
+    };
+    std::vector<std::unique_ptr<LevelParts>> mParts;
     BrickLookAhead mLookAhead;
     // Screen positions by vertex number - mMesh.firstVertex; x NaN: not projected yet, x inf:
     // not on the image plane. Grows with the mesh; cleared with it in streaming.
@@ -88,7 +100,10 @@ struct BrickVisit {
     static constexpr bool kTestsCells = true, kTestsPolygons = true;
 
     ViewTraversal& t;
-    int64_t brick;
+    const ViewCuller& culler;     // the brick's level's
+    BrickExtractor& extractor;    //   "
+    const BrickLayout& layout;    //   "
+    int64_t brick;                // in the level's numbering
     BrickKernel<T> kernel;
     // The brick is extracted whole (ViewStream::Use::Whole): hidden meta-cells too, without
     // points or per-cell tests.
@@ -98,19 +113,22 @@ struct BrickVisit {
     MetaCellRangeCache::Ranges kept;         // from the options' range cache, if any
     const std::vector<BrickRange>& ranges;  // of the brick's meta-cells
 
-    BrickVisit(ViewTraversal& traversal, int64_t id, const void* samples, bool wholeBrick)
-        : t(traversal), brick(id),
-          kernel(traversal.mExtractor, id, samples, traversal.mOptions.iso, traversal.mMesh, traversal.mSeams),
+    BrickVisit(ViewTraversal& traversal, const ViewLevels::Brick& at, const void* samples, bool wholeBrick)
+        : t(traversal), culler(traversal.mLevels.culler(at.level)),
+          extractor(traversal.mParts[size_t(at.level)]->extractor),
+          layout(traversal.mLevels.source(at.level).layout()), brick(at.local),
+          kernel(extractor, at.local, samples, traversal.mOptions.iso, traversal.mMesh,
+                 traversal.mParts[size_t(at.level)]->seams),
           whole(wholeBrick), cellTests(traversal.mOptions.cellTests && !wholeBrick),
           eyeCell(kernel.eyeInCells(traversal.mCamera.eye)),
-          kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(id, traversal.mExtractor, samples)
+          kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(at.id, extractor, samples)
                                              : nullptr),
-          ranges(kept ? *kept : traversal.mExtractor.currentRanges()) {}
+          ranges(kept ? *kept : extractor.currentRanges()) {}
 
     // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
     bool keepCell(int64_t x, int64_t y, int64_t z) {
         if (!cellTests) return true;
-        const bool keep = t.mCuller.cullScreenBox(t.mCuller.cellBox(x, y, z)) == Cull::None;
+        const bool keep = culler.cullScreenBox(culler.cellBox(x, y, z)) == Cull::None;
         t.mStats.view.cellsCulled += !keep;
         return keep;
     }
@@ -241,7 +259,7 @@ struct BrickVisit {
     Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b) {
         ++t.mStats.nodesVisited;
         ScreenBox box;
-        const Cull cull = t.mCuller.cull(range, a, b, box);
+        const Cull cull = culler.cull(range, a, b, box);
         if (cull != Cull::None) {
             t.count(cull);
             return Verdict::Culled;
@@ -291,9 +309,8 @@ struct BrickVisit {
 
     // The meta-cells [lo, hi) of the brick, front to back by halving the longest side.
     void visitMetaCells(const int lo[3], const int hi[3]) {
-        const int n = t.mExtractor.metaCellsPerAxis(), M = t.mExtractor.metaCellSize();
+        const int n = extractor.metaCellsPerAxis(), M = extractor.metaCellSize();
         const BrickRange range = rangeOf(lo, hi);
-        const BrickLayout& layout = t.mSource.layout();
         const Dims3 c = layout.brickCoord(brick);
         int64_t cellLo[3], cellHi[3];
         for (int k = 0; k < 3; ++k) {
@@ -303,7 +320,7 @@ struct BrickVisit {
         }
         if (cellLo[0] >= cellHi[0] || cellLo[1] >= cellHi[1] || cellLo[2] >= cellHi[2]) return;
         glm::dvec3 a, b;
-        t.mCuller.worldBox(cellLo, cellHi, a, b);
+        culler.worldBox(cellLo, cellHi, a, b);
         if (whole) {
             // Every active meta-cell is made; only those that show are scan-converted.
             ++t.mStats.nodesVisited;
@@ -311,7 +328,7 @@ struct BrickVisit {
                 ++t.mStats.view.culledByRange;
                 return;
             }
-            if (t.mCuller.cullScreenBox(t.mCuller.screenBox(a, b)) != Cull::None) {
+            if (culler.cullScreenBox(culler.screenBox(a, b)) != Cull::None) {
                 extractUnseen(lo, hi);
                 return;
             }
@@ -348,7 +365,7 @@ struct BrickVisit {
     // boxes of several meta-cells instead, and computing a brick's meta-cell ranges only for
     // those visited, was slower: the coarser ranges let more boxes through to the screen tests.)
     BrickRange rangeOf(const int lo[3], const int hi[3]) {
-        const int n = t.mExtractor.metaCellsPerAxis();
+        const int n = extractor.metaCellsPerAxis();
         BrickRange range{std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
         for (int z = lo[2]; z < hi[2]; ++z)
             for (int y = lo[1]; y < hi[1]; ++y)
@@ -362,7 +379,7 @@ struct BrickVisit {
     // The surface of the active meta-cells [lo, hi), which do not show: made for a whole
     // brick's chunk, not scan-converted.
     void extractUnseen(const int lo[3], const int hi[3]) {
-        const int n = t.mExtractor.metaCellsPerAxis();
+        const int n = extractor.metaCellsPerAxis();
         AllCells all;
         for (int z = lo[2]; z < hi[2]; ++z)
             for (int y = lo[1]; y < hi[1]; ++y)
@@ -375,7 +392,7 @@ struct BrickVisit {
     }
 
     void run() {
-        const int n = t.mExtractor.metaCellsPerAxis();
+        const int n = extractor.metaCellsPerAxis();
         const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
         visitMetaCells(lo, hi);
     }
@@ -427,12 +444,14 @@ std::vector<int64_t> ViewTraversal::run() {
         glm::dvec3 a, b;
         mCuller.nodeBox(node, a, b);
         if (!passes(node, a, b)) continue;
-        if (!node.isLeaf()) {
+        const int level = mLevels.levelOf(node, a, b);
+        if (level == 0 && !node.isLeaf()) {
             mTree.pushChildrenFarFirst(stack, index, mCuller.eyeInBricks());
             continue;
         }
-        const int64_t brick = mTree.brickOf(node);
-        if (!mCuller.subBlocksShow(brick)) {
+        const ViewLevels::Brick at = mLevels.brickOf(node, level);
+        const int64_t brick = at.id;
+        if (!mLevels.shows(at)) {
             ++mStats.view.bricksCulledBySubBlocks;
             continue;
         }
@@ -447,17 +466,18 @@ std::vector<int64_t> ViewTraversal::run() {
                 break;
             }
             // A chunk stands alone: no vertex is welded to another brick's.
-            mSeams.clear();
+            mParts[size_t(level)]->seams.clear();
         }
         mLookAhead.beforeAcquire(brick);
         const auto start = Clock::now();
         const BrickHandle handle = mSource.acquire(brick);  // only now: it passed 1-3
         mStats.brickWaitSeconds += std::chrono::duration<double>(Clock::now() - start).count();
         ++mStats.bricksActive;
+        mStats.view.coarseBricks += level > 0;
         acquired.push_back(brick);
-        mExtractor.beginBrick(brick, handle.samples());
+        mParts[size_t(level)]->extractor.beginBrick(at.local, handle.samples());
         visitScalarType(mSource.volume().type, [&](auto zero) {
-            BrickVisit<decltype(zero)>(*this, brick, handle.samples(), use == ViewStream::Use::Whole).run();
+            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole).run();
         });
         if (mOptions.stream) {
             mStats.triangles += mMesh.triangleCount();
@@ -470,7 +490,7 @@ std::vector<int64_t> ViewTraversal::run() {
         }
     }
     mLookAhead.stop();
-    mStats.cellsActive = mExtractor.counters().cellsActive;
+    for (const auto& parts : mParts) mStats.cellsActive += parts->extractor.counters().cellsActive;
     mStats.view.bricksPrefetchedUnused = int64_t(mLookAhead.readUnused());
     return acquired;
 }
@@ -486,7 +506,9 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     const uint64_t trianglesBefore = mesh.triangleCount();
     const uint32_t verticesBefore = mesh.nextVertex();
     const int strips = std::clamp(options.threads, 1, camera.width);
-    const MinMaxTree tree(source.layout(), source.brickRanges());
+    // With levels of detail, the tree knows every level's bricks and ranges (core/minmax_tree.h).
+    const MinMaxTree tree = options.lodError > 0 ? MinMaxTree(source.levels(), source.brickRanges())
+                                                 : MinMaxTree(source.layout(), source.brickRanges());
     // What is visible scales with the image, not the volume: room for a couple of triangles
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).
     const size_t pixels = size_t(camera.width) * size_t(camera.height);

@@ -58,12 +58,4 @@ bool ViewCuller::subBlocksShow(int64_t brick) const {
     return false;
 }
 
-bool ViewCuller::passes(const MinMaxTree& tree, uint32_t index, ScreenBox& box) const {
-    const MinMaxNode& node = tree.nodes()[index];
-    glm::dvec3 a, b;
-    nodeBox(node, a, b);
-    if (cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) return false;
-    return !node.isLeaf() || subBlocksShow(tree.brickOf(node));
-}
-
 }  // namespace vdiso

@@ -76,8 +76,6 @@ public:
     // the index, so a brick whose box passes only where it holds no surface, or only where its
     // surface is hidden, is not read. True when the source has no sub-block ranges.
     bool subBlocksShow(int64_t brick) const;
-    // Tests 1-3 now for tree node `index` and, for a leaf, its sub-blocks; its screen box in `box`.
-    bool passes(const MinMaxTree& tree, uint32_t index, ScreenBox& box) const;
 
 private:
     const BrickSource& mSource;

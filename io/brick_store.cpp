@@ -109,6 +109,7 @@ BrickStoreReader::BrickStoreReader(std::string path, ReadMode mode)
         preadExact(mFd, headerBytes.data(), headerBytes.size(), 0, mPath, "header");
         mHeader = store_format::decodeHeader(headerBytes.data(), headerBytes.size(), mPath);
         mLayout = BrickLayout(mHeader.volume.dims, mHeader.brickSize);
+        mLevels = brickLevels(mHeader.volume, mHeader.brickSize, mHeader.levelCount);
         // Compared without a sum that could wrap: both numbers come from the file.
         if (mHeader.indexOffset < kStoreHeaderBytes || mHeader.indexBytes > mFileBytes ||
             mHeader.indexOffset > mFileBytes - mHeader.indexBytes)
@@ -167,17 +168,19 @@ struct AlignedBuffer {
 }  // namespace
 
 void BrickStoreReader::failBrick(int64_t id, const std::string& what) const {
-    const Dims3 c = mLayout.brickCoord(id);
+    const int level = levelOfBrick(mLevels, id);
+    const Dims3 c = mLevels[size_t(level)].layout.brickCoord(id - mLevels[size_t(level)].firstBrick);
     throwIoError(mPath, "brick " + std::to_string(id) + " (" + std::to_string(c[0]) + "," +
                             std::to_string(c[1]) + "," + std::to_string(c[2]) +
+                            (level > 0 ? " of level " + std::to_string(level) : std::string()) +
                             ") at byte offset " + std::to_string(mIndex[size_t(id)].offset) +
                             ": " + what);
 }
 
 std::span<const unsigned char> BrickStoreReader::readStoredBrick(int64_t id) const {
-    if (id < 0 || id >= mLayout.brickCount())
+    if (id < 0 || id >= int64_t(mIndex.size()))
         throwIoError(mPath, "no brick " + std::to_string(id) + " (the store has " +
-                                std::to_string(mLayout.brickCount()) + ")");
+                                std::to_string(mIndex.size()) + ")");
     const BrickEntry& e = mIndex[size_t(id)];
     thread_local AlignedBuffer buffer;
     if (mDirectFd >= 0) {

@@ -19,12 +19,15 @@
 #include <vector>
 
 #include "core/brick_layout.h"
+#include "core/brick_levels.h"
 #include "core/brick_source.h"
 #include "core/volume.h"
 
 namespace vdiso {
 
-constexpr uint32_t kStoreFormatVersion = 2;
+// 3: levels of detail (the header's level count; every level's bricks in the index). Version
+// 2 stores, level 0 only, open as before.
+constexpr uint32_t kStoreFormatVersion = 3;
 constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;
@@ -67,14 +70,16 @@ struct ValueHistogram {
 };
 
 struct StoreHeader {
+    uint32_t formatVersion = kStoreFormatVersion;  // as read; written is always the current
     VolumeInfo volume;
     int brickSize = 32;
+    int levelCount = 1;  // levels of detail, level 0 included (core/brick_levels.h)
     Compression compression = Compression::Zstd;
     ChecksumAlgorithm checksum = ChecksumAlgorithm::Crc32;
     BrickFilter filter = BrickFilter::None;  // applied to compressed bricks only
     uint64_t indexOffset = 0, indexBytes = 0;
     double valueMin = 0, valueMax = 0;
-    uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded)
+    uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded), all levels
 };
 
 // How bricks are read. Buffered: through the page cache (repeated runs hit memory). Cold: the
@@ -96,7 +101,11 @@ public:
     const std::string& path() const { return mPath; }
     const StoreHeader& header() const { return mHeader; }
     const VolumeInfo& volume() const { return mHeader.volume; }
+    // Level 0's bricks.
     const BrickLayout& layout() const { return mLayout; }
+    // Every level, level 0 first; brick ids run through them (core/brick_levels.h).
+    const std::vector<BrickLevel>& levels() const { return mLevels; }
+    // Every level's bricks, by brick id.
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
     // kSubBlocksPerBrick codes per brick, in brick order (core/sub_blocks.h).
@@ -130,6 +139,7 @@ private:
     uint64_t mFileBytes = 0;
     StoreHeader mHeader;
     BrickLayout mLayout;
+    std::vector<BrickLevel> mLevels;
     std::vector<BrickEntry> mIndex;
     ValueHistogram mHistogram;
     std::vector<SubBlockCode> mSubBlocks;

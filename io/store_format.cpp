@@ -86,8 +86,8 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
     w.put<uint32_t>(kGhostBefore);
     w.put<uint32_t>(kGhostAfter);
     w.put<uint32_t>(kStoreAlignment);
-    w.put<uint32_t>(0);
-    w.put<uint64_t>(uint64_t(BrickLayout(h.volume.dims, h.brickSize).brickCount()));
+    w.put<uint32_t>(uint32_t(h.levelCount));
+    w.put<uint64_t>(uint64_t(totalBricks(h)));
     w.put<uint64_t>(h.indexOffset);
     w.put<uint64_t>(h.indexBytes);
     w.put<double>(h.valueMin);
@@ -122,6 +122,7 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     if (r.get<uint32_t>() != kStoreHeaderBytes) throwIoError(path, "unexpected header size");
 
     StoreHeader h;
+    h.formatVersion = version;
     for (int a = 0; a < 3; ++a) h.volume.dims[a] = int64_t(r.get<uint64_t>());
     for (int a = 0; a < 3; ++a) h.volume.spacing[a] = r.get<double>();
     for (int a = 0; a < 3; ++a) h.volume.origin[a] = r.get<double>();
@@ -142,7 +143,7 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     h.brickSize = int(r.get<uint32_t>());
     const uint32_t ghostBefore = r.get<uint32_t>(), ghostAfter = r.get<uint32_t>();
     const uint32_t alignment = r.get<uint32_t>();
-    r.skip(4);
+    const uint32_t levelCount = r.get<uint32_t>();  // reserved (0) before version 3
     const uint64_t brickCount = r.get<uint64_t>();
     h.indexOffset = r.get<uint64_t>();
     h.indexBytes = r.get<uint64_t>();
@@ -178,11 +179,26 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     if (ghostBefore != kGhostBefore || ghostAfter != kGhostAfter)
         throwIoError(path, "unsupported ghost layout");
     if (alignment != kStoreAlignment) throwIoError(path, "unsupported brick alignment");
-    if (brickCount != uint64_t(BrickLayout(h.volume.dims, h.brickSize).brickCount()))
-        throwIoError(path, "header's brick count does not match its dimensions");
+    if (version < 3) {
+        h.levelCount = 1;
+    } else {
+        const int most = levelsUntilOneBrick(BrickLayout(h.volume.dims, h.brickSize));
+        if (levelCount < 1 || levelCount > uint32_t(most))
+            throwIoError(path, "header's level count " + std::to_string(levelCount) +
+                                   " is invalid: this volume has between 1 and " + std::to_string(most) +
+                                   " levels of detail");
+        h.levelCount = int(levelCount);
+    }
+    if (brickCount != uint64_t(totalBricks(h)))
+        throwIoError(path, "header's brick count does not match its dimensions and levels");
     if (h.indexBytes != indexBytes(brickCount))
         throwIoError(path, "header's index size does not match its brick count");
     return h;
+}
+
+int64_t totalBricks(const StoreHeader& header) {
+    const std::vector<BrickLevel> levels = brickLevels(header.volume, header.brickSize, header.levelCount);
+    return levels.back().firstBrick + levels.back().layout.brickCount();
 }
 
 uint64_t indexBytes(uint64_t brickCount) {
@@ -226,7 +242,7 @@ void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header
                  const BrickLayout& layout, const std::string& path,
                  std::vector<BrickEntry>& entries, ValueHistogram& histogram,
                  std::vector<SubBlockCode>& subBlocks) {
-    const uint64_t count = uint64_t(layout.brickCount());
+    const uint64_t count = uint64_t(totalBricks(header));
     if (n != indexBytes(count) || std::memcmp(bytes, kIndexMagic, 8) != 0)
         throwIoError(path, "index is missing or corrupt (wrong magic at byte offset " +
                                std::to_string(header.indexOffset) + ")");

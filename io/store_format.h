@@ -27,6 +27,9 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
                                        const ValueHistogram& histogram,
                                        const std::vector<SubBlockCode>& subBlocks);
 
+// Bricks of every level of detail the header describes.
+int64_t totalBricks(const StoreHeader& header);
+
 // Size in bytes of the index of a store with `brickCount` bricks.
 uint64_t indexBytes(uint64_t brickCount);
 

@@ -22,6 +22,8 @@
 
 #include "core/interrupt.h"
 #include "core/iso.h"
+#include "core/brick_levels.h"
+#include "core/downsample.h"
 #include "core/sub_blocks.h"
 #include "io/atomic_output.h"
 #include "io/byte_shuffle.h"
@@ -169,6 +171,7 @@ void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord,
             }
             lo = std::min(lo, rowLo);
             hi = std::max(hi, rowHi);
+            if (!histogramEven) continue;  // a coarse level: the histogram is level 0's
             if (lz >= kGhostBefore + owned[2] || ly >= kGhostBefore + owned[1]) continue;
             int i = 0;
             for (; i + 1 < owned[0]; i += 2) {
@@ -204,8 +207,10 @@ BrickFilter filterFor(ScalarType type, const StoreWriteOptions& options) {
                : BrickFilter::None;
 }
 
+// Brick `id` of the level whose slices `window` holds, in `layout`; its owned samples count in
+// the histogram when `countSamples` (level 0).
 void encodeBrick(const SliceRing& window, const BrickLayout& layout, ScalarType type,
-                 const StoreWriteOptions& options, int64_t id, BrickScratch& scratch,
+                 const StoreWriteOptions& options, int64_t id, bool countSamples, BrickScratch& scratch,
                  StoredBrick& out) {
     const Dims3 coord = layout.brickCoord(id);
     const size_t rawBytes = size_t(layout.samplesPerBrick()) * scalarSize(type);
@@ -215,7 +220,8 @@ void encodeBrick(const SliceRing& window, const BrickLayout& layout, ScalarType 
         T* brick = reinterpret_cast<T*>(scratch.raw.data());
         gatherBrick<T>(window, layout, coord[0], coord[1], coord[2], brick);
         measureBrick<T>(brick, layout, coord, out.entry.minValue, out.entry.maxValue,
-                        scratch.histogramEven.data(), scratch.histogramOdd.data());
+                        countSamples ? scratch.histogramEven.data() : nullptr,
+                        countSamples ? scratch.histogramOdd.data() : nullptr);
     });
     measureSubBlocks(type, scratch.raw.data(), layout, coord,
                      {out.entry.minValue, out.entry.maxValue}, out.subBlocks);
@@ -267,9 +273,30 @@ void validateOptions(const VolumeInfo& info, const StoreWriteOptions& options,
         if (info.dims[a] < 2)
             throwIoError(sourceName, "every axis needs at least 2 samples to hold cells");
     requireVolumeDims(sourceName, info.dims);
-    if (const std::string problem = brickLayoutProblem(BrickLayout(info.dims, options.brickSize));
-        !problem.empty())
+    const BrickLayout layout(info.dims, options.brickSize);
+    if (const std::string problem = brickLayoutProblem(layout); !problem.empty())
         throwIoError(sourceName, problem);
+    const int most = levelsUntilOneBrick(layout) - 1;
+    if (options.coarseLevels != StoreWriteOptions::kLevelsUntilOneBrick &&
+        (options.coarseLevels < 0 || options.coarseLevels > most))
+        throw std::invalid_argument("--levels " + std::to_string(options.coarseLevels) + ": " +
+                                    sourceName + " in bricks of " + std::to_string(options.brickSize) +
+                                    " cells has at most " + std::to_string(most) +
+                                    " coarser levels (the coarsest is then one brick)");
+}
+
+// A coarser level being made: its slices as they are filtered from the level below, and the
+// next of its layers of bricks to encode.
+struct LevelInProgress {
+    BrickLevel level;
+    SliceRing ring;
+    int64_t nextSlice = 0;
+    int64_t nextLayer = 0;
+};
+
+// The last slice layer `bk` of `layout` needs.
+int64_t lastSliceOfLayer(const BrickLayout& layout, int64_t bk) {
+    return std::min(layout.firstSample(bk) + layout.side() - 1, layout.dims[2] - 1);
 }
 
 }  // namespace
@@ -282,64 +309,69 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     const BrickLayout layout(info.dims, options.brickSize);
     const size_t sampleBytes = scalarSize(info.type);
     const int B = options.brickSize;
+    const int levelCount = options.coarseLevels == StoreWriteOptions::kLevelsUntilOneBrick
+                               ? levelsUntilOneBrick(layout)
+                               : options.coarseLevels + 1;
+    const std::vector<BrickLevel> levels = brickLevels(info, B, levelCount);
 
     AtomicOutputFile out(outPath, options.overwrite, source.files());
     uint64_t fileEnd = kStoreHeaderBytes;  // the header is written last, at offset 0
 
+    auto mapRing = [&](SliceRing& ring, const Dims3& dims, int64_t slots) {
+        ring.sliceBytes = size_t(dims[0] * dims[1]) * sampleBytes;
+        ring.slots = std::min<int64_t>(slots, dims[2]);
+        const uint64_t ringBytes = checkedMul(uint64_t(ring.slots), uint64_t(ring.sliceBytes));
+        if (ringBytes > SIZE_MAX || !ring.map(size_t(ringBytes)))
+            throwIoError(source.name(), "converting it needs " + std::to_string(ringBytes >> 20) +
+                                            " MiB for " + std::to_string(ring.slots) + " slices of " +
+                                            std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
+                                            " samples, more memory than the process may allocate");
+    };
     SliceRing ring;
-    ring.sliceBytes = size_t(info.sliceSamples()) * sampleBytes;
-    ring.slots = std::min<int64_t>(2 * int64_t(B) + kGhostBefore + kGhostAfter, info.dims[2]);
-    const uint64_t ringBytes = checkedMul(uint64_t(ring.slots), uint64_t(ring.sliceBytes));
-    if (ringBytes > SIZE_MAX || !ring.map(size_t(ringBytes))) {
-        throwIoError(source.name(), "converting it needs " + std::to_string(ringBytes >> 20) +
-                                        " MiB for " + std::to_string(ring.slots) + " slices of " +
-                                        std::to_string(info.dims[0]) + " x " +
-                                        std::to_string(info.dims[1]) +
-                                        " samples, more memory than the process may allocate");
+    mapRing(ring, info.dims, 2 * int64_t(B) + kGhostBefore + kGhostAfter);
+    std::vector<LevelInProgress> coarse(size_t(levelCount - 1));
+    for (size_t l = 0; l < coarse.size(); ++l) {
+        coarse[l].level = levels[l + 1];
+        mapRing(coarse[l].ring, coarse[l].level.volume.dims, int64_t(B) + kGhostBefore + kGhostAfter);
     }
 
-    std::vector<BrickEntry> entries(size_t(layout.brickCount()));
+    const int64_t totalBricks = levels.back().firstBrick + levels.back().layout.brickCount();
+    std::vector<BrickEntry> entries(static_cast<size_t>(totalBricks));
     std::vector<SubBlockCode> subBlocks(entries.size() * kSubBlocksPerBrick);
-    const int64_t rowBricks = layout.brickCounts[0];
-    // Bricks are encoded a few rows at a time and written in id order: enough work for every
-    // core, while the compressed bytes held stay a few MB whatever the layer's size.
-    const int64_t groupRows = std::max<int64_t>(1, 128 / rowBricks);
-    // Two groups: one is encoded while the other is written, so neither core waits on the
-    // copy into the page cache. One write is in flight at a time.
+    // Bricks are encoded a few rows at a time and written in the order they are made: enough
+    // work for every core, while the compressed bytes held stay a few MB whatever the layer's
+    // size. Two groups: one is encoded while the other is written, so neither core waits on
+    // the copy into the page cache. One write is in flight at a time.
     std::vector<StoredBrick> groups[2];
-    for (auto& g : groups) g.resize(static_cast<size_t>(groupRows * rowBricks));
+    int64_t groupIndex = 0;
     std::future<void> pendingWrite;
     tbb::enumerable_thread_specific<BrickScratch> scratch;
 
-    // The last slice a layer needs (the next layer's read starts after it).
-    auto lastSliceOfLayer = [&](int64_t bk) {
-        return std::min(layout.firstSample(bk) + layout.side() - 1, info.dims[2] - 1);
-    };
-    readSlices(source, ring, 0, lastSliceOfLayer(0) + 1);
-    int64_t groupIndex = 0;
-    for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
-        throwIfInterrupted(source.name());  // also without a progress callback
-        std::future<void> prefetch;
-        if (bk + 1 < layout.brickCounts[2])
-            prefetch = std::async(std::launch::async, readSlices, std::ref(source), std::ref(ring),
-                                  lastSliceOfLayer(bk) + 1, lastSliceOfLayer(bk + 1) + 1);
-        for (int64_t bj = 0; bj < layout.brickCounts[1]; bj += groupRows, ++groupIndex) {
+    // Encodes and writes layer `bk` of a level, its slices in `window`.
+    auto emitLayer = [&](const SliceRing& window, const BrickLevel& level, int64_t bk) {
+        const BrickLayout& lay = level.layout;
+        const int64_t rowBricks = lay.brickCounts[0];
+        const int64_t groupRows = std::max<int64_t>(1, 128 / rowBricks);
+        for (int64_t bj = 0; bj < lay.brickCounts[1]; bj += groupRows, ++groupIndex) {
             std::vector<StoredBrick>& group = groups[groupIndex % 2];
-            const int64_t firstId = layout.brickId(0, bj, bk);
-            const int64_t count = std::min(groupRows, layout.brickCounts[1] - bj) * rowBricks;
+            const int64_t firstId = lay.brickId(0, bj, bk);
+            const int64_t count = std::min(groupRows, lay.brickCounts[1] - bj) * rowBricks;
+            if (group.size() < size_t(count)) group.resize(size_t(count));
+            const bool countSamples = level.firstBrick == 0;
             tbb::parallel_for(tbb::blocked_range<int64_t>(0, count, 2), [&](const auto& r) {
                 BrickScratch& s = scratch.local();
                 for (int64_t b = r.begin(); b != r.end(); ++b)
-                    encodeBrick(ring, layout, info.type, options, firstId + b, s, group[size_t(b)]);
+                    encodeBrick(window, lay, info.type, options, firstId + b, countSamples, s, group[size_t(b)]);
             });
             const uint64_t groupStart = fileEnd;
             for (int64_t b = 0; b < count; ++b) {
                 StoredBrick& sb = group[size_t(b)];
                 sb.entry.offset = fileEnd;
                 fileEnd = alignUp(fileEnd + sb.bytes.size());
-                entries[size_t(firstId + b)] = sb.entry;
+                const int64_t id = level.firstBrick + firstId + b;
+                entries[size_t(id)] = sb.entry;
                 std::copy(std::begin(sb.subBlocks), std::end(sb.subBlocks),
-                          subBlocks.begin() + (firstId + b) * kSubBlocksPerBrick);
+                          subBlocks.begin() + id * kSubBlocksPerBrick);
             }
             if (pendingWrite.valid()) pendingWrite.get();
             pendingWrite = std::async(std::launch::async, [&out, &group, count, groupStart, fileEnd] {
@@ -349,23 +381,78 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
                 out.startWriteback(groupStart, fileEnd - groupStart);
             });
         }
+    };
+
+    // Level `l` (>= 1) makes every slice it can now that the level below holds slices up to
+    // `below`; each new slice goes on to the next level, and each layer it completes is encoded.
+    std::function<void(size_t, int64_t)> feed = [&](size_t l, int64_t below) {
+        LevelInProgress& level = coarse[l - 1];
+        const SliceRing& fineRing = l == 1 ? ring : coarse[l - 2].ring;
+        const Dims3& fine = levels[l - 1].volume.dims;
+        const Dims3& dims = level.level.volume.dims;
+        while (level.nextSlice < dims[2] &&
+               (2 * level.nextSlice + 1 <= below || below == fine[2] - 1)) {
+            const int64_t z = level.nextSlice;
+            auto fineSlice = [&](int64_t s) { return fineRing.slice(std::clamp<int64_t>(s, 0, fine[2] - 1)); };
+            visitScalarType(info.type, [&](auto zero) {
+                using T = decltype(zero);
+                const T* planes[3] = {reinterpret_cast<const T*>(fineSlice(2 * z - 1)),
+                                      reinterpret_cast<const T*>(fineSlice(2 * z)),
+                                      reinterpret_cast<const T*>(fineSlice(2 * z + 1))};
+                T* dst = reinterpret_cast<T*>(level.ring.slice(z));
+                tbb::parallel_for(tbb::blocked_range<int64_t>(0, dims[1], 16), [&](const auto& r) {
+                    downsampleRows<T>(planes[0], planes[1], planes[2], fine, dims, r.begin(), r.end(), dst);
+                });
+            });
+            ++level.nextSlice;
+            if (l < coarse.size()) feed(l + 1, z);
+            const BrickLayout& lay = level.level.layout;
+            // (Two layers can end on the volume's last slice.)
+            while (level.nextLayer < lay.brickCounts[2] && lastSliceOfLayer(lay, level.nextLayer) == z)
+                emitLayer(level.ring, level.level, level.nextLayer++);
+        }
+    };
+
+    readSlices(source, ring, 0, lastSliceOfLayer(layout, 0) + 1);
+    int64_t fedSlices = 0;  // level-0 slices handed to level 1
+    for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
+        throwIfInterrupted(source.name());  // also without a progress callback
+        std::future<void> prefetch;
+        if (bk + 1 < layout.brickCounts[2])
+            prefetch = std::async(std::launch::async, readSlices, std::ref(source), std::ref(ring),
+                                  lastSliceOfLayer(layout, bk) + 1, lastSliceOfLayer(layout, bk + 1) + 1);
+        emitLayer(ring, levels[0], bk);
+        // The slices the next layer does not read again are final for level 1 now; the reader
+        // fills other slots meanwhile.
+        if (!coarse.empty()) {
+            const int64_t last = lastSliceOfLayer(layout, bk);
+            for (; fedSlices <= last; ++fedSlices) feed(1, fedSlices);
+        }
         if (prefetch.valid()) prefetch.get();
         if (progress) progress(double(bk + 1) / double(layout.brickCounts[2]));
     }
     if (pendingWrite.valid()) pendingWrite.get();
+    for (const LevelInProgress& level : coarse)
+        if (level.nextLayer != level.level.layout.brickCounts[2])
+            throw std::logic_error("store writer: a level of detail was not completed");
     source.finish();
 
     StoreHeader header;
     header.volume = info;
     header.brickSize = B;
+    header.levelCount = levelCount;
     header.compression = options.compression;
     header.filter = filterFor(info.type, options);
     header.valueMin = std::numeric_limits<double>::max();
     header.valueMax = std::numeric_limits<double>::lowest();
-    for (const BrickEntry& e : entries) {
+    uint64_t level0Bytes = 0;
+    for (size_t id = 0; id < entries.size(); ++id) {
+        const BrickEntry& e = entries[id];
+        header.storedBrickBytes += e.storedBytes;
+        if (int64_t(id) >= layout.brickCount()) continue;  // coarse samples lie within level 0's
+        level0Bytes += e.storedBytes;
         header.valueMin = std::min(header.valueMin, double(e.minValue));
         header.valueMax = std::max(header.valueMax, double(e.maxValue));
-        header.storedBrickBytes += e.storedBytes;
     }
 
     // The histogram spans the finite samples (docs/store-format.md): -inf counts in the first
@@ -413,7 +500,10 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     out.commit();
 
     StoreWriteSummary summary;
-    summary.bricks = layout.brickCount();
+    summary.bricks = totalBricks;
+    summary.levels = levelCount;
+    summary.level0Bytes = level0Bytes;
+    summary.coarseBytes = header.storedBrickBytes - level0Bytes;
     summary.inputBytes = info.byteSize();
     summary.fileBytes = fileEnd + index.size();
     summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -1,5 +1,10 @@
 // Conversion into the brick store, streaming.
 //
+// Levels of detail (core/brick_levels.h) are made in the same pass: each level-0 slice, once
+// its layer is encoded, is filtered into level 1 (core/downsample.h), level 1's into level 2,
+// and so on; each level holds B+3 slices of its own, and its layers of bricks are encoded and
+// written as they complete, between level 0's. The input is read once.
+//
 // Holds 2B+3 z-slices: the B+3 a layer of bricks needs, and B more that a reader thread fills
 // for the next layer while this one is encoded. Memory is those slices plus a few MB of
 // compressed bricks, whatever the volume's depth. Bricks are gathered, measured (min, max,
@@ -24,10 +29,17 @@ struct StoreWriteOptions {
     int compressionLevel = 1;                 // zstd level; 1 keeps conversion near disk speed
     bool shuffle = true;                      // byte-shuffle multi-byte samples before compressing
     bool overwrite = false;                   // replace an existing output file
+    // Levels of detail beyond level 0; kLevelsUntilOneBrick: until the coarsest level is one
+    // brick (`--levels auto`).
+    static constexpr int kLevelsUntilOneBrick = -1;
+    int coarseLevels = kLevelsUntilOneBrick;
 };
 
 struct StoreWriteSummary {
-    int64_t bricks = 0;
+    int64_t bricks = 0;        // all levels
+    int levels = 1;            // level 0 included
+    uint64_t level0Bytes = 0;  // stored bytes of level 0's bricks
+    uint64_t coarseBytes = 0;  // of the coarser levels' bricks
     uint64_t inputBytes = 0;   // samples read, at the store's sample size
     uint64_t fileBytes = 0;    // size of the written store
     double seconds = 0;

@@ -42,7 +42,7 @@ int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
     for (size_t i = 0; i < stores.size(); ++i) {
         const BrickCache& cache = *stores[i].cache;
         const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
-        if (bricks >= uint64_t(stores[i].reader->layout().brickCount())) continue;
+        if (bricks >= uint64_t(stores[i].reader->index().size())) continue;
         const uint64_t perFrame = uint64_t(settings.prefetchBricks + 4 * settings.threads);
         if (bricks < 2 * perFrame)
             throw IoError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +

@@ -67,8 +67,8 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
             if (other.name == s.name)
                 throw IoError(path + ": a store named '" + s.name + "' is served already");
         s.reader = std::make_unique<BrickStoreReader>(path);
-        if (uint64_t(s.reader->layout().brickCount()) >= kNoBrick)
-            throw IoError(path + ": " + std::to_string(s.reader->layout().brickCount()) +
+        if (uint64_t(s.reader->index().size()) >= kNoBrick)
+            throw IoError(path + ": " + std::to_string(s.reader->index().size()) +
                           " bricks; the protocol numbers bricks in 32 bits");
         const StoreHeader& h = s.reader->header();
         if (iso && !(*iso >= h.valueMin && *iso <= h.valueMax))

@@ -62,14 +62,14 @@ TEST_F(BrickCacheTest, SamplesMatchTheReaderAndCountersAddUp) {
     BrickCache cache(store, 64u << 20);
     std::vector<unsigned char> expected(store.brickBytes());
     for (int round = 0; round < 2; ++round)
-        for (int64_t id = 0; id < store.layout().brickCount(); ++id) {
+        for (int64_t id = 0; id < int64_t(store.index().size()); ++id) {  // every level's
             store.readBrick(id, expected.data());
             const BrickHandle h = cache.acquire(id);
             EXPECT_EQ(std::memcmp(h.samples(), expected.data(), expected.size()), 0);
         }
     const CacheCounters c = cache.counters();
-    EXPECT_EQ(c.requests, uint64_t(2 * store.layout().brickCount()));
-    EXPECT_EQ(c.misses, uint64_t(store.layout().brickCount()));
+    EXPECT_EQ(c.requests, uint64_t(2 * store.index().size()));
+    EXPECT_EQ(c.misses, uint64_t(store.index().size()));
     EXPECT_EQ(c.hits, c.misses);
     EXPECT_EQ(c.bytesRead, store.header().storedBrickBytes);
 }
@@ -102,13 +102,13 @@ TEST_F(BrickCacheTest, ColdReadsReturnTheSameBricksFromDisk) {
                 std::string(cold.readMethod()) == "fadvise")
         << cold.readMethod();
     std::vector<unsigned char> a(buffered.brickBytes()), b(cold.brickBytes());
-    for (int64_t id = 0; id < buffered.layout().brickCount(); ++id) {
+    for (int64_t id = 0; id < int64_t(buffered.index().size()); ++id) {
         buffered.readBrick(id, a.data());
         cold.readBrick(id, b.data());
         EXPECT_EQ(a, b) << "brick " << id;
     }
     BrickCache cache(cold, 64u << 20);
-    for (int64_t id = 0; id < cold.layout().brickCount(); ++id) cache.acquire(id);
+    for (int64_t id = 0; id < int64_t(cold.index().size()); ++id) cache.acquire(id);
     EXPECT_EQ(cache.counters().bytesRead, cold.header().storedBrickBytes);
 }
 

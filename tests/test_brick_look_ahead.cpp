@@ -59,12 +59,15 @@ std::vector<int64_t> bricksInOrder(const MinMaxTree& tree, const ViewCuller& cul
     while (!stack.empty()) {
         const uint32_t index = stack.back();
         stack.pop_back();
+        const MinMaxNode& node = tree.nodes()[index];
+        glm::dvec3 a, b;
+        culler.nodeBox(node, a, b);
         ScreenBox box;
-        if (!culler.passes(tree, index, box)) continue;
-        if (tree.nodes()[index].isLeaf())
-            bricks.push_back(tree.brickOf(tree.nodes()[index]));
-        else
+        if (culler.cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) continue;
+        if (!node.isLeaf())
             tree.pushChildrenFarFirst(stack, index, culler.eyeInBricks());
+        else if (culler.subBlocksShow(tree.brickOf(node)))
+            bricks.push_back(tree.brickOf(node));
     }
     return bricks;
 }
@@ -75,7 +78,8 @@ struct Scene {
     MinMaxTree tree{source.layout(), source.brickRanges()};
     Camera camera = presetCamera(ViewPreset::Normal, source.volume().origin, source.volume().worldMax(), 200, 200);
     OcclusionPyramid pyramid{200, 200};
-    ViewCuller culler{source, camera, pyramid, kSkin, true};
+    ViewLevels levels{source, tree, camera, pyramid, kSkin, true, 0.0};
+    const ViewCuller& culler = levels.culler(0);
     Scene() { fitClipPlanes(camera, source.volume().origin, source.volume().worldMax()); }
 };
 
@@ -87,7 +91,7 @@ TEST(BrickLookAhead, ReadsBricksOfTheTraversalInItsOrderEachOnce) {
     ASSERT_GT(order.size(), 10u);
     std::vector<int64_t> read;
     {
-        BrickLookAhead ahead(s.source, s.tree, s.culler, 4, 1);
+        BrickLookAhead ahead(s.source, s.tree, s.levels, 4, 1);
         for (int64_t b : order) {
             ahead.beforeAcquire(b);
             // Let the reader catch up, so the reads show what was handed over when.
@@ -110,7 +114,7 @@ TEST(BrickLookAhead, HiddenBricksAreNotRead) {
     Scene s;
     const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
     ASSERT_GT(order.size(), 10u);
-    BrickLookAhead ahead(s.source, s.tree, s.culler, 16, 1);
+    BrickLookAhead ahead(s.source, s.tree, s.levels, 16, 1);
     // The whole image is covered before the look-ahead starts: every brick after the first is
     // hidden, so nothing is read ahead.
     for (int y = 0; y < 200; ++y) s.pyramid.coverSpan(y, 0, 199);
@@ -125,7 +129,7 @@ TEST(BrickLookAhead, HiddenBricksAreNotRead) {
 TEST(BrickLookAhead, BricksHiddenAfterTheyWereFoundAreDropped) {
     Scene s;
     const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
-    BrickLookAhead ahead(s.source, s.tree, s.culler, 16, 1);
+    BrickLookAhead ahead(s.source, s.tree, s.levels, 16, 1);
     ahead.beforeAcquire(order[0]);
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const size_t before = s.source.ids().size();
@@ -146,7 +150,7 @@ TEST(BrickLookAhead, ResidentBricksAreNotReadAhead) {
         Scene s;
         s.source.resident = resident;
         const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
-        BrickLookAhead ahead(s.source, s.tree, s.culler, 8, 1);
+        BrickLookAhead ahead(s.source, s.tree, s.levels, 8, 1);
         for (int64_t b : order) {
             ahead.beforeAcquire(b);
             std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -163,7 +167,7 @@ TEST(BrickLookAhead, ResidentBricksAreNotReadAhead) {
 TEST(BrickLookAhead, DepthZeroReadsNothing) {
     Scene s;
     const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
-    BrickLookAhead ahead(s.source, s.tree, s.culler, 0);
+    BrickLookAhead ahead(s.source, s.tree, s.levels, 0);
     for (int64_t b : order) ahead.beforeAcquire(b);
     ahead.stop();
     EXPECT_TRUE(s.source.ids().empty());

@@ -35,10 +35,13 @@ TEST(Cli, ConvertRawAndDescribeIt) {
     EXPECT_TRUE(contains(r.output, "0.5 x 0.5 x 0.5")) << r.output;
     EXPECT_TRUE(contains(r.output, "0 .. 999")) << r.output;
 
-    // --iso counts exactly the bricks whose range holds the isovalue.
+    // --iso counts exactly level 0's bricks whose range holds the isovalue.
     const BrickStoreReader store(out);
     size_t active = 0;
-    for (const BrickEntry& e : store.index()) active += (e.minValue <= 500.5 && 500.5 < e.maxValue);
+    for (int64_t id = 0; id < store.layout().brickCount(); ++id) {
+        const BrickEntry& e = store.index()[size_t(id)];
+        active += (e.minValue <= 500.5 && 500.5 < e.maxValue);
+    }
     r = runVdiso("info " + out + " --iso 500.5 --json");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_TRUE(contains(r.output, "\"active_bricks\": " + std::to_string(active))) << r.output;

@@ -330,9 +330,10 @@ std::string headStore(const test::ScratchDir& dir, const Dims3& dims) {
 TEST(ExtractPrefetch, ReadsEachListedBrickOnceAndNothingElse) {
     test::ScratchDir dir;
     const BrickStoreReader store(headStore(dir, {70, 66, 60}));
-    size_t activeBricks = 0;
-    for (const BrickEntry& e : store.index())
-        activeBricks += rangeHoldsIso(e.minValue, e.maxValue, kHeadSkinIso);
+    size_t activeBricks = 0;  // of level 0
+    for (int64_t id = 0; id < store.layout().brickCount(); ++id)
+        activeBricks += rangeHoldsIso(store.index()[size_t(id)].minValue, store.index()[size_t(id)].maxValue,
+                                      kHeadSkinIso);
     TriangleMesh without, with;
     {
         BrickCache cache(store, 16 * store.brickBytes());

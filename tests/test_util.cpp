@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <random>
 #include <stdexcept>
+#include <type_traits>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -103,15 +104,16 @@ std::vector<unsigned char> readAllSamples(SliceReader& source, int64_t slab) {
 }
 
 std::string compareStoreWithSamples(const BrickStoreReader& store,
-                                    const std::vector<unsigned char>& samples) {
-    const BrickLayout& l = store.layout();
+                                    const std::vector<unsigned char>& samples, int level) {
+    const BrickLayout& l = store.levels().at(size_t(level)).layout;
+    const int64_t first = store.levels()[size_t(level)].firstBrick;
     const Dims3& d = l.dims;
     std::vector<unsigned char> brick(store.brickBytes());
     return visitScalarType(store.volume().type, [&](auto zero) -> std::string {
         using T = decltype(zero);
         const T* volume = reinterpret_cast<const T*>(samples.data());
         for (int64_t id = 0; id < l.brickCount(); ++id) {
-            store.readBrick(id, brick.data());
+            store.readBrick(first + id, brick.data());
             const Dims3 c = l.brickCoord(id);
             const T* s = reinterpret_cast<const T*>(brick.data());
             double lo = INFINITY, hi = -INFINITY;
@@ -123,7 +125,8 @@ std::string compareStoreWithSamples(const BrickStoreReader& store,
                         const int64_t z = l.clampSample(2, l.firstSample(c[2]) + lz);
                         const T expected = volume[x + d[0] * (y + d[1] * z)];
                         const T got = s[(size_t(lz) * l.side() + ly) * l.side() + lx];
-                        if (std::memcmp(&got, &expected, sizeof(T)) != 0)
+                        const bool bothNaN = got != got && expected != expected;
+                        if (std::memcmp(&got, &expected, sizeof(T)) != 0 && !bothNaN)
                             return "brick " + std::to_string(id) + " sample " +
                                    std::to_string(lx) + "," + std::to_string(ly) + "," +
                                    std::to_string(lz) + ": " + std::to_string(double(got)) +
@@ -137,7 +140,7 @@ std::string compareStoreWithSamples(const BrickStoreReader& store,
                             hi = std::max(hi, double(expected));
                         }
                     }
-            const BrickEntry& e = store.index()[size_t(id)];
+            const BrickEntry& e = store.index()[size_t(first + id)];
             if (double(e.minValue) != double(float(lo)) || double(e.maxValue) != double(float(hi)))
                 return "brick " + std::to_string(id) + " index range [" +
                        std::to_string(e.minValue) + ", " + std::to_string(e.maxValue) +
@@ -145,6 +148,40 @@ std::string compareStoreWithSamples(const BrickStoreReader& store,
         }
         return "";
     });
+}
+
+std::vector<unsigned char> bruteForceLevel(const std::vector<unsigned char>& samples, Dims3& dims,
+                                           ScalarType type) {
+    const Dims3 fine = dims;
+    for (int a = 0; a < 3; ++a) dims[a] = (fine[a] - 1 + 1) / 2 + 1;
+    std::vector<unsigned char> out(size_t(dims[0] * dims[1] * dims[2]) * scalarSize(type));
+    visitScalarType(type, [&](auto zero) {
+        using T = decltype(zero);
+        const T* in = reinterpret_cast<const T*>(samples.data());
+        T* o = reinterpret_cast<T*>(out.data());
+        const float tent[3] = {0.25f, 0.5f, 0.25f};
+        auto clamp = [](int64_t v, int64_t n) { return std::clamp<int64_t>(v, 0, n - 1); };
+        for (int64_t z = 0; z < dims[2]; ++z)
+            for (int64_t y = 0; y < dims[1]; ++y)
+                for (int64_t x = 0; x < dims[0]; ++x) {
+                    float column[3];
+                    for (int dx = 0; dx < 3; ++dx) {
+                        const int64_t fx = clamp(2 * x + dx - 1, fine[0]);
+                        column[dx] = 0.0f;
+                        for (int dz = 0; dz < 3; ++dz)
+                            for (int dy = 0; dy < 3; ++dy) {
+                                const int64_t fz = clamp(2 * z + dz - 1, fine[2]), fy = clamp(2 * y + dy - 1, fine[1]);
+                                column[dx] += tent[dz] * tent[dy] * float(in[fx + fine[0] * (fy + fine[1] * fz)]);
+                            }
+                    }
+                    const float v = 0.25f * column[0] + 0.5f * column[1] + 0.25f * column[2];
+                    T r;
+                    if constexpr (std::is_floating_point_v<T>) r = T(v);
+                    else r = T(std::floor(v + 0.5f));
+                    o[x + dims[0] * (y + dims[1] * z)] = r;
+                }
+    });
+    return out;
 }
 
 }  // namespace vdiso::test

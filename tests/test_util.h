@@ -79,10 +79,16 @@ private:
 // Reads everything a source delivers, in slabs of `slab` slices (uneven on purpose).
 std::vector<unsigned char> readAllSamples(SliceReader& source, int64_t slab = 3);
 
-// Compares every stored sample of every brick (ghosts included, clamped at the borders) with
-// `samples` (the whole volume, x fastest), and each brick's index min/max with brute force.
-// Returns "" when all agree, else a description of the first difference.
+// Compares every stored sample of every brick of level `level` (ghosts included, clamped at the
+// borders) with `samples` (the whole level, x fastest), and each brick's index min/max with
+// brute force. Returns "" when all agree, else a description of the first difference.
 std::string compareStoreWithSamples(const BrickStoreReader& store,
-                                    const std::vector<unsigned char>& samples);
+                                    const std::vector<unsigned char>& samples, int level = 0);
+
+// The next level of detail of `samples` (`dims` of `type`, x fastest), by brute force: every
+// coarse sample from its 27 fine neighbours (core/downsample.h's tent, indices clamped), summed
+// in the same order so that floats agree to the bit. `dims` becomes the coarse level's.
+std::vector<unsigned char> bruteForceLevel(const std::vector<unsigned char>& samples, Dims3& dims,
+                                           ScalarType type);
 
 }  // namespace vdiso::test

@@ -79,6 +79,9 @@ const char* const kStoreWriteOptionsHelp =
     "                          about a quarter fewer bytes, lz4 decodes about 5x faster\n"
     "  --level N               zstd level (default 1)\n"
     "  --no-shuffle            compress multi-byte samples without the byte-shuffle filter\n"
+    "  --levels N|auto         levels of detail beyond the full resolution, each with cells\n"
+    "                          twice as large (default auto: until the coarsest is one\n"
+    "                          brick, about 1/7 more bytes); 0 for none\n"
     "  --force                 replace OUTPUT if it exists\n";
 
 bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions& options) {
@@ -96,6 +99,10 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
             throw UsageError("--compress expects zstd, lz4 or none, not '" + c + "'");
     } else if (flag == "--level") {
         options.compressionLevel = int(parseInt(flag, args.value(flag), -7, 19));
+    } else if (flag == "--levels") {
+        const std::string v = args.value(flag);
+        options.coarseLevels = v == "auto" ? StoreWriteOptions::kLevelsUntilOneBrick
+                                           : int(parseInt(flag, v, 0, kMaxLevels - 1));
     } else if (flag == "--no-shuffle") {
         options.shuffle = false;
     } else if (flag == "--force") {

@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <algorithm>
 #include <cstring>
 
 #include "io/store_writer.h"
@@ -125,11 +126,13 @@ int runConvert(int argc, char** argv) {
     const StoreWriteSummary s = writeBrickStore(
         *source, outPath, store, progressBar("convert", double(info.byteSize()), quiet));
     if (!quiet)
-        std::printf("wrote %s: %lldx%lldx%lld %s, %lld bricks of %d^3 cells, %.1f MB in, %.1f MB "
-                    "stored (ratio %.2f), %.2f s, %.0f MB/s\n",
+        std::printf("wrote %s: %lldx%lldx%lld %s, %lld bricks of %d^3 cells in %d level%s (coarse "
+                    "levels +%.1f%%), %.1f MB in, %.1f MB stored (ratio %.2f), %.2f s, %.0f MB/s\n",
                     outPath.c_str(), (long long)info.dims[0], (long long)info.dims[1],
                     (long long)info.dims[2], scalarTypeName(info.type), (long long)s.bricks,
-                    store.brickSize, s.inputBytes / 1e6, s.fileBytes / 1e6,
+                    store.brickSize, s.levels, s.levels == 1 ? "" : "s",
+                    100.0 * double(s.coarseBytes) / double(std::max<uint64_t>(s.level0Bytes, 1)),
+                    s.inputBytes / 1e6, s.fileBytes / 1e6,
                     double(s.inputBytes) / double(s.fileBytes), s.seconds,
                     s.inputBytes / 1e6 / s.seconds);
     return 0;

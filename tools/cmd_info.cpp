@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -19,7 +20,8 @@ constexpr const char* kHelp =
     "usage: vdiso info FILE.vdiso [--iso V] [--json]\n"
     "\n"
     "Describes a brick store from its header and index alone (no brick is read):\n"
-    "dimensions, type, spacing, bricks, stored bytes, compression, value range, histogram.\n"
+    "dimensions, type, spacing, bricks, levels of detail (each level's bricks and stored\n"
+    "bytes), compression, value range, histogram.\n"
     "\n"
     "  --iso V    also count the bricks that can hold isovalue V and the bytes they store\n"
     "             (a span-space query over the bricks' value ranges)\n"
@@ -46,8 +48,9 @@ struct ActiveBricks {
     uint64_t storedBytes = 0;
 };
 
+// Level 0's bricks that can hold iso.
 ActiveBricks activeBricks(const BrickStoreReader& store, double iso) {
-    const auto& index = store.index();
+    const std::span<const BrickEntry> index(store.index().data(), size_t(store.layout().brickCount()));
     std::vector<float> mins(index.size()), maxs(index.size());
     for (size_t i = 0; i < index.size(); ++i) {
         mins[i] = index[i].minValue;
@@ -60,6 +63,18 @@ ActiveBricks activeBricks(const BrickStoreReader& store, double iso) {
     a.bricks = ids.size();
     for (uint32_t id : ids) a.storedBytes += index[id].storedBytes;
     return a;
+}
+
+// Stored bytes of each level's bricks.
+std::vector<uint64_t> levelBytes(const BrickStoreReader& store) {
+    std::vector<uint64_t> bytes;
+    for (const BrickLevel& level : store.levels()) {
+        uint64_t sum = 0;
+        for (int64_t id = 0; id < level.layout.brickCount(); ++id)
+            sum += store.index()[size_t(level.firstBrick + id)].storedBytes;
+        bytes.push_back(sum);
+    }
+    return bytes;
 }
 
 }  // namespace
@@ -94,6 +109,7 @@ int runInfo(int argc, char** argv) {
     const BrickLayout& l = store.layout();
     const ValueHistogram& hist = store.histogram();
     const double ratio = double(v.byteSize()) / double(store.fileBytes());
+    const std::vector<uint64_t> bytesOfLevel = levelBytes(store);
     // Integer samples have integer quantiles; the histogram's interpolation would suggest more.
     auto quantile = [&](double f) {
         const double q = hist.quantile(f);
@@ -108,7 +124,7 @@ int runInfo(int argc, char** argv) {
                    std::to_string(t[2]) + "]";
         };
         JsonObject o;
-        o.add("file", path).add("format_version", int64_t(kStoreFormatVersion));
+        o.add("file", path).add("format_version", int64_t(h.formatVersion));
         o.addRaw("dims", triple(v.dims)).add("type", scalarTypeName(v.type));
         o.addRaw("spacing", "[" + std::to_string(v.spacing.x) + ", " + std::to_string(v.spacing.y) +
                                 ", " + std::to_string(v.spacing.z) + "]");
@@ -117,6 +133,16 @@ int runInfo(int argc, char** argv) {
         o.add("brick_size", h.brickSize).addRaw("brick_counts", triple(l.brickCounts));
         o.add("bricks", l.brickCount()).add("compression", compressionName(h.compression));
         o.add("volume_bytes", v.byteSize()).add("file_bytes", store.fileBytes());
+        std::string levels = "[";
+        for (size_t k = 0; k < bytesOfLevel.size(); ++k) {
+            const BrickLevel& level = store.levels()[k];
+            JsonObject lo;
+            lo.add("level", int64_t(k)).addRaw("dims", triple(level.volume.dims));
+            lo.add("cell_size", double(int64_t(1) << k)).add("bricks", level.layout.brickCount());
+            lo.add("stored_bytes", bytesOfLevel[k]);
+            levels += (k ? ", " : "") + lo.str();
+        }
+        o.addRaw("levels", levels + "]");
         o.add("compression_ratio", ratio).add("min", h.valueMin).add("max", h.valueMax);
         o.add("p01", quantile(0.01)).add("p50", quantile(0.5)).add("p99", quantile(0.99));
         std::string counts = "[";
@@ -138,6 +164,16 @@ int runInfo(int argc, char** argv) {
     std::printf("  bricks       %lld (%lld x %lld x %lld) of %d^3 cells, stored %d^3 samples\n",
                 (long long)l.brickCount(), (long long)l.brickCounts[0], (long long)l.brickCounts[1],
                 (long long)l.brickCounts[2], h.brickSize, l.side());
+    for (size_t k = 0; k < bytesOfLevel.size() && bytesOfLevel.size() > 1; ++k) {
+        const BrickLevel& level = store.levels()[k];
+        std::printf("  level %-2zu     cells %3lldx  %lld x %lld x %lld samples  %6lld bricks  %8.1f MB", k,
+                    (long long)(int64_t(1) << k), (long long)level.volume.dims[0],
+                    (long long)level.volume.dims[1], (long long)level.volume.dims[2],
+                    (long long)level.layout.brickCount(), bytesOfLevel[k] / 1e6);
+        if (k > 0) std::printf("  (%.2f%% of level 0)", 100.0 * double(bytesOfLevel[k]) / double(std::max<uint64_t>(bytesOfLevel[0], 1)));
+        std::printf("\n");
+    }
+    if (bytesOfLevel.size() == 1) std::printf("  levels       1 (no coarser levels of detail)\n");
     std::printf("  stored       %.1f MB on disk for %.1f MB of samples (%s, ratio %.2f)\n",
                 store.fileBytes() / 1e6, v.byteSize() / 1e6, compressionName(h.compression), ratio);
     std::printf("  values       %g .. %g   1%% %.4g  median %.4g  99%% %.4g\n", h.valueMin,
@@ -149,7 +185,7 @@ int runInfo(int argc, char** argv) {
                     *iso, active->bricks, (long long)l.brickCount(),
                     100.0 * double(active->bricks) / double(l.brickCount()),
                     active->storedBytes / 1e6,
-                    100.0 * double(active->storedBytes) / double(h.storedBrickBytes));
+                    100.0 * double(active->storedBytes) / double(bytesOfLevel[0]));
     return 0;
 }
 
