@@ -121,7 +121,7 @@ struct BrickVisit {
                  traversal.mParts[size_t(at.level)]->seams),
           whole(wholeBrick), cellTests(traversal.mOptions.cellTests && !wholeBrick),
           eyeCell(kernel.eyeInCells(traversal.mCamera.eye)),
-          kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(at.id, extractor, samples)
+          kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(at.id, at.local, extractor, samples)
                                              : nullptr),
           ranges(kept ? *kept : extractor.currentRanges()) {}
 

@@ -2,7 +2,8 @@
 
 namespace vdiso {
 
-MetaCellRangeCache::Ranges MetaCellRangeCache::get(int64_t id, BrickExtractor& extractor, const void* samples) {
+MetaCellRangeCache::Ranges MetaCellRangeCache::get(int64_t id, int64_t brick, BrickExtractor& extractor,
+                                                   const void* samples) {
     {
         std::lock_guard lock(mMutex);
         const auto it = mEntries.find(id);
@@ -13,7 +14,7 @@ MetaCellRangeCache::Ranges MetaCellRangeCache::get(int64_t id, BrickExtractor& e
     }
     // Computed outside the lock: strips computing the same brick at once both do the work.
     auto ranges = std::make_shared<std::vector<BrickRange>>();
-    extractor.metaCellRanges(id, samples, *ranges);
+    extractor.metaCellRanges(brick, samples, *ranges);
     std::lock_guard lock(mMutex);
     if (mMaxBricks == 0) return ranges;
     const auto it = mEntries.find(id);

@@ -26,9 +26,10 @@ public:
 
     explicit MetaCellRangeCache(size_t maxBricks) : mMaxBricks(maxBricks) {}
 
-    // The ranges of brick `id` as extractor.metaCellRanges gives them for `samples` (its
-    // samples), computed on the first call.
-    Ranges get(int64_t id, BrickExtractor& extractor, const void* samples);
+    // The ranges of source brick `id` as extractor.metaCellRanges gives them for `samples` (its
+    // samples), computed on the first call. `brick`: its number in the extractor's layout
+    // (its level's: core/brick_levels.h), `id` for level 0.
+    Ranges get(int64_t id, int64_t brick, BrickExtractor& extractor, const void* samples);
 
     size_t size() const;
 

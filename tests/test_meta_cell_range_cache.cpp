@@ -15,7 +15,7 @@ TEST(MetaCellRangeCache, ComputesOnceKeepsTheRecentAndMatchesTheExtractor) {
     BrickExtractor four(source->volume(), source->layout(), 4), two(source->volume(), source->layout(), 2);
     MetaCellRangeCache cache(2);
     const BrickHandle b0 = source->acquire(0), b1 = source->acquire(1), b2 = source->acquire(2);
-    const MetaCellRangeCache::Ranges first = cache.get(0, four, b0.samples());
+    const MetaCellRangeCache::Ranges first = cache.get(0, 0, four, b0.samples());
     std::vector<BrickRange> direct;
     four.metaCellRanges(0, b0.samples(), direct);
     ASSERT_EQ(first->size(), direct.size());
@@ -23,14 +23,14 @@ TEST(MetaCellRangeCache, ComputesOnceKeepsTheRecentAndMatchesTheExtractor) {
         EXPECT_EQ((*first)[m].minValue, direct[m].minValue);
         EXPECT_EQ((*first)[m].maxValue, direct[m].maxValue);
     }
-    EXPECT_EQ(cache.get(0, four, b0.samples()), first);  // kept, not recomputed
+    EXPECT_EQ(cache.get(0, 0, four, b0.samples()), first);  // kept, not recomputed
     // Another meta-cell size is not served from what was kept for this one.
-    EXPECT_NE(cache.get(0, two, b0.samples())->size(), first->size());
-    cache.get(0, four, b0.samples());
-    cache.get(1, four, b1.samples());
-    cache.get(2, four, b2.samples());  // two bricks at most: 0, the least recent, goes
+    EXPECT_NE(cache.get(0, 0, two, b0.samples())->size(), first->size());
+    cache.get(0, 0, four, b0.samples());
+    cache.get(1, 1, four, b1.samples());
+    cache.get(2, 2, four, b2.samples());  // two bricks at most: 0, the least recent, goes
     EXPECT_EQ(cache.size(), 2u);
-    EXPECT_NE(cache.get(0, four, b0.samples()), first);
+    EXPECT_NE(cache.get(0, 0, four, b0.samples()), first);
 }
 
 // Frames that reuse kept ranges extract what frames without them do.

@@ -9,6 +9,7 @@
 #include "core/camera.h"
 #include "core/extract_full.h"
 #include "core/extract_view.h"
+#include "core/level_source.h"
 #include "io/atomic_output.h"
 #include "io/camera_json.h"
 #include "io/json.h"
@@ -45,6 +46,12 @@ constexpr const char* kHelp =
     "  --cell-test on|off        sage/wise: test each cell of an extracted meta-cell too,\n"
     "                            and keep a cell only if it covers a new pixel centre\n"
     "                            (on for sage, off for wise)\n"
+    "  --lod-error P             sage/wise: extract each part of the volume at the coarsest\n"
+    "                            level of detail whose cells span at most P pixels on screen\n"
+    "                            (default 1; 0: full resolution only). Stores converted with\n"
+    "                            --levels 0 (or before format 3) have full resolution only\n"
+    "  --level L                 octree/noise: extract the whole surface at level of detail L\n"
+    "                            (cells 2^L times larger: a quick coarse mesh; default 0)\n"
     "  --points-out POINTS.ply   write the points (with normals)\n"
     "  --oracle                  also measure the visible-surface oracle: the full surface's\n"
     "                            depth buffer mapped back to cells and bricks, the least any\n"
@@ -85,6 +92,9 @@ struct ExtractOptions {
     int orbitFrames = 0;   // --path orbit:N
     std::string pathFile;  // --path FILE.json
     std::optional<double> iso;
+    double lodError = 1.0;
+    bool lodErrorGiven = false;
+    int level = 0;
     std::string method = "octree";
     std::string meshPath, pngPath, statsPath, cameraPath;
     ViewPreset view = ViewPreset::Normal;
@@ -146,6 +156,13 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.method = args.value(a);
             if (o.method != "octree" && o.method != "noise" && o.method != "sage" && o.method != "wise")
                 throw UsageError("--method expects octree, noise, sage or wise, not '" + o.method + "'");
+        } else if (a == "--lod-error") {
+            o.lodError = parseDouble(a, args.value(a));
+            if (!(o.lodError >= 0 && o.lodError <= 1e6))
+                throw UsageError("--lod-error expects pixels, 0 or more, not " + std::to_string(o.lodError));
+            o.lodErrorGiven = true;
+        } else if (a == "--level") {
+            o.level = int(parseInt(a, args.value(a), 0, kMaxLevels - 1));
         } else if (a == "--scan") {
             o.scanPolygons = parseSwitch(a, args.value(a), "polygons", "triangles");
         } else if (a == "--box") {
@@ -219,6 +236,12 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests))
         throw UsageError("--scan, --box, --points, --update and --cell-test apply to --method "
                          "sage or wise");
+    if (o.lodErrorGiven && !viewDependent)
+        throw UsageError("--lod-error applies to --method sage or wise; the full methods take one "
+                         "--level for the whole surface");
+    if (o.level != 0 && viewDependent)
+        throw UsageError("--level applies to --method octree or noise; sage and wise choose a "
+                         "level per part of the volume by --lod-error");
     if (!o.pointsPath.empty() && !viewDependent)
         throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
@@ -296,14 +319,16 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         v.prefetchReaders = o.readers;
         v.threads = plan.threads;
         v.rangeCache = &ranges;
+        v.lodError = o.lodError;
         stats = extractViewDependent(cache, *camera, v, mesh, points, progress);
     } else {
         FullExtractOptions extract{*o.iso, o.metaCellSize, plan.threads};
         if (streamed) extract.sink = &*streamed;
         extract.prefetchBricks = plan.prefetchBricks;
         extract.prefetchReaders = o.readers;
-        stats = o.method == "noise" ? extractNoise(cache, extract, mesh, progress)
-                                    : extractOctree(cache, extract, mesh, progress);
+        LevelSource level(cache, o.level);
+        stats = o.method == "noise" ? extractNoise(level, extract, mesh, progress)
+                                    : extractOctree(level, extract, mesh, progress);
     }
     const CacheCounters io = cache.counters() - before;
 
@@ -323,6 +348,11 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     JsonObject s;
     s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", plan.threads);
+    if (isViewDependent(o.method))
+        s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks);
+    else
+        s.add("level", o.level);
+    s.add("levels", store.header().levelCount);
     s.add("triangles", stats.triangles).add("points", uint64_t(points.size()));
     s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
@@ -387,6 +417,11 @@ int runExtract(int argc, char** argv) {
 
     const BrickStoreReader store(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
     BrickCache cache(store, o.cacheMb << 20);
+    if (o.level >= store.header().levelCount)
+        throw UsageError("--level " + std::to_string(o.level) + ": " + o.input + " holds " +
+                         std::to_string(store.header().levelCount) + " level" +
+                         (store.header().levelCount == 1 ? "" : "s") + " of detail (0 to " +
+                         std::to_string(store.header().levelCount - 1) + ")");
     const VolumeInfo& volume = store.volume();
     const glm::dvec3 boundsMin = volume.origin;
     const glm::dvec3 boundsMax = volume.worldMax();

@@ -1,0 +1,267 @@
+// Levels of detail (core/brick_levels.h): the min/max tree's ranges hold every finer level's,
+// nodes are the bricks of the levels they say, views at --lod-error 1 look like the
+// full-resolution surface at every distance while reading less, a store of format version 2
+// still opens and extracts as before, and what the tools refuse. (Coarse samples against a
+// brute-force downsample and round trips of every level: test_store.cpp.)
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include "cache/brick_cache.h"
+#include "core/camera.h"
+#include "core/extract_full.h"
+#include "core/extract_view.h"
+#include "core/level_source.h"
+#include "core/minmax_tree.h"
+#include "core/synth.h"
+#include "io/brick_store.h"
+#include "io/image_compare.h"
+#include "io/renderer.h"
+#include "io/store_format.h"
+#include "io/store_writer.h"
+#include "io/volume_open.h"
+#include "tests/extract_test_util.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+std::string writeStore(SliceReader& source, const std::string& path, int brickSize, int coarseLevels) {
+    StoreWriteOptions o;
+    o.brickSize = brickSize;
+    o.coarseLevels = coarseLevels;
+    writeBrickStore(source, path, o);
+    return path;
+}
+
+std::string headStore(const test::ScratchDir& dir, const Dims3& dims, int brickSize,
+                      int coarseLevels = StoreWriteOptions::kLevelsUntilOneBrick) {
+    SynthParams p;
+    p.kind = SynthKind::Head;
+    p.dims = dims;
+    return writeStore(*openSynthVolume(p), dir.file("head.vdiso"), brickSize, coarseLevels);
+}
+
+// Level-l brick c covers level-0 bricks [c 2^l, (c+1) 2^l) per axis, clipped to the grid.
+TEST(Levels, TreeNodesAreTheLevelsBricksAndTheirRangesHoldEveryFinerLevel) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {70, 66, 37}, 8));
+    const std::vector<BrickLevel>& levels = store.levels();
+    ASSERT_EQ(levels.size(), 5u);  // 9 x 9 x 5 bricks: one brick at level 4
+    std::vector<BrickRange> ranges;
+    for (const BrickEntry& e : store.index()) ranges.push_back({e.minValue, e.maxValue});
+    const MinMaxTree tree(levels, ranges);
+    std::vector<int> bricksAsNodes(levels.size(), 0), nodesAsBricks(levels.size(), 0);
+    for (const MinMaxNode& node : tree.nodes()) {
+        for (size_t l = 0; l < levels.size(); ++l) nodesAsBricks[l] += node.isBrickOfLevel(int(l));
+        for (size_t l = 0; l < levels.size(); ++l) {
+            const BrickLayout& layout = levels[l].layout;
+            for (int64_t id = 0; id < layout.brickCount(); ++id) {
+                const Dims3 c = layout.brickCoord(id);
+                bool inside = true, same = true;
+                for (int a = 0; a < 3; ++a) {
+                    const int64_t lo = c[a] << l, hi = std::min((c[a] + 1) << l, levels[0].layout.brickCounts[a]);
+                    inside = inside && lo >= node.lo[a] && hi <= node.hi[a];
+                    same = same && lo == node.lo[a] && hi == node.hi[a];
+                }
+                const BrickRange r = ranges[size_t(levels[l].firstBrick + id)];
+                if (inside) {
+                    EXPECT_LE(node.minValue, r.minValue) << "level " << l << " brick " << id;
+                    EXPECT_GE(node.maxValue, r.maxValue) << "level " << l << " brick " << id;
+                }
+                if (same) {
+                    EXPECT_TRUE(node.isBrickOfLevel(int(l))) << "level " << l << " brick " << id;
+                    EXPECT_EQ(tree.brickOf(node, int(l)), levels[l].firstBrick + id);
+                    ++bricksAsNodes[l];
+                }
+            }
+        }
+    }
+    // Every brick of every level is a node, and a node says it is a brick only when it is one.
+    for (size_t l = 0; l < levels.size(); ++l) {
+        EXPECT_EQ(bricksAsNodes[l], levels[l].layout.brickCount()) << "level " << l;
+        EXPECT_EQ(nodesAsBricks[l], levels[l].layout.brickCount()) << "level " << l;
+    }
+}
+
+// Rendered like the full-resolution octree surface from cameras ever farther away, while the
+// far views read coarse bricks and fewer bytes.
+struct DistanceResult {
+    double agreement;
+    uint64_t referenceCovered, missing, differentColour;
+    int64_t coarseBricks;
+    uint64_t bytesRead, bytesReadFull;
+};
+
+DistanceResult viewAtDistance(const BrickStoreReader& store, double iso, double scale, int imageSize) {
+    const VolumeInfo& v = store.volume();
+    Camera camera = presetCamera(ViewPreset::Normal, v.origin, v.worldMax(), imageSize, imageSize);
+    camera.eye = camera.target + (camera.eye - camera.target) * scale;
+    camera.zNear = camera.zFar = 0;
+    fitClipPlanes(camera, v.origin, v.worldMax());
+    TriangleMesh full;
+    {
+        BrickCache cache(store, 256u << 20);
+        extractOctree(cache, {iso, 4}, full);
+    }
+    DistanceResult r{};
+    ViewExtractOptions o = ViewExtractOptions::sage(iso);
+    TriangleMesh flat, lod;
+    PointSet flatPoints, lodPoints;
+    {
+        BrickCache cache(store, 256u << 20);
+        extractViewDependent(cache, camera, o, flat, flatPoints);
+        r.bytesReadFull = cache.counters().bytesRead;
+    }
+    o.lodError = 1;
+    BrickCache cache(store, 256u << 20);
+    const ExtractStats s = extractViewDependent(cache, camera, o, lod, lodPoints);
+    r.bytesRead = cache.counters().bytesRead;
+    r.coarseBricks = s.view.coarseBricks;
+    const ImageAgreement a = compareImages(renderSurface(full, PointSet{}, camera).image,
+                                           renderSurface(lod, lodPoints, camera).image);
+    r.agreement = a.agreement();
+    r.referenceCovered = a.referenceCovered;
+    r.missing = a.missing;
+    r.differentColour = a.differentColour;
+    return r;
+}
+
+// `smooth`: the surface's normals vary little within a coarse cell (a head's skin), so the
+// coarse picture's colours match too. Elsewhere (bone, noise, an MRI's skin) a coarse vertex's
+// normal is the gradient of the filtered field, the average of the fine normals it stands
+// for, where the fine picture shows one of them per pixel: the pixels are covered, their
+// shading differs beyond the 24/255 the comparison allows, and only coverage is asserted.
+void expectFaithfulAtEveryDistance(const BrickStoreReader& store, double iso, const char* what, bool smooth) {
+    // 1: the normal view (cells about a pixel: level 0); then ever farther, to where the
+    // volume is a few dozen pixels across and its coarsest levels are drawn.
+    for (double scale : {1.0, 2.5, 5.0, 10.0}) {
+        const DistanceResult r = viewAtDistance(store, iso, scale, 600);
+        const std::string label = std::string(what) + " at " + std::to_string(scale) + "x of " +
+                                  std::to_string(r.referenceCovered) + " pixels: " + std::to_string(r.missing) +
+                                  " missing, " + std::to_string(r.differentColour) + " of another colour";
+        // Missing pixels are silhouette pixels (a coarse surface's outline is a little inside):
+        // a larger share of a small picture.
+        EXPECT_LE(double(r.missing), (scale <= 5.0 ? 0.01 : 0.02) * double(r.referenceCovered)) << label;
+        if (scale <= 2.5 || smooth) {
+            EXPECT_GE(r.agreement, scale <= 2.5 ? 0.995 : 0.98) << label;
+        }
+        EXPECT_LE(r.bytesRead, r.bytesReadFull) << label;
+        if (scale >= 5.0) {
+            EXPECT_GT(r.coarseBricks, 0) << label;
+            EXPECT_LT(double(r.bytesRead), 0.5 * double(r.bytesReadFull)) << label;
+        }
+    }
+}
+
+TEST(Levels, GeneratedHeadLooksTheSameAtEveryDistance) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {192, 192, 192}, 8));
+    expectFaithfulAtEveryDistance(store, kHeadSkinIso, "head skin", true);
+    expectFaithfulAtEveryDistance(store, kHeadBoneIso, "head bone", false);
+}
+
+TEST(Levels, TurbulenceLooksTheSameAtEveryDistance) {
+    test::ScratchDir dir;
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {160, 160, 160};
+    const BrickStoreReader store(writeStore(*openSynthVolume(p), dir.file("t.vdiso"), 8,
+                                            StoreWriteOptions::kLevelsUntilOneBrick));
+    expectFaithfulAtEveryDistance(store, turbulenceIso(ScalarType::U16), "turbulence", false);
+}
+
+TEST(Levels, RealMriLooksTheSameAtEveryDistance) {
+    const char* dir = std::getenv("VDISO_DATA_DIR");
+    const std::string path = dir ? std::string(dir) + "/ch2.nii.gz" : "";
+    if (path.empty() || !std::filesystem::exists(path))
+        GTEST_SKIP() << "VDISO_DATA_DIR has no ch2.nii.gz (scripts/test.sh fetches it)";
+    test::ScratchDir scratch;
+    auto mri = openVolume(path, {});
+    const BrickStoreReader store(writeStore(*mri, scratch.file("mri.vdiso"), 8,
+                                            StoreWriteOptions::kLevelsUntilOneBrick));
+    expectFaithfulAtEveryDistance(store, 40.5, "mri skin", false);
+}
+
+// A store written before levels of detail (format version 2: no level count, level 0's bricks
+// alone) opens, has one level, and extracts what it did; asking it for levels changes nothing.
+TEST(Levels, VersionTwoStoreOpensAndExtractsAsBefore) {
+    test::ScratchDir dir;
+    const std::string path = headStore(dir, {64, 60, 56}, 8, 0);
+    auto bytes = test::readFile(path);
+    const uint32_t two = 2, none = 0;
+    std::memcpy(bytes.data() + 8, &two, 4);
+    std::memcpy(bytes.data() + 108, &none, 4);  // the level count was reserved, zero
+    const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+    std::memcpy(bytes.data() + 160, &crc, 4);
+    const std::string old = dir.file("old.vdiso");
+    test::writeFile(old, bytes.data(), bytes.size());
+
+    const BrickStoreReader current(path), before(old);
+    EXPECT_EQ(before.header().formatVersion, 2u);
+    EXPECT_EQ(before.header().levelCount, 1);
+    EXPECT_EQ(before.levels().size(), 1u);
+    BrickCache a(current, 64u << 20), b(before, 64u << 20);
+    TriangleMesh ma, mb;
+    extractOctree(a, {kHeadSkinIso, 4}, ma);
+    extractOctree(b, {kHeadSkinIso, 4}, mb);
+    EXPECT_EQ(ma.positions, mb.positions);
+    EXPECT_EQ(ma.indices, mb.indices);
+    const VolumeInfo& v = before.volume();
+    const Camera camera = presetCamera(ViewPreset::Distant, v.origin, v.worldMax(), 400, 400);
+    ViewExtractOptions o = ViewExtractOptions::sage(kHeadSkinIso);
+    TriangleMesh flat, lod;
+    PointSet pf, pl;
+    extractViewDependent(b, camera, o, flat, pf);
+    o.lodError = 1;
+    const ExtractStats s = extractViewDependent(b, camera, o, lod, pl);
+    EXPECT_EQ(s.view.coarseBricks, 0);
+    EXPECT_EQ(flat.positions, lod.positions);
+    EXPECT_EQ(pf.positions, pl.positions);
+}
+
+// --level L extracts level L's whole surface: the same as a store whose level 0 is level L's
+// samples.
+TEST(Levels, FullExtractionAtACoarseLevelIsThatLevelsSurface) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {50, 47, 44}, 8));
+    BrickCache cache(store, 64u << 20);
+    LevelSource level1(cache, 1);
+    EXPECT_EQ(level1.volume().dims, (Dims3{26, 24, 23}));
+    EXPECT_EQ(level1.volume().spacing, store.volume().spacing * 2.0);
+    TriangleMesh coarse, fine;
+    extractOctree(level1, {kHeadSkinIso, 4}, coarse);
+    extractOctree(cache, {kHeadSkinIso, 4}, fine);
+    EXPECT_GT(coarse.triangleCount(), fine.triangleCount() / 8);
+    EXPECT_LT(coarse.triangleCount(), fine.triangleCount() / 2);
+    EXPECT_EQ(test::checkClosedOriented(coarse, &level1.volume()), "");
+}
+
+TEST(Levels, ToolsRefuseLevelsTheStoreDoesNotHave) {
+    test::ScratchDir dir;
+    const std::string raw = dir.file("v.raw"), out = dir.file("v.vdiso");
+    std::vector<uint8_t> samples(20 * 18 * 17, 7);
+    test::writeFile(raw, samples.data(), samples.size());
+    auto r = test::runVdiso("convert " + raw + " " + out + " --dims 20,18,17 --type u8 --brick 8 --levels 3");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--levels 3"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("at most 2 coarser levels"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    r = test::runVdiso("convert " + raw + " " + out + " --dims 20,18,17 --type u8 --brick 8 --levels 1");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = test::runVdiso("info " + out);
+    EXPECT_NE(r.output.find("level 1 "), std::string::npos) << r.output;
+    r = test::runVdiso("extract " + out + " --iso 3 --level 2");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--level 2: " + out + " holds 2 levels of detail"), std::string::npos) << r.output;
+    r = test::runVdiso("extract " + out + " --iso 3 --method sage --level 1");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--lod-error"), std::string::npos) << r.output;
+    r = test::runVdiso("extract " + out + " --iso 3 --lod-error 2");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--lod-error applies to --method sage or wise"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace vdiso
