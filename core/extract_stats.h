@@ -15,6 +15,7 @@ struct ViewCounters {
     int64_t bricksCulledBySubBlocks = 0;  // box passed, no sub-block did: not read
     int64_t bricksPrefetchedUnused = 0;   // read ahead, then hidden before the traversal came
     int64_t coarseBricks = 0;  // of the bricks acquired, those of a coarser level of detail
+    int64_t cappedFaces = 0;   // brick faces closed where levels meet (core/face_cap.h)
     uint64_t points = 0;
     bool abandoned = false;  // a stream's beginBrick returned false
     double scanSeconds = 0;  // extracting visible meta-cells, with their projection and scan
@@ -30,6 +31,7 @@ struct ViewCounters {
         bricksCulledBySubBlocks += o.bricksCulledBySubBlocks;
         bricksPrefetchedUnused += o.bricksPrefetchedUnused;
         coarseBricks += o.coarseBricks;
+        cappedFaces += o.cappedFaces;
         points += o.points;
         abandoned |= o.abandoned;
         scanSeconds += o.scanSeconds;

@@ -1,6 +1,7 @@
 #include "core/extract_view.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -8,6 +9,7 @@
 #include "core/brick_kernel.h"
 #include "core/brick_look_ahead.h"
 #include "core/edge_function.h"
+#include "core/face_cap.h"
 #include "core/first_hit.h"
 #include "core/image_strips.h"
 #include "core/iso.h"
@@ -119,7 +121,8 @@ struct BrickVisit {
           layout(traversal.mLevels.source(at.level).layout()), brick(at.local),
           kernel(extractor, at.local, samples, traversal.mOptions.iso, traversal.mMesh,
                  traversal.mParts[size_t(at.level)]->seams),
-          whole(wholeBrick), cellTests(traversal.mOptions.cellTests && !wholeBrick),
+          whole(wholeBrick),
+          cellTests(traversal.mOptions.cellTests && traversal.mOptions.occlusion && !wholeBrick),
           eyeCell(kernel.eyeInCells(traversal.mCamera.eye)),
           kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(at.id, at.local, extractor, samples)
                                              : nullptr),
@@ -139,6 +142,7 @@ struct BrickVisit {
     // it would draw lies behind what is drawn already or between pixel centres, where the
     // rasterizer makes no fragment either.
     bool keepPolygon(const uint32_t* vertices, int count) {
+        if (!t.mOptions.occlusion) return true;
         glm::dvec2 v[kMcMaxPolygonVertices];
         for (int k = 0; k < count; ++k)
             if (!t.screenPosition(vertices[k], v[k])) return true;  // marks nothing
@@ -282,8 +286,10 @@ struct BrickVisit {
         }
         t.mPoints.positions.push_back(position);
         t.mPoints.normals.push_back(normal);
-        t.mPyramid.coverSpan(p->y, p->x, p->x);
-        t.mPyramid.propagate();
+        if (t.mOptions.occlusion) {
+            t.mPyramid.coverSpan(p->y, p->x, p->x);
+            t.mPyramid.propagate();
+        }
         ++t.mStats.view.points;
         return Verdict::Done;
     }
@@ -391,10 +397,13 @@ struct BrickVisit {
                 }
     }
 
-    void run() {
+    // `capFaces`: the faces to close (core/face_cap.h), bits as ViewLevels::seamFaces.
+    void run(unsigned capFaces) {
         const int n = extractor.metaCellsPerAxis();
         const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
         visitMetaCells(lo, hi);
+        for (int face = 0; face < 6; ++face)
+            if (capFaces & (1u << face)) appendFaceCap(kernel, face / 2, face % 2 == 1);
     }
 };
 
@@ -476,8 +485,15 @@ std::vector<int64_t> ViewTraversal::run() {
         mStats.view.coarseBricks += level > 0;
         acquired.push_back(brick);
         mParts[size_t(level)]->extractor.beginBrick(at.local, handle.samples());
+        // Seams between levels are capped: where this brick meets another level for this
+        // camera, or, for a whole brick's chunk (the same for every camera), wherever it meets
+        // a neighbour.
+        unsigned capFaces = 0;
+        if (mLevels.count() > 1 && use != ViewStream::Use::Held)
+            capFaces = use == ViewStream::Use::Whole ? mLevels.innerFaces(node) : mLevels.seamFaces(node, level);
+        mStats.view.cappedFaces += std::popcount(capFaces);
         visitScalarType(mSource.volume().type, [&](auto zero) {
-            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole).run();
+            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole).run(capFaces);
         });
         if (mOptions.stream) {
             mStats.triangles += mMesh.triangleCount();

@@ -76,6 +76,9 @@ struct ViewExtractOptions {
     // cells are about the size of pixels this brings the output near the visible-surface
     // oracle.
     bool cellTests = true;
+    // False: no occlusion culling at all (for the measures of what it saves): nothing is
+    // scan-converted into the pyramid, so no box is ever hidden, and there are no cell tests.
+    bool occlusion = true;
     // Bricks a reader thread loads ahead of the traversal (core/brick_prefetcher.h), found by
     // a look-ahead that runs tests 1-3 ahead of it; 0: none. The source's cache must hold
     // more than this many bricks.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/iso.h"
+
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
@@ -17,7 +19,7 @@ ViewLevels::Level::Level(BrickSource& base, int l, const Camera& camera, const O
 
 ViewLevels::ViewLevels(BrickSource& source, const MinMaxTree& tree, const Camera& camera,
                        const OcclusionPyramid& pyramid, double iso, bool estimateBox, double lodError)
-    : mTree(tree), mLodError(lodError), mEye(camera.eye), mForward(camera.forward()),
+    : mTree(tree), mIso(iso), mLodError(lodError), mEye(camera.eye), mForward(camera.forward()),
       mFocalPixels(double(camera.height) / (2.0 * std::tan(glm::radians(camera.fovYDegrees) / 2.0))) {
     const int levels = lodError > 0 ? tree.levelCount() : 1;
     for (int l = 0; l < levels; ++l)
@@ -36,6 +38,52 @@ int ViewLevels::levelOf(const MinMaxNode& node, const glm::dvec3& a, const glm::
     for (int l = coarsest; l >= std::max<int>(node.fineLevel, 1); --l)
         if (mLevels[size_t(l)]->cellSize * mFocalPixels / depth <= mLodError) return l;
     return 0;
+}
+
+int ViewLevels::levelAt(const int64_t c[3]) const {
+    const std::vector<MinMaxNode>& nodes = mTree.nodes();
+    uint32_t index = 0;
+    while (true) {
+        const MinMaxNode& node = nodes[index];
+        if (!rangeHoldsIso(node.minValue, node.maxValue, mIso)) return -1;
+        glm::dvec3 a, b;
+        culler(0).nodeBox(node, a, b);
+        const int level = levelOf(node, a, b);
+        if (level > 0) return level;
+        if (node.isLeaf()) return 0;
+        const int axis = node.splitAxis;
+        index = c[axis] < nodes[index + 1].hi[axis] ? index + 1 : node.secondChild;
+    }
+}
+
+unsigned ViewLevels::innerFaces(const MinMaxNode& node) const {
+    const Dims3& bricks = mTree.layout().brickCounts;
+    unsigned faces = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (node.lo[a] > 0) faces |= 1u << (2 * a);
+        if (node.hi[a] < bricks[a]) faces |= 1u << (2 * a + 1);
+    }
+    return faces;
+}
+
+unsigned ViewLevels::seamFaces(const MinMaxNode& node, int level) const {
+    if (count() == 1) return 0;
+    unsigned faces = 0;
+    for (int a = 0; a < 3; ++a) {
+        const int u = (a + 1) % 3, v = (a + 2) % 3;
+        for (int upper = 0; upper < 2; ++upper) {
+            const unsigned bit = 1u << (2 * a + upper);
+            if (!(innerFaces(node) & bit)) continue;
+            int64_t c[3];
+            c[a] = upper ? node.hi[a] : node.lo[a] - 1;
+            for (c[u] = node.lo[u]; c[u] < node.hi[u] && !(faces & bit); ++c[u])
+                for (c[v] = node.lo[v]; c[v] < node.hi[v] && !(faces & bit); ++c[v]) {
+                    const int other = levelAt(c);
+                    if (other >= 0 && other != level) faces |= bit;
+                }
+        }
+    }
+    return faces;
 }
 
 }  // namespace vdiso

@@ -50,6 +50,17 @@ public:
     // Test 1-3 for the brick's sub-blocks (ViewCuller::subBlocksShow).
     bool shows(const Brick& brick) const { return culler(brick.level).subBlocksShow(brick.local); }
 
+    // The level level-0 brick c is extracted at, whether or not it shows: that of the first
+    // node on the tree's path down to it that resolves (levelOf > 0, or the leaf); -1 when a
+    // node on the way holds no surface at any level. Depends on the camera, not the pyramid.
+    int levelAt(const int64_t c[3]) const;
+    // The faces of `node`, extracted at `level`, that meet a region extracted at another level
+    // (one that holds surface): bit 2a for its low face on axis a, 2a + 1 for its high face.
+    // Those are the faces to cap (core/face_cap.h). 0 with one level.
+    unsigned seamFaces(const MinMaxNode& node, int level) const;
+    // The faces of `node` inside the volume (those with a neighbour), in the same bits.
+    unsigned innerFaces(const MinMaxNode& node) const;
+
 private:
     struct Level {
         LevelSource source;
@@ -59,6 +70,7 @@ private:
               bool estimateBox);
     };
     const MinMaxTree& mTree;
+    double mIso;
     std::vector<std::unique_ptr<Level>> mLevels;
     double mLodError;
     glm::dvec3 mEye, mForward;

@@ -52,6 +52,8 @@ constexpr const char* kHelp =
     "                            --levels 0 (or before format 3) have full resolution only\n"
     "  --level L                 octree/noise: extract the whole surface at level of detail L\n"
     "                            (cells 2^L times larger: a quick coarse mesh; default 0)\n"
+    "  --occlusion on|off        sage/wise: occlusion culling (default on); off draws all that\n"
+    "                            is in view, front and back, to measure what culling saves\n"
     "  --points-out POINTS.ply   write the points (with normals)\n"
     "  --oracle                  also measure the visible-surface oracle: the full surface's\n"
     "                            depth buffer mapped back to cells and bricks, the least any\n"
@@ -86,7 +88,7 @@ constexpr const char* kHelp =
 
 struct ExtractOptions {
     std::string input;
-    std::optional<bool> scanPolygons, estimateBox, points, bottomUp, cellTests;  // sage/wise
+    std::optional<bool> scanPolygons, estimateBox, points, bottomUp, cellTests, occlusion;  // sage/wise
     std::string pointsPath;
     bool oracle = false;
     int orbitFrames = 0;   // --path orbit:N
@@ -179,6 +181,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
                 o.orbitFrames = int(parseInt(a, p.substr(6), 1, 100000));
             else
                 o.pathFile = p;
+        } else if (a == "--occlusion") {
+            o.occlusion = parseSwitch(a, args.value(a), "on", "off");
         } else if (a == "--cell-test") {
             o.cellTests = parseSwitch(a, args.value(a), "on", "off");
         } else if (a == "--points-out") {
@@ -233,9 +237,9 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
         (o.viewGiven || !o.cameraPath.empty()))
         throw UsageError("--view and --camera frame the picture: they need --png (or a "
                          "view-dependent --method)");
-    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests))
-        throw UsageError("--scan, --box, --points, --update and --cell-test apply to --method "
-                         "sage or wise");
+    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests || o.occlusion))
+        throw UsageError("--scan, --box, --points, --update, --cell-test and --occlusion apply to "
+                         "--method sage or wise");
     if (o.lodErrorGiven && !viewDependent)
         throw UsageError("--lod-error applies to --method sage or wise; the full methods take one "
                          "--level for the whole surface");
@@ -315,6 +319,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.points) v.points = *o.points;
         if (o.bottomUp) v.bottomUp = *o.bottomUp;
         if (o.cellTests) v.cellTests = *o.cellTests;
+        if (o.occlusion) v.occlusion = *o.occlusion;
         v.prefetchBricks = plan.prefetchBricks;
         v.prefetchReaders = o.readers;
         v.threads = plan.threads;
@@ -349,7 +354,8 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", plan.threads);
     if (isViewDependent(o.method))
-        s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks);
+        s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks)
+            .add("capped_faces", stats.view.cappedFaces);
     else
         s.add("level", o.level);
     s.add("levels", store.header().levelCount);
