@@ -12,7 +12,8 @@
 #      full-resolution octree's picture;
 #   3. the curve: bytes read and extraction time against camera distance (the normal view's
 #      distance times 1 .. 24), with and without levels, with and without occlusion culling,
-#      on the 2560^3 head, cold, 2 threads; bench/lod/curve.csv and bench/lod/curve.png (gnuplot).
+#      on the 2560^3 head, cold, 2 threads, times the median of REPEAT; bench/lod/curve.csv and
+#      bench/lod/curve.png (gnuplot).
 # Every row is one `vdiso extract --cold`: the store's pages are dropped, bricks come from disk.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -83,7 +84,7 @@ for view in normal closeup distant; do
 done
 echo
 
-echo "## 3. Bytes read and time against distance (2560^3 head, cold, 1024x1024, 2 threads)"
+echo "## 3. Bytes read and time (median of $REPEAT) against distance (2560^3 head, cold, 1024x1024, 2 threads)"
 echo
 CSV="$OUT/curve.csv"
 echo "scale,distance,levels,occlusion,bytes_read,extract_s,bricks_read,triangles,points" > "$CSV"
@@ -102,12 +103,16 @@ EOF
     dist=$(python3 -c "import json; c=json.load(open('$TMP/cam.json')); print(round(sum((c['eye'][k]-c['target'][k])**2 for k in range(3))**0.5))")
     for lod in 0 1; do
         for occ in on off; do
-            j=$(extract "$S" --camera "$TMP/cam.json" --lod-error $lod --occlusion $occ)
-            python3 - "$j" "$scale" "$dist" "$lod" "$occ" >> "$CSV" <<'EOF'
+            times=()
+            for r in $(seq "$REPEAT"); do
+                j=$(extract "$S" --camera "$TMP/cam.json" --lod-error $lod --occlusion $occ)
+                times+=("$(echo "$j" | field extract_s)")
+            done
+            python3 - "$j" "$scale" "$dist" "$lod" "$occ" "$(median "${times[@]}")" >> "$CSV" <<'EOF'
 import json, sys
 d = json.loads(sys.argv[1])
 print(f"{sys.argv[2]},{sys.argv[3]},{'on' if sys.argv[4] == '1' else 'off'},{sys.argv[5]},{d['bytes_read']},"
-      f"{d['extract_s']:.4f},{d['bricks_loaded']},{d['triangles']},{d['points']}")
+      f"{float(sys.argv[6]):.4f},{d['bricks_loaded']},{d['triangles']},{d['points']}")
 EOF
         done
     done
@@ -139,8 +144,9 @@ set terminal pngcairo size 1200,500 font ",10"
 set output "$OUT/curve.png"
 set multiplot layout 1,2 title "2560^3 generated head, skin, cold reads, 1024x1024, 2 threads (bench/lod.sh)"
 set logscale xy
+set xrange [0.9:30]
 set xlabel "camera distance (x the normal view's)"
-set key bottom left
+set key top right
 set grid
 set ylabel "MB read"
 plot "$TMP/on_on.dat" using 1:2 with linespoints title "levels + occlusion culling", \

@@ -489,7 +489,7 @@ std::vector<int64_t> ViewTraversal::run() {
         // camera, or, for a whole brick's chunk (the same for every camera), wherever it meets
         // a neighbour.
         unsigned capFaces = 0;
-        if (mLevels.count() > 1 && use != ViewStream::Use::Held)
+        if (mLevels.count() > 1 && mOptions.capSeams && use != ViewStream::Use::Held)
             capFaces = use == ViewStream::Use::Whole ? mLevels.innerFaces(node) : mLevels.seamFaces(node, level);
         mStats.view.cappedFaces += std::popcount(capFaces);
         visitScalarType(mSource.volume().type, [&](auto zero) {

@@ -97,6 +97,9 @@ struct ViewExtractOptions {
     // whose cells span at most this many pixels on screen where the node is nearest the eye
     // (core/view_levels.h); 0: level 0 only. Points stay for what is under a pixel.
     double lodError = 0;
+    // Where a brick meets another level, close its surface on that face (core/face_cap.h), so
+    // no crack between levels shows; false leaves the seams open (for the measure of it).
+    bool capSeams = true;
     // When set, bricks' meta-cell ranges are kept there from one extraction to the next (frames
     // of a moving camera over the same source and meta-cell size).
     MetaCellRangeCache* rangeCache = nullptr;

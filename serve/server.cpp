@@ -81,7 +81,7 @@ struct Server::Impl {
 
     explicit Impl(const ServeOptions& o)
         : options(o), stores(o.stores, o.cacheBytes, o.iso), web(o.webRoot),
-          settings{o.threads, o.metaCellSize}, gate(frameSlots(stores, settings)),
+          settings{o.threads, o.metaCellSize, 8, size_t(32) << 20, o.lodError}, gate(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 
     void accept();

@@ -25,6 +25,7 @@ struct ServeOptions {
     uint64_t cacheBytes = uint64_t(1024) << 20;  // brick cache, split across the stores
     int threads = 1;  // image strips per frame
     int metaCellSize = 4;
+    double lodError = 1.0;  // levels of detail: the final frame's error in pixels; 0: level 0 only
     std::string webRoot;  // the viewer's folder (web/)
     std::string token;    // empty: a random one
     bool handleSignals = false;  // SIGINT and SIGTERM stop run()

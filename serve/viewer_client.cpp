@@ -115,6 +115,19 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
             const nlohmann::json j = nlohmann::json::parse(text);
             if (j.value("frame", int64_t(-1)) != int64_t(frame)) continue;
             f.status = j.value("status", std::string());
+            if (!j.value("final", true) && f.status == "complete") {
+                // A coarse frame of this VIEW, complete: the final one follows and stands alone.
+                if (f.coarseFrames++ == 0) {
+                    f.coarseCompleteSeconds = since();
+                    f.coarseTriangles = j.value("triangles", uint64_t(0));
+                }
+                f.chunks.clear();
+                f.refs.clear();
+                f.transient.clear();
+                f.binaryBytes = 0;
+                f.missingRefs = 0;
+                continue;
+            }
             f.frameEnd = text;
             f.completeSeconds = since();
             return f;

@@ -33,6 +33,11 @@ struct ClientFrame {
     double firstGeometrySeconds = -1;  // from sending the VIEW to the first CHUNK or REFS
     double completeSeconds = -1;       // to frameEnd
     std::vector<std::string> errors;   // error messages that arrived meanwhile
+    // Coarser frames of the same VIEW that came first (levels of detail: frameEnd's "final"
+    // false); the fields above are the final frame's. -1: none.
+    int coarseFrames = 0;
+    double coarseCompleteSeconds = -1;  // to the first coarse frame's end
+    uint64_t coarseTriangles = 0;       // that frame's, as its frameEnd says
 };
 
 class ViewerClient {

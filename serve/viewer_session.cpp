@@ -154,6 +154,14 @@ void ViewerSession::work() {
 }
 
 void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival) {
+    const ServedStore& store = mStores[view.store];
+    const double lodError = store.reader->header().levelCount > 1 ? mSettings.lodError : 0.0;
+    if (lodError > 0 && runPass(view, arrival, lodError * SessionSettings::kCoarsePassFactor, false) != "complete")
+        return;  // superseded (or failed): the coarse frame says so, no finer one follows
+    runPass(view, arrival, lodError, true);
+}
+
+std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point arrival, double lodError, bool final) {
     ServedStore& store = mStores[view.store];
     const VolumeInfo& volume = store.reader->volume();
     Camera camera = cameraOf(view);
@@ -164,6 +172,8 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
                                          .add("frame", int64_t(view.seq))
                                          .add("store", int64_t(view.store))
                                          .addExact("iso", view.iso)
+                                         .add("lodError", lodError)
+                                         .add("final", final)
                                          .str()),
                  false);
     FrameStream stream(mClient, mOutbox, view.seq, view.store, view.iso, mSuperseded, arrival);
@@ -173,6 +183,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
     options.prefetchBricks = mSettings.prefetchBricks;
     options.stream = &stream;
     options.rangeCache = store.ranges.get();
+    options.lodError = lodError;
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;
     ExtractStats stats;
@@ -199,6 +210,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
     auto frameEnd = [&](const std::string& said) {
         JsonObject end;
         end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", said);
+        end.add("lodError", lodError).add("final", final);
         end.add("chunks", c.chunks).add("refs", c.refs).add("triangles", c.triangles);
         end.add("points", c.points).add("bytes", c.bytes);
         // The cache is shared: misses while this frame ran, whoever caused them.
@@ -214,6 +226,7 @@ void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival)
     end.ends = view.seq;
     if (status == "complete") end.ifIncomplete = OutMessage::control(frameEnd("superseded")).bytes;
     mOutbox.push(std::move(end));
+    return status;
 }
 
 }  // namespace vdiso::serve

@@ -31,6 +31,11 @@ struct SessionSettings {
     int metaCellSize = 4;
     int prefetchBricks = 8;  // per frame
     size_t outboxBytes = size_t(32) << 20;
+    // Levels of detail (core/view_levels.h): a VIEW's final frame is extracted at this error in
+    // pixels (0: level 0 only); on a store with levels, a first frame at kCoarsePassFactor times
+    // it comes before, so the viewer shows a coarse surface at once and refines it.
+    double lodError = 1.0;
+    static constexpr double kCoarsePassFactor = 8.0;
 };
 
 // At most `slots` frames extract at once, so that their pinned bricks never fill a cache.
@@ -72,6 +77,9 @@ public:
 private:
     void work();
     void runFrame(const ViewMessage& view, std::chrono::steady_clock::time_point arrival);
+    // One frame of a VIEW at `lodError`; `final`: the last for it. Returns its status.
+    std::string runPass(const ViewMessage& view, std::chrono::steady_clock::time_point arrival, double lodError,
+                        bool final);
     void reply(const std::string& error, std::optional<uint32_t> seq = std::nullopt);
 
     StoreCatalog& mStores;

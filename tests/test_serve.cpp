@@ -378,6 +378,13 @@ TEST(ServeSession, FirstFrameIsTheLibrarysStreamedExtraction) {
     const Camera camera = presetFor(fixture.storePath, ViewPreset::Normal, 192);
     const ClientFrame frame = client->requestFrame(viewOf(camera, 1));
     ASSERT_EQ(frame.status, "complete") << frame.frameEnd;
+    // The store has levels of detail: a coarse frame (8 px) came first, complete, with fewer
+    // triangles, and the final frame (1 px, the default) after it.
+    EXPECT_EQ(frame.coarseFrames, 1);
+    EXPECT_GT(frame.coarseTriangles, 0u);
+    EXPECT_LT(frame.coarseTriangles, nlohmann::json::parse(frame.frameEnd)["triangles"].get<uint64_t>());
+    EXPECT_LE(frame.coarseCompleteSeconds, frame.completeSeconds);
+    EXPECT_EQ(nlohmann::json::parse(frame.frameEnd)["final"], true);
     EXPECT_TRUE(frame.refs.empty());
     EXPECT_EQ(frame.missingRefs, 0u);
     ASSERT_FALSE(frame.chunks.empty());
@@ -388,6 +395,7 @@ TEST(ServeSession, FirstFrameIsTheLibrarysStreamedExtraction) {
     LibraryFrame library;
     ViewExtractOptions options = ViewExtractOptions::sage(kHeadSkinIso);
     options.stream = &library;
+    options.lodError = 1;  // the server's default
     TriangleMesh unused;
     PointSet unusedPoints;
     extractViewDependent(cache, camera, options, unused, unusedPoints);

@@ -50,6 +50,8 @@ constexpr const char* kHelp =
     "                            level of detail whose cells span at most P pixels on screen\n"
     "                            (default 1; 0: full resolution only). Stores converted with\n"
     "                            --levels 0 (or before format 3) have full resolution only\n"
+    "  --seams cap|open          sage/wise: close each brick's surface on faces that meet\n"
+    "                            another level of detail, so no crack shows (default cap)\n"
     "  --level L                 octree/noise: extract the whole surface at level of detail L\n"
     "                            (cells 2^L times larger: a quick coarse mesh; default 0)\n"
     "  --occlusion on|off        sage/wise: occlusion culling (default on); off draws all that\n"
@@ -88,7 +90,7 @@ constexpr const char* kHelp =
 
 struct ExtractOptions {
     std::string input;
-    std::optional<bool> scanPolygons, estimateBox, points, bottomUp, cellTests, occlusion;  // sage/wise
+    std::optional<bool> scanPolygons, estimateBox, points, bottomUp, cellTests, occlusion, capSeams;  // sage/wise
     std::string pointsPath;
     bool oracle = false;
     int orbitFrames = 0;   // --path orbit:N
@@ -181,6 +183,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
                 o.orbitFrames = int(parseInt(a, p.substr(6), 1, 100000));
             else
                 o.pathFile = p;
+        } else if (a == "--seams") {
+            o.capSeams = parseSwitch(a, args.value(a), "cap", "open");
         } else if (a == "--occlusion") {
             o.occlusion = parseSwitch(a, args.value(a), "on", "off");
         } else if (a == "--cell-test") {
@@ -237,8 +241,9 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
         (o.viewGiven || !o.cameraPath.empty()))
         throw UsageError("--view and --camera frame the picture: they need --png (or a "
                          "view-dependent --method)");
-    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests || o.occlusion))
-        throw UsageError("--scan, --box, --points, --update, --cell-test and --occlusion apply to "
+    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests || o.occlusion ||
+                            o.capSeams))
+        throw UsageError("--scan, --box, --points, --update, --cell-test, --occlusion and --seams apply to "
                          "--method sage or wise");
     if (o.lodErrorGiven && !viewDependent)
         throw UsageError("--lod-error applies to --method sage or wise; the full methods take one "
@@ -320,6 +325,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         if (o.bottomUp) v.bottomUp = *o.bottomUp;
         if (o.cellTests) v.cellTests = *o.cellTests;
         if (o.occlusion) v.occlusion = *o.occlusion;
+        if (o.capSeams) v.capSeams = *o.capSeams;
         v.prefetchBricks = plan.prefetchBricks;
         v.prefetchReaders = o.readers;
         v.threads = plan.threads;

@@ -25,6 +25,10 @@ constexpr const char* kHelp =
     "  --threads N         extraction threads per frame: image strips (default: the\n"
     "                      machine's cores)\n"
     "  --metacell M        meta-cell size in cells, 1 to 32 (default 4)\n"
+    "  --lod-error P       levels of detail: each frame's surface is extracted where it is\n"
+    "                      nearest at the coarsest level whose cells span at most P pixels\n"
+    "                      (default 1; 0: full resolution only); on stores with levels a\n"
+    "                      frame 8x coarser comes first, and the viewer refines from it\n"
     "  --token T           the access token (default: random at each start)\n"
     "  --web DIR           the viewer's folder (default: the source tree's web/)\n";
 
@@ -51,6 +55,10 @@ int runServe(int argc, char** argv) {
             o.cacheBytes = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30)) << 20;
         } else if (a == "--threads") {
             o.threads = int(parseInt(a, args.value(a), 1, 64));
+        } else if (a == "--lod-error") {
+            o.lodError = parseDouble(a, args.value(a));
+            if (!(o.lodError >= 0 && o.lodError <= 1e6))
+                throw UsageError("--lod-error expects pixels, 0 or more, not " + std::to_string(o.lodError));
         } else if (a == "--metacell") {
             o.metaCellSize = int(parseInt(a, args.value(a), 1, 32));
         } else if (a == "--token") {

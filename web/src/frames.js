@@ -57,6 +57,9 @@ class Frame {
     return {
       frame: this.seq,
       status: this.status,
+      // Levels of detail: the coarse frame of a VIEW comes first (final false), the final after.
+      lodError: end.lodError ?? null,
+      final: end.final ?? true,
       store: this.store,
       iso: this.iso,
       triangles,

@@ -26,7 +26,8 @@ export class Overlay {
   // stats: a frame's stats (frames.js); cache: the ChunkCache.
   showFrame(stats, cache) {
     const lines = [
-      `frame ${stats.frame} ${stats.status}`,
+      `frame ${stats.frame} ${stats.status}${stats.final === false ? ' (coarse, refining)' : ''}` +
+        (stats.lodError ? `  lod error ${stats.lodError} px` : ''),
       `triangles ${count(stats.triangles)}  points ${count(stats.points)}`,
       `received ${megabytes(stats.bytes)}  (${count(stats.chunks)} chunks, ${count(stats.refs)} refs)`,
       `first geometry ${milliseconds(stats.firstGeometryMs)}  complete ${milliseconds(stats.completeMs)}`,

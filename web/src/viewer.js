@@ -279,6 +279,7 @@ class Viewer {
   settledFrame() {
     const frame = this.drawnFrame;
     if (this.viewDirty || !frame || frame !== this.frames.complete || frame.seq !== this.seq) return null;
+    if (frame.end && frame.end.final === false) return null; // a coarse frame: the final one follows
     return frame;
   }
 
