@@ -38,8 +38,8 @@ storeBytes() { stat -c %s "$1"; }
 
 echo "## 1. Cold distant views, 1024x1024, 1 thread"
 echo
-echo "| volume | store MB | levels | bricks read | MB read | share of the store | extract s |"
-echo "|---|---|---|---|---|---|---|"
+echo "| volume | store MB | levels | bricks read | MB read | share of the store | extract s | tree s |"
+echo "|---|---|---|---|---|---|---|---|"
 for n in 1024 2048 2560; do
     s="$DATA/head${n}L.vdiso"
     for lod in 0 1; do
@@ -48,7 +48,7 @@ for n in 1024 2048 2560; do
 import json, sys
 d = json.loads(sys.argv[1]); size = int(sys.argv[2])
 print(f"| {sys.argv[3]}^3 | {size/1e6:.0f} | {'on' if sys.argv[4] == '1' else 'off'} | {d['bricks_loaded']} | "
-      f"{d['bytes_read']/1e6:.2f} | {100*d['bytes_read']/size:.4f}% | {d['extract_s']:.3f} |")
+      f"{d['bytes_read']/1e6:.2f} | {100*d['bytes_read']/size:.4f}% | {d['extract_s']:.3f} | {d['tree_s']:.3f} |")
 EOF
     done
 done
@@ -57,20 +57,25 @@ echo
 S="$DATA/head2560L.vdiso"
 echo "## 2. The 2560^3 head, cold normal view, 1024x1024 (median of $REPEAT)"
 echo
-echo "| threads | levels | extract s | bricks read | MB read | triangles | points |"
-echo "|---|---|---|---|---|---|---|"
+echo "extract s: the frame; + tree: with building the min/max tree over all levels' bricks, which"
+echo "a single \`vdiso extract\` does first and the frames of a path or a server share."
+echo
+echo "| threads | levels | extract s | + tree s | bricks read | MB read | triangles | points |"
+echo "|---|---|---|---|---|---|---|---|"
 for threads in 1 2; do
     for lod in 0 1; do
         times=()
+        total=()
         for r in $(seq "$REPEAT"); do
             j=$(extract "$S" --view normal --size 1024x1024 --threads $threads --lod-error $lod)
             times+=("$(echo "$j" | field extract_s)")
+            total+=("$(echo "$j" | python3 -c "import json,sys; d=json.load(sys.stdin); print(d['extract_s'] + d['tree_s'])")")
         done
-        python3 - "$j" "$(median "${times[@]}")" "$threads" "$lod" <<'EOF'
+        python3 - "$j" "$(median "${times[@]}")" "$threads" "$lod" "$(median "${total[@]}")" <<'EOF'
 import json, sys
 d = json.loads(sys.argv[1])
-print(f"| {sys.argv[3]} | {'on' if sys.argv[4] == '1' else 'off'} | {float(sys.argv[2]):.3f} | {d['bricks_loaded']} | "
-      f"{d['bytes_read']/1e6:.1f} | {d['triangles']} | {d['points']} |")
+print(f"| {sys.argv[3]} | {'on' if sys.argv[4] == '1' else 'off'} | {float(sys.argv[2]):.3f} | {float(sys.argv[5]):.3f} | "
+      f"{d['bricks_loaded']} | {d['bytes_read']/1e6:.1f} | {d['triangles']} | {d['points']} |")
 EOF
     done
 done

@@ -5,8 +5,10 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "core/brick_kernel.h"
+#include "core/check.h"
 #include "core/brick_look_ahead.h"
 #include "core/edge_function.h"
 #include "core/face_cap.h"
@@ -523,8 +525,14 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     const uint32_t verticesBefore = mesh.nextVertex();
     const int strips = std::clamp(options.threads, 1, camera.width);
     // With levels of detail, the tree knows every level's bricks and ranges (core/minmax_tree.h).
-    const MinMaxTree tree = options.lodError > 0 ? MinMaxTree(source.levels(), source.brickRanges())
-                                                 : MinMaxTree(source.layout(), source.brickRanges());
+    std::optional<MinMaxTree> built;
+    if (options.tree)
+        VDISO_CHECK_EQ(options.tree->levelCount(), source.levelCount());
+    else if (options.lodError > 0)
+        built.emplace(source.levels(), source.brickRanges());
+    else
+        built.emplace(source.layout(), source.brickRanges());
+    const MinMaxTree& tree = options.tree ? *options.tree : *built;
     // What is visible scales with the image, not the volume: room for a couple of triangles
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).
     const size_t pixels = size_t(camera.width) * size_t(camera.height);

@@ -32,6 +32,7 @@
 #include "core/extract_stats.h"
 #include "core/mesh.h"
 #include "core/meta_cell_range_cache.h"
+#include "core/minmax_tree.h"
 #include "core/progress.h"
 
 namespace vdiso {
@@ -103,6 +104,10 @@ struct ViewExtractOptions {
     // When set, bricks' meta-cell ranges are kept there from one extraction to the next (frames
     // of a moving camera over the same source and meta-cell size).
     MetaCellRangeCache* rangeCache = nullptr;
+    // When set, the min/max tree over the source, built once for many extractions (frames of a
+    // moving camera): MinMaxTree(source.levels(), source.brickRanges()). Otherwise each
+    // extraction builds its own (a 2560^3 volume's 512,000 bricks take tens of ms).
+    const MinMaxTree* tree = nullptr;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {

@@ -11,6 +11,7 @@
 
 #include "cache/brick_cache.h"
 #include "core/meta_cell_range_cache.h"
+#include "core/minmax_tree.h"
 #include "io/brick_store.h"
 
 namespace vdiso::serve {
@@ -22,6 +23,8 @@ struct ServedStore {
     // The meta-cell ranges of its bricks, kept across frames and clients (as many bricks as the
     // cache holds).
     std::unique_ptr<MetaCellRangeCache> ranges;
+    // The min/max tree over every level's bricks, built once for every frame.
+    std::unique_ptr<MinMaxTree> tree;
     double defaultIso = 0;  // --iso, else Otsu's threshold of the histogram
     std::string description;  // the store's JSON object in `hello`
 };

@@ -183,6 +183,7 @@ std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point ar
     options.prefetchBricks = mSettings.prefetchBricks;
     options.stream = &stream;
     options.rangeCache = store.ranges.get();
+    options.tree = store.tree.get();
     options.lodError = lodError;
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -299,7 +300,8 @@ std::string framePath(const std::string& pattern, int frame) {
 JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, BrickCache& cache,
                         const std::optional<Camera>& camera, const std::string& meshPath,
                         const std::string& pngPath, const std::string& pointsPath,
-                        MetaCellRangeCache& ranges, const ProgressFn& progress, std::string& summary) {
+                        MetaCellRangeCache& ranges, const MinMaxTree* tree, const ProgressFn& progress,
+                        std::string& summary) {
     const CacheCounters before = cache.counters();
     CachePlan plan;
     try {
@@ -330,6 +332,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         v.prefetchReaders = o.readers;
         v.threads = plan.threads;
         v.rangeCache = &ranges;
+        v.tree = tree;
         v.lodError = o.lodError;
         stats = extractViewDependent(cache, *camera, v, mesh, points, progress);
     } else {
@@ -453,6 +456,11 @@ int runExtract(int argc, char** argv) {
 
     // Meta-cell ranges are kept across the frames of a path, for as many bricks as the cache.
     MetaCellRangeCache ranges(cache.budgetBytes() / store.brickBytes());
+    // The view-dependent methods' tree, likewise built once.
+    std::optional<MinMaxTree> tree;
+    const auto treeStart = std::chrono::steady_clock::now();
+    if (isViewDependent(o.method)) tree.emplace(cache.levels(), cache.brickRanges());
+    const double treeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - treeStart).count();
     std::string statsText, summary;
     const ProgressFn progress = progressBar("extract", 0, o.quiet || path);
     const size_t frames = std::max<size_t>(1, cameras.size());
@@ -461,7 +469,9 @@ int runExtract(int argc, char** argv) {
             cameras.empty() ? std::nullopt : std::optional<Camera>(cameras[f]);
         const std::string png = path && !o.pngPath.empty() ? framePath(o.pngPath, int(f)) : o.pngPath;
         JsonObject s = extractFrame(o, store, cache, camera, path ? "" : o.meshPath, png,
-                                    path ? "" : o.pointsPath, ranges, progress, summary);
+                                    path ? "" : o.pointsPath, ranges, tree ? &*tree : nullptr, progress, summary);
+        // Built before the first frame, outside its extract_s; shared by the frames of a path.
+        if (tree && f == 0) s.add("tree_s", treeSeconds);
         if (path) s.add("frame", int64_t(f));
         else if (camera)
             s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());
