@@ -59,7 +59,7 @@ uint64_t wholeFrameBytes(const ViewerClient& client, const ClientFrame& f) {
 int main(int argc, char** argv) {
     if (argc < 2) {
         std::fprintf(stderr, "usage: vdiso_serve_bench STORE.vdiso --iso V [--size N] [--frames N] "
-                             "[--threads N] [--cache-mb N] [--web DIR] [--images DIR] [--no-warmup]\n");
+                             "[--threads N] [--cache-mb N] [--web DIR] [--images DIR] [--no-warmup] [--lod-error P]\n");
         return 2;
     }
     ServeOptions options;
@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
         else if (a == "--web") options.webRoot = next();
         else if (a == "--images") images = next();
         else if (a == "--no-warmup") warmup = false;
+        else if (a == "--lod-error") options.lodError = std::stod(next());
         else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;
@@ -108,6 +109,9 @@ int main(int argc, char** argv) {
                     line.add("server_complete_ms", end["serverMs"].get<double>());
                     line.add("client_first_geometry_ms", f.firstGeometrySeconds * 1e3);
                     line.add("client_complete_ms", f.completeSeconds * 1e3);
+                    // Levels of detail: the coarse frame that came first (-1: none).
+                    line.add("client_coarse_complete_ms", f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1.0);
+                    line.add("coarse_triangles", f.coarseTriangles);
                     line.add("bytes", f.binaryBytes).add("whole_frame_bytes", wholeFrameBytes(client, f));
                     line.add("chunks", uint64_t(f.chunks.size())).add("refs", uint64_t(f.refs.size()));
                     line.add("transient_chunks", uint64_t(f.transient.size()));
