@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <optional>
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
@@ -254,6 +255,37 @@ TEST(Levels, VersionTwoStoreOpensAndExtractsAsBefore) {
     EXPECT_EQ(s.view.coarseBricks, 0);
     EXPECT_EQ(flat.positions, lod.positions);
     EXPECT_EQ(pf.positions, pl.positions);
+}
+
+// A level count the volume cannot have (none, or more than until one brick) is refused at open,
+// naming the file; so is a version-3 header whose brick count leaves out a level's bricks.
+TEST(Levels, ImpossibleLevelCountsAreRefused) {
+    test::ScratchDir dir;
+    const std::string path = headStore(dir, {40, 40, 40}, 8);  // 5 bricks a side: 4 levels
+    const auto good = test::readFile(path);
+    auto openWith = [&](uint32_t levels, std::optional<uint64_t> bricks = std::nullopt) {
+        auto bytes = good;
+        std::memcpy(bytes.data() + 108, &levels, 4);
+        if (bricks) std::memcpy(bytes.data() + 112, &*bricks, 8);
+        const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+        std::memcpy(bytes.data() + 160, &crc, 4);
+        const std::string bad = dir.file("bad.vdiso");
+        test::writeFile(bad, bytes.data(), bytes.size());
+        try {
+            BrickStoreReader reader(bad);
+        } catch (const std::exception& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_EQ(openWith(4), "");
+    for (const uint32_t levels : {0u, 5u, 4000000000u}) {
+        const std::string error = openWith(levels);
+        EXPECT_NE(error.find("bad.vdiso: header's level count " + std::to_string(levels) + " is invalid"),
+                  std::string::npos)
+            << error;
+    }
+    EXPECT_NE(openWith(4, 125).find("bad.vdiso: header's brick count does not match"), std::string::npos);
 }
 
 // --level L extracts level L's whole surface: the same as a store whose level 0 is level L's
