@@ -1,6 +1,7 @@
 // Brick stores: the input is a store file whose checksums (header, index, each brick) are
 // recomputed here, so mutations reach the checks behind them: field validation, index
-// entries, brick decoding, and, for small volumes, extraction on hostile ranges and samples.
+// entries, brick decoding, and, for small volumes, extraction on hostile ranges and samples, at
+// every level of detail the store holds.
 #include <cstring>
 #include <vector>
 
@@ -8,6 +9,7 @@
 #include "core/camera.h"
 #include "core/extract_full.h"
 #include "core/extract_view.h"
+#include "core/level_source.h"
 #include "fuzz/fuzz_input.h"
 #include "io/brick_store.h"
 #include "io/store_format.h"
@@ -46,7 +48,7 @@ void fixChecksums(std::vector<uint8_t>& b) {
 
 void exercise(const std::string& path) {
     const vdiso::BrickStoreReader reader(path);
-    const int64_t bricks = reader.layout().brickCount();
+    const int64_t bricks = int64_t(reader.index().size());  // every level's
     if (reader.brickBytes() > (size_t(16) << 20)) return;
     std::vector<unsigned char> samples(reader.brickBytes());
     for (int64_t id = 0; id < bricks && id < 64; ++id) reader.readBrick(id, samples.data());
@@ -61,6 +63,16 @@ void exercise(const std::string& path) {
     vdiso::TriangleMesh visible;
     vdiso::PointSet points;
     vdiso::extractViewDependent(cache, camera, vdiso::ViewExtractOptions::sage(iso), visible, points);
+    if (reader.levels().size() < 2) return;
+    // The coarsest level whole, and a view choosing its levels (cells up to 8 pixels).
+    vdiso::LevelSource coarsest(cache, int(reader.levels().size()) - 1);
+    vdiso::TriangleMesh coarse;
+    vdiso::extractOctree(coarsest, {iso, 4}, coarse);
+    vdiso::ViewExtractOptions lod = vdiso::ViewExtractOptions::sage(iso);
+    lod.lodError = 8;
+    vdiso::TriangleMesh levels;
+    vdiso::PointSet levelPoints;
+    vdiso::extractViewDependent(cache, camera, lod, levels, levelPoints);
 }
 
 }  // namespace
