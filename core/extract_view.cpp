@@ -90,6 +90,7 @@ private:
         EdgeVertexMap seams;
     };
     std::vector<std::unique_ptr<LevelParts>> mParts;
+    TriangleMesh mCaps;  // streaming: the current brick's seam caps
     BrickLookAhead mLookAhead;
     // Screen positions by vertex number - mMesh.firstVertex; x NaN: not projected yet, x inf:
     // not on the image plane. Grows with the mesh; cleared with it in streaming.
@@ -399,13 +400,14 @@ struct BrickVisit {
                 }
     }
 
-    // `capFaces`: the faces to close (core/face_cap.h), bits as ViewLevels::seamFaces.
-    void run(unsigned capFaces) {
+    // `capFaces`: the faces to close (core/face_cap.h), bits as ViewLevels::seamFaces; their
+    // caps go to `caps`.
+    void run(unsigned capFaces, TriangleMesh& caps) {
         const int n = extractor.metaCellsPerAxis();
         const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
         visitMetaCells(lo, hi);
         for (int face = 0; face < 6; ++face)
-            if (capFaces & (1u << face)) appendFaceCap(kernel, face / 2, face % 2 == 1);
+            if (capFaces & (1u << face)) appendFaceCap(kernel, face / 2, face % 2 == 1, caps);
     }
 };
 
@@ -487,22 +489,23 @@ std::vector<int64_t> ViewTraversal::run() {
         mStats.view.coarseBricks += level > 0;
         acquired.push_back(brick);
         mParts[size_t(level)]->extractor.beginBrick(at.local, handle.samples());
-        // Seams between levels are capped: where this brick meets another level for this
-        // camera, or, for a whole brick's chunk (the same for every camera), wherever it meets
-        // a neighbour.
-        unsigned capFaces = 0;
-        if (mLevels.count() > 1 && mOptions.capSeams && use != ViewStream::Use::Held)
-            capFaces = use == ViewStream::Use::Whole ? mLevels.innerFaces(node) : mLevels.seamFaces(node, level);
+        // Seams between levels are capped where this brick meets another level for this
+        // camera: with the mesh, or apart from a stream's brick output (they are the camera's).
+        const unsigned capFaces = mOptions.capSeams ? mLevels.seamFaces(node, level) : 0u;
         mStats.view.cappedFaces += std::popcount(capFaces);
         visitScalarType(mSource.volume().type, [&](auto zero) {
-            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole).run(capFaces);
+            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole)
+                .run(capFaces, mOptions.stream ? mCaps : mMesh);
         });
         if (mOptions.stream) {
             mStats.triangles += mMesh.triangleCount();
             mStats.vertices += mMesh.vertexCount();
-            mOptions.stream->endBrick(brick, use, mMesh, mPoints);
+            mStats.triangles += mCaps.triangleCount();
+            mStats.vertices += mCaps.vertexCount();
+            mOptions.stream->endBrick(brick, use, mMesh, mPoints, mCaps);
             mMesh.firstVertex = mMesh.nextVertex();
             mMesh.clear();
+            mCaps.clear();
             mPoints.clear();
             mScreen.clear();
         }

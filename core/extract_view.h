@@ -50,7 +50,10 @@ namespace vdiso {
 // onwards (with per-cell tests, also some no kept triangle refers to: a consumer that packs
 // vertices drops them anyway), mesh.indices refer to those only (bricks share no vertices in
 // streaming), points
-// hold its points; both are cleared after the call. Calls come from the strip's thread, so an
+// hold its points; both are cleared after the call. `seams`: the caps closing the brick's faces
+// that meet another level of detail for this camera (core/face_cap.h; empty without levels),
+// vertices numbered from seams.firstVertex, whatever the use: they depend on the camera, so
+// they are never part of a Whole brick's surface. Calls come from the strip's thread, so an
 // implementation used with threads > 1 must be thread-safe; a brick showing in two strips
 // is offered by both.
 class ViewStream {
@@ -61,7 +64,8 @@ public:
     // at most (infinite for a brick crossing the near plane). Returns false to abandon the
     // extraction here (a newer camera came): nothing more is read or made.
     virtual bool beginBrick(int64_t brick, double cellPixels, Use& use) = 0;
-    virtual void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) = 0;
+    virtual void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
+                          const TriangleMesh& seams) = 0;
 };
 
 struct ViewExtractOptions {

@@ -31,10 +31,10 @@
 
 namespace vdiso {
 
-// Appends the cap band of the brick's face on `axis`, at its low end or its high (`upper`) end.
+// Appends to `mesh` the cap band of the brick's face on `axis`, at its low end or its high
+// (`upper`) end.
 template <class T>
-void appendFaceCap(const BrickKernel<T>& k, int axis, bool upper) {
-    TriangleMesh& mesh = k.mesh;
+void appendFaceCap(const BrickKernel<T>& k, int axis, bool upper, TriangleMesh& mesh) {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const int plane = upper ? k.cells[axis] : 0;
     glm::dvec3 outward(0.0);

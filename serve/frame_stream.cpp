@@ -81,8 +81,11 @@ bool FrameStream::beginBrick(int64_t brick, double cellPixels, Use& use) {
     return true;
 }
 
-void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) {
+void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
+                           const TriangleMesh& seams) {
     const uint32_t b = uint32_t(brick);
+    // Caps between levels are this camera's: transient geometry, whatever the brick's use.
+    if (!seams.indices.empty()) addTransient(seams, PointSet{});
     if (use == Use::Whole) {
         ChunkHeader header;
         header.flags = kChunkCacheable;
@@ -126,6 +129,10 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
         }
         // Evicted since beginBrick: what was made for it this frame goes as transient geometry.
     }
+    addTransient(mesh, points);
+}
+
+void FrameStream::addTransient(const TriangleMesh& mesh, const PointSet& points) {
     bool full = false;
     {
         std::lock_guard lock(mMutex);

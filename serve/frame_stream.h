@@ -63,7 +63,8 @@ public:
                 const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
 
     bool beginBrick(int64_t brick, double cellPixels, Use& use) override;
-    void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) override;
+    void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
+                  const TriangleMesh& seams) override;
     // Queues what is still batched. Call once, after the extraction.
     void finish();
     FrameCounters counters();
@@ -72,6 +73,8 @@ public:
     bool incomplete() const { return mRefused.load(); }
 
 private:
+    // Adds to the frame's transient batch, sent when full (and at the end).
+    void addTransient(const TriangleMesh& mesh, const PointSet& points);
     void pushTransient(bool force);
     void queued(size_t bytes);  // counts bytes queued; notes the first
     void push(OutMessage m, bool waitForRoom);  // notes a refusal

@@ -330,7 +330,9 @@ struct LibraryFrame final : ViewStream {
         use = cellPixels >= kWholeCellPixels ? Use::Whole : Use::Part;
         return true;
     }
-    void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points) override {
+    void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
+                  const TriangleMesh& seams) override {
+        addPart(seams, PointSet{});  // the server sends them as transient geometry
         TriangleMesh local;
         local.positions = mesh.positions;
         local.normals = mesh.normals;
@@ -339,10 +341,13 @@ struct LibraryFrame final : ViewStream {
             whole[uint32_t(brick)] = std::move(local);
             return;
         }
+        addPart(mesh, points);
+    }
+    void addPart(const TriangleMesh& mesh, const PointSet& points) {
         const uint32_t offset = uint32_t(part.positions.size());
-        part.positions.insert(part.positions.end(), local.positions.begin(), local.positions.end());
-        part.normals.insert(part.normals.end(), local.normals.begin(), local.normals.end());
-        for (const uint32_t v : local.indices) part.indices.push_back(v + offset);
+        part.positions.insert(part.positions.end(), mesh.positions.begin(), mesh.positions.end());
+        part.normals.insert(part.normals.end(), mesh.normals.begin(), mesh.normals.end());
+        for (const uint32_t v : mesh.indices) part.indices.push_back(v - mesh.firstVertex + offset);
         partPoints.positions.insert(partPoints.positions.end(), points.positions.begin(), points.positions.end());
         partPoints.normals.insert(partPoints.normals.end(), points.normals.begin(), points.normals.end());
     }
