@@ -208,7 +208,7 @@ TEST(CliExtract, BadArgumentsAreUsageErrors) {
     ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 24 --quiet").exitCode, 0);
     EXPECT_EQ(test::runVdiso("extract " + store).exitCode, 2);  // no --iso
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --method marching").exitCode, 2);
-    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 -o x.stl").exitCode, 1);
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 -o x.stp").exitCode, 1);
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --view sideways --png " + dir.file("a.png")).exitCode, 2);
     // A meta-cell's row of corners is one 64-bit word: 32 cells at most.
     const auto big = test::runVdiso("extract " + store + " --iso 1 --metacell 33");
