@@ -1,41 +1,21 @@
 #include "io/mesh_writer.h"
 
 #include <cstdio>
-#include <span>
 #include <cstring>
+#include <span>
 #include <stdexcept>
-
-#include <unistd.h>
-#include <vector>
 
 #include "io/atomic_output.h"
 #include "io/error.h"
 #include "io/file_names.h"
+#include "io/glb_writer.h"
+#include "io/mesh_output.h"
+#include "io/stl_writer.h"
+#include "io/vtp_writer.h"
 
 namespace vdiso {
 
 namespace {
-
-// Appends to a file through a 4 MiB buffer: a few large writes instead of millions of small.
-class BufferedAppender {
-public:
-    explicit BufferedAppender(AtomicOutputFile& out) : mOut(out) { mBuffer.reserve(kSize); }
-    void put(const void* data, size_t n) {
-        if (mBuffer.size() + n > kSize) flush();
-        const auto* p = static_cast<const unsigned char*>(data);
-        mBuffer.insert(mBuffer.end(), p, p + n);
-    }
-    void put(const std::string& s) { put(s.data(), s.size()); }
-    void flush() {
-        mOut.append(mBuffer.data(), mBuffer.size());
-        mBuffer.clear();
-    }
-
-private:
-    static constexpr size_t kSize = 4u << 20;
-    AtomicOutputFile& mOut;
-    std::vector<unsigned char> mBuffer;
-};
 
 void putVertices(BufferedAppender& w, std::span<const glm::vec3> positions,
                  std::span<const glm::vec3> normals) {
@@ -63,31 +43,84 @@ std::string plyHeader(uint64_t vertices, uint64_t triangles) {
     return head + "comment " + std::string(padding, '.') + "\n" + tail;
 }
 
+// PLY and OBJ: vertex records go to the output as they come, face records to a side file,
+// appended by finish(), which then writes PLY's header with the final counts.
+class PlyObjWriter final : public MeshFormatWriter {
+public:
+    PlyObjWriter(const std::string& path, bool overwrite, MeshFormat format)
+        : mOut(path, overwrite), mFaces(path, ".faces"), mPly(format == MeshFormat::Ply) {
+        mVertexWriter.put(mPly ? plyHeader(0, 0) : std::string("# vdiso isosurface\n"));
+    }
+
+    void append(const TriangleMesh& part) override {
+        if (mPly) {
+            putVertices(mVertexWriter, part.positions, part.normals);
+            for (size_t t = 0; t < part.triangleCount(); ++t) {
+                unsigned char face[13];
+                face[0] = 3;
+                std::memcpy(face + 1, &part.indices[3 * t], 12);
+                mFaces.put(face, sizeof face);
+            }
+        } else {
+            char line[160];
+            for (size_t i = 0; i < part.positions.size(); ++i) {
+                const glm::vec3 &p = part.positions[i], &n = part.normals[i];
+                const int k = std::snprintf(line, sizeof line, "v %.7g %.7g %.7g\nvn %.5f %.5f %.5f\n",
+                                            p.x, p.y, p.z, n.x, n.y, n.z);
+                mVertexWriter.put(line, size_t(k));
+            }
+            for (size_t t = 0; t < part.triangleCount(); ++t) {
+                // OBJ counts from 1; vertex i's normal is vn i, as they were written in pairs.
+                const uint32_t a = part.indices[3 * t] + 1, b = part.indices[3 * t + 1] + 1,
+                               c = part.indices[3 * t + 2] + 1;
+                const int k = std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", a, a,
+                                            b, b, c, c);
+                mFaces.put(line, size_t(k));
+            }
+        }
+        mVertices += part.positions.size();
+        mTriangles += part.triangleCount();
+    }
+
+    void finish() override {
+        mFaces.copyTo(mVertexWriter);
+        mVertexWriter.flush();
+        if (mPly) {
+            const std::string header = plyHeader(mVertices, mTriangles);
+            mOut.writeAt(header.data(), header.size(), 0);
+        }
+        mOut.commit();
+    }
+
+private:
+    AtomicOutputFile mOut;  // header and vertices, then the faces appended by finish()
+    BufferedAppender mVertexWriter{mOut};
+    SideFile mFaces;
+    bool mPly;
+    uint64_t mVertices = 0, mTriangles = 0;
+};
+
 }  // namespace
 
 MeshFormat meshFormatFor(const std::string& path) {
     if (endsWithIgnoreCase(path, ".ply")) return MeshFormat::Ply;
     if (endsWithIgnoreCase(path, ".obj")) return MeshFormat::Obj;
-    throwIoError(path, "unknown mesh format (expected a .ply or .obj name)");
+    if (endsWithIgnoreCase(path, ".stl")) return MeshFormat::Stl;
+    if (endsWithIgnoreCase(path, ".glb")) return MeshFormat::Glb;
+    if (endsWithIgnoreCase(path, ".vtp")) return MeshFormat::Vtp;
+    throwIoError(path, "unknown mesh format (expected a .ply, .obj, .stl, .glb or .vtp name)");
 }
 
-struct MeshFileWriter::Files {
-    AtomicOutputFile out;    // header and vertices, then the faces appended by finish()
-    AtomicOutputFile faces;  // a side file, never committed: removed with the object
-    BufferedAppender vertexWriter{out}, faceWriter{faces};
-    uint64_t headerBytes = 0;
-    Files(const std::string& path, bool overwrite)
-        : out(path, overwrite), faces(path + ".faces", true) {}
-};
-
-MeshFileWriter::MeshFileWriter(const std::string& path, bool overwrite)
-    : mFiles(std::make_unique<Files>(path, overwrite)), mFormat(meshFormatFor(path)) {
-    if (mFormat == MeshFormat::Ply) {
-        const std::string header = plyHeader(0, 0);
-        mFiles->vertexWriter.put(header);
-        mFiles->headerBytes = header.size();
-    } else {
-        mFiles->vertexWriter.put(std::string("# vdiso isosurface\n"));
+MeshFileWriter::MeshFileWriter(const std::string& path, bool overwrite, bool compress) {
+    const MeshFormat format = meshFormatFor(path);
+    if (compress && format != MeshFormat::Glb)
+        throwIoError(path, "mesh compression applies to .glb output only");
+    switch (format) {
+        case MeshFormat::Ply:
+        case MeshFormat::Obj: mWriter = std::make_unique<PlyObjWriter>(path, overwrite, format); break;
+        case MeshFormat::Stl: mWriter = makeStlWriter(path, overwrite); break;
+        case MeshFormat::Glb: mWriter = makeGlbWriter(path, overwrite, compress); break;
+        case MeshFormat::Vtp: mWriter = makeVtpWriter(path, overwrite); break;
     }
 }
 
@@ -96,60 +129,18 @@ MeshFileWriter::~MeshFileWriter() = default;
 void MeshFileWriter::append(const TriangleMesh& part) {
     if (part.firstVertex != mVertices)
         throw std::logic_error("MeshFileWriter: pieces must arrive in vertex order");
-    BufferedAppender& v = mFiles->vertexWriter;
-    BufferedAppender& f = mFiles->faceWriter;
-    if (mFormat == MeshFormat::Ply) {
-        putVertices(v, part.positions, part.normals);
-        for (size_t t = 0; t < part.triangleCount(); ++t) {
-            unsigned char face[13];
-            face[0] = 3;
-            std::memcpy(face + 1, &part.indices[3 * t], 12);
-            f.put(face, sizeof face);
-        }
-    } else {
-        char line[160];
-        for (size_t i = 0; i < part.positions.size(); ++i) {
-            const glm::vec3 &p = part.positions[i], &n = part.normals[i];
-            const int k = std::snprintf(line, sizeof line, "v %.7g %.7g %.7g\nvn %.5f %.5f %.5f\n",
-                                        p.x, p.y, p.z, n.x, n.y, n.z);
-            v.put(line, size_t(k));
-        }
-        for (size_t t = 0; t < part.triangleCount(); ++t) {
-            // OBJ counts from 1; vertex i's normal is vn i, as they were written in pairs.
-            const uint32_t a = part.indices[3 * t] + 1, b = part.indices[3 * t + 1] + 1,
-                           c = part.indices[3 * t + 2] + 1;
-            const int k = std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", a, a, b,
-                                        b, c, c);
-            f.put(line, size_t(k));
-        }
-    }
+    mWriter->append(part);
     mVertices += part.positions.size();
     mTriangles += part.triangleCount();
 }
 
 void MeshFileWriter::finish() {
-    Files& files = *mFiles;
-    files.vertexWriter.flush();
-    files.faceWriter.flush();
-    // Append the side file's faces to the output, a few MB at a time.
-    std::vector<unsigned char> buffer(8u << 20);
-    const int facesFd = files.faces.fd();
-    for (uint64_t at = 0; at < files.faces.size();) {
-        const ssize_t n = ::pread(facesFd, buffer.data(), buffer.size(), off_t(at));
-        if (n <= 0) throwIoError(files.out.path(), "cannot read back the faces written");
-        files.out.append(buffer.data(), size_t(n));
-        at += uint64_t(n);
-    }
-    if (mFormat == MeshFormat::Ply) {
-        const std::string header = plyHeader(mVertices, mTriangles);
-        files.out.writeAt(header.data(), header.size(), 0);
-    }
-    files.out.commit();
-    mFiles.reset();  // removes the side file now, not when the writer goes
+    mWriter->finish();
+    mWriter.reset();  // removes the side files now, not when the writer goes
 }
 
-void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite) {
-    MeshFileWriter writer(path, overwrite);
+void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite, bool compress) {
+    MeshFileWriter writer(path, overwrite, compress);
     writer.append(mesh);
     writer.finish();
 }

@@ -1,7 +1,13 @@
-// Writing extraction output: binary little-endian PLY (positions, normals, faces) and OBJ
-// (v, vn, f with shared indices). Vertices are written as the mesh holds them (welded by the
-// extractors). Files appear only when complete (AtomicOutputFile); `overwrite` allows
-// replacing an existing file. Throws IoError naming the file.
+// Writing extraction output, the format chosen by the file's extension:
+//   .ply  binary little-endian PLY: positions, normals, faces
+//   .obj  OBJ: v, vn, f with shared indices
+//   .stl  binary STL: one facet normal and three corners per triangle (io/stl_writer.h)
+//   .glb  glTF 2.0 binary: one indexed mesh with normals, optionally meshopt-compressed
+//         (io/glb_writer.h)
+//   .vtp  VTK XML PolyData, raw appended data: points, normals, polygons (io/vtp_writer.h)
+// Vertices are written as the mesh holds them (welded by the extractors). Files appear only
+// when complete (AtomicOutputFile); `overwrite` allows replacing an existing file. Throws
+// IoError naming the file.
 #pragma once
 
 #include <cstdint>
@@ -12,36 +18,38 @@
 
 namespace vdiso {
 
-enum class MeshFormat { Ply, Obj };
+enum class MeshFormat { Ply, Obj, Stl, Glb, Vtp };
 
-// From the name: .ply or .obj; throws IoError for anything else.
+// From the name's extension; throws IoError for anything else, listing the accepted ones.
 MeshFormat meshFormatFor(const std::string& path);
 
-// A mesh file written piece by piece as extraction streams it (a MeshSink): vertex records go
-// to the output file as they come, face records to a side file next to it, and finish()
-// appends the faces and writes the header with the final counts. Memory holds no more than
-// the piece being appended. Both formats list all vertices before all faces, hence the side
-// file. Pieces must arrive in vertex order (part.firstVertex == vertices appended so far).
+class MeshFormatWriter;
+
+// A mesh file written piece by piece as extraction streams it (a MeshSink). Memory holds no
+// more than the piece being appended (but for a compressed GLB, which finish() encodes whole:
+// see io/glb_writer.h): what a format lists after the vertices goes to side files next to the
+// output, which finish() appends before writing the header with the final counts. Pieces must
+// arrive in vertex order (part.firstVertex == vertices appended so far). `compress` applies
+// EXT_meshopt_compression to a .glb; for another format it is an error.
 class MeshFileWriter final : public MeshSink {
 public:
-    MeshFileWriter(const std::string& path, bool overwrite);
+    MeshFileWriter(const std::string& path, bool overwrite, bool compress = false);
     ~MeshFileWriter() override;
     void append(const TriangleMesh& part) override;
-    // Completes the file, renames it into place and removes the side file; call once, last.
+    // Completes the file, renames it into place and removes the side files; call once, last.
     // Without finish(), nothing is left behind.
     void finish();
     uint64_t vertices() const { return mVertices; }
     uint64_t triangles() const { return mTriangles; }
 
 private:
-    struct Files;
-    std::unique_ptr<Files> mFiles;
-    MeshFormat mFormat;
+    std::unique_ptr<MeshFormatWriter> mWriter;
     uint64_t mVertices = 0, mTriangles = 0;
 };
 
 // The whole mesh at once (through MeshFileWriter).
-void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite);
+void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite,
+               bool compress = false);
 
 // Points with normals as a PLY vertex list (SAGE's sub-pixel points).
 void writePointsPly(const std::string& path, const PointSet& points, bool overwrite);

@@ -11,6 +11,7 @@
 #include <zlib.h>
 
 #include "io/brick_store.h"
+#include "tests/mesh_test_readers.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -202,13 +203,62 @@ TEST(CliExtract, WritesMeshPictureAndStats) {
     EXPECT_EQ(test::readFile(obj)[0], '#');
 }
 
+// Every mesh format from a streamed extraction (and a held one, with a picture) has the PLY's
+// vertices and triangles; --mesh-compress is for .glb only; an unknown extension is refused
+// naming it; an existing output is kept without --force.
+TEST(CliExtract, WritesEveryMeshFormat) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(runVdiso("synth " + store + " --kind head --size 40 --brick 8 --quiet").exitCode, 0);
+    const std::string extract = "extract " + store + " --iso 600.5 --quiet -o ";
+    ASSERT_EQ(runVdiso(extract + dir.file("h.ply")).exitCode, 0);
+    const TriangleMesh ply = test::readPly(dir.file("h.ply"));
+    ASSERT_GT(ply.triangleCount(), 1000u);
+    for (const char* name : {"h.stl", "h.glb", "h.vtp"}) {
+        const auto r = runVdiso(extract + dir.file(name));
+        EXPECT_EQ(r.exitCode, 0) << name << ": " << r.output;
+    }
+    for (const char* options : {" --mesh-compress", " --mesh-compress --png " /* held mesh */}) {
+        const bool png = std::strstr(options, "png") != nullptr;
+        const std::string name = png ? "held.glb" : "packed.glb";
+        const auto r = runVdiso(extract + dir.file(name) + options + (png ? dir.file("h.png") : ""));
+        EXPECT_EQ(r.exitCode, 0) << name << ": " << r.output;
+        nlohmann::json json;
+        test::expectSameMesh(test::readGlb(dir.file(name), &json), ply, name, true);
+        EXPECT_EQ(json["extensionsRequired"], nlohmann::json::array({"EXT_meshopt_compression"}));
+    }
+    test::expectSameTriangles(test::readStl(dir.file("h.stl")), ply, "STL");
+    test::expectSameMesh(test::readGlb(dir.file("h.glb")), ply, "GLB");
+    test::expectSameMesh(test::readVtp(dir.file("h.vtp")), ply, "VTP");
+
+    auto r = runVdiso(extract + dir.file("x.ply") + " --mesh-compress");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_TRUE(contains(r.output, "--mesh-compress applies to a .glb mesh output")) << r.output;
+    EXPECT_EQ(runVdiso("extract " + store + " --iso 600.5 --mesh-compress").exitCode, 2);
+    r = runVdiso(extract + dir.file("x.stp"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(contains(r.output, "x.stp: unknown mesh format (expected a .ply, .obj, .stl, .glb or .vtp name)"))
+        << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.ply")));
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.stp")));
+    for (const char* name : {"h.stl", "h.glb", "h.vtp"}) {
+        test::writeFile(dir.file(name), "old");
+        r = runVdiso(extract + dir.file(name));
+        EXPECT_EQ(r.exitCode, 2) << name;
+        EXPECT_TRUE(contains(r.output, "already exists")) << r.output;
+        EXPECT_EQ(test::readFile(dir.file(name)).size(), 3u) << name;
+    }
+    EXPECT_EQ(runVdiso(extract + dir.file("h.glb") + " --force --mesh-compress").exitCode, 0);
+    EXPECT_EQ(test::readGlb(dir.file("h.glb")).triangleCount(), ply.triangleCount());
+}
+
 TEST(CliExtract, BadArgumentsAreUsageErrors) {
     test::ScratchDir dir;
     const std::string store = dir.file("h.vdiso");
     ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 24 --quiet").exitCode, 0);
     EXPECT_EQ(test::runVdiso("extract " + store).exitCode, 2);  // no --iso
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --method marching").exitCode, 2);
-    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 -o x.stl").exitCode, 1);
+    EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 -o x.stp").exitCode, 1);
     EXPECT_EQ(test::runVdiso("extract " + store + " --iso 1 --view sideways --png " + dir.file("a.png")).exitCode, 2);
     // A meta-cell's row of corners is one 64-bit word: 32 cells at most.
     const auto big = test::runVdiso("extract " + store + " --iso 1 --metacell 33");

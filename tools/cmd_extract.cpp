@@ -66,7 +66,12 @@ constexpr const char* kHelp =
     "                            --view preset), or a JSON list of cameras; one cache is kept\n"
     "                            across frames; --stats gets one JSON line per frame, --png\n"
     "                            a pattern (frame_%04d.png)\n"
-    "  -o, --output MESH         write the mesh: .ply (binary, normals) or .obj\n"
+    "  -o, --output MESH         write the mesh, in the format its extension names: .ply\n"
+    "                            (binary, normals), .obj, .stl (binary), .glb (glTF 2.0\n"
+    "                            binary, normals) or .vtp (VTK XML PolyData, for ParaView)\n"
+    "  --mesh-compress           .glb: compress the mesh with meshoptimizer\n"
+    "                            (EXT_meshopt_compression; three.js loads it with its\n"
+    "                            MeshoptDecoder)\n"
     "  --png IMAGE.png           render the mesh with OSMesa and write a picture\n"
     "  --view distant|normal|closeup   camera preset framed from the volume (default normal);\n"
     "                            the picture's camera, and the extraction's for sage/wise\n"
@@ -111,6 +116,7 @@ struct ExtractOptions {
     int readers = BrickPrefetcher::kDefaultReaders;
     uint64_t cacheMb = 1024;
     bool overwrite = false, quiet = false, cold = false;
+    bool meshCompress = false;  // --mesh-compress (.glb only)
 };
 
 void parseSize(const std::string& text, int& width, int& height) {
@@ -194,6 +200,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.pointsPath = args.value(a);
         } else if (a == "-o" || a == "--output") {
             o.meshPath = args.value(a);
+        } else if (a == "--mesh-compress") {
+            o.meshCompress = true;
         } else if (a == "--png") {
             o.pngPath = args.value(a);
         } else if (a == "--view") {
@@ -255,6 +263,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (!o.pointsPath.empty() && !viewDependent)
         throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
+    if (o.meshCompress && (o.meshPath.empty() || meshFormatFor(o.meshPath) != MeshFormat::Glb))
+        throw UsageError("--mesh-compress applies to a .glb mesh output (-o MESH.glb)");
     if (o.oracle && !viewDependent && o.pngPath.empty() && !o.viewGiven && o.cameraPath.empty())
         throw UsageError("--oracle needs a camera: --view, --camera or a view-dependent --method");
     if (o.orbitFrames > 0 || !o.pathFile.empty()) {
@@ -314,7 +324,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     TriangleMesh mesh;
     std::optional<MeshFileWriter> streamed;
     if (!meshPath.empty() && pngPath.empty() && !isViewDependent(o.method))
-        streamed.emplace(meshPath, o.overwrite);
+        streamed.emplace(meshPath, o.overwrite, o.meshCompress);
     PointSet points;
     ExtractStats stats;
     if (isViewDependent(o.method)) {
@@ -349,7 +359,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     if (streamed)
         streamed->finish();
     else if (!meshPath.empty())
-        writeMesh(meshPath, mesh, o.overwrite);
+        writeMesh(meshPath, mesh, o.overwrite, o.meshCompress);
     std::optional<double> drawSeconds;
     if (!pointsPath.empty()) writePointsPly(pointsPath, points, o.overwrite);
     if (!pngPath.empty()) {
