@@ -95,7 +95,8 @@ struct DistanceResult {
     uint64_t bytesRead, bytesReadFull;
 };
 
-DistanceResult viewAtDistance(const BrickStoreReader& store, double iso, double scale, int imageSize) {
+DistanceResult viewAtDistance(const BrickStoreReader& store, double iso, double scale, int imageSize,
+                              bool wise = false) {
     const VolumeInfo& v = store.volume();
     Camera camera = presetCamera(ViewPreset::Normal, v.origin, v.worldMax(), imageSize, imageSize);
     camera.eye = camera.target + (camera.eye - camera.target) * scale;
@@ -107,7 +108,7 @@ DistanceResult viewAtDistance(const BrickStoreReader& store, double iso, double 
         extractOctree(cache, {iso, 4}, full);
     }
     DistanceResult r{};
-    ViewExtractOptions o = ViewExtractOptions::sage(iso);
+    ViewExtractOptions o = wise ? ViewExtractOptions::wise(iso) : ViewExtractOptions::sage(iso);
     TriangleMesh flat, lod;
     PointSet flatPoints, lodPoints;
     {
@@ -161,6 +162,17 @@ TEST(Levels, GeneratedHeadLooksTheSameAtEveryDistance) {
     const BrickStoreReader store(headStore(dir, {192, 192, 192}, 8));
     expectFaithfulAtEveryDistance(store, kHeadSkinIso, "head skin", true);
     expectFaithfulAtEveryDistance(store, kHeadBoneIso, "head bone", false);
+}
+
+// WISE takes its levels the same way (its own switches: exact boxes, top-down insertion).
+TEST(Levels, WiseUsesTheLevelsToo) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {192, 192, 192}, 8));
+    const DistanceResult r = viewAtDistance(store, kHeadSkinIso, 5.0, 600, true);
+    EXPECT_GT(r.coarseBricks, 0);
+    EXPECT_LT(double(r.bytesRead), 0.5 * double(r.bytesReadFull));
+    EXPECT_LE(double(r.missing), 0.01 * double(r.referenceCovered)) << r.missing << " of " << r.referenceCovered;
+    EXPECT_GE(r.agreement, 0.98);
 }
 
 TEST(Levels, TurbulenceLooksTheSameAtEveryDistance) {
