@@ -32,7 +32,7 @@ void loadArray(const std::vector<unsigned char>& bytes, uint64_t at, size_t coun
     EXPECT_LE(at + count * sizeof(T), bytes.size());
     if (at + count * sizeof(T) > bytes.size()) return;
     out.resize(count);
-    std::memcpy(out.data(), bytes.data() + at, count * sizeof(T));
+    if (count > 0) std::memcpy(out.data(), bytes.data() + at, count * sizeof(T));  // data() may be null
 }
 
 // The value of attribute `name` in `tag` (name="value").
