@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <stdexcept>
 #include <type_traits>
@@ -14,10 +15,12 @@
 namespace vdiso::test {
 
 ScratchDir::ScratchDir() {
-    static int counter = 0;
-    mPath = std::filesystem::temp_directory_path() /
-            ("vdiso_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    std::filesystem::create_directories(mPath);
+    // A new directory every time (mkdtemp): one named by the process id could be an old one
+    // left by a killed test, files and all, once the ids wrap (pid_max is 32768 here), and a
+    // test would then find outputs it has not written.
+    std::string pattern = (std::filesystem::temp_directory_path() / "vdiso_test_XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) throw std::runtime_error("cannot make a scratch directory in " + pattern);
+    mPath = pattern;
 }
 
 ScratchDir::~ScratchDir() {
