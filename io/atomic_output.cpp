@@ -49,9 +49,17 @@ AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite,
     if (errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL)
         throwSystemError(mPath, "cannot write", errno);
     // File systems without O_TMPFILE: a named temporary, removed on any failure we live through.
-    mTempPath = temporaryName();
-    mFd = ::open(mTempPath.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (mFd < 0) throwSystemError(mPath, "cannot write", errno);
+    // (A name a killed process left, its id now ours, is passed over for the next.)
+    for (int attempt = 0; mFd < 0 && attempt < 100; ++attempt) {
+        mTempPath = temporaryName();
+        mFd = ::open(mTempPath.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+        if (mFd < 0 && errno != EEXIST) break;
+    }
+    if (mFd < 0) {
+        const int error = errno;
+        mTempPath.clear();  // not ours: never unlinked
+        throwSystemError(mPath, "cannot write", error);
+    }
 }
 
 std::string AtomicOutputFile::temporaryName() const {
