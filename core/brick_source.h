@@ -8,7 +8,6 @@
 
 #include <cstdint>
 #include <span>
-
 #include <vector>
 
 #include "core/brick_layout.h"

@@ -531,10 +531,8 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     std::optional<MinMaxTree> built;
     if (options.tree)
         VDISO_CHECK_EQ(options.tree->levelCount(), source.levelCount());
-    else if (options.lodError > 0)
-        built.emplace(source.levels(), source.brickRanges());
     else
-        built.emplace(source.layout(), source.brickRanges());
+        built.emplace(source.levels(), source.brickRanges());
     const MinMaxTree& tree = options.tree ? *options.tree : *built;
     // What is visible scales with the image, not the volume: room for a couple of triangles
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).
@@ -566,7 +564,7 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                                .run();
             if (options.cellTests && !options.stream) dropUnreferencedVertices(out.triangles, 0);
         });
-        stats = mergeStrips(outputs, mesh, points);
+        stats = mergeStrips(outputs, mesh, points, source.layout().brickCount());
     }
     if (!options.stream) {
         stats.triangles = mesh.triangleCount() - trianglesBefore;

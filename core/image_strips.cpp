@@ -41,7 +41,8 @@ void coverOutsideStrip(OcclusionPyramid& pyramid, int column0, int column1) {
     pyramid.propagate();
 }
 
-ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points) {
+ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points,
+                         int64_t firstCoarseBrick) {
     size_t vertices = 0, indices = 0;
     for (const StripOutput& part : outputs) {
         vertices += part.triangles.positions.size();
@@ -66,7 +67,10 @@ ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, 
         acquired.insert(acquired.end(), part.acquired.begin(), part.acquired.end());
     }
     std::sort(acquired.begin(), acquired.end());
-    stats.bricksActive = int64_t(std::unique(acquired.begin(), acquired.end()) - acquired.begin());
+    acquired.erase(std::unique(acquired.begin(), acquired.end()), acquired.end());
+    stats.bricksActive = int64_t(acquired.size());
+    stats.view.coarseBricks =
+        int64_t(acquired.end() - std::lower_bound(acquired.begin(), acquired.end(), firstCoarseBrick));
     return stats;
 }
 

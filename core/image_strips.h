@@ -41,8 +41,10 @@ template <class Strip>
 void runStrips(std::vector<StripOutput>& outputs, Strip&& strip);
 
 // Appends the strips' meshes and points in strip order; returns their statistics summed, with
-// bricksActive counting a brick read by two strips once.
-ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points);
+// bricksActive, and view.coarseBricks (those numbered from `firstCoarseBrick`: coarser levels
+// of detail), counting a brick read by two strips once.
+ExtractStats mergeStrips(std::vector<StripOutput>& outputs, TriangleMesh& mesh, PointSet& points,
+                         int64_t firstCoarseBrick);
 
 template <class Strip>
 void runStrips(std::vector<StripOutput>& outputs, Strip&& strip) {

@@ -21,7 +21,6 @@ public:
     BrickHandle acquire(int64_t id) override { return mBase.acquire(mLevel.firstBrick + id); }
     bool isResident(int64_t id) const override { return mBase.isResident(mLevel.firstBrick + id); }
 
-    int level() const { return mLevelNumber; }
     // The underlying source's number of this level's brick `id`.
     int64_t baseBrick(int64_t id) const { return mLevel.firstBrick + id; }
 
@@ -30,7 +29,6 @@ protected:
 
 private:
     BrickSource& mBase;
-    int mLevelNumber;
     BrickLevel mLevel;
     std::span<const BrickRange> mRanges;
     std::span<const SubBlockCode> mSubBlocks;

@@ -58,10 +58,11 @@ public:
     // (one that holds surface): bit 2a for its low face on axis a, 2a + 1 for its high face.
     // Those are the faces to cap (core/face_cap.h). 0 with one level.
     unsigned seamFaces(const MinMaxNode& node, int level) const;
-    // The faces of `node` inside the volume (those with a neighbour), in the same bits.
-    unsigned innerFaces(const MinMaxNode& node) const;
 
 private:
+    // The faces of `node` inside the volume (those with a neighbour), in seamFaces' bits.
+    unsigned innerFaces(const MinMaxNode& node) const;
+
     struct Level {
         LevelSource source;
         ViewCuller culler;

@@ -186,9 +186,8 @@ TEST(Levels, TurbulenceLooksTheSameAtEveryDistance) {
 }
 
 TEST(Levels, RealMriLooksTheSameAtEveryDistance) {
-    const char* dir = std::getenv("VDISO_DATA_DIR");
-    const std::string path = dir ? std::string(dir) + "/ch2.nii.gz" : "";
-    if (path.empty() || !std::filesystem::exists(path))
+    const std::string path = test::dataFile("ch2.nii.gz");
+    if (path.empty())
         GTEST_SKIP() << "VDISO_DATA_DIR has no ch2.nii.gz (scripts/test.sh fetches it)";
     test::ScratchDir scratch;
     auto mri = openVolume(path, {});

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-#include <filesystem>
 
 #include "io/brick_store.h"
 #include "io/store_writer.h"
@@ -13,16 +12,9 @@
 namespace vdiso {
 namespace {
 
-std::string dataFile(const char* name) {
-    const char* dir = std::getenv("VDISO_DATA_DIR");
-    if (!dir) return "";
-    const std::string path = std::string(dir) + "/" + name;
-    return std::filesystem::exists(path) ? path : "";
-}
-
 TEST(RealData, MriHeadRoundTripsThroughTheStore) {
     for (const char* name : {"ch2.nii.gz", "ch2better.nii.gz"}) {
-        const std::string path = dataFile(name);
+        const std::string path = test::dataFile(name);
         if (path.empty()) GTEST_SKIP() << "VDISO_DATA_DIR has no " << name << " (scripts/test.sh fetches it)";
         auto whole = openVolume(path, {});
         const std::vector<unsigned char> samples = test::readAllSamples(*whole, 7);

@@ -14,6 +14,13 @@
 
 namespace vdiso::test {
 
+std::string dataFile(const char* name) {
+    const char* dir = std::getenv("VDISO_DATA_DIR");
+    if (!dir) return "";
+    const std::string path = std::string(dir) + "/" + name;
+    return std::filesystem::exists(path) ? path : "";
+}
+
 ScratchDir::ScratchDir() {
     // A new directory every time (mkdtemp): one named by the process id could be an old one
     // left by a killed test, files and all, once the ids wrap (pid_max is 32768 here), and a

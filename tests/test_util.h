@@ -54,6 +54,10 @@ CommandResult runCommand(const std::string& line);
 // Runs build/bin/vdiso with `args` (a shell-quoted string).
 CommandResult runVdiso(const std::string& args);
 
+// $VDISO_DATA_DIR/name (the real data scripts/fetch_data.sh puts there), or "" when it is not
+// there: the test then skips.
+std::string dataFile(const char* name);
+
 // A deterministic pseudo-random value for sample index i: spreads over the type's range so
 // every bit of every sample is exercised.
 double testSampleValue(ScalarType type, uint64_t i);

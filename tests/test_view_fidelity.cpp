@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <filesystem>
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
@@ -106,9 +105,8 @@ TEST(ViewFidelity, Turbulence) {
 }
 
 TEST(ViewFidelity, RealMri) {
-    const char* dir = std::getenv("VDISO_DATA_DIR");
-    const std::string path = dir ? std::string(dir) + "/ch2.nii.gz" : "";
-    if (path.empty() || !std::filesystem::exists(path))
+    const std::string path = test::dataFile("ch2.nii.gz");
+    if (path.empty())
         GTEST_SKIP() << "VDISO_DATA_DIR has no ch2.nii.gz (scripts/test.sh fetches it)";
     test::ScratchDir scratch;
     auto mri = openVolume(path, {});
