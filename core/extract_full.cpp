@@ -32,32 +32,55 @@ constexpr int64_t kProgressEvery = 32;
 constexpr size_t kChunksPerThread = 8;
 
 
+// Where one brick's output ends in its chunk's mesh (vertex and index counts after it).
+struct BrickEnd {
+    size_t vertices, indices;
+};
+
 struct ChunkOutput {
     TriangleMesh mesh;
     EdgeVertexMap seams;
     KernelCounters counters;
+    std::vector<BrickEnd> brickEnds;  // only when handing the surface over brick by brick
 };
 
 // Appends a chunk's mesh to `out`, merging its brick-face vertices with those already there.
-// (Chunk meshes number their vertices from 0; `out` may have streamed earlier ones away.)
-void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams) {
+// (Chunk meshes number their vertices from 0; `out` may have streamed earlier ones away.) With
+// the chunk's brick ends, brickDone(k) follows the appending of its k-th brick's output, which
+// may then be drained.
+template <class BrickDone>
+void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams, BrickDone&& brickDone) {
     constexpr uint32_t kNew = UINT32_MAX;
     std::vector<uint32_t> remap(chunk.mesh.vertexCount(), kNew);
     chunk.seams.forEach([&](uint64_t key, uint32_t v) {
         const uint32_t existing = outSeams.find(key);
         if (existing != UINT32_MAX) remap[v] = existing;
     });
-    for (size_t v = 0; v < remap.size(); ++v) {
-        if (remap[v] != kNew) continue;
-        remap[v] = out.nextVertex();
-        out.positions.push_back(chunk.mesh.positions[v]);
-        out.normals.push_back(chunk.mesh.normals[v]);
+    // A vertex is made by the chunk's first brick using it, so a brick's triangles refer only to
+    // vertices of the bricks appended before or with it.
+    auto appendSpan = [&](BrickEnd begin, BrickEnd end) {
+        for (size_t v = begin.vertices; v < end.vertices; ++v) {
+            if (remap[v] != kNew) continue;
+            remap[v] = out.nextVertex();
+            out.positions.push_back(chunk.mesh.positions[v]);
+            out.normals.push_back(chunk.mesh.normals[v]);
+        }
+        out.indices.reserve(out.indices.size() + (end.indices - begin.indices));
+        for (size_t i = begin.indices; i < end.indices; ++i) out.indices.push_back(remap[chunk.mesh.indices[i]]);
+    };
+    if (chunk.brickEnds.empty()) {
+        appendSpan({0, 0}, {chunk.mesh.vertexCount(), chunk.mesh.indices.size()});
+    } else {
+        BrickEnd begin{0, 0};
+        for (size_t k = 0; k < chunk.brickEnds.size(); ++k) {
+            appendSpan(begin, chunk.brickEnds[k]);
+            brickDone(k);
+            begin = chunk.brickEnds[k];
+        }
     }
     chunk.seams.forEach([&](uint64_t key, uint32_t v) {
         if (outSeams.find(key) == UINT32_MAX) outSeams.insert(key, remap[v]);
     });
-    out.indices.reserve(out.indices.size() + chunk.mesh.indices.size());
-    for (uint32_t i : chunk.mesh.indices) out.indices.push_back(remap[i]);
 }
 
 // Appends the chunks' meshes to `out`, in parallel, giving the mesh mergeChunk gives chunk by
@@ -144,10 +167,18 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     const uint32_t firstVertex = mesh.nextVertex();
     uint64_t trianglesStreamed = 0;
     std::atomic<int64_t> waitNanoseconds{0};
+    BrickMeshSink* const brickSink = options.sink ? nullptr : options.brickSink;
     auto stream = [&](bool last) {
         if (!options.sink || (!last && mesh.vertexCount() < options.streamPieceVertices)) return;
         trianglesStreamed += mesh.triangleCount();
         drainInto(*options.sink, mesh);
+    };
+    // Hands the mesh, brick `id`'s output alone, to the brick sink and drops it.
+    auto handOverBrick = [&](int64_t id) {
+        trianglesStreamed += mesh.triangleCount();
+        brickSink->appendBrick(id, mesh);
+        mesh.firstVertex = mesh.nextVertex();
+        mesh.clear();
     };
     auto finish = [&] {
         stream(true);
@@ -159,8 +190,9 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     // vertex each: reserving that up front saves the copies of repeated regrowth (reserved
     // pages that are never touched cost nothing).
     const size_t perBrick = size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
-    const size_t expectVertices =
-        options.sink ? options.streamPieceVertices + perBrick * 4 : items.size() * perBrick;
+    const size_t expectVertices = options.sink        ? options.streamPieceVertices + perBrick * 4
+                                  : brickSink != nullptr ? perBrick * 4
+                                                         : items.size() * perBrick;
     mesh.indices.reserve(mesh.indices.size() + expectVertices * 6);
     mesh.positions.reserve(mesh.positions.size() + expectVertices);
     mesh.normals.reserve(mesh.positions.capacity());
@@ -188,6 +220,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             prefetcher.consumed(i);
             const BrickHandle brick = acquireTimed(items[i]);
             extractItem(extractor, items[i], brick.samples(), mesh, seams);
+            if (brickSink) handOverBrick(bricks[i]);
             trimmer.finished(bricks[i]);
             trimmer.maybeTrim(seams);
             stream(false);
@@ -212,6 +245,8 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             for (size_t i = begin; i < end; ++i) {
                 const BrickHandle brick = acquireTimed(items[i]);
                 extractItem(extractor, items[i], brick.samples(), chunks[c].mesh, chunks[c].seams);
+                if (brickSink)
+                    chunks[c].brickEnds.push_back({chunkMesh.vertexCount(), chunkMesh.indices.size()});
                 const size_t n = ++done;
                 if (n % kProgressEvery == 0) {
                     std::lock_guard lock(progressMutex);  // the callback is not thread-safe
@@ -228,17 +263,19 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         total.cellsVisited += chunk.counters.cellsVisited;
         total.cellsActive += chunk.counters.cellsActive;
     }
-    if (!options.sink) {
+    if (!options.sink && !brickSink) {
         std::vector<int32_t> chunkOfBrick(size_t(source.layout().brickCount()), -1);
         for (size_t c = 0; c < chunkCount; ++c)
             for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
                 chunkOfBrick[size_t(bricks[i])] = int32_t(c);
         arena.execute([&] { mergeChunksParallel(chunks, chunkOfBrick, source.volume(), source.layout(), mesh); });
     } else {
-        // Streamed: chunk by chunk, so that memory holds a piece of the mesh, not all of it.
+        // Streamed: chunk by chunk (or brick by brick), so that memory holds a piece of the mesh,
+        // not all of it.
         EdgeVertexMap seams;
         for (size_t c = 0; c < chunkCount; ++c) {
-            mergeChunk(chunks[c], mesh, seams);
+            const size_t begin = items.size() * c / chunkCount;
+            mergeChunk(chunks[c], mesh, seams, [&](size_t k) { handOverBrick(bricks[begin + k]); });
             chunks[c] = ChunkOutput();  // free the chunk's memory as soon as it is merged
             for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
                 trimmer.finished(bricks[i]);
@@ -262,6 +299,7 @@ ExtractStats extractOctree(BrickSource& source, const FullExtractOptions& option
     std::vector<int64_t> bricks;
     stats.nodesVisited =
         tree.forEachActiveBrick(options.iso, [&](int64_t id) { bricks.push_back(id); });
+    std::sort(bricks.begin(), bricks.end());  // the file's order: sequential reads
     const KernelCounters counters = extractItems(
         bricks, source, options, mesh, stats, progress, 0.0,
         [&](BrickExtractor& extractor, int64_t id, const void* samples, TriangleMesh& out,

@@ -7,7 +7,8 @@
 //   preprocessing pass acquires every brick once to compute the meta-cell ranges and build the
 //   kd-tree (timed apart as preprocessSeconds); the query returns exactly the active
 //   meta-cells, which are then extracted brick by brick.
-// Both produce the same triangles (vertex numbering aside) through the same kernel
+// Both visit the active bricks in increasing id order (the file's order) and produce the same
+// triangles (vertex numbering aside) through the same kernel
 // (core/brick_extractor.h), with vertices welded across bricks.
 #pragma once
 
@@ -21,6 +22,17 @@
 #include "core/progress.h"
 
 namespace vdiso {
+
+// Receives a full extraction brick by brick (FullExtractOptions::brickSink), in increasing brick
+// id order (x fastest, z slowest). Each call holds one active brick's triangles and the vertices
+// it made, numbered part.firstVertex onwards (== all handed over before); its triangles refer
+// only to those and to vertices of earlier bricks that share a face, edge or corner with it
+// (a vertex on a brick border belongs to the first brick that made it).
+class BrickMeshSink {
+public:
+    virtual ~BrickMeshSink() = default;
+    virtual void appendBrick(int64_t id, const TriangleMesh& part) = 0;
+};
 
 struct FullExtractOptions {
     double iso = 0;
@@ -36,6 +48,9 @@ struct FullExtractOptions {
     // holds a bounded part of the output instead of all of it.
     MeshSink* sink = nullptr;
     size_t streamPieceVertices = size_t(1) << 20;  // vertices per piece handed to the sink
+    // When set (and sink is not), the surface is handed over brick by brick instead, and at the
+    // end the mesh is empty: what the out-of-core post-processing (core/mesh_slabs.h) reads.
+    BrickMeshSink* brickSink = nullptr;
     // Bricks a prefetch thread loads ahead of the extraction (threads == 1), from the list of
     // bricks the traversal already decided to visit: reads overlap extraction and no other
     // brick is read. 0: none. Prefetched bricks stay pinned until used, so the source's cache
