@@ -71,6 +71,20 @@ public:
     virtual void append(const TriangleMesh& part) = 0;
 };
 
+// A MeshSink that appends what it receives to a mesh held whole (firstVertex 0).
+class MeshAppender final : public MeshSink {
+public:
+    explicit MeshAppender(TriangleMesh& mesh) : mMesh(mesh) {}
+    void append(const TriangleMesh& part) override {
+        mMesh.positions.insert(mMesh.positions.end(), part.positions.begin(), part.positions.end());
+        mMesh.normals.insert(mMesh.normals.end(), part.normals.begin(), part.normals.end());
+        mMesh.indices.insert(mMesh.indices.end(), part.indices.begin(), part.indices.end());
+    }
+
+private:
+    TriangleMesh& mMesh;
+};
+
 // Sum of the triangles' areas (in double), in world units squared. Indices must refer to the
 // vertices the mesh holds (firstVertex == 0).
 double surfaceArea(const TriangleMesh& mesh);
