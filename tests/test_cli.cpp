@@ -252,6 +252,63 @@ TEST(CliExtract, WritesEveryMeshFormat) {
     EXPECT_EQ(test::readGlb(dir.file("h.glb")).triangleCount(), ply.triangleCount());
 }
 
+// --smooth, --decimate, --largest and --min-piece from the command line: into every streamed
+// format and into the picture, with their figures; what they refuse.
+TEST(CliExtract, PostProcessesTheMesh) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(runVdiso("synth " + store + " --kind head --size 48 --brick 8 --quiet").exitCode, 0);
+    const std::string extract = "extract " + store + " --iso 600.5 --quiet ";
+    ASSERT_EQ(runVdiso(extract + "-o " + dir.file("plain.ply")).exitCode, 0);
+    const TriangleMesh plain = test::readPly(dir.file("plain.ply"));
+    const std::string post = " --smooth 3 --decimate 0.5 --min-piece 20 --stats " + dir.file("s.json");
+    auto r = runVdiso(extract + "-o " + dir.file("p.ply") + post);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const nlohmann::json stats = nlohmann::json::parse(test::readFile(dir.file("s.json")));
+    const TriangleMesh ply = test::readPly(dir.file("p.ply"));
+    EXPECT_EQ(stats["triangles"], ply.triangleCount());
+    EXPECT_EQ(stats["triangles_extracted"], plain.triangleCount());
+    EXPECT_EQ(stats["smooth"], 3);
+    EXPECT_GE(stats["pieces"].get<int>(), 1);
+    EXPECT_LT(ply.triangleCount(), plain.triangleCount() * 6 / 10);
+    EXPECT_GT(ply.triangleCount(), plain.triangleCount() * 4 / 10);
+    // The same mesh in another format, and held for a picture.
+    r = runVdiso(extract + "-o " + dir.file("p.stl") + post + " --force");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(test::readStl(dir.file("p.stl")).normals.size(), ply.triangleCount());
+    r = runVdiso(extract + "-o " + dir.file("held.ply") + " --png " + dir.file("p.png") + post + " --force");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    test::expectSameMesh(test::readPly(dir.file("held.ply")), ply, "held for the picture");
+    r = runVdiso(extract + "-o " + dir.file("l.ply") + " --largest --method noise");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_LE(test::readPly(dir.file("l.ply")).triangleCount(), plain.triangleCount());
+    // No file is left beside the outputs.
+    size_t files = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
+    EXPECT_EQ(files, 8u);  // h.vdiso, plain.ply, p.ply, s.json, p.stl, held.ply, p.png, l.ply
+
+    const std::pair<const char*, const char*> refused[] = {
+        {" --smooth 2 --method sage -o x.ply", "apply to the full surface"},
+        {" --decimate 0", "--decimate expects the fraction"},
+        {" --decimate 1.5 -o x.ply", "--decimate expects the fraction"},
+        {" --min-piece 0 -o x.ply", "--min-piece"},
+        {" --smooth -1 -o x.ply", "--smooth"},
+        {" --largest", "give -o MESH or --png"},
+        {" --largest --path orbit:3 --png f%d.png", "nor post-processes them"},
+    };
+    for (const auto& [options, message] : refused) {
+        r = runVdiso(extract + options);
+        EXPECT_EQ(r.exitCode, 2) << options;
+        EXPECT_TRUE(contains(r.output, message)) << options << ": " << r.output;
+    }
+    // An existing output stays as it was.
+    test::writeFile(dir.file("old.ply"), "old");
+    r = runVdiso(extract + "-o " + dir.file("old.ply") + " --smooth 2");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_TRUE(contains(r.output, "already exists")) << r.output;
+    EXPECT_EQ(test::readFile(dir.file("old.ply")).size(), 3u);
+}
+
 TEST(CliExtract, BadArgumentsAreUsageErrors) {
     test::ScratchDir dir;
     const std::string store = dir.file("h.vdiso");

@@ -14,6 +14,7 @@
 #include "io/atomic_output.h"
 #include "io/camera_json.h"
 #include "io/json.h"
+#include "io/mesh_post.h"
 #include "io/mesh_writer.h"
 #include "io/oracle_comparison.h"
 #include "io/png_image.h"
@@ -72,6 +73,18 @@ constexpr const char* kHelp =
     "  --mesh-compress           .glb: compress the mesh with meshoptimizer\n"
     "                            (EXT_meshopt_compression; three.js loads it with its\n"
     "                            MeshoptDecoder)\n"
+    "  --smooth N                octree/noise: N iterations of Taubin smoothing (lambda|mu:\n"
+    "                            no shrinkage), on surfaces larger than memory: bricks are\n"
+    "                            spooled beside the output and smoothed a layer at a time\n"
+    "                            with the layers N cells reach, which gives the result of\n"
+    "                            smoothing the whole mesh at once; normals from the smoothed\n"
+    "                            surface\n"
+    "  --decimate R              octree/noise: keep a fraction R (0 < R <= 1) of the triangles\n"
+    "                            (meshoptimizer's simplifier, each layer of bricks on its own\n"
+    "                            with its borders locked, so layers still meet exactly)\n"
+    "  --largest                 octree/noise: keep only the largest connected piece\n"
+    "  --min-piece N             octree/noise: drop connected pieces of fewer than N triangles\n"
+    "                            (pieces are found across bricks by union-find)\n"
     "  --png IMAGE.png           render the mesh with OSMesa and write a picture\n"
     "  --view distant|normal|closeup   camera preset framed from the volume (default normal);\n"
     "                            the picture's camera, and the extraction's for sage/wise\n"
@@ -117,6 +130,7 @@ struct ExtractOptions {
     uint64_t cacheMb = 1024;
     bool overwrite = false, quiet = false, cold = false;
     bool meshCompress = false;  // --mesh-compress (.glb only)
+    MeshPostOptions post;       // --smooth, --decimate, --largest, --min-piece
 };
 
 void parseSize(const std::string& text, int& width, int& height) {
@@ -202,6 +216,18 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.meshPath = args.value(a);
         } else if (a == "--mesh-compress") {
             o.meshCompress = true;
+        } else if (a == "--smooth") {
+            o.post.smoothIterations = int(parseInt(a, args.value(a), 0, 1000));
+        } else if (a == "--decimate") {
+            const std::string ratio = args.value(a);
+            o.post.decimateRatio = parseDouble(a, ratio);
+            if (!(o.post.decimateRatio > 0 && o.post.decimateRatio <= 1))
+                throw UsageError("--decimate expects the fraction of triangles to keep, above 0 and at "
+                                 "most 1, not " + ratio);
+        } else if (a == "--largest") {
+            o.post.largestPiece = true;
+        } else if (a == "--min-piece") {
+            o.post.minPieceTriangles = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 40));
         } else if (a == "--png") {
             o.pngPath = args.value(a);
         } else if (a == "--view") {
@@ -260,6 +286,12 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (o.level != 0 && viewDependent)
         throw UsageError("--level applies to --method octree or noise; sage and wise choose a "
                          "level per part of the volume by --lod-error");
+    if (o.post.any() && viewDependent)
+        throw UsageError("--smooth, --decimate, --largest and --min-piece apply to the full surface: "
+                         "--method octree or noise");
+    if (o.post.any() && o.meshPath.empty() && o.pngPath.empty())
+        throw UsageError("--smooth, --decimate, --largest and --min-piece shape the mesh: give -o MESH "
+                         "or --png");
     if (!o.pointsPath.empty() && !viewDependent)
         throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
@@ -270,9 +302,9 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (o.orbitFrames > 0 || !o.pathFile.empty()) {
         if (o.oracle) throw UsageError("--oracle measures one view, not a --path");
         if (!o.cameraPath.empty()) throw UsageError("give --path or --camera, not both");
-        if (!o.meshPath.empty() || !o.pointsPath.empty())
+        if (!o.meshPath.empty() || !o.pointsPath.empty() || o.post.any())
             throw UsageError("a --path writes pictures (--png frame_%04d.png) and statistics, "
-                             "not meshes");
+                             "not meshes (nor post-processes them)");
         if (!o.pngPath.empty() && !isFramePattern(o.pngPath))
             throw UsageError("with --path, --png needs one %d in its name (frame_%04d.png)");
         if (!isViewDependent(o.method) && o.pngPath.empty())
@@ -327,6 +359,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         streamed.emplace(meshPath, o.overwrite, o.meshCompress);
     PointSet points;
     ExtractStats stats;
+    std::optional<MeshPostStats> post;
     if (isViewDependent(o.method)) {
         ViewExtractOptions v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso)
                                                   : ViewExtractOptions::wise(*o.iso);
@@ -347,12 +380,30 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         stats = extractViewDependent(cache, *camera, v, mesh, points, progress);
     } else {
         FullExtractOptions extract{*o.iso, o.metaCellSize, plan.threads};
-        if (streamed) extract.sink = &*streamed;
         extract.prefetchBricks = plan.prefetchBricks;
         extract.prefetchReaders = o.readers;
         LevelSource level(cache, o.level);
-        stats = o.method == "noise" ? extractNoise(level, extract, mesh, progress)
-                                    : extractOctree(level, extract, mesh, progress);
+        // Post-processing takes the surface brick by brick and hands its result on to the file
+        // (streamed) or to the mesh held for the picture.
+        MeshAppender held(mesh);
+        std::optional<PostProcessedMesh> postProcess;
+        if (o.post.any()) {
+            postProcess.emplace(meshPath.empty() ? pngPath : meshPath, level.layout(), o.post,
+                                streamed ? static_cast<MeshSink&>(*streamed) : held);
+            extract.brickSink = &*postProcess;
+        } else if (streamed) {
+            extract.sink = &*streamed;
+        }
+        // Brick by brick, the extraction's own mesh is a passing buffer, not the one held.
+        TriangleMesh passing;
+        TriangleMesh& into = postProcess ? passing : mesh;
+        stats = o.method == "noise" ? extractNoise(level, extract, into, progress)
+                                    : extractOctree(level, extract, into, progress);
+        if (postProcess) {
+            post = postProcess->finish(progressBar("post-process", 0, o.quiet));
+            stats.triangles = post->trianglesOut;
+            stats.vertices = post->verticesOut;
+        }
     }
     const CacheCounters io = cache.counters() - before;
 
@@ -380,6 +431,16 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("levels", store.header().levelCount);
     s.add("triangles", stats.triangles).add("points", uint64_t(points.size()));
     s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
+    if (post) {
+        s.add("smooth", o.post.smoothIterations).add("decimate", o.post.decimateRatio);
+        s.add("largest", o.post.largestPiece).add("min_piece", o.post.minPieceTriangles);
+        s.add("triangles_extracted", post->trianglesIn).add("vertices_extracted", post->verticesIn);
+        s.add("pieces", post->pieces).add("pieces_kept", post->piecesKept);
+        s.add("post_slabs", post->slabs).add("post_halo_slabs", post->haloSlabs);
+        s.add("post_window_triangles_max", post->largestWindowTriangles);
+        s.add("post_spool_mb", double(post->spoolBytes) / 1e6);
+        s.add("pieces_s", post->piecesSeconds).add("post_s", post->finishSeconds);
+    }
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
