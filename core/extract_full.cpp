@@ -30,6 +30,10 @@ constexpr int64_t kProgressEvery = 32;
 
 // Chunks per thread when extracting in parallel: enough to balance uneven bricks.
 constexpr size_t kChunksPerThread = 8;
+// Streamed, a chunk holds at most this many bricks, and each thread extracts this many chunks a
+// round: memory holds a few hundred bricks' surface, whatever the volume.
+constexpr size_t kStreamedChunkBricks = 64;
+constexpr size_t kStreamedChunksPerThread = 2;
 
 
 // Where one brick's output ends in its chunk's mesh (vertex and index counts after it).
@@ -229,59 +233,64 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         finish();
         return extractor.counters();
     }
-    const size_t chunkCount = std::min(items.size(), size_t(options.threads) * kChunksPerThread);
+    // Streamed, chunks of a bounded number of bricks are extracted a round at a time and
+    // merged: memory holds a round's surface, not all of it. (Vertices are numbered as one
+    // thread would number them whatever the chunks: see mergeChunk.)
+    const bool streamed = options.sink || brickSink;
+    const size_t chunkCount =
+        std::max(std::min(items.size(), size_t(options.threads) * kChunksPerThread),
+                 streamed ? (items.size() + kStreamedChunkBricks - 1) / kStreamedChunkBricks : 0);
+    const size_t round = streamed ? size_t(options.threads) * kStreamedChunksPerThread : chunkCount;
     std::vector<ChunkOutput> chunks(chunkCount);
     std::atomic<size_t> done{0};
     std::mutex progressMutex;
     tbb::task_arena arena(options.threads);
-    arena.execute([&] {
-        tbb::parallel_for(size_t(0), chunkCount, [&](size_t c) {
-            BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
-            const size_t begin = items.size() * c / chunkCount, end = items.size() * (c + 1) / chunkCount;
-            TriangleMesh& chunkMesh = chunks[c].mesh;
-            chunkMesh.indices.reserve((end - begin) * perBrick * 6);
-            chunkMesh.positions.reserve((end - begin) * perBrick);
-            chunkMesh.normals.reserve((end - begin) * perBrick);
-            for (size_t i = begin; i < end; ++i) {
-                const BrickHandle brick = acquireTimed(items[i]);
-                extractItem(extractor, items[i], brick.samples(), chunks[c].mesh, chunks[c].seams);
-                if (brickSink)
-                    chunks[c].brickEnds.push_back({chunkMesh.vertexCount(), chunkMesh.indices.size()});
-                const size_t n = ++done;
-                if (n % kProgressEvery == 0) {
-                    std::lock_guard lock(progressMutex);  // the callback is not thread-safe
-                    report(n);
-                }
-            }
-            chunks[c].counters = extractor.counters();
-        });
-    });
     KernelCounters total;
-    for (const ChunkOutput& chunk : chunks) {
-        total.metaCellsTested += chunk.counters.metaCellsTested;
-        total.metaCellsActive += chunk.counters.metaCellsActive;
-        total.cellsVisited += chunk.counters.cellsVisited;
-        total.cellsActive += chunk.counters.cellsActive;
+    EdgeVertexMap seams;  // streamed: the brick-face vertices of the chunks merged so far
+    for (size_t first = 0; first < chunkCount; first += round) {
+        const size_t last = std::min(chunkCount, first + round);
+        arena.execute([&] {
+            tbb::parallel_for(first, last, [&](size_t c) {
+                BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
+                const size_t begin = items.size() * c / chunkCount, end = items.size() * (c + 1) / chunkCount;
+                TriangleMesh& chunkMesh = chunks[c].mesh;
+                chunkMesh.indices.reserve((end - begin) * perBrick * 6);
+                chunkMesh.positions.reserve((end - begin) * perBrick);
+                chunkMesh.normals.reserve((end - begin) * perBrick);
+                for (size_t i = begin; i < end; ++i) {
+                    const BrickHandle brick = acquireTimed(items[i]);
+                    extractItem(extractor, items[i], brick.samples(), chunks[c].mesh, chunks[c].seams);
+                    if (brickSink)
+                        chunks[c].brickEnds.push_back({chunkMesh.vertexCount(), chunkMesh.indices.size()});
+                    const size_t n = ++done;
+                    if (n % kProgressEvery == 0) {
+                        std::lock_guard lock(progressMutex);  // the callback is not thread-safe
+                        report(n);
+                    }
+                }
+                chunks[c].counters = extractor.counters();
+            });
+        });
+        for (size_t c = first; c < last; ++c) {
+            total.metaCellsTested += chunks[c].counters.metaCellsTested;
+            total.metaCellsActive += chunks[c].counters.metaCellsActive;
+            total.cellsVisited += chunks[c].counters.cellsVisited;
+            total.cellsActive += chunks[c].counters.cellsActive;
+            if (!streamed) continue;
+            const size_t begin = items.size() * c / chunkCount;
+            mergeChunk(chunks[c], mesh, seams, [&](size_t k) { handOverBrick(bricks[begin + k]); });
+            chunks[c] = ChunkOutput();  // free the chunk's memory as soon as it is merged
+            for (size_t i = begin; i < items.size() * (c + 1) / chunkCount; ++i) trimmer.finished(bricks[i]);
+            trimmer.maybeTrim(seams);
+            stream(false);
+        }
     }
-    if (!options.sink && !brickSink) {
+    if (!streamed) {
         std::vector<int32_t> chunkOfBrick(size_t(source.layout().brickCount()), -1);
         for (size_t c = 0; c < chunkCount; ++c)
             for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
                 chunkOfBrick[size_t(bricks[i])] = int32_t(c);
         arena.execute([&] { mergeChunksParallel(chunks, chunkOfBrick, source.volume(), source.layout(), mesh); });
-    } else {
-        // Streamed: chunk by chunk (or brick by brick), so that memory holds a piece of the mesh,
-        // not all of it.
-        EdgeVertexMap seams;
-        for (size_t c = 0; c < chunkCount; ++c) {
-            const size_t begin = items.size() * c / chunkCount;
-            mergeChunk(chunks[c], mesh, seams, [&](size_t k) { handOverBrick(bricks[begin + k]); });
-            chunks[c] = ChunkOutput();  // free the chunk's memory as soon as it is merged
-            for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
-                trimmer.finished(bricks[i]);
-            trimmer.maybeTrim(seams);
-            stream(false);
-        }
     }
     finish();
     report(items.size());

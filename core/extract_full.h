@@ -38,10 +38,10 @@ struct FullExtractOptions {
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
     // Threads extracting bricks. 1 runs on the calling thread alone. More split the active
-    // bricks into contiguous chunks (the same chunks for any thread count above 1, so the
-    // output does not depend on scheduling), each with its own mesh, merged in order with
-    // vertices on chunk borders welded: in parallel, written into place after a prefix sum of
-    // the chunks' counts (with a sink, chunk by chunk instead, to keep memory bounded).
+    // bricks into contiguous chunks, each with its own mesh, merged in order with vertices on
+    // chunk borders welded: in parallel, written into place after a prefix sum of the chunks'
+    // counts (streamed, chunks of a few dozen bricks a round at a time, merged chunk by chunk, to
+    // keep memory bounded). The mesh is the same, vertex numbers included, for any thread count.
     int threads = 1;
     // When set, the surface is streamed: every streamPieceVertices vertices, what the mesh holds is
     // handed to the sink and dropped (drainInto), and at the end the mesh is empty. Memory then

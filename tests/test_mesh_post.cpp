@@ -98,7 +98,7 @@ TEST(MeshPost, WithoutOperationsGivesTheExtractedMesh) {
     auto source = turbulence(8);
     for (bool noise : {false, true})
         for (int threads : {1, 2}) {
-            const TriangleMesh expected = held(*source, kTurbulenceIso, threads, noise);
+            const TriangleMesh expected = held(*source, kTurbulenceIso, 1, noise);  // any thread count
             MeshPostStats stats;
             const TriangleMesh got = postProcessed(*source, kTurbulenceIso, {}, threads, &stats, noise);
             EXPECT_GT(expected.triangleCount(), 10000u);
