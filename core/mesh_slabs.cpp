@@ -162,54 +162,63 @@ int haloSlabs(const MeshPostOptions& options, int brickSize) {
     return std::max(1, reach / brickSize + 1);
 }
 
-void SlabFinisher::finish(std::span<const TriangleMesh> window, size_t center, TriangleMesh& out) {
+ShapedSlab shapeSlab(const MeshPostOptions& options, std::span<const TriangleMesh> window, size_t center) {
     const TriangleMesh& slab = window[center];
     WindowMesh w = gather(window);
     const uint32_t first = slab.firstVertex - w.base, count = uint32_t(slab.vertexCount());
-    if (mOptions.smoothIterations > 0) {
-        smoothTaubin(w.positions, w.indices, mOptions.smoothIterations);
+    if (options.smoothIterations > 0) {
+        smoothTaubin(w.positions, w.indices, options.smoothIterations);
         triangleNormals(w.positions, w.indices, w.normals, first, count);
     }
-
-    // The slab's triangles, in window numbering.
-    std::vector<uint32_t> triangles(slab.indices.begin(), slab.indices.end());
-    for (uint32_t& v : triangles) {
+    ShapedSlab shaped;
+    shaped.firstVertex = slab.firstVertex;
+    shaped.positions.assign(w.positions.begin() + first, w.positions.begin() + first + count);
+    shaped.normals.assign(w.normals.begin() + first, w.normals.begin() + first + count);
+    // The slab's triangles, in window numbering while decimated.
+    shaped.indices.assign(slab.indices.begin(), slab.indices.end());
+    for (uint32_t& v : shaped.indices) {
         if (v < w.base) throw std::invalid_argument("a mesh slab's triangle refers to a vertex before the slab it follows");
         v -= w.base;
     }
-    if (mOptions.decimateRatio < 1.0) decimateKeepingBorder(triangles, w.positions, mOptions.decimateRatio);
-
-    // Its vertices written: those its triangles or the next slab's use.
-    std::vector<uint32_t> numbers(count, kNone);
-    auto mark = [&](uint32_t v) {
-        if (v - first < count) numbers[v - first] = 0;
-    };
-    for (uint32_t v : triangles) mark(v);
+    if (options.decimateRatio < 1.0) decimateKeepingBorder(shaped.indices, w.positions, options.decimateRatio);
+    for (uint32_t& v : shaped.indices) v += w.base;
+    shaped.usedByNext.assign(count, false);
     if (center + 1 < window.size())
-        for (uint32_t v : window[center + 1].indices) mark(v - w.base);
+        for (uint32_t v : window[center + 1].indices)
+            if (v - slab.firstVertex < count) shaped.usedByNext[v - slab.firstVertex] = true;
+    return shaped;
+}
+
+void SlabWriter::write(const ShapedSlab& slab, TriangleMesh& out) {
+    // Its vertices written: those its triangles or the next slab's use.
+    const uint32_t first = slab.firstVertex, count = uint32_t(slab.positions.size());
+    std::vector<uint32_t> numbers(count, kNone);
+    for (uint32_t k = 0; k < count; ++k)
+        if (slab.usedByNext[k]) numbers[k] = 0;
+    for (uint32_t v : slab.indices)
+        if (v - first < count) numbers[v - first] = 0;
     out.clear();
     out.firstVertex = uint32_t(mWritten);
     for (uint32_t k = 0; k < count; ++k) {
         if (numbers[k] == kNone) continue;
         numbers[k] = out.nextVertex();
-        out.positions.push_back(w.positions[first + k]);
-        out.normals.push_back(w.normals[first + k]);
+        out.positions.push_back(slab.positions[k]);
+        out.normals.push_back(slab.normals[k]);
     }
     mWritten = out.nextVertex();
-    out.indices.resize(triangles.size());
-    const uint32_t previousFirst = mPreviousFirst - w.base;
-    for (size_t i = 0; i < triangles.size(); ++i) {
-        const uint32_t v = triangles[i];
+    out.indices.resize(slab.indices.size());
+    for (size_t i = 0; i < slab.indices.size(); ++i) {
+        const uint32_t v = slab.indices[i];
         const uint32_t n = v - first < count ? numbers[v - first]
-                           : v - previousFirst < mPreviousNumbers.size() ? mPreviousNumbers[v - previousFirst]
-                                                                         : kNone;
+                           : v - mPreviousFirst < mPreviousNumbers.size() ? mPreviousNumbers[v - mPreviousFirst]
+                                                                          : kNone;
         if (n == kNone)
             throw std::invalid_argument("a mesh slab's triangle refers to a vertex neither it nor the slab "
                                         "before it has written");
         out.indices[i] = n;
     }
     mPreviousNumbers = std::move(numbers);
-    mPreviousFirst = slab.firstVertex;
+    mPreviousFirst = first;
 }
 
 }  // namespace vdiso

@@ -18,6 +18,8 @@
 #include <span>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "core/mesh.h"
 
 namespace vdiso {
@@ -29,6 +31,7 @@ struct MeshPostOptions {
     uint64_t minPieceTriangles = 0;  // drop pieces with fewer triangles
     bool any() const { return smoothIterations > 0 || decimateRatio < 1.0 || removesPieces(); }
     bool removesPieces() const { return largestPiece || minPieceTriangles > 0; }
+    int threads = 1;  // slabs shaped at once (the result is the same for any count)
 };
 
 // The slabs on each side of the one being finished that a window must hold: at least 1 (the next
@@ -36,22 +39,30 @@ struct MeshPostOptions {
 // brick of `brickSize` cells.
 int haloSlabs(const MeshPostOptions& options, int brickSize);
 
-// Finishes slabs in order, numbering the vertices it writes from 0.
-class SlabFinisher {
+// A slab smoothed and decimated, its vertices not yet numbered for writing.
+struct ShapedSlab {
+    uint32_t firstVertex = 0;
+    std::vector<glm::vec3> positions, normals;  // the slab's own vertices
+    std::vector<uint32_t> indices;              // its triangles, in the extraction's numbering
+    std::vector<bool> usedByNext;               // which own vertices the next slab's triangles use
+};
+
+// Smooths and decimates window[center]. `window` holds consecutive slabs (empty ones included: a
+// mesh with no vertices and no triangles, numbered on from the one before), with haloSlabs() of
+// them on each side of the centre where the volume has them. Slabs may be shaped at once on
+// several threads: the result depends on the window alone.
+ShapedSlab shapeSlab(const MeshPostOptions& options, std::span<const TriangleMesh> window, size_t center);
+
+// Numbers shaped slabs' vertices for a MeshSink, slab after slab in order, from 0: writes a
+// slab's output to `out`, the vertices it writes (those its triangles or the next slab's use)
+// numbered out.firstVertex (the count written before) onwards and its triangles in that
+// numbering.
+class SlabWriter {
 public:
-    explicit SlabFinisher(const MeshPostOptions& options) : mOptions(options) {}
-
-    // `window` holds consecutive slabs (empty ones included: a mesh with no vertices and no
-    // triangles, numbered on from the one before), window[center] the one to finish, with
-    // haloSlabs() of them on each side where the volume has them. Writes its finished
-    // output to `out`: the vertices it writes, numbered out.firstVertex onwards (set to the
-    // count written before), and its triangles in the written numbering, for a MeshSink.
-    void finish(std::span<const TriangleMesh> window, size_t center, TriangleMesh& out);
-
+    void write(const ShapedSlab& slab, TriangleMesh& out);
     uint64_t verticesWritten() const { return mWritten; }
 
 private:
-    MeshPostOptions mOptions;
     uint64_t mWritten = 0;
     // The written number of each of the previous slab's vertices (UINT32_MAX: not written).
     std::vector<uint32_t> mPreviousNumbers;

@@ -1,6 +1,11 @@
 #include "io/mesh_post.h"
 
+#include <algorithm>
 #include <chrono>
+#include <span>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "core/mesh_pieces.h"
 #include "io/error.h"
@@ -124,30 +129,45 @@ MeshPostStats PostProcessedMesh::finish(const ProgressFn& progress) {
         stats.piecesSeconds = secondsSince(start);
     }
 
-    // Slab by slab through a sliding window.
+    // A batch of slabs at a time, each shaped with the window around it (on several threads),
+    // then written in order.
     const auto start = Clock::now();
     const int halo = haloSlabs(mOptions, mLayout.brickSize);
     stats.haloSlabs = halo;
-    SlabFinisher finisher(mOptions);
-    std::vector<TriangleMesh> window;  // slabs first .. first + window.size() - 1
+    const int threads = std::max(1, mOptions.threads);
+    const int batch = 2 * threads;
+    tbb::task_arena arena(threads);
+    SlabWriter writer;
+    std::vector<TriangleMesh> held;  // slabs first .. first + held.size() - 1
     int first = 0;
     TriangleMesh out;
-    for (int k = 0; k < slabs; ++k) {
-        while (first < k - halo) {
-            window.erase(window.begin());
-            ++first;
+    for (int k0 = 0; k0 < slabs; k0 += batch) {
+        const int k1 = std::min(slabs, k0 + batch);
+        const int from = std::max(0, k0 - halo), to = std::min(slabs, k1 + halo);  // slabs needed
+        held.erase(held.begin(), held.begin() + std::min<ptrdiff_t>(ptrdiff_t(held.size()), from - first));
+        first = from;
+        while (first + int(held.size()) < to)
+            held.push_back(readSlab(first + int(held.size()), keep ? &*keep : nullptr));
+        std::vector<ShapedSlab> shaped(size_t(k1 - k0));
+        arena.execute([&] {
+            tbb::parallel_for(k0, k1, [&](int k) {
+                const int lo = std::max(0, k - halo), hi = std::min(slabs, k + halo + 1);
+                const std::span<const TriangleMesh> window(held.data() + (lo - first), size_t(hi - lo));
+                shaped[size_t(k - k0)] = shapeSlab(mOptions, window, size_t(k - lo));
+            });
+        });
+        for (int k = k0; k < k1; ++k) {
+            uint64_t inWindow = 0;
+            for (int j = std::max(0, k - halo); j < std::min(slabs, k + halo + 1); ++j)
+                inWindow += held[size_t(j - first)].triangleCount();
+            stats.largestWindowTriangles = std::max(stats.largestWindowTriangles, inWindow);
+            writer.write(shaped[size_t(k - k0)], out);
+            stats.trianglesOut += out.triangleCount();
+            mOut.append(out);
+            report(passes - 1, k);
         }
-        while (first + int(window.size()) <= std::min(k + halo, slabs - 1))
-            window.push_back(readSlab(first + int(window.size()), keep ? &*keep : nullptr));
-        uint64_t held = 0;
-        for (const TriangleMesh& s : window) held += s.triangleCount();
-        stats.largestWindowTriangles = std::max(stats.largestWindowTriangles, held);
-        finisher.finish(window, size_t(k - first), out);
-        stats.trianglesOut += out.triangleCount();
-        mOut.append(out);
-        report(passes - 1, k);
     }
-    stats.verticesOut = finisher.verticesWritten();
+    stats.verticesOut = writer.verticesWritten();
     stats.finishSeconds = secondsSince(start);
     return stats;
 }

@@ -5,7 +5,8 @@
 // slab of bricks, to side files beside the output. finish() then reads the slabs back: once to
 // find the connected pieces when pieces are to be removed (core/mesh_pieces.h), once to smooth,
 // decimate and hand them (core/mesh_slabs.h) to a MeshSink, a MeshFileWriter as a rule.
-// Memory holds a window of a few slabs and the pieces' table, never the whole surface. The side
+// Memory holds a batch of slabs shaped at once (two per thread) with the slabs around them that
+// smoothing reaches, and the pieces' table, never the whole surface. The side
 // files go with the object, whatever happens.
 #pragma once
 

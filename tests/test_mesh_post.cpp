@@ -35,7 +35,9 @@ TriangleMesh postProcessed(BrickSource& source, double iso, const MeshPostOption
     test::ScratchDir dir;
     TriangleMesh result, rest;
     MeshAppender out(result);
-    PostProcessedMesh mesh(dir.file("m.ply"), source.layout(), post, out);
+    MeshPostOptions options = post;
+    options.threads = threads;  // slabs shaped at once: the same result
+    PostProcessedMesh mesh(dir.file("m.ply"), source.layout(), options, out);
     FullExtractOptions o{iso, 4, threads};
     o.brickSink = &mesh;
     const ExtractStats extracted = noise ? extractNoise(source, o, rest) : extractOctree(source, o, rest);

@@ -388,7 +388,9 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         MeshAppender held(mesh);
         std::optional<PostProcessedMesh> postProcess;
         if (o.post.any()) {
-            postProcess.emplace(meshPath.empty() ? pngPath : meshPath, level.layout(), o.post,
+            MeshPostOptions post = o.post;
+            post.threads = plan.threads;
+            postProcess.emplace(meshPath.empty() ? pngPath : meshPath, level.layout(), post,
                                 streamed ? static_cast<MeshSink&>(*streamed) : held);
             extract.brickSink = &*postProcess;
         } else if (streamed) {
