@@ -1,13 +1,21 @@
 // What a volume is, independent of where its samples live.
 //
 // A volume is a grid of dims[0] x dims[1] x dims[2] samples (x fastest). Sample (i,j,k) sits at
-// origin + (i,j,k) * spacing in world units. Cells are the (dims-1) cubes between samples.
+// origin + (i,j,k) * spacing in world units ("volume space": axis-aligned, where extraction,
+// culling, cameras and rendering work). Cells are the (dims-1) cubes between samples.
+//
+// Physical space is where the scanner put the volume, in patient coordinates LPS (x towards the
+// patient's Left, y Posterior, z Superior: DICOM's and ITK's convention): sample (i,j,k) sits at
+// origin + direction * ((i,j,k) * spacing). The two spaces share the origin (sample 0,0,0) and
+// differ by the direction's rotation (or flip, or shear) about it; core/orientation.h maps one to
+// the other. Meshes are written in physical space; everything else stays in volume space.
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string>
 
+#include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
@@ -45,6 +53,11 @@ struct VolumeInfo {
     ScalarType type = ScalarType::U8;
     glm::dvec3 spacing{1.0, 1.0, 1.0};
     glm::dvec3 origin{0.0, 0.0, 0.0};
+    // Columns: the unit LPS directions of the i, j and k axes (core/orientation.h checks them:
+    // finite, not singular; not necessarily orthogonal). Identity when the input said nothing
+    // of its orientation, which hasOrientation tells apart from an input that said "identity".
+    glm::dmat3 direction{1.0};
+    bool hasOrientation = false;
 
     // Sizes: throw std::overflow_error rather than wrap (dims beyond the limits above).
     int64_t sliceSamples() const { return checkedMul(dims[0], dims[1]); }

@@ -1,4 +1,4 @@
-// Brick stores: the input is a store file whose checksums (header, index, each brick) are
+// Brick stores: the input is a store file whose checksums (header (both), index, each brick) are
 // recomputed here, so mutations reach the checks behind them: field validation, index
 // entries, brick decoding, and, for small volumes, extraction on hostile ranges and samples, at
 // every level of detail the store holds.
@@ -10,6 +10,7 @@
 #include "core/extract_full.h"
 #include "core/extract_view.h"
 #include "core/level_source.h"
+#include "core/orientation.h"
 #include "fuzz/fuzz_input.h"
 #include "io/brick_store.h"
 #include "io/store_format.h"
@@ -44,6 +45,8 @@ void fixChecksums(std::vector<uint8_t>& b) {
         store(b, indexOffset + indexSize - 4, vdiso::store_format::crc32Of(b.data() + indexOffset, indexSize - 4));
     }
     store(b, 160, vdiso::store_format::crc32Of(b.data(), 160));
+    // Version 4's second checksum, over the orientation too (older versions ignore the bytes).
+    store(b, 240, vdiso::store_format::crc32Of(b.data(), 240));
 }
 
 void exercise(const std::string& path) {
@@ -59,7 +62,10 @@ void exercise(const std::string& path) {
     vdiso::TriangleMesh mesh;
     vdiso::extractOctree(cache, {iso, 4}, mesh);
     const vdiso::VolumeInfo& v = reader.volume();
-    const vdiso::Camera camera = vdiso::presetCamera(vdiso::ViewPreset::Normal, v.origin, v.worldMax(), 64, 64);
+    // As vdiso extract writes it: in physical space, and seen from the patient's front.
+    vdiso::transformMesh(vdiso::volumeToPhysical(v), mesh);
+    const vdiso::Camera camera = vdiso::presetCamera(vdiso::ViewPreset::Normal, vdiso::viewFacing(std::nullopt, v),
+                                                     v.origin, v.worldMax(), 64, 64);
     vdiso::TriangleMesh visible;
     vdiso::PointSet points;
     vdiso::extractViewDependent(cache, camera, vdiso::ViewExtractOptions::sage(iso), visible, points);

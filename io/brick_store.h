@@ -2,7 +2,7 @@
 //
 //   [header: 4096 bytes] [brick 0] [brick 1] ... (each at a 4096-byte aligned offset) [index]
 //
-// The header holds dimensions, spacing, origin, scalar type, brick size, ghost layout,
+// The header holds dimensions, spacing, origin, orientation, scalar type, brick size, ghost layout,
 // compression, checksum algorithm and where the index is. The index holds, per brick, its file
 // offset, stored size, checksum and the min and max of the samples its cells touch, then a
 // histogram of the whole volume. Both are written last: a file whose header or index is
@@ -25,9 +25,10 @@
 
 namespace vdiso {
 
+// 4: the volume's orientation (direction matrix and whether the input had one) in the header.
 // 3: levels of detail (the header's level count; every level's bricks in the index). Version
-// 2 stores, level 0 only, open as before.
-constexpr uint32_t kStoreFormatVersion = 3;
+// 2 and 3 stores open as before, without orientation; version 2 ones with level 0 only.
+constexpr uint32_t kStoreFormatVersion = 4;
 constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;

@@ -8,6 +8,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/orientation.h"
 #include "io/error.h"
 
 namespace vdiso {
@@ -246,6 +247,18 @@ DicomVolume arrangeDicomSeries(std::vector<DicomHeader> slices, const std::strin
         if (std::isfinite(s[0]) && s[0] > 0.0) v.info.spacing.y = s[0];
     }
     if (first.position) v.info.origin = *first.position;
+    if (placed) {
+        // PS3.3 C.7.6.2.1.1: the row cosines are the direction of increasing column (our i),
+        // the column cosines that of increasing row (j); slices run along their cross product,
+        // the order orderByPosition sorted them in (k). ImagePositionPatient is LPS already.
+        const std::array<double, 6>& o = *first.orientation;
+        const glm::dvec3 row = glm::normalize(rowDirection(o)), column = glm::normalize(columnDirection(o));
+        const glm::dmat3 direction(row, column, glm::normalize(glm::cross(row, column)));
+        if (const std::string problem = directionProblem(direction); !problem.empty())
+            throwIoError(where, "ImageOrientationPatient of " + first.path + ": " + problem);
+        v.info.direction = direction;
+        v.info.hasOrientation = true;
+    }
     v.slices = std::move(slices);
     return v;
 }

@@ -16,9 +16,10 @@
 // sheared stack (gantry tilt), which a grid of origin and spacing cannot place.
 //
 // Spacing: x from PixelSpacing's column spacing (its second value), y from its row spacing,
-// z from the positions' step. Origin: the first slice's ImagePositionPatient. The direction
-// cosines are not kept (the store has no orientation yet): the volume sits axis-aligned at that
-// origin.
+// z from the positions' step. Origin: the first slice's ImagePositionPatient (in that order).
+// Orientation (core/volume.h, LPS as DICOM's patient coordinates are): i along the row cosines
+// of ImageOrientationPatient, j along the column cosines, k along their cross product (the
+// direction the slices were sorted in). Slices ordered by InstanceNumber have none.
 //
 // Type: RescaleSlope/RescaleIntercept are applied. The store holds i16 when every slice's slope
 // and intercept are integers and every stored value (per BitsStored) maps into i16, as CT's

@@ -111,7 +111,9 @@ MeshFormat meshFormatFor(const std::string& path) {
     throwIoError(path, "unknown mesh format (expected a .ply, .obj, .stl, .glb or .vtp name)");
 }
 
-MeshFileWriter::MeshFileWriter(const std::string& path, bool overwrite, bool compress) {
+MeshFileWriter::MeshFileWriter(const std::string& path, bool overwrite, bool compress,
+                               const SpaceTransform& transform)
+    : mTransform(transform) {
     const MeshFormat format = meshFormatFor(path);
     if (compress && format != MeshFormat::Glb)
         throwIoError(path, "mesh compression applies to .glb output only");
@@ -129,7 +131,13 @@ MeshFileWriter::~MeshFileWriter() = default;
 void MeshFileWriter::append(const TriangleMesh& part) {
     if (part.firstVertex != mVertices)
         throw std::logic_error("MeshFileWriter: pieces must arrive in vertex order");
-    mWriter->append(part);
+    if (mTransform.isIdentity()) {
+        mWriter->append(part);
+    } else {
+        mTransformed = part;
+        transformMesh(mTransform, mTransformed);
+        mWriter->append(mTransformed);
+    }
     mVertices += part.positions.size();
     mTriangles += part.triangleCount();
 }
@@ -139,13 +147,20 @@ void MeshFileWriter::finish() {
     mWriter.reset();  // removes the side files now, not when the writer goes
 }
 
-void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite, bool compress) {
-    MeshFileWriter writer(path, overwrite, compress);
+void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite, bool compress,
+               const SpaceTransform& transform) {
+    MeshFileWriter writer(path, overwrite, compress, transform);
     writer.append(mesh);
     writer.finish();
 }
 
-void writePointsPly(const std::string& path, const PointSet& points, bool overwrite) {
+void writePointsPly(const std::string& path, const PointSet& points, bool overwrite,
+                    const SpaceTransform& transform) {
+    if (!transform.isIdentity()) {
+        PointSet mapped = points;
+        transformPoints(transform, mapped);
+        return writePointsPly(path, mapped, overwrite);
+    }
     AtomicOutputFile out(path, overwrite);
     BufferedAppender w(out);
     w.put("ply\nformat binary_little_endian 1.0\ncomment vdiso points\nelement vertex " +

@@ -5,7 +5,10 @@
 //   .glb  glTF 2.0 binary: one indexed mesh with normals, optionally meshopt-compressed
 //         (io/glb_writer.h)
 //   .vtp  VTK XML PolyData, raw appended data: points, normals, polygons (io/vtp_writer.h)
-// Vertices are written as the mesh holds them (welded by the extractors). Files appear only
+// Vertices are written as the mesh holds them (welded by the extractors), through an optional
+// SpaceTransform (core/orientation.h; vdiso extract gives volumeToPhysical, so that meshes land
+// in the patient's LPS space as 3D Slicer and ITK place them): positions and normals mapped,
+// winding reversed when it mirrors, in every format and for streamed pieces alike. Files appear only
 // when complete (AtomicOutputFile); `overwrite` allows replacing an existing file. Throws
 // IoError naming the file.
 #pragma once
@@ -15,6 +18,7 @@
 #include <string>
 
 #include "core/mesh.h"
+#include "core/orientation.h"
 
 namespace vdiso {
 
@@ -30,10 +34,12 @@ class MeshFormatWriter;
 // see io/glb_writer.h): what a format lists after the vertices goes to side files next to the
 // output, which finish() appends before writing the header with the final counts. Pieces must
 // arrive in vertex order (part.firstVertex == vertices appended so far). `compress` applies
-// EXT_meshopt_compression to a .glb; for another format it is an error.
+// EXT_meshopt_compression to a .glb; for another format it is an error. `transform` maps every
+// piece before it is written (the identity: as given).
 class MeshFileWriter final : public MeshSink {
 public:
-    MeshFileWriter(const std::string& path, bool overwrite, bool compress = false);
+    MeshFileWriter(const std::string& path, bool overwrite, bool compress = false,
+                   const SpaceTransform& transform = {});
     ~MeshFileWriter() override;
     void append(const TriangleMesh& part) override;
     // Completes the file, renames it into place and removes the side files; call once, last.
@@ -44,14 +50,17 @@ public:
 
 private:
     std::unique_ptr<MeshFormatWriter> mWriter;
+    SpaceTransform mTransform;
+    TriangleMesh mTransformed;  // the piece mapped by mTransform, reused across pieces
     uint64_t mVertices = 0, mTriangles = 0;
 };
 
 // The whole mesh at once (through MeshFileWriter).
 void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite,
-               bool compress = false);
+               bool compress = false, const SpaceTransform& transform = {});
 
-// Points with normals as a PLY vertex list (SAGE's sub-pixel points).
-void writePointsPly(const std::string& path, const PointSet& points, bool overwrite);
+// Points with normals as a PLY vertex list (SAGE's sub-pixel points), mapped by `transform`.
+void writePointsPly(const std::string& path, const PointSet& points, bool overwrite,
+                    const SpaceTransform& transform = {});
 
 }  // namespace vdiso

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/orientation.h"
 #include "io/byte_stream.h"
 #include "io/error.h"
 #include "io/raw_reader.h"
@@ -26,6 +27,7 @@ struct MetaHeader {
     std::vector<int64_t> dimSize;
     std::optional<FileScalar> type;
     std::vector<double> spacing, offset;
+    std::vector<double> transform;  // TransformMatrix (or Rotation, Orientation): NDims^2 values
     bool bigEndian = false;
     bool compressed = false;
     std::optional<uint64_t> compressedSize;
@@ -156,6 +158,9 @@ MetaHeader parseHeader(const std::string& path) {
                 h.spacing = numbers<double>(path, key, value);
             } else if (k == "offset" || ((k == "origin" || k == "position") && h.offset.empty())) {
                 h.offset = numbers<double>(path, key, value);
+            } else if (k == "transformmatrix" ||
+                       ((k == "rotation" || k == "orientation") && h.transform.empty())) {
+                h.transform = numbers<double>(path, key, value);
             } else if (k == "binarydatabyteordermsb" || k == "elementbyteordermsb") {
                 h.bigEndian = boolean(path, key, value);
             } else if (k == "binarydata") {
@@ -203,6 +208,23 @@ VolumeInfo volumeInfo(const std::string& path, const MetaHeader& h) {
             info.spacing[a] = std::abs(h.spacing[size_t(a)]);
     for (int a = 0; a < 3 && a < int(h.offset.size()); ++a)
         if (std::isfinite(h.offset[size_t(a)])) info.origin[a] = h.offset[size_t(a)];
+    if (!h.transform.empty()) {
+        // As ITK's MetaImageIO reads it: the values in groups of NDims, group a the direction
+        // of axis a, in ITK's LPS (AnatomicalOrientation is a label that ITK does not apply).
+        if (h.transform.size() != size_t(n) * size_t(n))
+            throwIoError(path, "TransformMatrix has " + std::to_string(h.transform.size()) +
+                                   " values; NDims " + std::to_string(n) + " needs " + std::to_string(n * n));
+        glm::dmat3 direction;
+        for (int a = 0; a < 3; ++a)
+            for (int r = 0; r < 3; ++r) direction[a][r] = h.transform[size_t(a * n + r)];
+        if (const std::string problem = directionProblem(direction); !problem.empty())
+            throwIoError(path, "TransformMatrix: " + problem);
+        for (int a = 0; a < 3 && a < int(h.offset.size()); ++a)
+            if (!std::isfinite(h.offset[size_t(a)]))
+                throwIoError(path, "Offset holds a value that is not finite");
+        info.direction = normalizedColumns(direction);
+        info.hasOrientation = true;
+    }
     return info;
 }
 

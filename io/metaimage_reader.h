@@ -8,8 +8,11 @@
 // CompressedData (zlib, as ITK writes it) with CompressedDataSize when given, HeaderSize
 // (bytes to skip in the data file; -1: the data ends the file), and ElementDataFile, which ends
 // the header: LOCAL (the data follows) or a file name relative to the header. Keys are matched
-// without regard to case; unknown ones are ignored, TransformMatrix among them (the store keeps
-// no orientation yet). Refused with a message saying so: ASCII data, 64-bit and multi-channel
+// without regard to case; unknown ones are ignored. TransformMatrix (else Rotation or
+// Orientation) gives the orientation (core/volume.h) as ITK reads it: NDims groups of NDims
+// values, group a the direction of axis a, in ITK's LPS (AnatomicalOrientation is a label ITK
+// does not apply, nor do we); a singular or non-finite one is refused, and a file without one
+// has no orientation. Refused with a message saying so: ASCII data, 64-bit and multi-channel
 // element types, and data split over files (LIST and the "name%03d.raw min max step" form).
 //
 // Streaming: raw data is read slab by slab and its size checked up front; compressed data is

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "core/orientation.h"
 #include "io/byte_stream.h"
 #include "io/error.h"
 #include "io/file_names.h"
@@ -28,6 +29,7 @@ constexpr size_t kOffSclSlope = 112;
 constexpr size_t kOffSclInter = 116;
 constexpr size_t kOffQformCode = 252;
 constexpr size_t kOffSformCode = 254;
+constexpr size_t kOffQuatern = 256;  // float b, c, d
 constexpr size_t kOffQoffset = 268;  // float x, y, z
 constexpr size_t kOffSrowX = 280;    // float[4] per row; [3] is the translation
 constexpr size_t kSrowStride = 16;
@@ -62,6 +64,8 @@ struct NiftiHeader {
     uint64_t voxOffset = 0;
     glm::dvec3 spacing{1.0, 1.0, 1.0};
     glm::dvec3 origin{0.0, 0.0, 0.0};
+    glm::dmat3 direction{1.0};  // LPS
+    bool hasOrientation = false;
     bool scaled = false;
     double slope = 1.0, intercept = 0.0;
 };
@@ -251,19 +255,69 @@ void niftiScaling(const std::string& path, const NiftiHeaderBytes& b, NiftiHeade
     h.intercept = intercept;
 }
 
-// The origin from the qform (or, lacking one, the sform) translation; rotation is ignored, as
-// the store is axis-aligned.
-glm::dvec3 niftiOrigin(const NiftiHeaderBytes& b) {
-    glm::dvec3 origin(0.0);
-    for (int a = 0; a < 3; ++a) {
-        double v = 0.0;
-        if (b.i16(kOffQformCode) > 0)
-            v = b.f32(kOffQoffset + 4 * a);
-        else if (b.i16(kOffSformCode) > 0)
-            v = b.f32(kOffSrowX + kSrowStride * a + 12);
-        origin[a] = std::isfinite(v) ? v : 0.0;
+// The qform's rotation (NIfTI-1 header docs, "METHOD 2"): the quaternion (b, c, d) with
+// a = sqrt(1 - b^2 - c^2 - d^2), the third column negated when qfac = pixdim[0] is negative.
+// Like nifti1_io, a quaternion longer than 1 is read as (0, b, c, d) normalised.
+glm::dmat3 qformRotation(const std::string& path, const NiftiHeaderBytes& b) {
+    double q[3];
+    for (int k = 0; k < 3; ++k) {
+        q[k] = b.f32(kOffQuatern + 4 * k);
+        if (!std::isfinite(q[k]))
+            throwIoError(path, "qform quaternion holds a value that is not finite");
     }
-    return origin;
+    double qb = q[0], qc = q[1], qd = q[2];
+    const double norm2 = qb * qb + qc * qc + qd * qd;
+    double qa = 1.0 - norm2;
+    if (qa < 1e-7) {
+        const double scale = 1.0 / std::sqrt(norm2);
+        qb *= scale;
+        qc *= scale;
+        qd *= scale;
+        qa = 0.0;
+    } else {
+        qa = std::sqrt(qa);
+    }
+    // Rows of R as the header docs write them; glm's matrices are indexed [column][row].
+    glm::dmat3 r;
+    r[0] = {qa * qa + qb * qb - qc * qc - qd * qd, 2 * (qb * qc + qa * qd), 2 * (qb * qd - qa * qc)};
+    r[1] = {2 * (qb * qc - qa * qd), qa * qa + qc * qc - qb * qb - qd * qd, 2 * (qc * qd + qa * qb)};
+    r[2] = {2 * (qb * qd + qa * qc), 2 * (qc * qd - qa * qb), qa * qa + qd * qd - qc * qc - qb * qb};
+    const double qfac = b.f32(kOffPixdim) < 0.0f ? -1.0 : 1.0;
+    r[2] *= qfac;
+    return r;
+}
+
+// Placement: the qform when qform_code > 0, else the sform when sform_code > 0 (the order
+// nifti1_io and ITK read them in), else none: the volume sits axis-aligned at 0 with pixdim's
+// spacing. NIfTI's space is RAS; ours is LPS. The sform's columns are the axes' whole steps,
+// so they give the spacing too.
+void niftiPlacement(const std::string& path, const NiftiHeaderBytes& b, NiftiHeader& h) {
+    glm::dmat3 ras(1.0);
+    glm::dvec3 rasOrigin(0.0);
+    if (b.i16(kOffQformCode) > 0) {
+        ras = qformRotation(path, b);
+        for (int a = 0; a < 3; ++a) rasOrigin[a] = b.f32(kOffQoffset + 4 * a);
+        if (!std::isfinite(rasOrigin.x + rasOrigin.y + rasOrigin.z))
+            throwIoError(path, "qoffset holds a value that is not finite");
+    } else if (b.i16(kOffSformCode) > 0) {
+        glm::dmat3 scaled;
+        for (int row = 0; row < 3; ++row) {
+            for (int c = 0; c < 3; ++c) scaled[c][row] = b.f32(kOffSrowX + kSrowStride * row + 4 * c);
+            rasOrigin[row] = b.f32(kOffSrowX + kSrowStride * row + 12);
+        }
+        if (const std::string problem = directionProblem(scaled); !problem.empty())
+            throwIoError(path, "sform: " + problem);
+        if (!std::isfinite(rasOrigin.x + rasOrigin.y + rasOrigin.z))
+            throwIoError(path, "sform translation holds a value that is not finite");
+        splitScaledColumns(scaled, ras, h.spacing);
+    } else {
+        return;
+    }
+    if (const std::string problem = directionProblem(ras); !problem.empty())
+        throwIoError(path, "qform: " + problem);
+    h.direction = kRasToLps * ras;
+    h.origin = kRasToLps * rasOrigin;
+    h.hasOrientation = true;
 }
 
 NiftiHeader parseNiftiHeader(const std::string& path, const NiftiHeaderBytes& b) {
@@ -290,7 +344,7 @@ NiftiHeader parseNiftiHeader(const std::string& path, const NiftiHeaderBytes& b)
         const double s = std::abs(double(b.f32(kOffPixdim + 4 * (a + 1))));
         h.spacing[a] = std::isfinite(s) && s > 0.0 ? s : 1.0;
     }
-    h.origin = niftiOrigin(b);
+    niftiPlacement(path, b, h);
     niftiScaling(path, b, h);
     return h;
 }
@@ -320,6 +374,8 @@ std::unique_ptr<SliceReader> openNiftiVolume(const std::string& path) {
     info.type = storeTypeFor(h.type, h.scaled);
     info.spacing = h.spacing;
     info.origin = h.origin;
+    info.direction = h.direction;
+    info.hasOrientation = h.hasOrientation;
     const uint64_t dataBytes = uint64_t(info.sampleCount()) * fileScalarSize(h.type);
     const StreamSliceDecoder decoder(h.type, h.bigEndian != hostIsBigEndian(), info.type, h.scaled,
                                      h.slope, h.intercept);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/interrupt.h"
+#include "core/orientation.h"
 #include "io/byte_stream.h"
 #include "io/error.h"
 #include "io/raw_reader.h"
@@ -34,6 +35,7 @@ struct NrrdHeader {
     std::vector<double> spacings;
     std::vector<NrrdDirection> spaceDirections;
     std::optional<std::vector<double>> spaceOrigin;
+    std::string space;  // the "space" field, lower case with single spaces; "" when absent
     int64_t byteSkip = 0;
     int64_t lineSkip = 0;
     std::string dataFile;      // empty when the data is attached
@@ -260,6 +262,8 @@ void applyNrrdField(const std::string& path, const std::string& field, std::stri
         h.spacings = parseDoubles(path, field, value);
     } else if (field == "space directions") {
         h.spaceDirections = parseDirections(path, field, value);
+    } else if (field == "space") {
+        h.space = normalizeWords(value);
     } else if (field == "space origin") {
         if (toLower(value) != "none") h.spaceOrigin = parseVector(path, field, value);
     } else if (field == "byte skip") {
@@ -269,7 +273,7 @@ void applyNrrdField(const std::string& path, const std::string& field, std::stri
     } else if (field == "data file" || field == "datafile") {
         h.dataFile = parseDataFile(path, value);
     }
-    // Every other field (kinds, space, centers, content, ...) does not change the samples.
+    // Every other field (kinds, centers, content, ...) does not change the samples.
 }
 
 // Reads one '\n'-terminated line (a trailing '\r' dropped); false at end of file.
@@ -358,6 +362,82 @@ std::string sizesText(const Dims3& dims) {
     return std::to_string(dims[0]) + " " + std::to_string(dims[1]) + " " + std::to_string(dims[2]);
 }
 
+// The "space" field's map to LPS (NRRD spec, "space"), or nullopt for a space without patient
+// directions (scanner-xyz, 3D-right-handed, ...) or none given: the grid is then placed by the
+// space directions' lengths and the space origin, without orientation. Unknown names are
+// refused, as teem refuses them.
+std::optional<glm::dmat3> spaceToLps(const std::string& path, const std::string& space) {
+    if (space.empty()) return std::nullopt;
+    static const char* const kUnoriented[] = {"scanner-xyz", "scanner-xyz-time", "3d-right-handed",
+                                              "3d-left-handed", "3d-right-handed-time",
+                                              "3d-left-handed-time"};
+    for (const char* name : kUnoriented)
+        if (space == name) return std::nullopt;
+    const glm::dmat3 las{1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0};
+    const std::pair<const char*, glm::dmat3> kAnatomical[] = {
+        {"right-anterior-superior", kRasToLps}, {"ras", kRasToLps},
+        {"right-anterior-superior-time", kRasToLps}, {"rast", kRasToLps},
+        {"left-anterior-superior", las}, {"las", las},
+        {"left-anterior-superior-time", las}, {"last", las},
+        {"left-posterior-superior", glm::dmat3(1.0)}, {"lps", glm::dmat3(1.0)},
+        {"left-posterior-superior-time", glm::dmat3(1.0)}, {"lpst", glm::dmat3(1.0)},
+    };
+    for (const auto& [name, toLps] : kAnatomical)
+        if (space == name) return toLps;
+    throwIoError(path, "unknown NRRD space '" + space +
+                           "' (expected right-anterior-superior, left-anterior-superior, "
+                           "left-posterior-superior, scanner-xyz, 3D-right-handed or "
+                           "3D-left-handed, or their short and -time forms)");
+}
+
+// Orientation from "space" and the kept axes' "space directions" (the columns, direction times
+// spacing); the origin follows the same map. Without an anatomical space or with a non-spatial
+// axis, none: the origin as given.
+void nrrdPlacement(const std::string& path, const NrrdHeader& h, int dropAxis, VolumeInfo& info) {
+    const std::optional<glm::dmat3> toLps = spaceToLps(path, h.space);
+    glm::dvec3 origin(0.0);
+    if (h.spaceOrigin) {
+        const std::vector<double>& o = *h.spaceOrigin;
+        if (toLps && o.size() != 3)
+            throwIoError(path, "'space origin' has " + std::to_string(o.size()) +
+                                   " components; space " + h.space + " has 3");
+        for (int a = 0; a < 3 && a < int(o.size()); ++a) {
+            if (toLps && !std::isfinite(o[a]))
+                throwIoError(path, "'space origin' holds a value that is not finite");
+            origin[a] = std::isfinite(o[a]) ? o[a] : 0.0;
+        }
+    }
+    glm::dmat3 scaled(1.0);
+    bool spatial = !h.spaceDirections.empty();
+    int column = 0;
+    for (int axis = 0; spatial && axis < int(h.spaceDirections.size()); ++axis) {
+        if (axis == dropAxis) continue;
+        const NrrdDirection& d = h.spaceDirections[axis];
+        if (!d) {
+            spatial = false;
+            break;
+        }
+        if (d->size() != 3) {
+            if (toLps)
+                throwIoError(path, "'space directions' has a vector of " + std::to_string(d->size()) +
+                                       " components; space " + h.space + " has 3");
+            spatial = false;
+            break;
+        }
+        scaled[column++] = {(*d)[0], (*d)[1], (*d)[2]};
+    }
+    if (toLps && spatial) {
+        if (const std::string problem = directionProblem(scaled); !problem.empty())
+            throwIoError(path, "'space directions': " + problem);
+        glm::dvec3 spacing;
+        splitScaledColumns(scaled, info.direction, spacing);
+        info.direction = *toLps * info.direction;
+        info.hasOrientation = true;
+        origin = *toLps * origin;
+    }
+    info.origin = origin;
+}
+
 // Checks the header describes a scalar 3-D volume and turns it into VolumeInfo.
 VolumeInfo nrrdVolumeInfo(const std::string& path, const NrrdHeader& h) {
     requireField(path, h.dimension.has_value(), "dimension");
@@ -401,11 +481,7 @@ VolumeInfo nrrdVolumeInfo(const std::string& path, const NrrdHeader& h) {
     double bytes = double(fileScalarSize(*h.type));
     for (int64_t d : info.dims) bytes *= double(d);
     if (bytes > 0x1p62) throwIoError(path, "sizes " + sizesText(info.dims) + " are too large");
-    if (h.spaceOrigin) {
-        const std::vector<double>& o = *h.spaceOrigin;
-        for (int a = 0; a < 3 && a < int(o.size()); ++a)
-            info.origin[a] = std::isfinite(o[a]) ? o[a] : 0.0;
-    }
+    nrrdPlacement(path, h, dropAxis, info);
     return info;
 }
 

@@ -3,10 +3,12 @@
 #include <cmath>
 #include <cstring>
 
+#include <glm/geometric.hpp>
 #include <zlib.h>
 #include <lz4.h>
 #include <zstd.h>
 
+#include "core/orientation.h"
 #include "core/sub_blocks.h"
 #include "io/error.h"
 
@@ -15,6 +17,12 @@ namespace vdiso::store_format {
 namespace {
 
 constexpr size_t kHeaderChecksumAt = 160;  // the header's CRC covers bytes [0, 160)
+// Version 4's orientation follows the first checksum, which keeps its place and span so that
+// the layout up to it is every version's; a second checksum covers the whole header up to it.
+constexpr size_t kOrientationAt = 164;
+constexpr size_t kWholeHeaderChecksumAt = 240;  // covers bytes [0, 240)
+// How far from unit length a stored direction column may be (they are written normalised).
+constexpr double kUnitTolerance = 1e-9;
 
 class ByteWriter {
 public:
@@ -57,6 +65,33 @@ private:
 
 }  // namespace
 
+namespace {
+
+// Version 4's orientation (bytes 164..243). Before it, every store is unoriented: identity.
+void decodeOrientation(const unsigned char* bytes, const std::string& path, VolumeInfo& volume) {
+    uint32_t storedCrc;
+    std::memcpy(&storedCrc, bytes + kWholeHeaderChecksumAt, 4);
+    if (storedCrc != crc32Of(bytes, kWholeHeaderChecksumAt))
+        throwIoError(path, "header checksum mismatch in its orientation (the header is corrupt)");
+    ByteReader r(bytes + kOrientationAt, kWholeHeaderChecksumAt - kOrientationAt);
+    const uint32_t flag = r.get<uint32_t>();
+    glm::dmat3 direction;
+    for (int c = 0; c < 3; ++c)
+        for (int row = 0; row < 3; ++row) direction[c][row] = r.get<double>();
+    if (flag > 1) throwIoError(path, "header's orientation flag " + std::to_string(flag) + " is neither 0 nor 1");
+    if (flag == 0 && direction != glm::dmat3(1.0))
+        throwIoError(path, "header has no orientation but a direction matrix other than the identity");
+    if (const std::string problem = directionProblem(direction); !problem.empty())
+        throwIoError(path, "header's orientation is invalid: " + problem);
+    for (int c = 0; c < 3; ++c)
+        if (!(std::abs(glm::length(direction[c]) - 1.0) <= kUnitTolerance))
+            throwIoError(path, "header's direction matrix has a column that is not of unit length");
+    volume.direction = direction;
+    volume.hasOrientation = flag == 1;
+}
+
+}  // namespace
+
 uint32_t crc32Of(const void* data, size_t n) {
     uLong crc = crc32(0L, Z_NULL, 0);
     const auto* p = static_cast<const Bytef*>(data);
@@ -94,6 +129,10 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
     w.put<double>(h.valueMax);
     w.put<uint64_t>(h.storedBrickBytes);
     w.put<uint32_t>(crc32Of(bytes.data(), kHeaderChecksumAt));
+    w.put<uint32_t>(h.volume.hasOrientation ? 1u : 0u);
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) w.put<double>(h.volume.direction[c][r]);
+    w.put<uint32_t>(crc32Of(bytes.data(), kWholeHeaderChecksumAt));
     return bytes;
 }
 
@@ -189,6 +228,7 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
                                    " levels of detail");
         h.levelCount = int(levelCount);
     }
+    if (version >= 4) decodeOrientation(bytes, path, h.volume);
     if (brickCount != uint64_t(totalBricks(h)))
         throwIoError(path, "header's brick count does not match its dimensions and levels");
     if (h.indexBytes != indexBytes(brickCount))

@@ -22,6 +22,7 @@
 
 #include "core/interrupt.h"
 #include "core/iso.h"
+#include "core/orientation.h"
 #include "core/brick_levels.h"
 #include "core/downsample.h"
 #include "core/sub_blocks.h"
@@ -273,6 +274,11 @@ void validateOptions(const VolumeInfo& info, const StoreWriteOptions& options,
         if (info.dims[a] < 2)
             throwIoError(sourceName, "every axis needs at least 2 samples to hold cells");
     requireVolumeDims(sourceName, info.dims);
+    // Readers refuse these; a source that did not would make a store that cannot be opened.
+    if (const std::string problem = directionProblem(info.direction); !problem.empty())
+        throwIoError(sourceName, problem);
+    if (!info.hasOrientation && info.direction != glm::dmat3(1.0))
+        throw std::invalid_argument(sourceName + ": a direction matrix without an orientation");
     const BrickLayout layout(info.dims, options.brickSize);
     if (const std::string problem = brickLayoutProblem(layout); !problem.empty())
         throwIoError(sourceName, problem);
@@ -304,8 +310,9 @@ int64_t lastSliceOfLayer(const BrickLayout& layout, int64_t bk) {
 StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPath,
                                   const StoreWriteOptions& options, const ProgressFn& progress) {
     const auto start = std::chrono::steady_clock::now();
-    const VolumeInfo info = source.info();
+    VolumeInfo info = source.info();
     validateOptions(info, options, source.name());
+    info.direction = normalizedColumns(info.direction);  // the store holds unit columns
     const BrickLayout layout(info.dims, options.brickSize);
     const size_t sampleBytes = scalarSize(info.type);
     const int B = options.brickSize;

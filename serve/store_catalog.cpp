@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "core/camera.h"
 #include "io/error.h"
 #include "io/json.h"
 #include "serve/protocol.h"
@@ -42,6 +43,14 @@ std::string describe(const ServedStore& s) {
     o.addRaw("spacing", vec3(v.spacing)).addRaw("origin", vec3(v.origin));
     o.addRaw("boundsMin", vec3(v.origin)).addRaw("boundsMax", vec3(v.worldMax()));
     o.add("type", scalarTypeName(v.type));
+    // Where the volume lies in the patient, and the facing its presets take (anterior for an
+    // oriented volume, core/camera.h), in volume space: the page frames its presets with it.
+    std::string direction = "[";
+    for (int c = 0; c < 3; ++c) direction += (c ? ", " : "") + vec3(v.direction[c]);
+    o.add("hasOrientation", v.hasOrientation).addRaw("direction", direction + "]");
+    const ViewFacing facing = viewFacing(std::nullopt, v);
+    o.addRaw("facing", JsonObject().addRaw("toEye", vec3(facing.toEye)).addRaw("up", vec3(facing.up))
+                           .addRaw("front", vec3(facing.front)).str());
     // Exact: the page sends these back as isovalues, which the server checks against the range.
     o.addExact("valueMin", h.valueMin).addExact("valueMax", h.valueMax).addExact("iso", s.defaultIso);
     o.add("brickSize", int64_t(h.brickSize)).add("bricks", s.reader->layout().brickCount());

@@ -122,6 +122,12 @@ void expectDoubleEq(const glm::dvec3& got, const glm::dvec3& want) {
                                           << "xyz"[a];
 }
 
+void expectDirection(const glm::dmat3& got, const glm::dmat3& want, double tolerance) {
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+            EXPECT_NEAR(got[c][r], want[c][r], tolerance) << "axis " << c << ", LPS component " << r;
+}
+
 void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts) {
     try {
         f();

@@ -44,6 +44,9 @@ void expectValues(SliceReader& reader, const std::vector<double>& want);
 // EXPECT_DOUBLE_EQ per axis: spacings computed as vector lengths may be off in the last bit.
 void expectDoubleEq(const glm::dvec3& got, const glm::dvec3& want);
 
+// Every entry of a direction matrix within `tolerance` (columns: the axes' LPS directions).
+void expectDirection(const glm::dmat3& got, const glm::dmat3& want, double tolerance = 1e-6);
+
 // Expects `f` to throw IoError with a message containing every one of `parts`.
 void expectIoError(const std::function<void()>& f, std::initializer_list<std::string> parts);
 

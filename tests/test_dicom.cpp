@@ -15,6 +15,7 @@
 #include <gdcmUIDGenerator.h>
 #include <gdcmWriter.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -198,6 +199,30 @@ TEST_F(DicomReader, OrderFollowsTheSliceNormal) {
     for (int z = 0; z < 4; ++z)
         for (int64_t i = 0; i < 35; ++i) want.push_back(storedValue(z, i));
     test::expectValues(*reader, want);
+}
+
+// An oblique series (rows along (1,1,0)/sqrt 2, columns along -z: the normal is (-1,1,0)/sqrt 2),
+// written with its files in the opposite order to its positions: the orientation is the row
+// cosines, the column cosines and the normal (PS3.3 C.7.6.2.1.1); the origin is the position of
+// the first slice along the normal. DICOM's patient coordinates are LPS already.
+TEST_F(DicomReader, ObliqueOrientationIsKept) {
+    SliceSpec s;
+    const double r = std::sqrt(0.5);
+    const double oblique[6] = {r, r, 0, 0, 0, -1};
+    std::memcpy(s.orientation, oblique, sizeof(oblique));
+    const glm::dvec3 normal(-r, r, 0.0), start(12.0, -40.0, 7.5);
+    for (int z = 0; z < 4; ++z) {
+        s.position = start + normal * (2.0 * (3 - z));
+        s.instance = z + 1;
+        writeSlice(path("oblique/s" + std::to_string(z)), s, 3 - z);
+    }
+    auto reader = openDicomVolume(path("oblique"), "");
+    const VolumeInfo& info = reader->info();
+    EXPECT_TRUE(info.hasOrientation);
+    test::expectDirection(info.direction, glm::dmat3(glm::dvec3(r, r, 0), glm::dvec3(0, 0, -1), normal), 1e-5);
+    test::expectDoubleEq(info.origin, start);
+    EXPECT_NEAR(info.spacing.z, 2.0, 1e-5);
+    test::expectValues(*reader, expectedValues(s, 4));
 }
 
 TEST_F(DicomReader, FractionalRescaleIsStoredAsFloat) {
@@ -523,6 +548,28 @@ TEST(DicomSeries, InstanceNumberOrdersSlicesWithoutPositions) {
     EXPECT_EQ(arrangeDicomSeries(headers, "x").info.type, ScalarType::F32);
     headers[1].instanceNumber = 1;
     expectIoError([&] { arrangeDicomSeries(headers, "x"); }, {"same InstanceNumber"});
+}
+
+// Slices ordered by InstanceNumber have no orientation; ordered by position, they have one,
+// with k along the normal they were sorted by (here a flipped axial stack: columns along -y).
+TEST(DicomSeries, OrientationOnlyFromPositions) {
+    std::vector<DicomHeader> headers(3);
+    for (int i = 0; i < 3; ++i) {
+        DicomHeader& h = headers[size_t(i)];
+        h.path = "f" + std::to_string(i);
+        h.rows = h.columns = 4;
+        h.instanceNumber = i + 1;
+    }
+    EXPECT_FALSE(arrangeDicomSeries(headers, "x").info.hasOrientation);
+    for (int i = 0; i < 3; ++i) {
+        headers[size_t(i)].position = glm::dvec3(1.0, 2.0, 3.0 - 1.5 * i);
+        headers[size_t(i)].orientation = std::array<double, 6>{1, 0, 0, 0, -1, 0};
+    }
+    const DicomVolume v = arrangeDicomSeries(headers, "x");
+    EXPECT_TRUE(v.info.hasOrientation);
+    EXPECT_EQ(v.info.direction, glm::dmat3(1, 0, 0, 0, -1, 0, 0, 0, -1));
+    EXPECT_EQ(v.info.origin, glm::dvec3(1.0, 2.0, 3.0));
+    EXPECT_EQ(v.slices.front().path, "f0");
 }
 
 TEST(DicomSeries, ShearedStackIsRefused) {

@@ -68,6 +68,43 @@ TEST_F(MetaImageReader, LocalRawAndCompressedEveryType) {
     }
 }
 
+// TransformMatrix as ITK writes it: NDims groups, group a the LPS direction of axis a (here a
+// quarter turn about z and k flipped; a group's length does not matter). Offset is LPS too.
+TEST_F(MetaImageReader, TransformMatrixGivesLpsDirection) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    auto reader = openMetaImageVolume(write(
+        "o.mha", header("MET_UCHAR", "TransformMatrix = 0 -2 0 1 0 0 0 0 -1\n") + "ElementDataFile = LOCAL\n" + samples));
+    const VolumeInfo& info = reader->info();
+    EXPECT_TRUE(info.hasOrientation);
+    test::expectDirection(info.direction, glm::dmat3(0, -1, 0, 1, 0, 0, 0, 0, -1), 1e-12);
+    test::expectDoubleEq(info.origin, glm::dvec3(-10.5, 20.0, 3.25));
+    test::expectDoubleEq(info.spacing, glm::dvec3(0.5, 0.75, 2.5));
+    test::expectValues(*reader, testValues(FileScalar::U8));
+    // The identity ITK writes for every image is an orientation: i to the left, j posterior.
+    auto identity = openMetaImageVolume(write("i.mha", header("MET_UCHAR") + "ElementDataFile = LOCAL\n" + samples));
+    EXPECT_TRUE(identity->info().hasOrientation);
+    EXPECT_EQ(identity->info().direction, glm::dmat3(1.0));
+    // Without a TransformMatrix, none.
+    auto none = openMetaImageVolume(write(
+        "n.mha", "NDims = 3\nDimSize = 7 5 4\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + samples));
+    EXPECT_FALSE(none->info().hasOrientation);
+}
+
+TEST_F(MetaImageErrors, SingularOrNonFiniteTransformMatrixIsRefused) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    const std::pair<const char*, const char*> cases[] = {
+        {"TransformMatrix = 1 0 0 1 0 0 0 0 1\n", "singular"},
+        {"TransformMatrix = 1 0 0 0 nan 0 0 0 1\n", "not finite"},
+        {"TransformMatrix = 1 0 0 0 0 0 0 0 1\n", "zero vector"},
+        {"TransformMatrix = 1 0 0 0 1 0\n", "NDims 3 needs 9"},
+    };
+    for (const auto& [line, what] : cases) {
+        SCOPED_TRACE(line);
+        const std::string p = write("bad.mha", header("MET_UCHAR", line) + "ElementDataFile = LOCAL\n" + samples);
+        expectIoError([&] { openMetaImageVolume(p); }, {p, "TransformMatrix", what});
+    }
+}
+
 TEST_F(MetaImageReader, DetachedDataBigEndianAndHeaderSize) {
     const FileScalar type = FileScalar::I16;
     write("data/v.raw", std::string(100, 'x') + encodeSamples(testValues(type), type, true));

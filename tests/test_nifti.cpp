@@ -122,7 +122,8 @@ TEST_F(NiftiReader, EveryDatatypeUncompressedAndGzip) {
             EXPECT_EQ(info.dims, kDims);
             EXPECT_EQ(info.type, storeTypeFor(t.type, false));
             EXPECT_EQ(info.spacing, glm::dvec3(0.5, 0.75, 2.5));
-            EXPECT_EQ(info.origin, glm::dvec3(-10.5, 20.0, 3.25));
+            // qoffset in RAS, the origin in LPS.
+            EXPECT_EQ(info.origin, glm::dvec3(10.5, -20.0, 3.25));
             EXPECT_EQ(reader->name(), p);
             expectValues(*reader, testValues(t.type));
         }
@@ -142,7 +143,7 @@ TEST_F(NiftiReader, ByteSwappedHeaderAndSamples) {
         auto reader = openNiftiVolume(write("swapped.nii", bytes));
         EXPECT_EQ(reader->info().dims, kDims);
         EXPECT_EQ(reader->info().spacing, glm::dvec3(0.5, 0.75, 2.5));
-        EXPECT_EQ(reader->info().origin, glm::dvec3(-10.5, 20.0, 3.25));
+        EXPECT_EQ(reader->info().origin, glm::dvec3(10.5, -20.0, 3.25));
         expectValues(*reader, testValues(t.type));
         auto gz = openNiftiVolume(write("swapped.nii.gz", gzipBytes(bytes)));
         expectValues(*gz, testValues(t.type));
@@ -188,15 +189,81 @@ TEST_F(NiftiReader, IdentityOrZeroSlopeKeepsFileType) {
     }
 }
 
-TEST_F(NiftiReader, PixdimSignAndZeroAndSformOrigin) {
+TEST_F(NiftiReader, PixdimSignAndZeroWithoutPlacement) {
     NiftiHeaderBuilder h(FileScalar::U8, 2);
     h.setF32(80, -0.8f).setF32(84, 0.0f).setF32(88, 3.0f);
-    // Without a qform the origin is the sform's translation column.
-    h.setI16(252, 0).setI16(254, 2).setF32(292, 1.5f).setF32(308, -2.5f).setF32(324, 7.0f);
+    // Neither qform nor sform: pixdim's spacing, origin 0, no orientation.
+    h.setI16(252, 0).setI16(254, 0);
     auto reader = openNiftiVolume(write(
         "v.nii", h.bytes() + encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false)));
     expectDoubleEq(reader->info().spacing, {double(0.8f), 1.0, 3.0});
-    EXPECT_EQ(reader->info().origin, glm::dvec3(1.5, -2.5, 7.0));
+    EXPECT_EQ(reader->info().origin, glm::dvec3(0.0));
+    EXPECT_FALSE(reader->info().hasOrientation);
+    EXPECT_EQ(reader->info().direction, glm::dmat3(1.0));
+}
+
+std::string u8Samples() { return encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false); }
+
+// The qform: a quarter turn about z (quaternion d = sin 45 deg) and qfac -1 (the third axis
+// flipped), in RAS: i -> (0,1,0), j -> (-1,0,0), k -> (0,0,-1). In LPS x and y change sign.
+TEST_F(NiftiReader, QformRotationAndFlipInLps) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setF32(76, -1.0f).setF32(264, float(std::sqrt(0.5)));
+    // An sform that disagrees: the qform wins.
+    h.setI16(254, 1).setF32(280, 5.0f).setF32(300, 5.0f).setF32(320, 5.0f);
+    auto reader = openNiftiVolume(write("q.nii", h.bytes() + u8Samples()));
+    const VolumeInfo& info = reader->info();
+    EXPECT_TRUE(info.hasOrientation);
+    test::expectDirection(info.direction, glm::dmat3(0, -1, 0, 1, 0, 0, 0, 0, -1));
+    EXPECT_EQ(info.origin, glm::dvec3(10.5, -20.0, 3.25));
+    EXPECT_EQ(info.spacing, glm::dvec3(0.5, 0.75, 2.5));
+}
+
+// Only an sform: its columns are the axes' steps in RAS, giving spacing and direction; its
+// last column the origin.
+TEST_F(NiftiReader, SformOnlyGivesDirectionSpacingAndOrigin) {
+    NiftiHeaderBuilder h(FileScalar::U8, 2);
+    h.setI16(252, 0).setI16(254, 2);
+    const float rows[3][4] = {{0, -0.5f, 0, 1.5f}, {0, 0, 3, -2.5f}, {2, 0, 0, 7}};
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) h.setF32(280 + 16 * size_t(r) + 4 * size_t(c), rows[r][c]);
+    auto reader = openNiftiVolume(write("s.nii", h.bytes() + u8Samples()));
+    const VolumeInfo& info = reader->info();
+    EXPECT_TRUE(info.hasOrientation);
+    // RAS i (0,0,1), j (-1,0,0), k (0,1,0).
+    test::expectDirection(info.direction, glm::dmat3(0, 0, 1, 1, 0, 0, 0, -1, 0));
+    expectDoubleEq(info.spacing, {2.0, 0.5, 3.0});
+    expectDoubleEq(info.origin, {-1.5, 2.5, 7.0});
+}
+
+TEST_F(NiftiErrors, SingularOrNonFinitePlacementIsRefused) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    {
+        NiftiHeaderBuilder h(FileScalar::U8, 2);
+        h.setI16(252, 0).setI16(254, 1).setF32(280, 1.0f).setF32(284, 1.0f).setF32(296, 1.0f)
+            .setF32(300, 1.0f).setF32(320, 1.0f);  // i and j along the same line
+        const std::string p = write("singular.nii", h.bytes() + u8Samples());
+        expectIoError([&] { openNiftiVolume(p); }, {p, "sform", "singular"});
+    }
+    {
+        NiftiHeaderBuilder h(FileScalar::U8, 2);
+        h.setI16(252, 0).setI16(254, 1).setF32(280, nan).setF32(300, 1.0f).setF32(320, 1.0f);
+        const std::string p = write("nan.nii", h.bytes() + u8Samples());
+        expectIoError([&] { openNiftiVolume(p); }, {p, "sform", "not finite"});
+    }
+    {
+        NiftiHeaderBuilder h(FileScalar::U8, 2);
+        h.setI16(254, 1).setF32(280, 0.0f).setF32(300, 0.0f).setF32(320, 0.0f);  // all zero
+        h.setI16(252, 0);
+        const std::string p = write("zero.nii", h.bytes() + u8Samples());
+        expectIoError([&] { openNiftiVolume(p); }, {p, "sform", "zero vector"});
+    }
+    {
+        NiftiHeaderBuilder h(FileScalar::U8, 2);
+        h.setF32(260, nan);
+        const std::string p = write("q.nii", h.bytes() + u8Samples());
+        expectIoError([&] { openNiftiVolume(p); }, {p, "qform quaternion", "not finite"});
+    }
 }
 
 TEST_F(NiftiReader, VoxOffsetSkipsExtensions) {

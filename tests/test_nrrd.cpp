@@ -207,7 +207,68 @@ TEST_F(NrrdReader, SlicerStyleDetachedHeaderWithCrlfAndObliqueDirections) {
     EXPECT_EQ(info.type, ScalarType::U16);
     expectDoubleEq(info.spacing, {1.0, 2.0, 1.5});
     expectDoubleEq(info.origin, {119.5, 119.5, -60.0});
+    // LPS already; the directions normalised and kept as they are (a shear: i is not at right
+    // angles to k).
+    EXPECT_TRUE(info.hasOrientation);
+    test::expectDirection(info.direction, glm::dmat3(0, 0.6, 0.8, -1, 0, 0, 0, 0, -1), 1e-12);
     expectValues(*reader, FileScalar::U16);
+}
+
+// Space directions in RAS, LAS and LPS: a quarter turn about z with the third axis flipped,
+// with steps of 2, 0.5, 3; each converted to LPS with its origin.
+TEST_F(NrrdReader, SpaceDirectionsInEveryAnatomicalSpaceGiveLps) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    struct Case {
+        const char* space;
+        glm::dvec3 flip;  // what the space's x, y, z are in LPS
+    };
+    for (const Case& c : {Case{"right-anterior-superior", {-1, -1, 1}}, Case{"RAS", {-1, -1, 1}},
+                          Case{"left-anterior-superior", {1, -1, 1}},
+                          Case{"left-posterior-superior", {1, 1, 1}}, Case{"LPS", {1, 1, 1}}}) {
+        SCOPED_TRACE(c.space);
+        const std::string header = std::string("NRRD0005\ntype: uchar\ndimension: 3\nspace: ") + c.space +
+                                   "\nsizes: 7 5 4\nspace directions: (0,2,0) (-0.5,0,0) (0,0,-3)\n"
+                                   "space origin: (1.5,-2.5,7)\nencoding: raw\n\n";
+        auto reader = openNrrdVolume(write("oriented.nrrd", header + samples));
+        const VolumeInfo& info = reader->info();
+        EXPECT_TRUE(info.hasOrientation);
+        expectDoubleEq(info.spacing, {2.0, 0.5, 3.0});
+        const glm::dmat3 flip(glm::dvec3(c.flip.x, 0, 0), glm::dvec3(0, c.flip.y, 0), glm::dvec3(0, 0, c.flip.z));
+        test::expectDirection(info.direction, flip * glm::dmat3(0, 1, 0, -1, 0, 0, 0, 0, -1), 1e-12);
+        expectDoubleEq(info.origin, flip * glm::dvec3(1.5, -2.5, 7.0));
+        expectValues(*reader, FileScalar::U8);
+    }
+}
+
+// Spaces without patient directions, and no space at all, give no orientation; the
+// directions still give the spacing and the origin is as written.
+TEST_F(NrrdReader, NonAnatomicalSpaceHasNoOrientation) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    for (const char* space : {"space: scanner-xyz\n", "space: 3D-right-handed\n", "space dimension: 3\n"}) {
+        SCOPED_TRACE(space);
+        const std::string header = std::string("NRRD0005\ntype: uchar\ndimension: 3\n") + space +
+                                   "sizes: 7 5 4\nspace directions: (0,2,0) (-0.5,0,0) (0,0,-3)\n"
+                                   "space origin: (1.5,-2.5,7)\nencoding: raw\n\n";
+        auto reader = openNrrdVolume(write("plain.nrrd", header + samples));
+        EXPECT_FALSE(reader->info().hasOrientation);
+        EXPECT_EQ(reader->info().direction, glm::dmat3(1.0));
+        expectDoubleEq(reader->info().spacing, {2.0, 0.5, 3.0});
+        expectDoubleEq(reader->info().origin, {1.5, -2.5, 7.0});
+    }
+}
+
+TEST_F(NrrdErrors, SingularNonFiniteOrUnknownSpaceIsRefused) {
+    const std::string samples = encodeSamples(testValues(FileScalar::U8), FileScalar::U8, false);
+    auto headerWith = [](const std::string& space, const std::string& directions) {
+        return "NRRD0005\ntype: uchar\ndimension: 3\nspace: " + space + "\nsizes: 7 5 4\n" +
+               "space directions: " + directions + "\nencoding: raw\n\n";
+    };
+    const std::string singular = write("singular.nrrd", headerWith("RAS", "(1,0,0) (2,0,0) (0,0,1)") + samples);
+    expectIoError([&] { openNrrdVolume(singular); }, {singular, "space directions", "singular"});
+    const std::string nan = write("nan.nrrd", headerWith("LPS", "(nan,0,0) (0,1,0) (0,0,1)") + samples);
+    expectIoError([&] { openNrrdVolume(nan); }, {nan, "space directions", "not finite"});
+    const std::string unknown = write("unknown.nrrd", headerWith("north-east-up", "(1,0,0) (0,1,0) (0,0,1)") + samples);
+    expectIoError([&] { openNrrdVolume(unknown); }, {unknown, "unknown NRRD space 'north-east-up'"});
 }
 
 TEST_F(NrrdReader, TeemSpacingsAndUnknownFields) {

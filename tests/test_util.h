@@ -69,6 +69,12 @@ public:
     const VolumeInfo& info() const override { return mInfo; }
     void read(void* dst, int64_t count) override;
     std::string name() const override { return "memory"; }
+    // Gives the volume a physical placement, as a reader of an oriented format does.
+    void orient(const glm::dvec3& origin, const glm::dmat3& direction) {
+        mInfo.origin = origin;
+        mInfo.direction = direction;
+        mInfo.hasOrientation = true;
+    }
 
     // Sample (x,y,z) as a double.
     double at(int64_t x, int64_t y, int64_t z) const;

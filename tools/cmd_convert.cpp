@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "core/orientation.h"
 #include "io/store_writer.h"
 #include "io/volume_open.h"
 #include "tools/args.h"
@@ -135,6 +136,12 @@ int runConvert(int argc, char** argv) {
                     s.inputBytes / 1e6, s.fileBytes / 1e6,
                     double(s.inputBytes) / double(s.fileBytes), s.seconds,
                     s.inputBytes / 1e6 / s.seconds);
+    // Whether meshes will land in patient space: worth a line, as a file may lack it silently.
+    if (!quiet)
+        std::printf(info.hasOrientation
+                        ? "  orientation: axes i, j, k toward %s (meshes are written in LPS)\n"
+                        : "  orientation: none in %s (meshes are written in volume space)\n",
+                    info.hasOrientation ? axisSidesCode(info.direction).c_str() : source->name().c_str());
     return 0;
 }
 

@@ -70,6 +70,15 @@ constexpr const char* kHelp =
     "  -o, --output MESH         write the mesh, in the format its extension names: .ply\n"
     "                            (binary, normals), .obj, .stl (binary), .glb (glTF 2.0\n"
     "                            binary, normals) or .vtp (VTK XML PolyData, for ParaView)\n"
+    "  --mesh-space physical|volume\n"
+    "                            the space meshes (-o, --points-out) are written in. physical\n"
+    "                            (default): the patient's LPS coordinates in mm, where the\n"
+    "                            input's orientation put the volume (DICOM, NIfTI, NRRD,\n"
+    "                            MetaImage), as 3D Slicer (4.11 on) and ITK place models;\n"
+    "                            volume: origin + index * spacing, axis-aligned, the space\n"
+    "                            vdiso extracts and renders in (what vdiso wrote before store\n"
+    "                            format 4). The two are the same for a store without\n"
+    "                            orientation (vdiso info says whether it has one)\n"
     "  --mesh-compress           .glb: compress the mesh with meshoptimizer\n"
     "                            (EXT_meshopt_compression; three.js loads it with its\n"
     "                            MeshoptDecoder)\n"
@@ -86,8 +95,17 @@ constexpr const char* kHelp =
     "  --min-piece N             octree/noise: drop connected pieces of fewer than N triangles\n"
     "                            (pieces are found across bricks by union-find)\n"
     "  --png IMAGE.png           render the mesh with OSMesa and write a picture\n"
-    "  --view distant|normal|closeup   camera preset framed from the volume (default normal);\n"
-    "                            the picture's camera, and the extraction's for sage/wise\n"
+    "  --view DISTANCE|SIDE|DISTANCE,SIDE\n"
+    "                            camera preset framed from the volume: the picture's camera,\n"
+    "                            and the extraction's for sage/wise. DISTANCE: distant, normal\n"
+    "                            (default) or closeup. SIDE, for a store with orientation: the\n"
+    "                            side of the patient the camera looks at, anterior (default:\n"
+    "                            a head's face, upright), posterior, left, right (superior up),\n"
+    "                            superior or inferior (anterior up); e.g. --view left,\n"
+    "                            --view closeup,anterior. A store without orientation is seen\n"
+    "                            from the front (+y), a little from the side and above, +z up.\n"
+    "                            (A mirrored grid, e.g. stored radiologically, is drawn in\n"
+    "                            volume space: left and right swap; up stays up.)\n"
     "  --camera CAM.json         camera from a file: {\"eye\":[..],\"target\":[..],\"up\":[..],\n"
     "                            \"fov\":30,\"width\":800,\"height\":600}\n"
     "  --size WxH                image size (default 800x800)\n"
@@ -120,8 +138,9 @@ struct ExtractOptions {
     int level = 0;
     std::string method = "octree";
     std::string meshPath, pngPath, statsPath, cameraPath;
-    ViewPreset view = ViewPreset::Normal;
+    ViewChoice view;
     bool viewGiven = false;
+    std::optional<bool> physicalMeshes;  // --mesh-space; default physical
     int width = 800, height = 800;
     int metaCellSize = kDefaultMetaCellSize;
     int threads = 0;  // 0: the machine's cores (as many as the cache allows strips for)
@@ -214,6 +233,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
             o.pointsPath = args.value(a);
         } else if (a == "-o" || a == "--output") {
             o.meshPath = args.value(a);
+        } else if (a == "--mesh-space") {
+            o.physicalMeshes = parseSwitch(a, args.value(a), "physical", "volume");
         } else if (a == "--mesh-compress") {
             o.meshCompress = true;
         } else if (a == "--smooth") {
@@ -233,7 +254,7 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
         } else if (a == "--view") {
             const std::string v = args.value(a);
             try {
-                o.view = parseViewPreset(v);
+                o.view = parseViewChoice(v);
             } catch (const std::invalid_argument& e) {
                 throw UsageError(e.what());
             }
@@ -295,6 +316,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     if (!o.pointsPath.empty() && !viewDependent)
         throw UsageError("--points-out needs --method sage or wise (only they make points)");
     if (!o.meshPath.empty()) meshFormatFor(o.meshPath);  // an unknown extension fails before work
+    if (o.physicalMeshes && o.meshPath.empty() && o.pointsPath.empty())
+        throw UsageError("--mesh-space applies to mesh outputs (-o MESH, --points-out POINTS.ply)");
     if (o.meshCompress && (o.meshPath.empty() || meshFormatFor(o.meshPath) != MeshFormat::Glb))
         throw UsageError("--mesh-compress applies to a .glb mesh output (-o MESH.glb)");
     if (o.oracle && !viewDependent && o.pngPath.empty() && !o.viewGiven && o.cameraPath.empty())
@@ -354,9 +377,12 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     // Without a picture to draw, the mesh goes to its file as it is extracted: memory holds a
     // bounded part of it. A picture needs the whole mesh, so then it is held.
     TriangleMesh mesh;
+    // Meshes are extracted in volume space and written in physical space (unless asked not to).
+    const SpaceTransform meshTransform =
+        o.physicalMeshes.value_or(true) ? volumeToPhysical(store.volume()) : SpaceTransform{};
     std::optional<MeshFileWriter> streamed;
     if (!meshPath.empty() && pngPath.empty() && !isViewDependent(o.method))
-        streamed.emplace(meshPath, o.overwrite, o.meshCompress);
+        streamed.emplace(meshPath, o.overwrite, o.meshCompress, meshTransform);
     PointSet points;
     ExtractStats stats;
     std::optional<MeshPostStats> post;
@@ -412,9 +438,9 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     if (streamed)
         streamed->finish();
     else if (!meshPath.empty())
-        writeMesh(meshPath, mesh, o.overwrite, o.meshCompress);
+        writeMesh(meshPath, mesh, o.overwrite, o.meshCompress, meshTransform);
     std::optional<double> drawSeconds;
-    if (!pointsPath.empty()) writePointsPly(pointsPath, points, o.overwrite);
+    if (!pointsPath.empty()) writePointsPly(pointsPath, points, o.overwrite, meshTransform);
     if (!pngPath.empty()) {
         const RenderResult r = renderSurface(mesh, points, *camera);
         writePng(pngPath, r.image, o.overwrite);
@@ -431,6 +457,8 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     else
         s.add("level", o.level);
     s.add("levels", store.header().levelCount);
+    if (!meshPath.empty() || !pointsPath.empty())
+        s.add("mesh_space", o.physicalMeshes.value_or(true) && volume.hasOrientation ? "physical" : "volume");
     s.add("triangles", stats.triangles).add("points", uint64_t(points.size()));
     s.add("vertices", stats.vertices).add("mesh_streamed", bool(streamed));
     if (post) {
@@ -513,16 +541,25 @@ int runExtract(int argc, char** argv) {
     const VolumeInfo& volume = store.volume();
     const glm::dvec3 boundsMin = volume.origin;
     const glm::dvec3 boundsMax = volume.worldMax();
+    // Presets face the patient's front on a store with orientation (or the side asked for).
+    ViewFacing facing;
+    try {
+        facing = viewFacing(o.view.side, volume);
+    } catch (const std::invalid_argument& e) {
+        throw UsageError("--view " + viewChoiceName(o.view) + ": " + o.input + ": " + e.what());
+    }
+    ViewChoice view = o.view;
+    if (!view.side && volume.hasOrientation) view.side = PatientSide::Anterior;
     // The cameras: one (or none for a full extraction without a picture), or a path.
     std::vector<Camera> cameras;
     if (o.orbitFrames > 0)
-        cameras = orbitCameras(o.view, boundsMin, boundsMax, o.width, o.height, o.orbitFrames);
+        cameras = orbitCameras(view.distance, facing, boundsMin, boundsMax, o.width, o.height, o.orbitFrames);
     else if (!o.pathFile.empty())
         cameras = readCameraPath(o.pathFile, o.width, o.height);
     else if (!o.cameraPath.empty())
         cameras.push_back(readCameraJson(o.cameraPath, o.width, o.height));
     else if (!o.pngPath.empty() || isViewDependent(o.method))
-        cameras.push_back(presetCamera(o.view, boundsMin, boundsMax, o.width, o.height));
+        cameras.push_back(presetCamera(view.distance, facing, boundsMin, boundsMax, o.width, o.height));
     for (Camera& c : cameras)
         if (!c.hasClipPlanes()) fitClipPlanes(c, boundsMin, boundsMax);
     const bool path = o.orbitFrames > 0 || !o.pathFile.empty();
@@ -547,7 +584,7 @@ int runExtract(int argc, char** argv) {
         if (tree && f == 0) s.add("tree_s", treeSeconds);
         if (path) s.add("frame", int64_t(f));
         else if (camera)
-            s.add("view", o.cameraPath.empty() ? viewPresetName(o.view) : o.cameraPath.c_str());
+            s.add("view", o.cameraPath.empty() ? viewChoiceName(view) : o.cameraPath);
         statsText += s.str() + "\n";
         if (o.statsPath == "-") std::fputs((s.str() + "\n").c_str(), stdout);
         if (!o.quiet && o.statsPath != "-")

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/orientation.h"
 #include "core/span_space.h"
 #include "io/brick_store.h"
 #include "io/json.h"
@@ -20,7 +21,7 @@ constexpr const char* kHelp =
     "usage: vdiso info FILE.vdiso [--iso V] [--json]\n"
     "\n"
     "Describes a brick store from its header and index alone (no brick is read):\n"
-    "dimensions, type, spacing, bricks, levels of detail (each level's bricks and stored\n"
+    "dimensions, type, spacing, origin, orientation, bricks, levels of detail (each level's bricks and stored\n"
     "bytes), compression, value range, histogram.\n"
     "\n"
     "  --iso V    also count the bricks that can hold isovalue V and the bytes they store\n"
@@ -130,6 +131,13 @@ int runInfo(int argc, char** argv) {
                                 ", " + std::to_string(v.spacing.z) + "]");
         o.addRaw("origin", "[" + std::to_string(v.origin.x) + ", " + std::to_string(v.origin.y) +
                                ", " + std::to_string(v.origin.z) + "]");
+        // Columns: the LPS direction of the i, j and k axes (identity without orientation).
+        std::string direction = "[";
+        for (int c = 0; c < 3; ++c)
+            direction += (c ? ", " : "") + std::string("[") + std::to_string(v.direction[c].x) + ", " +
+                         std::to_string(v.direction[c].y) + ", " + std::to_string(v.direction[c].z) + "]";
+        o.add("has_orientation", v.hasOrientation).addRaw("direction", direction + "]");
+        if (v.hasOrientation) o.add("axes_toward", axisSidesCode(v.direction));
         o.add("brick_size", h.brickSize).addRaw("brick_counts", triple(l.brickCounts));
         o.add("bricks", l.brickCount()).add("compression", compressionName(h.compression));
         o.add("volume_bytes", v.byteSize()).add("file_bytes", store.fileBytes());
@@ -161,6 +169,14 @@ int runInfo(int argc, char** argv) {
                 (long long)v.dims[2], scalarTypeName(v.type));
     std::printf("  spacing      %g x %g x %g   origin (%g, %g, %g)\n", v.spacing.x, v.spacing.y,
                 v.spacing.z, v.origin.x, v.origin.y, v.origin.z);
+    if (v.hasOrientation)
+        std::printf("  orientation  axes i, j, k toward %s: LPS directions (%.4g, %.4g, %.4g) "
+                    "(%.4g, %.4g, %.4g) (%.4g, %.4g, %.4g)\n",
+                    axisSidesCode(v.direction).c_str(), v.direction[0].x, v.direction[0].y,
+                    v.direction[0].z, v.direction[1].x, v.direction[1].y, v.direction[1].z,
+                    v.direction[2].x, v.direction[2].y, v.direction[2].z);
+    else
+        std::printf("  orientation  none (the input gave none, or the store predates format 4)\n");
     std::printf("  bricks       %lld (%lld x %lld x %lld) of %d^3 cells, stored %d^3 samples\n",
                 (long long)l.brickCount(), (long long)l.brickCounts[0], (long long)l.brickCounts[1],
                 (long long)l.brickCounts[2], h.brickSize, l.side());

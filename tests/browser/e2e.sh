@@ -37,8 +37,9 @@ for _ in $(seq 100); do
 done
 [ -n "$url" ] || { echo "e2e: vdiso serve printed no URL"; cat "$work/serve.log"; exit 1; }
 
-# A view of the brain from the front, right and above (world units of the MRI).
-echo '{"eye": [188, 522, 170], "target": [0, -14.75, 9.25], "up": [0, 0, 1], "fov": 30}' > "$work/cam.json"
+# A view of the brain from the front, right and above (volume space of the MRI: origin + index
+# * spacing, from its LPS origin (75, 107, -69.5); i runs to the right, j to the front).
+echo '{"eye": [338, 736, 170], "target": [150, 199.25, 9.25], "up": [0, 0, 1], "fov": 30}' > "$work/cam.json"
 page=()
 [ -n "${2:-}" ] && page=(--page "$out/viewer_page.png")
 node "$here/e2e.mjs" --url "$url" --camera "$work/cam.json" --size 800x800 --out "$out/viewer_frame.png" \

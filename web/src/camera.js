@@ -6,15 +6,16 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 export const PRESET_NAMES = ['distant', 'normal', 'closeup'];
 
-// Exactly core/camera.cpp's presetCamera (see its header for what each view is).
-const PRESET_DIRECTION = new THREE.Vector3(0.35, 1.0, 0.3).normalize();
-const PRESET_UP = [0, 0, 1];
+// Exactly core/camera.cpp's presetCamera (see its header for what each view is). `facing` is
+// the store's (hello: toEye, up, front; anterior for a store with orientation); without one,
+// core's defaultFacing().
+const DEFAULT_FACING = { toEye: new THREE.Vector3(0.35, 1.0, 0.3).normalize().toArray(), up: [0, 0, 1], front: [0, 1, 0] };
 const PRESET_FOV = 30;
 const DISTANT_IMAGE_FRACTION = 0.1;
 const CLOSEUP_LOOK_AT_FRONT = 0.35;
 const CLOSEUP_FRACTION = 1 / 6;
 
-export function presetCamera(name, boundsMin, boundsMax, aspect) {
+export function presetCamera(name, boundsMin, boundsMax, aspect, facing = DEFAULT_FACING) {
   const b0 = new THREE.Vector3(...boundsMin);
   const b1 = new THREE.Vector3(...boundsMax);
   const centre = b0.clone().add(b1).multiplyScalar(0.5);
@@ -29,14 +30,16 @@ export function presetCamera(name, boundsMin, boundsMax, aspect) {
   } else if (name === 'distant') {
     distance = radius / Math.sin(Math.atan(DISTANT_IMAGE_FRACTION * tanHalf));
   } else if (name === 'closeup') {
-    target = centre.clone().add(new THREE.Vector3(0, CLOSEUP_LOOK_AT_FRONT * extent.y, 0));
+    const front = new THREE.Vector3(...facing.front);
+    const depth = Math.abs(front.x) * extent.x + Math.abs(front.y) * extent.y + Math.abs(front.z) * extent.z;
+    target = centre.clone().addScaledVector(front, CLOSEUP_LOOK_AT_FRONT * depth);
     const largest = Math.max(extent.x, extent.y, extent.z, 1e-6);
     distance = (0.5 * CLOSEUP_FRACTION * largest) / tanHalf;
   } else {
     throw new Error(`unknown view preset '${name}' (expected ${PRESET_NAMES.join(', ')})`);
   }
-  const eye = target.clone().addScaledVector(PRESET_DIRECTION, distance);
-  return { eye: eye.toArray(), target: target.toArray(), up: [...PRESET_UP], fov: PRESET_FOV };
+  const eye = target.clone().addScaledVector(new THREE.Vector3(...facing.toEye), distance);
+  return { eye: eye.toArray(), target: target.toArray(), up: [...facing.up], fov: PRESET_FOV };
 }
 
 function checkVec3(name, value) {

@@ -173,7 +173,7 @@ class Viewer {
     const store = this.stores[index];
     this.storeIndex = index;
     this.panel.setStore(index, store);
-    const preset = presetCamera('normal', store.boundsMin, store.boundsMax, this.scene.camera.aspect);
+    const preset = presetCamera('normal', store.boundsMin, store.boundsMax, this.scene.camera.aspect, store.facing);
     this.cameraController.set({
       eye: camera.eye ?? preset.eye,
       target: camera.target ?? preset.target,
@@ -186,7 +186,7 @@ class Viewer {
   applyPreset(name) {
     if (this.storeIndex < 0) return;
     const store = this.stores[this.storeIndex];
-    this.cameraController.set(presetCamera(name, store.boundsMin, store.boundsMax, this.scene.camera.aspect));
+    this.cameraController.set(presetCamera(name, store.boundsMin, store.boundsMax, this.scene.camera.aspect, store.facing));
   }
 
   // For the scripting interface: the store (and so the camera and isovalue) is chosen at hello.
