@@ -277,7 +277,9 @@ TEST(MeshPost, DecimationLeavesNoCrackInAThinNoisySurface) {
         const auto back = directed.find({edge.second, edge.first});
         const int reverse = back == directed.end() ? 0 : back->second;
         if (edge.first < edge.second || reverse == 0) ++edges;
-        if (reverse != count) EXPECT_TRUE(onOneFace(edge.first, edge.second)) << edge.first << "-" << edge.second;
+        if (reverse != count) {
+            EXPECT_TRUE(onOneFace(edge.first, edge.second)) << edge.first << "-" << edge.second;
+        }
         if (edge.first < edge.second && count + reverse > 2) ++pinched;
     }
     EXPECT_LT(double(pinched), 1e-3 * double(edges));

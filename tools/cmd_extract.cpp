@@ -414,9 +414,9 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         MeshAppender held(mesh);
         std::optional<PostProcessedMesh> postProcess;
         if (o.post.any()) {
-            MeshPostOptions post = o.post;
-            post.threads = plan.threads;
-            postProcess.emplace(meshPath.empty() ? pngPath : meshPath, level.layout(), post,
+            MeshPostOptions shape = o.post;
+            shape.threads = plan.threads;
+            postProcess.emplace(meshPath.empty() ? pngPath : meshPath, level.layout(), shape,
                                 streamed ? static_cast<MeshSink&>(*streamed) : held);
             extract.brickSink = &*postProcess;
         } else if (streamed) {
