@@ -88,15 +88,15 @@ for i in "${!labels[@]}"; do
 done
 rm -f $out
 
-echo "| format | input on disk (samples) | runs | median s | MB/s of samples | peak RSS MB | peak / samples | vdiso + helper MB |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| format | input on disk (samples) | runs | median s | runs s | MB/s of samples | peak RSS MB | peak / samples | vdiso + helper MB |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for i in "${!labels[@]}"; do
   disk=$(du -sbL "${inputs[$i]%%:/*}" | cut -f1)
   printf '%s' "${results[$i]}" | sort -n | awk -v label="${labels[$i]}" -v d="$disk" \
       -v b="${samples[$i]}" -v cold="$cold" -v both="${together[$i]:-}" '
     { s[NR]=$1; if ($2 > peak) peak = $2 } END {
       med = s[int((NR+1)/2)];
-      printf "| %s | %.0f MB %s (%.0f MB) | %d | %.2f | %.0f | %.0f | %.1f%% | %s |\n",
-        label, d/1e6, cold, b/1e6, NR, med, b/1e6/med, peak/1024, 100*peak*1024/b,
+      printf "| %s | %.0f MB %s (%.0f MB) | %d | %.2f | %.1f-%.1f | %.0f | %.0f | %.1f%% | %s |\n",
+        label, d/1e6, cold, b/1e6, NR, med, s[1], s[NR], b/1e6/med, peak/1024, 100*peak*1024/b,
         both == "" ? "-" : sprintf("%.0f", both/1024) }'
 done
