@@ -30,7 +30,11 @@ public:
         if (!options) throwIoError(mPath, "cannot allocate libtiff's open options");
         TIFFOpenOptionsSetErrorHandlerExtR(options, &TiffHandle::onError, this);
         TIFFOpenOptionsSetWarningHandlerExtR(options, &TiffHandle::onWarning, nullptr);
-        mTif = TIFFOpenExt(mPath.c_str(), "r", options);
+        // "m": read, not memory-mapped. libtiff maps the whole file by default, and conversion
+        // touches every strip once, so a 2 GiB stack ended with 2.2 GB resident (RssFile: the
+        // mapped file) where the slab ring is 0.2 GB; reading each strip into its slice costs
+        // the same copy.
+        mTif = TIFFOpenExt(mPath.c_str(), "rm", options);
         TIFFOpenOptionsFree(options);
         if (!mTif) fail("cannot be read as TIFF");
     }

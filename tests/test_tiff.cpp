@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -225,6 +226,21 @@ TEST_F(TiffReader, BigTiff) {
     EXPECT_TRUE(hasTiffMagic(path("big.tif")));
     auto reader = openTiffVolume(path("big.tif"));
     expectStack(*reader, d, FileScalar::I16, values);
+}
+
+// The file is read, not memory-mapped: libtiff maps it by default, which made converting a
+// 2 GiB stack hold the whole file resident (bench/RESULTS.md, "Readers").
+TEST_F(TiffReader, DoesNotMapTheFile) {
+    const Dims3 d = test::kDims;
+    const std::vector<double> values = tiffValues(FileScalar::U16, d);
+    writeStack(path("mapped.tif"), d, FileScalar::U16, values, {});
+    auto reader = openTiffVolume(path("mapped.tif"));
+    std::vector<uint16_t> slice(size_t(d[0] * d[1]));
+    reader->read(slice.data(), 1);
+    std::ifstream maps("/proc/self/maps");
+    ASSERT_TRUE(maps.good());
+    for (std::string line; std::getline(maps, line);)
+        EXPECT_EQ(line.find("mapped.tif"), std::string::npos) << line;
 }
 
 TEST_F(TiffReader, FolderAndGlobInNaturalOrder) {

@@ -1,0 +1,98 @@
+// An OME-Zarr 0.4 image written by hand (the format is JSON and a file per chunk), as
+// tests/test_zarr.cpp writes its small ones: a layer of chunks at a time.
+#include <blosc.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <vector>
+
+#include "bench/inputs/writers.h"
+
+namespace vdiso::bench {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void writeFile(const fs::path& path, const void* data, size_t bytes) {
+    std::ofstream out(path, std::ios::binary);
+    if (!out.write(static_cast<const char*>(data), std::streamsize(bytes)) || !out.flush())
+        throw std::runtime_error(path.string() + ": cannot write it");
+}
+
+void writeJson(const fs::path& path, const json& j) {
+    const std::string text = j.dump(2);
+    writeFile(path, text.data(), text.size());
+}
+
+}  // namespace
+
+void writeOmeZarr(const HeadSlices& head, const std::string& folder, int64_t chunk) {
+    const int64_t n = head.size();
+    const fs::path root(folder), array = root / "0";
+    fs::create_directories(array);
+    writeJson(root / ".zgroup", {{"zarr_format", 2}});
+    const json axis = {{"type", "space"}, {"unit", "micrometer"}};
+    json axes = json::array();
+    for (const char* name : {"z", "y", "x"}) {
+        json a = axis;
+        a["name"] = name;
+        axes.push_back(a);
+    }
+    json scale = json::object();
+    scale["type"] = "scale";
+    scale["scale"] = {1.0, 1.0, 1.0};
+    json dataset = json::object();
+    dataset["path"] = "0";
+    dataset["coordinateTransformations"] = json::array({scale});
+    json image = json::object();
+    image["version"] = "0.4";
+    image["name"] = "head";
+    image["axes"] = axes;
+    image["datasets"] = json::array({dataset});
+    json attributes = json::object();
+    attributes["multiscales"] = json::array({image});
+    writeJson(root / ".zattrs", attributes);
+    writeJson(array / ".zarray", {{"zarr_format", 2},
+                                  {"shape", {n, n, n}},
+                                  {"chunks", {chunk, chunk, chunk}},
+                                  {"dtype", "<u2"},
+                                  {"compressor",
+                                   {{"id", "blosc"}, {"cname", "lz4"}, {"clevel", 5},
+                                    {"shuffle", 1}, {"blocksize", 0}}},
+                                  {"fill_value", 0},
+                                  {"order", "C"},
+                                  {"filters", nullptr},
+                                  {"dimension_separator", "/"}});
+
+    const size_t chunkSamples = size_t(chunk * chunk * chunk);
+    std::vector<uint16_t> slab(size_t(chunk * n * n)), samples(chunkSamples);
+    std::vector<char> stored(chunkSamples * 2 + BLOSC_MAX_OVERHEAD);
+    for (int64_t z0 = 0; z0 < n; z0 += chunk) {
+        const int64_t depth = std::min(chunk, n - z0);
+        head.read(z0, depth, slab.data());
+        for (int64_t y0 = 0; y0 < n; y0 += chunk)
+            for (int64_t x0 = 0; x0 < n; x0 += chunk) {
+                // Edge chunks are whole in the file, padded with the fill value.
+                std::fill(samples.begin(), samples.end(), uint16_t(0));
+                const int64_t rows = std::min(chunk, n - y0), cols = std::min(chunk, n - x0);
+                for (int64_t z = 0; z < depth; ++z)
+                    for (int64_t y = 0; y < rows; ++y)
+                        std::copy_n(slab.data() + size_t((z * n + y0 + y) * n + x0), cols,
+                                    samples.data() + size_t((z * chunk + y) * chunk));
+                const int bytes = blosc_compress_ctx(5, BLOSC_SHUFFLE, 2, chunkSamples * 2,
+                                                     samples.data(), stored.data(), stored.size(),
+                                                     "lz4", 0, 1);
+                const fs::path file = array / std::to_string(z0 / chunk) /
+                                      std::to_string(y0 / chunk) / std::to_string(x0 / chunk);
+                if (bytes <= 0) throw std::runtime_error(file.string() + ": blosc cannot compress it");
+                fs::create_directories(file.parent_path());
+                writeFile(file, stored.data(), size_t(bytes));
+            }
+    }
+}
+
+}  // namespace vdiso::bench
