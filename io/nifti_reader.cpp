@@ -277,7 +277,7 @@ glm::dmat3 qformRotation(const std::string& path, const NiftiHeaderBytes& b) {
     } else {
         qa = std::sqrt(qa);
     }
-    // Rows of R as the header docs write them; glm's matrices are indexed [column][row].
+    // R's columns (the header docs write R by rows); glm's matrices are indexed [column][row].
     glm::dmat3 r;
     r[0] = {qa * qa + qb * qb - qc * qc - qd * qd, 2 * (qb * qc + qa * qd), 2 * (qb * qd - qa * qc)};
     r[1] = {2 * (qb * qc - qa * qd), qa * qa + qc * qc - qb * qb - qd * qd, 2 * (qc * qd + qa * qb)};
@@ -287,34 +287,48 @@ glm::dmat3 qformRotation(const std::string& path, const NiftiHeaderBytes& b) {
     return r;
 }
 
-// Placement: the qform when qform_code > 0, else the sform when sform_code > 0 (the order
-// nifti1_io and ITK read them in), else none: the volume sits axis-aligned at 0 with pixdim's
-// spacing. NIfTI's space is RAS; ours is LPS. The sform's columns are the axes' whole steps,
-// so they give the spacing too.
+// True when the matrix's columns are orthogonal (up to the rounding of a float header): a
+// rotation, maybe mirrored, times a scale per axis, with no shear.
+bool columnsOrthogonal(const glm::dmat3& m) {
+    for (int i = 0; i < 3; ++i)
+        for (int j = i + 1; j < 3; ++j)
+            if (std::abs(glm::dot(glm::normalize(m[i]), glm::normalize(m[j]))) > 1e-4) return false;
+    return true;
+}
+
+// Placement, as nibabel and ITK choose it: the sform when sform_code > 0, unless it shears and
+// a qform is there too (ITK then takes the qform: a rigid placement); else the qform when
+// qform_code > 0; else none: the volume sits axis-aligned at 0 with pixdim's spacing. (3D Slicer
+// reads NIfTI through ITK, so its models and these meshes land in the same place.) NIfTI's
+// space is RAS; ours is LPS. The sform's columns are the axes' whole steps, so they give the
+// spacing too. Units (xyzt_units) are not read: the numbers are taken as they are.
 void niftiPlacement(const std::string& path, const NiftiHeaderBytes& b, NiftiHeader& h) {
+    const bool hasQform = b.i16(kOffQformCode) > 0, hasSform = b.i16(kOffSformCode) > 0;
     glm::dmat3 ras(1.0);
     glm::dvec3 rasOrigin(0.0);
-    if (b.i16(kOffQformCode) > 0) {
-        ras = qformRotation(path, b);
-        for (int a = 0; a < 3; ++a) rasOrigin[a] = b.f32(kOffQoffset + 4 * a);
-        if (!std::isfinite(rasOrigin.x + rasOrigin.y + rasOrigin.z))
-            throwIoError(path, "qoffset holds a value that is not finite");
-    } else if (b.i16(kOffSformCode) > 0) {
+    bool useSform = false;
+    if (hasSform) {
         glm::dmat3 scaled;
         for (int row = 0; row < 3; ++row) {
             for (int c = 0; c < 3; ++c) scaled[c][row] = b.f32(kOffSrowX + kSrowStride * row + 4 * c);
             rasOrigin[row] = b.f32(kOffSrowX + kSrowStride * row + 12);
         }
-        if (const std::string problem = directionProblem(scaled); !problem.empty())
-            throwIoError(path, "sform: " + problem);
+        // A broken sform beside a qform is passed over, as ITK does; alone, it is refused.
+        std::string problem = directionProblem(scaled);
+        if (problem.empty() && !std::isfinite(rasOrigin.x + rasOrigin.y + rasOrigin.z))
+            problem = "translation holds a value that is not finite";
+        if (!problem.empty() && !hasQform) throwIoError(path, "sform: " + problem);
+        useSform = problem.empty() && (!hasQform || columnsOrthogonal(scaled));
+        if (useSform) splitScaledColumns(scaled, ras, h.spacing);
+    }
+    if (!useSform && hasQform) {
+        ras = qformRotation(path, b);
+        for (int a = 0; a < 3; ++a) rasOrigin[a] = b.f32(kOffQoffset + 4 * a);
         if (!std::isfinite(rasOrigin.x + rasOrigin.y + rasOrigin.z))
-            throwIoError(path, "sform translation holds a value that is not finite");
-        splitScaledColumns(scaled, ras, h.spacing);
-    } else {
+            throwIoError(path, "qoffset holds a value that is not finite");
+    } else if (!useSform) {
         return;
     }
-    if (const std::string problem = directionProblem(ras); !problem.empty())
-        throwIoError(path, "qform: " + problem);
     h.direction = kRasToLps * ras;
     h.origin = kRasToLps * rasOrigin;
     h.hasOrientation = true;

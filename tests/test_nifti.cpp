@@ -209,14 +209,38 @@ std::string u8Samples() { return encodeSamples(testValues(FileScalar::U8), FileS
 TEST_F(NiftiReader, QformRotationAndFlipInLps) {
     NiftiHeaderBuilder h(FileScalar::U8, 2);
     h.setF32(76, -1.0f).setF32(264, float(std::sqrt(0.5)));
-    // An sform that disagrees: the qform wins.
-    h.setI16(254, 1).setF32(280, 5.0f).setF32(300, 5.0f).setF32(320, 5.0f);
+    h.setI16(254, 0);
     auto reader = openNiftiVolume(write("q.nii", h.bytes() + u8Samples()));
     const VolumeInfo& info = reader->info();
     EXPECT_TRUE(info.hasOrientation);
     test::expectDirection(info.direction, glm::dmat3(0, -1, 0, 1, 0, 0, 0, 0, -1));
     EXPECT_EQ(info.origin, glm::dvec3(10.5, -20.0, 3.25));
     EXPECT_EQ(info.spacing, glm::dvec3(0.5, 0.75, 2.5));
+}
+
+// Both forms, as nibabel and ITK (so 3D Slicer) choose: the sform, unless it shears or is
+// broken, when the qform (rigid) is taken.
+TEST_F(NiftiReader, SformWinsUnlessItShearsOrIsBroken) {
+    auto withSform = [&](const std::string& name, const float (&rows)[3][4]) {
+        NiftiHeaderBuilder h(FileScalar::U8, 2);
+        h.setF32(76, -1.0f).setF32(264, float(std::sqrt(0.5)));  // the qform above
+        h.setI16(254, 1);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) h.setF32(280 + 16 * size_t(r) + 4 * size_t(c), rows[r][c]);
+        return openNiftiVolume(write(name, h.bytes() + u8Samples()))->info();
+    };
+    const float scaled[3][4] = {{5, 0, 0, 1}, {0, 5, 0, 2}, {0, 0, 5, 3}};
+    VolumeInfo info = withSform("sform.nii", scaled);
+    test::expectDirection(info.direction, glm::dmat3(-1, 0, 0, 0, -1, 0, 0, 0, 1));
+    expectDoubleEq(info.spacing, {5.0, 5.0, 5.0});
+    expectDoubleEq(info.origin, {-1.0, -2.0, 3.0});
+    const float sheared[3][4] = {{5, 1, 0, 1}, {0, 5, 0, 2}, {0, 0, 5, 3}};
+    info = withSform("sheared.nii", sheared);
+    test::expectDirection(info.direction, glm::dmat3(0, -1, 0, 1, 0, 0, 0, 0, -1));
+    EXPECT_EQ(info.origin, glm::dvec3(10.5, -20.0, 3.25));
+    const float singular[3][4] = {{5, 5, 0, 1}, {0, 0, 0, 2}, {0, 0, 5, 3}};
+    info = withSform("singular.nii", singular);
+    test::expectDirection(info.direction, glm::dmat3(0, -1, 0, 1, 0, 0, 0, 0, -1));
 }
 
 // Only an sform: its columns are the axes' steps in RAS, giving spacing and direction; its
