@@ -109,7 +109,7 @@ ViewFacing patientFacing(PatientSide side, const glm::dmat3& direction) {
     const glm::dmat3 toVolume = glm::inverse(direction);
     ViewFacing f;
     f.toEye = glm::normalize(toVolume * toEye);
-    f.up = toVolume * up;
+    f.up = glm::normalize(toVolume * up);  // unit even where the direction shears
     f.front = f.toEye;
     return f;
 }

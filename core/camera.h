@@ -93,10 +93,11 @@ enum class ViewPreset { Distant, Normal, Closeup };
 
 // Which way a preset looks: the eye lies from the look-at point along toEye, up is up (not
 // parallel to toEye), and a closeup looks at a point moved from the centre towards front.
+// Made by defaultFacing(), patientFacing() or viewFacing(); a value-initialised one is no facing.
 struct ViewFacing {
-    glm::dvec3 toEye{0.0, 1.0, 0.0};  // unit
-    glm::dvec3 up{0.0, 0.0, 1.0};
-    glm::dvec3 front{0.0, 1.0, 0.0};  // unit
+    glm::dvec3 toEye{0.0};  // unit
+    glm::dvec3 up{0.0};     // unit
+    glm::dvec3 front{0.0};  // unit
 };
 
 // The facing of volumes without orientation: kPresetViewDirection, up +z, front +y.

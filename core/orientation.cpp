@@ -17,6 +17,13 @@ constexpr double kMinUnitDeterminant = 1e-6;
 // The inverse transpose, computed once per mesh piece: how normals follow a linear map.
 glm::dmat3 normalMatrix(const glm::dmat3& linear) { return glm::transpose(glm::inverse(linear)); }
 
+// A normal through the normal matrix, unit again; a zero normal (a flat gradient) stays zero.
+glm::vec3 mappedNormal(const glm::dmat3& normals, glm::vec3 n) {
+    const glm::dvec3 m = normals * glm::dvec3(n);
+    const double length = glm::length(m);
+    return length > 0.0 ? glm::vec3(m / length) : glm::vec3(0.0f);
+}
+
 }  // namespace
 
 std::string directionProblem(const glm::dmat3& direction) {
@@ -72,7 +79,7 @@ SpaceTransform volumeToPhysical(const VolumeInfo& volume) {
 void transformMesh(const SpaceTransform& t, TriangleMesh& mesh) {
     const glm::dmat3 normals = normalMatrix(t.linear);
     for (glm::vec3& p : mesh.positions) p = glm::vec3(t.linear * glm::dvec3(p) + t.offset);
-    for (glm::vec3& n : mesh.normals) n = glm::vec3(glm::normalize(normals * glm::dvec3(n)));
+    for (glm::vec3& n : mesh.normals) n = mappedNormal(normals, n);
     if (t.mirrors())
         for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) std::swap(mesh.indices[i + 1], mesh.indices[i + 2]);
 }
@@ -80,7 +87,7 @@ void transformMesh(const SpaceTransform& t, TriangleMesh& mesh) {
 void transformPoints(const SpaceTransform& t, PointSet& points) {
     const glm::dmat3 normals = normalMatrix(t.linear);
     for (glm::vec3& p : points.positions) p = glm::vec3(t.linear * glm::dvec3(p) + t.offset);
-    for (glm::vec3& n : points.normals) n = glm::vec3(glm::normalize(normals * glm::dvec3(n)));
+    for (glm::vec3& n : points.normals) n = mappedNormal(normals, n);
 }
 
 }  // namespace vdiso

@@ -36,7 +36,7 @@ void splitScaledColumns(const glm::dmat3& scaled, glm::dmat3& direction, glm::dv
 
 // RAS coordinates (NIfTI, NRRD's right-anterior-superior) to LPS and back: x and y change sign.
 // The map is its own inverse. A direction matrix converts as rasToLps * D.
-const glm::dmat3 kRasToLps{-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0};
+inline const glm::dmat3 kRasToLps{-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0};
 
 // For each of the i, j, k axes, the letter of the patient side its direction points to most
 // nearly: L or R (LPS +x or -x), P or A (+y, -y), S or I (+z, -z). "RAS" for a grid whose i

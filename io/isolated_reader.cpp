@@ -23,6 +23,7 @@ void serveReader(int fd, const std::function<std::unique_ptr<SliceReader>()>& op
     const VolumeInfo& info = reader->info();
     WireWriter w;
     w.put(info.dims).put(uint8_t(info.type)).put(info.spacing).put(info.origin).put(reader->name());
+    w.put(uint8_t(info.hasOrientation)).put(info.direction[0]).put(info.direction[1]).put(info.direction[2]);
     const std::vector<std::string> files = reader->files();
     w.put(uint64_t(files.size()));
     for (const std::string& f : files) w.put(f);
@@ -66,6 +67,10 @@ public:
         r.get(mInfo.spacing);
         r.get(mInfo.origin);
         r.get(mName);
+        uint8_t oriented = 0;
+        r.get(oriented);
+        mInfo.hasOrientation = oriented != 0;
+        for (int c = 0; c < 3; ++c) r.get(mInfo.direction[c]);
         r.get(files);
         mInfo.type = ScalarType(type);
         for (uint64_t i = 0; i < files; ++i) {

@@ -72,12 +72,14 @@ constexpr const char* kHelp =
     "                            binary, normals) or .vtp (VTK XML PolyData, for ParaView)\n"
     "  --mesh-space physical|volume\n"
     "                            the space meshes (-o, --points-out) are written in. physical\n"
-    "                            (default): the patient's LPS coordinates in mm, where the\n"
+    "                            (default): the patient's LPS coordinates (in the input's\n"
+    "                            units, mm for DICOM), where the\n"
     "                            input's orientation put the volume (DICOM, NIfTI, NRRD,\n"
     "                            MetaImage), as 3D Slicer (4.11 on) and ITK place models;\n"
     "                            volume: origin + index * spacing, axis-aligned, the space\n"
-    "                            vdiso extracts and renders in (what vdiso wrote before store\n"
-    "                            format 4). The two are the same for a store without\n"
+    "                            vdiso extracts and renders in (before store format 4, vdiso\n"
+    "                            wrote this with a RAS input's origin as RAS; it is LPS now).\n"
+    "                            The two are the same for a store without\n"
     "                            orientation (vdiso info says whether it has one)\n"
     "  --mesh-compress           .glb: compress the mesh with meshoptimizer\n"
     "                            (EXT_meshopt_compression; three.js loads it with its\n"
@@ -429,6 +431,12 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
                                     : extractOctree(level, extract, into, progress);
         if (postProcess) {
             post = postProcess->finish(progressBar("post-process", 0, o.quiet));
+            if (post->pieces > 0 && post->piecesKept == 0)
+                std::fprintf(stderr,
+                             "vdiso extract: warning: --min-piece %llu dropped every piece (the largest has %llu "
+                             "triangles): the mesh is empty\n",
+                             (unsigned long long)o.post.minPieceTriangles,
+                             (unsigned long long)post->largestPieceTriangles);
             stats.triangles = post->trianglesOut;
             stats.vertices = post->verticesOut;
         }
@@ -466,6 +474,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
         s.add("largest", o.post.largestPiece).add("min_piece", o.post.minPieceTriangles);
         s.add("triangles_extracted", post->trianglesIn).add("vertices_extracted", post->verticesIn);
         s.add("pieces", post->pieces).add("pieces_kept", post->piecesKept);
+        s.add("largest_piece_triangles", post->largestPieceTriangles);
         s.add("post_slabs", post->slabs).add("post_halo_slabs", post->haloSlabs);
         s.add("post_window_triangles_max", post->largestWindowTriangles);
         s.add("post_spool_mb", double(post->spoolBytes) / 1e6);
@@ -542,7 +551,7 @@ int runExtract(int argc, char** argv) {
     const glm::dvec3 boundsMin = volume.origin;
     const glm::dvec3 boundsMax = volume.worldMax();
     // Presets face the patient's front on a store with orientation (or the side asked for).
-    ViewFacing facing;
+    ViewFacing facing = defaultFacing();
     try {
         facing = viewFacing(o.view.side, volume);
     } catch (const std::invalid_argument& e) {
