@@ -118,6 +118,7 @@ MeshPostStats PostProcessedMesh::finish(const ProgressFn& progress) {
         stats.spoolBytes += mLabels->size();
         stats.pieces = pieces.pieceCount();
         const uint32_t largest = pieces.largestPiece();
+        if (largest != UINT32_MAX) stats.largestPieceTriangles = pieces.trianglesOf(largest);
         keep.emplace(pieces.labelCount(), uint8_t(0));
         for (uint32_t l = 0; l < pieces.labelCount(); ++l) {
             const uint32_t piece = pieces.pieceOf(l);

@@ -27,6 +27,7 @@ struct MeshPostStats {
     uint64_t trianglesIn = 0, verticesIn = 0;    // as extracted
     uint64_t trianglesOut = 0, verticesOut = 0;  // as written
     uint64_t pieces = 0, piecesKept = 0;         // 0, 0 unless pieces were removed
+    uint64_t largestPieceTriangles = 0;
     uint64_t spoolBytes = 0;                     // the side files' size
     int slabs = 0, haloSlabs = 0;
     uint64_t largestWindowTriangles = 0;  // the most triangles a window held

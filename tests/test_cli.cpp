@@ -301,6 +301,11 @@ TEST(CliExtract, PostProcessesTheMesh) {
         EXPECT_EQ(r.exitCode, 2) << options;
         EXPECT_TRUE(contains(r.output, message)) << options << ": " << r.output;
     }
+    // Every piece dropped: an empty mesh, and a warning that says why.
+    r = runVdiso(extract + "-o " + dir.file("none.ply") + " --min-piece 100000000");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, "dropped every piece (the largest has")) << r.output;
+    EXPECT_EQ(test::readPly(dir.file("none.ply")).triangleCount(), 0u);
     // An existing output stays as it was.
     test::writeFile(dir.file("old.ply"), "old");
     r = runVdiso(extract + "-o " + dir.file("old.ply") + " --smooth 2");
