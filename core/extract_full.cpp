@@ -5,6 +5,8 @@
 #include <chrono>
 #include <mutex>
 #include <span>
+#include <stdexcept>
+#include <string>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -35,6 +37,48 @@ constexpr size_t kChunksPerThread = 8;
 constexpr size_t kStreamedChunkBricks = 64;
 constexpr size_t kStreamedChunksPerThread = 2;
 
+
+// The part of the volume given by FullExtractOptions::bricks, and the test of whether an edge
+// also has a cell in a brick outside it (then another part makes its vertex too).
+class PartBorder {
+public:
+    PartBorder(const VolumeInfo& volume, const BrickLayout& layout, std::span<const int64_t> part)
+        : mDims(volume.dims), mLayout(layout), mInPart(size_t(layout.brickCount()), part.empty()) {
+        for (int64_t id : part) {
+            if (id < 0 || id >= layout.brickCount())
+                throw std::invalid_argument("FullExtractOptions::bricks: brick " + std::to_string(id) +
+                                            " is not in the volume");
+            mInPart[size_t(id)] = 1;
+        }
+    }
+    bool holds(int64_t id) const { return mInPart[size_t(id)] != 0; }
+    bool crossesEdge(uint64_t key) const {
+        int64_t bricks[4];
+        const int n = bricksOnEdge(mDims, mLayout, key, bricks);
+        for (int i = 0; i < n; ++i)
+            if (!holds(bricks[i])) return true;
+        return false;
+    }
+    // The bricks outside the part.
+    std::vector<int64_t> outside() const {
+        std::vector<int64_t> ids;
+        for (size_t id = 0; id < mInPart.size(); ++id)
+            if (!mInPart[id]) ids.push_back(int64_t(id));
+        return ids;
+    }
+    // Copies the entries of `seams` on the part's border to `out` (numbers mapped by `number`).
+    template <class Number>
+    void collect(const EdgeVertexMap& seams, EdgeVertexMap& out, Number&& number) const {
+        seams.forEach([&](uint64_t key, uint32_t v) {
+            if (crossesEdge(key) && out.find(key) == UINT32_MAX) out.insert(key, number(v));
+        });
+    }
+
+private:
+    Dims3 mDims;
+    BrickLayout mLayout;
+    std::vector<uint8_t> mInPart;
+};
 
 // Where one brick's output ends in its chunk's mesh (vertex and index counts after it).
 struct BrickEnd {
@@ -93,8 +137,10 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams, 
 // vertices follow the earlier chunks', written into place after a prefix sum of their counts
 // (Flying Edges' way). Only the chunks' seam entries are looked up; no pass over the mesh is
 // serial. `chunkOfBrick`: the chunk extracting each brick, -1 for none. Frees the chunks.
+// With `border`, the chunks' vertices on the part's border go to `borderOut` (numbered as in out).
 void mergeChunksParallel(std::vector<ChunkOutput>& chunks, const std::vector<int32_t>& chunkOfBrick,
-                         const VolumeInfo& volume, const BrickLayout& layout, TriangleMesh& out) {
+                         const VolumeInfo& volume, const BrickLayout& layout, TriangleMesh& out,
+                         const PartBorder* border, EdgeVertexMap* borderOut) {
     constexpr uint32_t kWelded = UINT32_MAX;
     struct Weld {
         uint32_t vertex, ownerChunk, ownerVertex;
@@ -144,6 +190,9 @@ void mergeChunksParallel(std::vector<ChunkOutput>& chunks, const std::vector<int
     tbb::parallel_for(size_t(0), count, [&](size_t c) {
         for (const Weld& w : welds[c]) final[c][w.vertex] = final[w.ownerChunk][w.ownerVertex];
     });
+    if (border && borderOut)
+        for (size_t c = 0; c < count; ++c)
+            border->collect(chunks[c].seams, *borderOut, [&](uint32_t v) { return final[c][v]; });
     tbb::parallel_for(size_t(0), count, [&](size_t c) {
         const MeshArray<uint32_t>& indices = chunks[c].mesh.indices;
         uint32_t* to = out.indices.data() + indexBase[c];
@@ -213,7 +262,17 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     };
     std::vector<int64_t> bricks(items.size());
     for (size_t i = 0; i < items.size(); ++i) bricks[i] = brickOf(items[i]);
-    SeamTrimmer trimmer(source.volume(), source.layout(), bricks, options.seamTrimEntries);
+    // Vertices on the part's border are wanted at the end: the bricks outside the part stay
+    // pending for the trimmer, so it keeps them.
+    const PartBorder border(source.volume(), source.layout(), options.bricks);
+    EdgeVertexMap* const borderOut = options.bricks.empty() ? nullptr : options.borderVertices;
+    std::vector<int64_t> pending = bricks;
+    if (borderOut) {
+        const std::vector<int64_t> outside = border.outside();
+        pending.insert(pending.end(), outside.begin(), outside.end());
+    }
+    SeamTrimmer trimmer(source.volume(), source.layout(), pending, options.seamTrimEntries);
+    auto identity = [](uint32_t v) { return v; };
     if (options.threads <= 1) {
         BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
         EdgeVertexMap seams;
@@ -230,6 +289,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             stream(false);
             if (i % kProgressEvery == 0 || i + 1 == items.size()) report(i + 1);
         }
+        if (borderOut) border.collect(seams, *borderOut, identity);
         finish();
         return extractor.counters();
     }
@@ -290,7 +350,11 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         for (size_t c = 0; c < chunkCount; ++c)
             for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
                 chunkOfBrick[size_t(bricks[i])] = int32_t(c);
-        arena.execute([&] { mergeChunksParallel(chunks, chunkOfBrick, source.volume(), source.layout(), mesh); });
+        arena.execute([&] {
+            mergeChunksParallel(chunks, chunkOfBrick, source.volume(), source.layout(), mesh, &border, borderOut);
+        });
+    } else if (borderOut) {
+        border.collect(seams, *borderOut, identity);
     }
     finish();
     report(items.size());
@@ -299,16 +363,25 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
 
 }  // namespace
 
+std::vector<int64_t> octreeActiveBricks(const BrickSource& source, double iso, int64_t* nodesVisited) {
+    const MinMaxTree tree(source.layout(), source.brickRanges());
+    std::vector<int64_t> bricks;
+    const int64_t nodes = tree.forEachActiveBrick(iso, [&](int64_t id) { bricks.push_back(id); });
+    if (nodesVisited) *nodesVisited = nodes;
+    std::sort(bricks.begin(), bricks.end());  // the file's order: sequential reads
+    return bricks;
+}
+
 ExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
                                TriangleMesh& mesh, const ProgressFn& progress) {
     requireFiniteIso(options.iso);
     const auto start = Clock::now();
     ExtractStats stats;
-    const MinMaxTree tree(source.layout(), source.brickRanges());
-    std::vector<int64_t> bricks;
-    stats.nodesVisited =
-        tree.forEachActiveBrick(options.iso, [&](int64_t id) { bricks.push_back(id); });
-    std::sort(bricks.begin(), bricks.end());  // the file's order: sequential reads
+    std::vector<int64_t> bricks = octreeActiveBricks(source, options.iso, &stats.nodesVisited);
+    if (!options.bricks.empty()) {
+        const PartBorder part(source.volume(), source.layout(), options.bricks);
+        std::erase_if(bricks, [&](int64_t id) { return !part.holds(id); });
+    }
     const KernelCounters counters = extractItems(
         bricks, source, options, mesh, stats, progress, 0.0,
         [&](BrickExtractor& extractor, int64_t id, const void* samples, TriangleMesh& out,
@@ -360,6 +433,10 @@ ExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options
         local[i] = active[i] % perBrick;
         if (work.empty() || work.back().id != id) work.push_back({id, i, i});
         work.back().end = i + 1;
+    }
+    if (!options.bricks.empty()) {
+        const PartBorder part(source.volume(), layout, options.bricks);
+        std::erase_if(work, [&](const BrickWork& w) { return !part.holds(w.id); });
     }
     const KernelCounters counters = extractItems(
         work, source, options, mesh, stats, progress, 0.5,

@@ -13,10 +13,13 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "core/brick_extractor.h"
 #include "core/brick_prefetcher.h"
 #include "core/brick_source.h"
+#include "core/edge_vertex_map.h"
 #include "core/extract_stats.h"
 #include "core/mesh.h"
 #include "core/progress.h"
@@ -60,7 +63,23 @@ struct FullExtractOptions {
     // The map of brick-face vertices forgets faces no pending brick shares once it holds this
     // many entries, and again each time it doubles (see SeamTrimmer in extract_full.cpp).
     size_t seamTrimEntries = size_t(1) << 16;
+    // A part of the volume: when not empty, only these bricks (increasing ids) are extracted,
+    // those of them the method finds active; the others are skipped unread. What each process
+    // of a shared extraction is given (mpi/). The part's vertices are numbered from 0 in the
+    // order one process extracting everything would number them, vertices a brick outside the
+    // part shares included (each part makes its own).
+    std::span<const int64_t> bricks{};
+    // With `bricks`: receives the vertices of the part on an edge that a brick outside it also
+    // has a cell on (edge key -> vertex number in the output), the ones another part makes too
+    // and that a caller welds across parts. Entries already there are kept.
+    EdgeVertexMap* borderVertices = nullptr;
 };
+
+// The bricks whose range holds options.iso by the min/max tree over source.brickRanges(), in
+// increasing id order: those extractOctree extracts (all of them without `bricks`). Sets
+// *nodesVisited to the tree nodes tested when given.
+std::vector<int64_t> octreeActiveBricks(const BrickSource& source, double iso,
+                                        int64_t* nodesVisited = nullptr);
 
 ExtractStats extractOctree(BrickSource& source, const FullExtractOptions& options,
                                TriangleMesh& mesh, const ProgressFn& progress = {});
