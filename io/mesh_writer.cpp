@@ -30,18 +30,21 @@ const char* kVertexProperties =
     "property float x\nproperty float y\nproperty float z\n"
     "property float nx\nproperty float ny\nproperty float nz\n";
 
-// The PLY header, padded by a comment line to a fixed length: the final header, written last
-// over the placeholder, then has the placeholder's length whatever the counts' digits.
-std::string plyHeader(uint64_t vertices, uint64_t triangles) {
-    constexpr size_t kHeaderBytes = 512;
+}  // namespace
+
+// Padded by a comment line to a fixed length: the final header, written last over the
+// placeholder, then has the placeholder's length whatever the counts' digits.
+std::string plyMeshHeader(uint64_t vertices, uint64_t triangles) {
     const std::string head =
         "ply\nformat binary_little_endian 1.0\ncomment vdiso isosurface\nelement vertex " +
         std::to_string(vertices) + "\n" + kVertexProperties + "element face " +
         std::to_string(triangles) + "\nproperty list uchar uint vertex_indices\n";
     const std::string tail = "end_header\n";
-    const size_t padding = kHeaderBytes - head.size() - tail.size() - std::strlen("comment \n");
+    const size_t padding = kPlyHeaderBytes - head.size() - tail.size() - std::strlen("comment \n");
     return head + "comment " + std::string(padding, '.') + "\n" + tail;
 }
+
+namespace {
 
 // PLY and OBJ: vertex records go to the output as they come, face records to a side file,
 // appended by finish(), which then writes PLY's header with the final counts.
@@ -49,7 +52,7 @@ class PlyObjWriter final : public MeshFormatWriter {
 public:
     PlyObjWriter(const std::string& path, bool overwrite, MeshFormat format)
         : mOut(path, overwrite), mFaces(path, ".faces"), mPly(format == MeshFormat::Ply) {
-        mVertexWriter.put(mPly ? plyHeader(0, 0) : std::string("# vdiso isosurface\n"));
+        mVertexWriter.put(mPly ? plyMeshHeader(0, 0) : std::string("# vdiso isosurface\n"));
     }
 
     void append(const TriangleMesh& part) override {
@@ -86,7 +89,7 @@ public:
         mFaces.copyTo(mVertexWriter);
         mVertexWriter.flush();
         if (mPly) {
-            const std::string header = plyHeader(mVertices, mTriangles);
+            const std::string header = plyMeshHeader(mVertices, mTriangles);
             mOut.writeAt(header.data(), header.size(), 0);
         }
         mOut.commit();
