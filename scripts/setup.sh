@@ -17,6 +17,7 @@ packages=(
   libgdcm-dev                             # DICOM series (io/dicom_reader.h)
   libhdf5-dev                             # HDF5 datasets (io/hdf5_reader.h)
   libblosc-dev                            # Zarr chunks (io/zarr_array.h)
+  libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
 )
 
 missing=()

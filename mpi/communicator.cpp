@@ -1,0 +1,125 @@
+#include "mpi/communicator.h"
+
+#include <mpi.h>
+
+#include <climits>
+
+namespace vdiso::mpi {
+
+namespace {
+
+void check(int code, const char* call) {
+    if (code == MPI_SUCCESS) return;
+    char text[MPI_MAX_ERROR_STRING];
+    int length = 0;
+    MPI_Error_string(code, text, &length);
+    throw MpiError(std::string(call) + " failed: " + std::string(text, size_t(length)));
+}
+
+// MPI counts are int: larger messages are refused rather than truncated.
+int countOf(size_t n, const char* call) {
+    if (n > size_t(INT_MAX)) throw MpiError(std::string(call) + ": message of " + std::to_string(n) + " items is too large");
+    return int(n);
+}
+
+}  // namespace
+
+MpiSession::MpiSession(int& argc, char**& argv) {
+    int provided = 0;
+    check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+    // Errors come back as codes, which check() turns into exceptions: a rank that fails then
+    // reaches the collective status check instead of aborting the job mid-write.
+    MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+    MPI_File_set_errhandler(MPI_FILE_NULL, MPI_ERRORS_RETURN);
+}
+
+MpiSession::~MpiSession() { MPI_Finalize(); }
+
+Communicator::Communicator() {
+    MPI_Comm_rank(MPI_COMM_WORLD, &mRank);
+    MPI_Comm_size(MPI_COMM_WORLD, &mSize);
+}
+
+uint64_t Communicator::exclusiveSum(uint64_t value) const {
+    uint64_t result = 0;
+    check(MPI_Exscan(&value, &result, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Exscan");
+    return mRank == 0 ? 0 : result;  // rank 0's result is undefined
+}
+
+uint64_t Communicator::sum(uint64_t value) const {
+    uint64_t result = 0;
+    check(MPI_Allreduce(&value, &result, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+    return result;
+}
+
+int Communicator::min(int value) const {
+    int result = 0;
+    check(MPI_Allreduce(&value, &result, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+    return result;
+}
+
+uint64_t Communicator::max(uint64_t value) const {
+    uint64_t result = 0;
+    check(MPI_Allreduce(&value, &result, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+    return result;
+}
+
+std::vector<uint64_t> Communicator::gather(uint64_t value, int root) const {
+    std::vector<uint64_t> all(mRank == root ? size_t(mSize) : 0);
+    check(MPI_Gather(&value, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, root, MPI_COMM_WORLD), "MPI_Gather");
+    return all;
+}
+
+std::vector<double> Communicator::gather(double value, int root) const {
+    std::vector<double> all(mRank == root ? size_t(mSize) : 0);
+    check(MPI_Gather(&value, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, root, MPI_COMM_WORLD), "MPI_Gather");
+    return all;
+}
+
+int Communicator::broadcast(int value, int root) const {
+    check(MPI_Bcast(&value, 1, MPI_INT, root, MPI_COMM_WORLD), "MPI_Bcast");
+    return value;
+}
+
+std::string Communicator::broadcast(const std::string& value, int root) const {
+    const int length = broadcast(countOf(value.size(), "MPI_Bcast"), root);
+    std::string result = mRank == root ? value : std::string(size_t(length), '\0');
+    check(MPI_Bcast(result.data(), length, MPI_CHAR, root, MPI_COMM_WORLD), "MPI_Bcast");
+    return result;
+}
+
+std::vector<std::vector<uint64_t>> Communicator::exchange(const std::vector<std::vector<uint64_t>>& send) const {
+    if (send.size() != size_t(mSize)) throw std::invalid_argument("Communicator::exchange: one list per rank");
+    const size_t ranks = size_t(mSize);
+    std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks), receiveOffsets(ranks);
+    std::vector<uint64_t> sendBuffer;
+    for (int r = 0; r < mSize; ++r) {
+        sendOffsets[size_t(r)] = countOf(sendBuffer.size(), "MPI_Alltoallv");
+        sendCounts[size_t(r)] = countOf(send[size_t(r)].size(), "MPI_Alltoallv");
+        sendBuffer.insert(sendBuffer.end(), send[size_t(r)].begin(), send[size_t(r)].end());
+    }
+    countOf(sendBuffer.size(), "MPI_Alltoallv");
+    check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, MPI_COMM_WORLD),
+          "MPI_Alltoall");
+    size_t total = 0;
+    for (int r = 0; r < mSize; ++r) {
+        receiveOffsets[size_t(r)] = countOf(total, "MPI_Alltoallv");
+        total += size_t(receiveCounts[size_t(r)]);
+    }
+    countOf(total, "MPI_Alltoallv");
+    std::vector<uint64_t> receiveBuffer(total);
+    check(MPI_Alltoallv(sendBuffer.data(), sendCounts.data(), sendOffsets.data(), MPI_UINT64_T,
+                        receiveBuffer.data(), receiveCounts.data(), receiveOffsets.data(), MPI_UINT64_T,
+                        MPI_COMM_WORLD),
+          "MPI_Alltoallv");
+    std::vector<std::vector<uint64_t>> received(ranks);
+    for (int r = 0; r < mSize; ++r) {
+        const auto first = receiveBuffer.begin() + receiveOffsets[size_t(r)];
+        received[size_t(r)].assign(first, first + receiveCounts[size_t(r)]);
+    }
+    return received;
+}
+
+void Communicator::barrier() const { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
+
+}  // namespace vdiso::mpi

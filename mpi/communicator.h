@@ -1,0 +1,58 @@
+// The processes of an mpirun job as the rest of vdiso_mpi sees them: MPI_COMM_WORLD behind a
+// few collective operations on our own types, so that <mpi.h> stays in communicator.cpp.
+//
+// Every member function but rank() and size() is collective: all ranks call it, in the same
+// order, or the job hangs. The MPI error handler is MPI_ERRORS_RETURN; a failed call throws
+// MpiError naming it (the caller's phase check then ends the job cleanly). Not thread-safe:
+// one thread per rank makes the calls (MPI_THREAD_FUNNELED).
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vdiso::mpi {
+
+class MpiError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+// Starts MPI (MPI_Init_thread) for the life of the object and ends it (MPI_Finalize).
+// One per process, made first in main().
+class MpiSession {
+public:
+    MpiSession(int& argc, char**& argv);
+    ~MpiSession();
+    MpiSession(const MpiSession&) = delete;
+    MpiSession& operator=(const MpiSession&) = delete;
+};
+
+class Communicator {
+public:
+    Communicator();  // the world: every rank of the job
+    int rank() const { return mRank; }
+    int size() const { return mSize; }
+
+    // The sum of `value` over the ranks before this one (0 on rank 0): MPI_Exscan.
+    uint64_t exclusiveSum(uint64_t value) const;
+    uint64_t sum(uint64_t value) const;
+    int min(int value) const;
+    uint64_t max(uint64_t value) const;
+    // `values` from every rank, rank by rank, on rank `root` (empty elsewhere).
+    std::vector<uint64_t> gather(uint64_t value, int root) const;
+    std::vector<double> gather(double value, int root) const;
+    // `root`'s value on every rank.
+    int broadcast(int value, int root) const;
+    std::string broadcast(const std::string& value, int root) const;
+    // Sends send[r] to rank r and returns what each rank sent to this one (MPI_Alltoallv).
+    // `send` has size() lists.
+    std::vector<std::vector<uint64_t>> exchange(const std::vector<std::vector<uint64_t>>& send) const;
+    void barrier() const;
+
+private:
+    int mRank = 0, mSize = 1;
+};
+
+}  // namespace vdiso::mpi

@@ -1,0 +1,121 @@
+#include "mpi/extract_across_ranks.h"
+
+#include <chrono>
+#include <optional>
+
+#include "cache/brick_cache.h"
+#include "cache/cache_plan.h"
+#include "core/extract_full.h"
+#include "core/level_source.h"
+#include "core/orientation.h"
+#include "io/brick_store.h"
+#include "io/mesh_writer.h"
+#include "mpi/brick_partition.h"
+#include "mpi/collective_ply.h"
+#include "mpi/rank_status.h"
+#include "mpi/rank_weld.h"
+
+namespace vdiso::mpi {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+int exitCodeOne(const std::exception&) { return 1; }
+
+}  // namespace
+
+RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const RanksExtractOptions& options) {
+    const auto start = Clock::now();
+    if (!options.meshPath.empty() && meshFormatFor(options.meshPath) != MeshFormat::Ply)
+        throw std::invalid_argument(options.meshPath + ": only .ply meshes are written under MPI for now");
+    std::optional<BrickStoreReader> store;
+    std::optional<BrickCache> cache;
+    std::optional<LevelSource> level;
+    BrickPartition partition;
+    TriangleMesh mesh;
+    EdgeVertexMap border;
+    ExtractStats stats;
+    CacheCounters io;
+    RankExtractFigures mine;
+
+    // Open, partition and extract this rank's part.
+    runPhase(comm, [&] {
+        store.emplace(options.store);
+        cache.emplace(*store, options.cacheBytes);
+        level.emplace(*cache, 0);
+        const CachePlan plan = planCacheUse(*cache, false, 32, options.threads, options.threads);
+        std::vector<int64_t> active = octreeActiveBricks(*level, options.iso, &stats.nodesVisited);
+        std::vector<uint64_t> weights = activeSubBlockWeights(*cache, active, options.iso);
+        partition = partitionBricks(std::move(active), std::move(weights), comm.size(), level->layout().brickCount());
+        const std::span<const int64_t> part = partition.part(comm.rank());
+        mine.bricks = part.size();
+        mine.weight = partition.weightOf(comm.rank());
+        if (!part.empty()) {
+            mine.firstBrick = part.front();
+            mine.lastBrick = part.back();
+            FullExtractOptions extract{options.iso, options.metaCellSize, plan.threads};
+            extract.prefetchBricks = plan.prefetchBricks;
+            extract.bricks = part;
+            extract.borderVertices = &border;
+            const int64_t nodes = stats.nodesVisited;
+            stats = extractOctree(*level, extract, mesh);
+            stats.nodesVisited = nodes;
+        }
+        io = cache->counters();
+    }, exitCodeOne);
+    mine.extractSeconds = secondsSince(start);
+
+    // Weld across ranks, then map to the output space (as vdiso extract does, piece by piece).
+    RankMeshNumbering numbering;
+    runPhase(comm, [&] {
+        numbering = weldAcrossRanks(comm, partition, level->volume(), level->layout(), border, mesh);
+        // Skipped when it is the identity, as MeshFileWriter skips it (0 + -0 is +0: bytes would differ).
+        const SpaceTransform transform = volumeToPhysical(store->volume());
+        if (options.physicalMeshes && !transform.isIdentity()) transformMesh(transform, mesh);
+    }, exitCodeOne);
+    if (!options.meshPath.empty()) writePlyCollectively(comm, options.meshPath, options.overwrite, mesh, numbering);
+
+    mine.bricksLoaded = io.misses;
+    mine.bytesRead = io.bytesRead;
+    mine.ioSeconds = io.readSeconds;
+    mine.decodeSeconds = io.decodeSeconds;
+    mine.triangles = numbering.triangles;
+    mine.verticesOwned = numbering.ownedVertices;
+    mine.verticesBorrowed = numbering.borrowedVertices;
+    mine.seconds = secondsSince(start);
+
+    RanksExtractResult result;
+    result.ranks = comm.size();
+    result.triangles = numbering.totalTriangles;
+    result.vertices = numbering.totalVertices;
+    result.bricksActive = int64_t(partition.bricks.size());
+    result.nodesVisited = stats.nodesVisited;
+    result.metaCellsActive = comm.sum(uint64_t(stats.metaCellsActive));
+    result.cellsActive = comm.sum(uint64_t(stats.cellsActive));
+    result.bricksLoaded = comm.sum(io.misses);
+    result.bytesRead = comm.sum(io.bytesRead);
+    result.readMethod = store->readMethod();
+    result.levels = store->header().levelCount;
+    result.hasOrientation = store->volume().hasOrientation;
+    // Rank 0 collects every rank's figures.
+    const auto u = [&](uint64_t v) { return comm.gather(v, 0); };
+    const auto d = [&](double v) { return comm.gather(v, 0); };
+    const auto bricks = u(mine.bricks), first = u(uint64_t(mine.firstBrick)), last = u(uint64_t(mine.lastBrick)),
+               weight = u(mine.weight), loaded = u(mine.bricksLoaded), bytes = u(mine.bytesRead),
+               triangles = u(mine.triangles), owned = u(mine.verticesOwned), borrowed = u(mine.verticesBorrowed);
+    const auto seconds = d(mine.seconds), extractSeconds = d(mine.extractSeconds), ioSeconds = d(mine.ioSeconds),
+               decodeSeconds = d(mine.decodeSeconds);
+    for (size_t r = 0; r < bricks.size(); ++r)
+        result.perRank.push_back({bricks[r], int64_t(first[r]), int64_t(last[r]), weight[r], loaded[r], bytes[r],
+                                  triangles[r], owned[r], borrowed[r], seconds[r], extractSeconds[r], ioSeconds[r],
+                                  decodeSeconds[r]});
+    result.seconds = secondsSince(start);
+    return result;
+}
+
+}  // namespace vdiso::mpi

@@ -1,0 +1,59 @@
+// Full extraction (the octree method) shared by the ranks of an mpirun job, one welded mesh
+// written collectively: the library side of `vdiso-mpi extract`.
+//
+// Every rank opens the store with its own cache, builds the same list of active bricks and
+// partition (brick_partition.h), extracts its part with its own threads
+// (FullExtractOptions::bricks), welds across ranks (rank_weld.h) and writes its records into
+// one PLY (collective_ply.h). Phases end in a collective status check (rank_status.h): a
+// failure on any rank throws RankFailure on every rank, naming the first failing rank and its
+// message, and leaves no output.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/brick_extractor.h"
+#include "mpi/communicator.h"
+
+namespace vdiso::mpi {
+
+struct RanksExtractOptions {
+    std::string store;
+    double iso = 0;
+    int metaCellSize = kDefaultMetaCellSize;
+    int threads = 1;                      // per rank
+    uint64_t cacheBytes = uint64_t(1) << 30;  // per rank
+    std::string meshPath;                 // a .ply, or empty for no mesh
+    bool overwrite = false;
+    bool physicalMeshes = true;           // as vdiso extract --mesh-space
+};
+
+// One rank's figures.
+struct RankExtractFigures {
+    uint64_t bricks = 0;          // its part of the active bricks
+    int64_t firstBrick = -1, lastBrick = -1;  // ids, -1 for an empty part
+    uint64_t weight = 0;          // the part's weight (active sub-blocks)
+    uint64_t bricksLoaded = 0, bytesRead = 0;
+    uint64_t triangles = 0, verticesOwned = 0, verticesBorrowed = 0;
+    double seconds = 0;           // extraction, welding and writing on this rank
+    double extractSeconds = 0, ioSeconds = 0, decodeSeconds = 0;
+};
+
+struct RanksExtractResult {
+    int ranks = 1;
+    uint64_t triangles = 0, vertices = 0;
+    int64_t bricksActive = 0, nodesVisited = 0;
+    uint64_t metaCellsActive = 0, cellsActive = 0;
+    uint64_t bricksLoaded = 0, bytesRead = 0;
+    double seconds = 0;  // the whole job, on rank 0
+    std::string readMethod;
+    int levels = 1;
+    bool hasOrientation = false;
+    std::vector<RankExtractFigures> perRank;  // rank 0 only: one per rank
+};
+
+// Collective. Throws RankFailure on every rank if any rank failed (options are the same on all).
+RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const RanksExtractOptions& options);
+
+}  // namespace vdiso::mpi
