@@ -19,9 +19,13 @@
 namespace vdiso {
 namespace {
 
-// CI runs as root, which OpenMPI refuses unless told twice.
+// CI runs as root, which OpenMPI refuses unless told twice. Under AddressSanitizer, leak
+// detection is off for the ranks: OpenMPI leaves some 120 KB of its own allocations at
+// MPI_Finalize, from components it has already unloaded (so no suppression can name them). The
+// same extraction code is leak-checked in vdiso's own tests; ASan's other checks and UBSan stay.
 test::CommandResult runMpi(int ranks, const std::string& args) {
-    return test::runCommand("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+    const std::string leaks = VDISO_UNDER_ASAN ? "ASAN_OPTIONS=\"${ASAN_OPTIONS:-}:detect_leaks=0\" " : "";
+    return test::runCommand("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + leaks +
                             std::string(VDISO_MPI_COMMAND) + " --oversubscribe -np " + std::to_string(ranks) +
                             " " + VDISO_MPI_BINARY + " " + args);
 }
