@@ -19,17 +19,7 @@ raw=data/head$size.raw
 [ -f $raw ] || $vdiso synth $raw --kind head --size $size --quiet
 bytes=$(stat -c %s $raw)
 
-cold="warm"
-drop() {
-  sync
-  if [ "$(id -u)" -eq 0 ]; then echo 3 > /proc/sys/vm/drop_caches; cold="cold"; fi
-}
-
-# Runs "$@" under /usr/bin/time; prints "seconds peak_kb".
-measure() {
-  /usr/bin/time -f "%e %M" -o /tmp/vdiso_bench_time "$@" > /dev/null
-  cat /tmp/vdiso_bench_time
-}
+. bench/cold_run.sh  # drop (the page cache), measure (seconds, peak KB)
 
 echo "| what | input | runs | median s | MB/s (input bytes) | peak RSS MB | peak / input |"
 echo "|---|---|---|---|---|---|---|"

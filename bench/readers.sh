@@ -23,18 +23,9 @@ out=$in/out.vdiso
 [ -f $raw ] || nice -n 19 $vdiso synth $raw --kind head --size 1024 --quiet
 nice -n 19 $gen $in --raw $raw >&2
 
-cold="warm"
-drop() {
-  sync
-  if [ "$(id -u)" -eq 0 ]; then echo 3 > /proc/sys/vm/drop_caches; cold="cold"; fi
-}
-
-# Runs "$@" under /usr/bin/time; prints "seconds peak_kb". The peak is the larger of vdiso's and
-# its helper process's (GDCM, libhdf5): wait4 reports the largest of a process and its children.
-measure() {
-  /usr/bin/time -f "%e %M" -o /tmp/vdiso_bench_time "$@" > /dev/null
-  cat /tmp/vdiso_bench_time
-}
+# drop (the page cache) and measure (seconds, peak KB; for vdiso with a GDCM or libhdf5 helper,
+# the larger of the two processes).
+. bench/cold_run.sh
 
 # Runs "$@" once, untimed, sampling every 0.1 s the resident memory of vdiso and its helper
 # processes together; prints the largest sum in KB. (Their shared library pages count twice:
