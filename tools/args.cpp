@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <thread>
 
@@ -29,6 +30,16 @@ std::vector<std::string> splitCommas(const std::string& text) {
 }
 
 }  // namespace
+
+void refuseExistingOutputs(std::initializer_list<const std::string*> paths, bool overwrite) {
+    if (overwrite) return;
+    for (const std::string* p : paths)
+        if (!p->empty() && *p != "-")
+            if (FILE* f = std::fopen(p->c_str(), "r")) {
+                std::fclose(f);
+                throw UsageError(*p + " already exists (pass --force to replace it)");
+            }
+}
 
 int machineThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
 

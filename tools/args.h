@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -33,6 +34,10 @@ private:
     std::vector<std::string> mItems;
     size_t mAt = 0;
 };
+
+// Refuses, before any work, an output that exists when --force was not given: throws UsageError
+// naming it. Empty paths and "-" (stdout) are passed over.
+void refuseExistingOutputs(std::initializer_list<const std::string*> paths, bool overwrite);
 
 // The default for --threads: the machine's cores (at least 1).
 int machineThreads();

@@ -339,17 +339,6 @@ ExtractOptions parseExtractOptions(int argc, char** argv, bool& helpShown) {
     return o;
 }
 
-// Refuses existing outputs before the work starts, not after minutes of extraction.
-void checkOutputsWritable(const ExtractOptions& o) {
-    for (const std::string* p : {&o.meshPath, &o.pngPath, &o.statsPath, &o.pointsPath})
-        if (!p->empty() && *p != "-" && !o.overwrite) {
-            if (FILE* f = std::fopen(p->c_str(), "r")) {
-                std::fclose(f);
-                throw UsageError(*p + " already exists (pass --force to replace it)");
-            }
-        }
-}
-
 }  // namespace
 
 namespace {
@@ -538,7 +527,8 @@ int runExtract(int argc, char** argv) {
     bool helpShown = false;
     const ExtractOptions o = parseExtractOptions(argc, argv, helpShown);
     if (helpShown) return 0;
-    checkOutputsWritable(o);
+    // Existing outputs are refused before the work starts, not after minutes of extraction.
+    refuseExistingOutputs({&o.meshPath, &o.pngPath, &o.statsPath, &o.pointsPath}, o.overwrite);
 
     const BrickStoreReader store(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
     BrickCache cache(store, o.cacheMb << 20);

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "core/brick_extractor.h"
 #include "io/atomic_output.h"
 #include "io/json.h"
 #include "io/mesh_writer.h"
@@ -88,7 +89,7 @@ MpiExtractCli parseExtract(int argc, char** argv) {
         } else if (a == "--stats") {
             o.statsPath = args.value(a);
         } else if (a == "--metacell") {
-            o.run.metaCellSize = int(parseInt(a, args.value(a), 1, 32));
+            o.run.metaCellSize = int(parseInt(a, args.value(a), 1, kMaxMetaCellSize));
         } else if (a == "--threads") {
             o.run.threads = int(parseInt(a, args.value(a), 1, 1024));
         } else if (a == "--cache-mb") {
@@ -161,12 +162,7 @@ int runExtract(const mpi::Communicator& comm, int argc, char** argv) {
     mpi::runPhase(comm, [&] {
         o = parseExtract(argc, argv);
         if (o.help || comm.rank() != 0) return;
-        for (const std::string* p : {&o.run.meshPath, &o.statsPath})
-            if (!p->empty() && *p != "-" && !o.run.overwrite)
-                if (FILE* f = std::fopen(p->c_str(), "r")) {
-                    std::fclose(f);
-                    throw UsageError(*p + " already exists (pass --force to replace it)");
-                }
+        refuseExistingOutputs({&o.run.meshPath, &o.statsPath}, o.run.overwrite);
     }, exitCodeOf);
     if (o.help) {
         if (comm.rank() == 0) std::fputs(kExtractHelp, stdout);
