@@ -93,4 +93,17 @@ inline std::string brickLayoutProblem(const BrickLayout& layout) {
     return "";
 }
 
+// A box of bricks, [lo, hi) on each axis of their coordinates: the part of the volume one
+// extraction covers when the volume is shared among processes (object-space partition, mpi/).
+struct BrickRegion {
+    int64_t lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    // Whether the box of bricks [boxLo, boxHi) shares a brick with this one.
+    template <class Coord>
+    bool meets(const Coord (&boxLo)[3], const Coord (&boxHi)[3]) const {
+        for (int a = 0; a < 3; ++a)
+            if (int64_t(boxHi[a]) <= lo[a] || int64_t(boxLo[a]) >= hi[a]) return false;
+        return true;
+    }
+};
+
 }  // namespace vdiso

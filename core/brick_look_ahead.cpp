@@ -16,6 +16,7 @@ bool BrickLookAhead::findNext() {
         const uint32_t index = mStack.back();
         mStack.pop_back();
         const MinMaxNode& node = mTree.nodes()[index];
+        if (mLevels.outsideRegion(node)) continue;
         glm::dvec3 a, b;
         mCuller.nodeBox(node, a, b);
         ScreenBox box;

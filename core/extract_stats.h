@@ -10,6 +10,7 @@ namespace vdiso {
 struct ViewCounters {
     int64_t culledByRange = 0, culledByFrustum = 0, culledByOcclusion = 0;
     int64_t droppedSubPixel = 0;  // sub-pixel boxes covering no free pixel centre
+    int64_t culledByRegion = 0;   // nodes outside the extraction's region (ViewExtractOptions)
     int64_t cellsCulled = 0;      // by the per-cell test
     int64_t polygonsHidden = 0;   // scan-converted without covering a new pixel centre
     int64_t bricksCulledBySubBlocks = 0;  // box passed, no sub-block did: not read
@@ -26,6 +27,7 @@ struct ViewCounters {
         culledByFrustum += o.culledByFrustum;
         culledByOcclusion += o.culledByOcclusion;
         droppedSubPixel += o.droppedSubPixel;
+        culledByRegion += o.culledByRegion;
         cellsCulled += o.cellsCulled;
         polygonsHidden += o.polygonsHidden;
         bricksCulledBySubBlocks += o.bricksCulledBySubBlocks;

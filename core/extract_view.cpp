@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 #include "core/brick_kernel.h"
 #include "core/check.h"
@@ -49,6 +51,7 @@ public:
           mLevels(source, tree, camera, mPyramid, options.iso, options.estimateBox, options.lodError),
           mCuller(mLevels.culler(0)),
           mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders) {
+        mLevels.confineTo(options.region);
         coverOutsideStrip(mPyramid, column0, column1);
         for (int l = 0; l < mLevels.count(); ++l) {
             const LevelSource& level = mLevels.source(l);
@@ -423,6 +426,10 @@ void ViewTraversal::count(Cull cull) {
 
 bool ViewTraversal::passes(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b) {
     ++mStats.nodesVisited;
+    if (mLevels.outsideRegion(node)) {
+        ++mStats.view.culledByRegion;
+        return false;
+    }
     ScreenBox box;
     const Cull cull = mCuller.cull({node.minValue, node.maxValue}, a, b, box);
     count(cull);
@@ -451,6 +458,7 @@ std::vector<int64_t> ViewTraversal::run() {
     std::vector<uint32_t> stack;
     if (!nodes.empty()) stack.push_back(0);
     while (!stack.empty()) {
+        if (mOptions.coverage) mOptions.coverage->between(mPyramid, mStats.bricksActive);
         const uint32_t index = stack.back();
         stack.pop_back();
         const MinMaxNode& node = nodes[index];
@@ -511,6 +519,7 @@ std::vector<int64_t> ViewTraversal::run() {
         }
     }
     mLookAhead.stop();
+    if (mOptions.coverage) mOptions.coverage->ended(mPyramid);
     for (const auto& parts : mParts) mStats.cellsActive += parts->extractor.counters().cellsActive;
     mStats.view.bricksPrefetchedUnused = int64_t(mLookAhead.readUnused());
     return acquired;
@@ -526,7 +535,14 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     ExtractStats stats;
     const uint64_t trianglesBefore = mesh.triangleCount();
     const uint32_t verticesBefore = mesh.nextVertex();
-    const int strips = std::clamp(options.threads, 1, camera.width);
+    const int column0 = options.columnBegin, column1 = options.columnEnd < 0 ? camera.width : options.columnEnd;
+    if (column0 < 0 || column1 <= column0 || column1 > camera.width)
+        throw std::invalid_argument("view-dependent extraction: columns [" + std::to_string(column0) + ", " +
+                                    std::to_string(column1) + ") are not a part of an image " +
+                                    std::to_string(camera.width) + " pixels wide");
+    const int strips = std::clamp(options.threads, 1, column1 - column0);
+    if (options.coverage && strips > 1)
+        throw std::invalid_argument("view-dependent extraction: merging coverage from elsewhere needs one thread");
     // With levels of detail, the tree knows every level's bricks and ranges (core/minmax_tree.h).
     std::optional<MinMaxTree> built;
     if (options.tree)
@@ -544,11 +560,11 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
             mesh.normals.reserve(mesh.positions.capacity());
         }
         const uint32_t firstNewVertex = mesh.nextVertex();
-        ViewTraversal(source, tree, camera, options, mesh, points, stats, 0, camera.width).run();
+        ViewTraversal(source, tree, camera, options, mesh, points, stats, column0, column1).run();
         // Vertices made for polygons that were then hidden belong to no triangle.
         if (options.cellTests && !options.stream) dropUnreferencedVertices(mesh, firstNewVertex);
     } else {
-        const std::vector<int> columns = stripColumns(source, camera, options.iso, strips);
+        const std::vector<int> columns = stripColumns(source, camera, options.iso, strips, column0, column1);
         std::vector<StripOutput> outputs(static_cast<size_t>(strips));
         ViewExtractOptions each = options;
         each.prefetchBricks = options.prefetchBricks / strips;

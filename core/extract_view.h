@@ -31,6 +31,7 @@
 #include "core/camera.h"
 #include "core/extract_stats.h"
 #include "core/mesh.h"
+#include "core/occlusion_pyramid.h"
 #include "core/meta_cell_range_cache.h"
 #include "core/minmax_tree.h"
 #include "core/progress.h"
@@ -66,6 +67,20 @@ public:
     virtual bool beginBrick(int64_t brick, double cellPixels, Use& use) = 0;
     virtual void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
                           const TriangleMesh& seams) = 0;
+};
+
+// Coverage made elsewhere, merged into a traversal's pyramid while it runs: the other
+// processes' surfaces in front of this one's part of the volume (object-space partition, mpi/).
+// Coverage only grows and what is merged lies in front, so culling stays conservative. Called
+// from the traversal's own thread (threads must be 1 with it).
+class CoverageExchange {
+public:
+    virtual ~CoverageExchange() = default;
+    // Between two nodes of the traversal, `bricks` acquired so far: may cover more pixels of
+    // `pyramid` (OcclusionPyramid::coverTiles, then propagate()).
+    virtual void between(OcclusionPyramid& pyramid, int64_t bricks) = 0;
+    // The traversal has ended with `pyramid` as its coverage.
+    virtual void ended(const OcclusionPyramid& pyramid) = 0;
 };
 
 struct ViewExtractOptions {
@@ -112,6 +127,18 @@ struct ViewExtractOptions {
     // moving camera): MinMaxTree(source.levels(), source.brickRanges()). Otherwise each
     // extraction builds its own (a 2560^3 volume's 512,000 bricks take tens of ms).
     const MinMaxTree* tree = nullptr;
+
+    // The part of the image to extract: pixel columns [columnBegin, columnEnd) (end -1: the
+    // image's width), the rest treated as covered; threads split this part into strips. A
+    // process's share of an image-space partition (mpi/).
+    int columnBegin = 0, columnEnd = -1;
+    // When set, only the bricks of this region are extracted: nodes wholly outside it are culled
+    // (counted in culledByRegion), nodes reaching across its faces descend. Full resolution only
+    // (lodError 0): a coarser level's brick reaches across the region's faces, so the parts would
+    // no longer be sorted in depth.
+    const BrickRegion* region = nullptr;
+    // When set, coverage from elsewhere merged as the traversal runs (threads 1).
+    CoverageExchange* coverage = nullptr;
 
     static ViewExtractOptions sage(double iso) { return {iso}; }
     static ViewExtractOptions wise(double iso) {

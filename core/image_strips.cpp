@@ -6,7 +6,8 @@
 
 namespace vdiso {
 
-std::vector<int> stripColumns(const BrickSource& source, const Camera& camera, double iso, int strips) {
+std::vector<int> stripColumns(const BrickSource& source, const Camera& camera, double iso, int strips, int column0,
+                              int column1) {
     const BrickLayout& layout = source.layout();
     const VolumeInfo& volume = source.volume();
     const PixelProjector pixels(camera);
@@ -20,16 +21,16 @@ std::vector<int> stripColumns(const BrickSource& source, const Camera& camera, d
             centre[k] = volume.origin[k] +
                         (double(c[k] * layout.brickSize) + 0.5 * layout.cellsOnAxis(k, c[k])) * volume.spacing[k];
         const glm::dvec3 s = pixels.project(centre);
-        if (s.z >= 0.0 && s.z <= 1.0 && s.x >= 0.0 && s.x < camera.width) centres.push_back(s.x);
+        if (s.z >= 0.0 && s.z <= 1.0 && s.x >= column0 && s.x < column1) centres.push_back(s.x);
     }
     std::sort(centres.begin(), centres.end());
-    std::vector<int> columns{0};
+    std::vector<int> columns{column0};
     for (int k = 1; k < strips; ++k) {
-        const int even = camera.width * k / strips;
+        const int even = column0 + (column1 - column0) * k / strips;
         const int cut = centres.empty() ? even : int(centres[centres.size() * size_t(k) / size_t(strips)]);
-        columns.push_back(std::clamp(cut, columns.back() + 1, camera.width - (strips - k)));
+        columns.push_back(std::clamp(cut, columns.back() + 1, column1 - (strips - k)));
     }
-    columns.push_back(camera.width);
+    columns.push_back(column1);
     return columns;
 }
 

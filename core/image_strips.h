@@ -19,9 +19,11 @@
 
 namespace vdiso {
 
-// Column bounds (strips + 1 of them, from 0 to camera.width) of `strips` strips with about as
-// many active bricks (range holding iso) projecting into each: a stand-in for equal work.
-std::vector<int> stripColumns(const BrickSource& source, const Camera& camera, double iso, int strips);
+// Column bounds (strips + 1 of them, from column0 to column1) of `strips` strips of the columns
+// [column0, column1) with about as many active bricks (range holding iso) projecting into each:
+// a stand-in for equal work. strips <= column1 - column0.
+std::vector<int> stripColumns(const BrickSource& source, const Camera& camera, double iso, int strips, int column0,
+                              int column1);
 
 // Covers every pixel outside columns [column0, column1) and propagates.
 void coverOutsideStrip(OcclusionPyramid& pyramid, int column0, int column1);

@@ -146,6 +146,24 @@ bool OcclusionPyramid::coverSpan(int y, int x0, int x1) {
     return changed;
 }
 
+bool OcclusionPyramid::coverTiles(std::span<const uint64_t> tiles) {
+    if (tiles.size() != this->tiles().size())
+        throw std::invalid_argument("OcclusionPyramid::coverTiles: tiles of another image size");
+    bool changed = false;
+    for (size_t t = 0; t < tiles.size(); ++t) {
+        uint64_t& w = mWords[t];
+        if ((w | tiles[t]) == w) continue;
+        w |= tiles[t];
+        changed = true;
+        ++mStats.tileUpdates;
+        if (w == kFull) {
+            ++mStats.tilesFilled;
+            mFilledTiles.push_back(uint32_t(t));
+        }
+    }
+    return changed;
+}
+
 void OcclusionPyramid::propagate() {
     const uint32_t tilesX = uint32_t(mWordsX[0]);
     for (const uint32_t tile : mFilledTiles) {

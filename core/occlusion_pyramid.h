@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -70,6 +71,14 @@ public:
     // Carries the tiles filled since the last call up the hierarchy.
     void propagate();
     bool hasPendingChanges() const { return !mFilledTiles.empty(); }
+
+    // The bottom level as it stands: one word per 8x8 tile, rows of wordsX(0) tiles, bits outside
+    // the image set. One process's coverage as exchanged with others (mpi/): width * height / 8
+    // bytes, 128 KB for 1024 x 1024.
+    std::span<const uint64_t> tiles() const { return {mWords.data(), size_t(mWordsX[0]) * size_t(mWordsY[0])}; }
+    // Covers the pixels set in `tiles` (laid out as tiles() of a pyramid of the same size); then
+    // propagate(). Returns whether any was not covered before.
+    bool coverTiles(std::span<const uint64_t> tiles);
 
     // WISE (Greene): covers the pixel centres inside the triangle (the fill and tie rules of
     // core/scan_convert.h) by descending from the top word; whole nodes inside the triangle are

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/iso.h"
 
@@ -24,6 +25,12 @@ ViewLevels::ViewLevels(BrickSource& source, const MinMaxTree& tree, const Camera
     const int levels = lodError > 0 ? tree.levelCount() : 1;
     for (int l = 0; l < levels; ++l)
         mLevels.push_back(std::make_unique<Level>(source, l, camera, pyramid, iso, estimateBox));
+}
+
+void ViewLevels::confineTo(const BrickRegion* region) {
+    if (region && mLevels.size() > 1)
+        throw std::invalid_argument("a region of the volume is extracted at full resolution only (lod error 0)");
+    mRegion = region;
 }
 
 int ViewLevels::levelOf(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b) const {

@@ -47,6 +47,12 @@ public:
         const int64_t id = level == 0 ? mTree.brickOf(node) : mTree.brickOf(node, level);
         return {level, id, id - mLevels[size_t(level)]->source.baseBrick(0)};
     }
+    // Extraction confined to `region` of level-0 bricks (nullptr: the whole volume; kept by
+    // pointer). Full resolution only: with lodError > 0 a coarse brick would reach across it.
+    void confineTo(const BrickRegion* region);
+    // Whether `node` lies wholly outside the region (never, without one).
+    bool outsideRegion(const MinMaxNode& node) const { return mRegion && !mRegion->meets(node.lo, node.hi); }
+
     // Test 1-3 for the brick's sub-blocks (ViewCuller::subBlocksShow).
     bool shows(const Brick& brick) const { return culler(brick.level).subBlocksShow(brick.local); }
 
@@ -74,6 +80,7 @@ private:
     double mIso;
     std::vector<std::unique_ptr<Level>> mLevels;
     double mLodError;
+    const BrickRegion* mRegion = nullptr;
     glm::dvec3 mEye, mForward;
     double mFocalPixels;  // pixels per unit of lateral size at unit depth
 };
