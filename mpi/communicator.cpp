@@ -2,6 +2,7 @@
 
 #include <mpi.h>
 
+#include <algorithm>
 #include <climits>
 
 namespace vdiso::mpi {
@@ -35,56 +36,90 @@ MpiSession::MpiSession(int& argc, char**& argv) {
 
 MpiSession::~MpiSession() { MPI_Finalize(); }
 
-Communicator::Communicator() {
-    MPI_Comm_rank(MPI_COMM_WORLD, &mRank);
-    MPI_Comm_size(MPI_COMM_WORLD, &mSize);
+Communicator::Communicator() : Communicator(int(MPI_Comm_c2f(MPI_COMM_WORLD))) {}
+
+Communicator::Communicator(int handle) : mHandle(handle) {
+    MPI_Comm_rank(MPI_Comm_f2c(MPI_Fint(mHandle)), &mRank);
+    MPI_Comm_size(MPI_Comm_f2c(MPI_Fint(mHandle)), &mSize);
+}
+
+// Kept until MPI_Finalize, which frees it: a job makes one or two.
+Communicator Communicator::reversed() const {
+    MPI_Comm comm = MPI_COMM_NULL;
+    check(MPI_Comm_split(MPI_Comm_f2c(MPI_Fint(mHandle)), 0, mSize - 1 - mRank, &comm), "MPI_Comm_split");
+    MPI_Comm_set_errhandler(comm, MPI_ERRORS_RETURN);
+    return Communicator(int(MPI_Comm_c2f(comm)));
+}
+
+std::vector<uint64_t> Communicator::exclusiveOr(std::span<const uint64_t> bits) const {
+    std::vector<uint64_t> result(bits.size(), 0);
+    check(MPI_Exscan(bits.data(), result.data(), countOf(bits.size(), "MPI_Exscan"), MPI_UINT64_T, MPI_BOR,
+                     MPI_Comm_f2c(MPI_Fint(mHandle))),
+          "MPI_Exscan");
+    if (mRank == 0) std::fill(result.begin(), result.end(), 0);  // rank 0's result is undefined
+    return result;
+}
+
+std::vector<unsigned char> Communicator::gatherBytes(std::span<const unsigned char> bytes, int root) const {
+    const MPI_Comm comm = MPI_Comm_f2c(MPI_Fint(mHandle));
+    // Every rank learns the total first, so that all refuse an oversized gather alike.
+    const uint64_t total = sum(bytes.size());
+    countOf(size_t(total), "MPI_Gatherv");
+    const int count = int(bytes.size());
+    std::vector<int> counts(mRank == root ? size_t(mSize) : 0), offsets(counts.size());
+    check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm), "MPI_Gather");
+    std::vector<unsigned char> all(mRank == root ? size_t(total) : 0);
+    for (size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+    check(MPI_Gatherv(bytes.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE, root, comm),
+          "MPI_Gatherv");
+    return all;
 }
 
 uint64_t Communicator::exclusiveSum(uint64_t value) const {
     uint64_t result = 0;
-    check(MPI_Exscan(&value, &result, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Exscan");
+    check(MPI_Exscan(&value, &result, 1, MPI_UINT64_T, MPI_SUM, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Exscan");
     return mRank == 0 ? 0 : result;  // rank 0's result is undefined
 }
 
 uint64_t Communicator::sum(uint64_t value) const {
     uint64_t result = 0;
-    check(MPI_Allreduce(&value, &result, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+    check(MPI_Allreduce(&value, &result, 1, MPI_UINT64_T, MPI_SUM, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Allreduce");
     return result;
 }
 
 int Communicator::min(int value) const {
     int result = 0;
-    check(MPI_Allreduce(&value, &result, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+    check(MPI_Allreduce(&value, &result, 1, MPI_INT, MPI_MIN, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Allreduce");
     return result;
 }
 
 uint64_t Communicator::max(uint64_t value) const {
     uint64_t result = 0;
-    check(MPI_Allreduce(&value, &result, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+    check(MPI_Allreduce(&value, &result, 1, MPI_UINT64_T, MPI_MAX, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Allreduce");
     return result;
 }
 
 std::vector<uint64_t> Communicator::gather(uint64_t value, int root) const {
     std::vector<uint64_t> all(mRank == root ? size_t(mSize) : 0);
-    check(MPI_Gather(&value, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, root, MPI_COMM_WORLD), "MPI_Gather");
+    check(MPI_Gather(&value, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, root, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Gather");
     return all;
 }
 
 std::vector<double> Communicator::gather(double value, int root) const {
     std::vector<double> all(mRank == root ? size_t(mSize) : 0);
-    check(MPI_Gather(&value, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, root, MPI_COMM_WORLD), "MPI_Gather");
+    check(MPI_Gather(&value, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, root, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Gather");
     return all;
 }
 
 int Communicator::broadcast(int value, int root) const {
-    check(MPI_Bcast(&value, 1, MPI_INT, root, MPI_COMM_WORLD), "MPI_Bcast");
+    check(MPI_Bcast(&value, 1, MPI_INT, root, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Bcast");
     return value;
 }
 
 std::string Communicator::broadcast(const std::string& value, int root) const {
     const int length = broadcast(countOf(value.size(), "MPI_Bcast"), root);
     std::string result = mRank == root ? value : std::string(size_t(length), '\0');
-    check(MPI_Bcast(result.data(), length, MPI_CHAR, root, MPI_COMM_WORLD), "MPI_Bcast");
+    check(MPI_Bcast(result.data(), length, MPI_CHAR, root, MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Bcast");
     return result;
 }
 
@@ -99,7 +134,7 @@ std::vector<std::vector<uint64_t>> Communicator::exchange(const std::vector<std:
         sendBuffer.insert(sendBuffer.end(), send[size_t(r)].begin(), send[size_t(r)].end());
     }
     countOf(sendBuffer.size(), "MPI_Alltoallv");
-    check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, MPI_COMM_WORLD),
+    check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, MPI_Comm_f2c(MPI_Fint(mHandle))),
           "MPI_Alltoall");
     size_t total = 0;
     for (int r = 0; r < mSize; ++r) {
@@ -110,7 +145,7 @@ std::vector<std::vector<uint64_t>> Communicator::exchange(const std::vector<std:
     std::vector<uint64_t> receiveBuffer(total);
     check(MPI_Alltoallv(sendBuffer.data(), sendCounts.data(), sendOffsets.data(), MPI_UINT64_T,
                         receiveBuffer.data(), receiveCounts.data(), receiveOffsets.data(), MPI_UINT64_T,
-                        MPI_COMM_WORLD),
+                        MPI_Comm_f2c(MPI_Fint(mHandle))),
           "MPI_Alltoallv");
     std::vector<std::vector<uint64_t>> received(ranks);
     for (int r = 0; r < mSize; ++r) {
@@ -120,6 +155,6 @@ std::vector<std::vector<uint64_t>> Communicator::exchange(const std::vector<std:
     return received;
 }
 
-void Communicator::barrier() const { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
+void Communicator::barrier() const { check(MPI_Barrier(MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Barrier"); }
 
 }  // namespace vdiso::mpi

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,14 +36,23 @@ public:
     int rank() const { return mRank; }
     int size() const { return mSize; }
 
+    // The same ranks in the opposite order (rank r here is rank size() - 1 - r there).
+    Communicator reversed() const;
+
     // The sum of `value` over the ranks before this one (0 on rank 0): MPI_Exscan.
     uint64_t exclusiveSum(uint64_t value) const;
     uint64_t sum(uint64_t value) const;
     int min(int value) const;
     uint64_t max(uint64_t value) const;
+    // The bitwise OR of `bits` over the ranks before this one (zeros on rank 0): MPI_Exscan.
+    // Every rank gives as many words.
+    std::vector<uint64_t> exclusiveOr(std::span<const uint64_t> bits) const;
     // `values` from every rank, rank by rank, on rank `root` (empty elsewhere).
     std::vector<uint64_t> gather(uint64_t value, int root) const;
     std::vector<double> gather(double value, int root) const;
+    // Every rank's bytes, one after another in rank order, on `root` (empty elsewhere); at most
+    // 2 GiB in all (MPI counts are int): more throws MpiError on every rank.
+    std::vector<unsigned char> gatherBytes(std::span<const unsigned char> bytes, int root) const;
     // `root`'s value on every rank.
     int broadcast(int value, int root) const;
     std::string broadcast(const std::string& value, int root) const;
@@ -52,6 +62,8 @@ public:
     void barrier() const;
 
 private:
+    explicit Communicator(int handle);
+    int mHandle;  // the MPI communicator as a Fortran handle (MPI_Comm_c2f), so <mpi.h> stays out
     int mRank = 0, mSize = 1;
 };
 

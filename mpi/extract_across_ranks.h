@@ -27,6 +27,7 @@ struct RanksExtractOptions {
     std::string meshPath;                 // a .ply, or empty for no mesh
     bool overwrite = false;
     bool physicalMeshes = true;           // as vdiso extract --mesh-space
+    bool cold = false;                    // as vdiso extract --cold: bricks from disk (O_DIRECT)
 };
 
 // One rank's figures.

@@ -14,6 +14,8 @@
 
 #include "core/synth.h"
 #include "io/brick_store.h"
+#include "io/image_compare.h"
+#include "io/png_image.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -138,15 +140,15 @@ TEST(MpiExtract, MissingStoreAndRefusals) {
     r = runMpi(2, "convert a b");
     EXPECT_EQ(r.exitCode, 2);
     EXPECT_NE(r.output.find("convert is not yet under MPI"), std::string::npos) << r.output;
-    r = runMpi(2, "extract " + store + " --iso 600.5 --method sage");
+    r = runMpi(2, "extract " + store + " --iso 600.5 --method noise");
     EXPECT_EQ(r.exitCode, 2);
-    EXPECT_NE(r.output.find("not yet under MPI"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--method noise is not under MPI"), std::string::npos) << r.output;
     r = runMpi(2, "extract " + store + " --iso 600.5 --png x.png");
     EXPECT_EQ(r.exitCode, 2);
-    EXPECT_NE(r.output.find("--png is not yet under MPI"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--png with --method octree is not under MPI"), std::string::npos) << r.output;
     r = runMpi(2, "extract " + store + " --iso 600.5 -o " + dir.file("h.obj"));
     EXPECT_EQ(r.exitCode, 2);
-    EXPECT_NE(r.output.find("only .ply meshes"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("writes .ply meshes under MPI"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir.file("h.obj")));
     test::writeFile(mesh, std::string("keep"));
     r = runMpi(2, "extract " + store + " --iso 600.5 -o " + mesh);
@@ -156,6 +158,129 @@ TEST(MpiExtract, MissingStoreAndRefusals) {
     r = runMpi(2, "extract " + store + " --iso 600.5 --quiet --force -o " + mesh);
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(text(mesh).substr(0, 4), "ply\n");
+}
+
+// The picture of a view-dependent extraction shared by 3 ranks, against the single process's.
+double pictureAgreement(const std::string& reference, const std::string& other) {
+    return compareImages(readPng(reference), readPng(other)).agreement();
+}
+
+TEST(MpiView, SagePictureIsTheSingleProcessOnesByImageAndByObject) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso"), one = dir.file("one.png");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 96 --brick 8 --quiet").exitCode, 0);
+    const std::string common = "extract " + store + " --iso " + std::to_string(kHeadSkinIso) +
+                               " --method sage --size 400x400 --prefetch 0 --quiet ";
+    auto r = test::runVdiso(common + "--threads 1 --png " + one);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    uint64_t objectLoaded = 0;
+    for (const std::string partition : {"image", "object"}) {
+        const std::string png = dir.file(partition + ".png"), mesh = dir.file(partition + ".obj"),
+                          stats = dir.file(partition + ".json");
+        r = runMpi(3, common + "--partition " + partition + " --png " + png + " -o " + mesh + " --stats " + stats);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_GE(pictureAgreement(one, png), 0.995) << partition;
+        EXPECT_GT(std::filesystem::file_size(mesh), 1000u) << partition;  // any mesh format, from rank 0
+        const std::string json = text(stats);
+        EXPECT_NE(json.find("\"ranks\": 3"), std::string::npos) << json;
+        EXPECT_NE(json.find("\"partition\": \"" + partition + "\""), std::string::npos) << json;
+        const std::vector<uint64_t> triangles = numbers(json, "triangles"), loaded = numbers(json, "bricks_loaded");
+        ASSERT_EQ(triangles.size(), 4u) << json;  // the total, then one per rank
+        ASSERT_EQ(loaded.size(), 4u) << json;
+        // Every rank did a real share: it read bricks and made triangles, and the shares add up.
+        for (size_t k = 1; k <= 3; ++k) {
+            EXPECT_GT(triangles[k], triangles[0] / 10) << partition << " rank " << k - 1 << ": " << json;
+            EXPECT_GT(loaded[k], 0u) << partition << " rank " << k - 1 << ": " << json;
+        }
+        EXPECT_EQ(triangles[1] + triangles[2] + triangles[3], triangles[0]);
+        EXPECT_EQ(loaded[1] + loaded[2] + loaded[3], loaded[0]);
+        // The parts tile the image's columns, or the volume's layers.
+        const std::string unit = partition == "image" ? "column" : "layer";
+        const std::vector<uint64_t> first = numbers(json, "first_" + unit), end = numbers(json, "end_" + unit);
+        ASSERT_EQ(first.size(), 3u) << json;
+        ASSERT_EQ(end.size(), 3u) << json;
+        EXPECT_EQ(first[0], 0u);
+        EXPECT_EQ(first[1], end[0]);
+        EXPECT_EQ(first[2], end[1]);
+        EXPECT_EQ(end[2], partition == "image" ? 400u : 12u);  // 96 samples in bricks of 8: 12 layers
+        if (partition == "object") {
+            EXPECT_GT(numbers(json, "coverage_rounds").at(0), 1u) << json;
+            for (uint64_t culled : numbers(json, "culled_region")) EXPECT_GT(culled, 0u) << json;
+            objectLoaded = loaded[0];
+        }
+    }
+    // The coverage trades are what spares the slabs behind the reads of what the front hides:
+    // with one trade only (before any brick), they read much more.
+    const std::string stats = dir.file("lone.json");
+    r = runMpi(3, common + "--partition object --exchange-bricks 1000000 --stats " + stats);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const uint64_t lone = numbers(text(stats), "bricks_loaded").at(0);
+    EXPECT_LT(double(objectLoaded), 0.85 * double(lone)) << objectLoaded << " bricks with trades, " << lone
+                                                        << " without";
+}
+
+TEST(MpiView, CorruptBrickInOneSlabFailsTheJobNamingItsRank) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso"), png = dir.file("h.png"), stats = dir.file("s.json");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 64 --brick 8 --quiet").exitCode, 0);
+    const std::string common =
+        "extract " + store + " --iso " + std::to_string(kHeadSkinIso) + " --method sage --partition object ";
+    auto r = runMpi(3, common + "--quiet --stats " + stats);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const std::string json = text(stats);
+    const std::vector<uint64_t> first = numbers(json, "first_layer"), end = numbers(json, "end_layer");
+    ASSERT_EQ(first.size(), 3u) << json;
+    const std::smatch axis = [&] {
+        std::smatch m;
+        std::regex_search(json, m, std::regex("\"slab_axis\": \"([xyz])\""));
+        return m;
+    }();
+    ASSERT_FALSE(axis.empty()) << json;
+    const int a = axis[1].str()[0] - 'x';
+    // Every level-0 brick of rank 1's slab flipped in the middle: the first it reads fails its
+    // checksum. Ranks 0 and 2 are in their coverage rounds meanwhile, and must end too.
+    {
+        const BrickStoreReader reader(store);
+        const BrickLayout& layout = reader.layout();
+        std::fstream f(store, std::ios::in | std::ios::out | std::ios::binary);
+        for (int64_t id = 0; id < layout.brickCount(); ++id) {
+            const int64_t c = layout.brickCoord(id)[a];
+            if (c < int64_t(first[1]) || c >= int64_t(end[1])) continue;
+            const BrickEntry& e = reader.index().at(size_t(id));
+            const uint64_t offset = e.offset + e.storedBytes / 2;
+            f.seekg(std::streamoff(offset));
+            const char byte = char(f.get());
+            f.seekp(std::streamoff(offset));
+            f.put(char(~byte));
+        }
+    }
+    r = runMpi(3, common + "--png " + png);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("vdiso-mpi extract: rank 1: "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(store), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("vdiso-mpi extract: "), r.output.rfind("vdiso-mpi extract: ")) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(png));
+}
+
+TEST(MpiView, Refusals) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 24 --brick 8 --quiet").exitCode, 0);
+    const std::string common = "extract " + store + " --iso 600.5 ";
+    const std::pair<std::string, std::string> cases[] = {
+        {"--partition object", "--partition applies to --method sage or wise"},
+        {"--method sage --partition depth", "--partition expects image or object"},
+        {"--method sage --partition object --lod-error 1", "full resolution (--lod-error 0)"},
+        {"--method sage --partition object --threads 2", "one thread per rank"},
+        {"--method sage --path orbit:4 --png f%d.png", "--path is not under MPI"},
+        {"--method sage --oracle", "--oracle is not under MPI"},
+        {"--method sage --exchange-bricks 0", "--exchange-bricks"},
+    };
+    for (const auto& [options, message] : cases) {
+        const auto r = runMpi(2, common + options);
+        EXPECT_EQ(r.exitCode, 2) << options << ": " << r.output;
+        EXPECT_NE(r.output.find(message), std::string::npos) << options << ": " << r.output;
+    }
 }
 
 }  // namespace

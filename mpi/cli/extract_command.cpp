@@ -1,0 +1,322 @@
+// `vdiso-mpi extract`: vdiso extract's command line (tools/extract_options.h), shared by the
+// ranks. The full surface (octree) by runs of bricks, welded into one PLY written together
+// (mpi/extract_across_ranks.h); the view-dependent surface (sage, wise) by parts of the image or
+// of the volume, gathered on rank 0 for the picture and the mesh (mpi/view_across_ranks.h).
+#include <cstdio>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cache/brick_cache.h"
+#include "cache/cache_plan.h"
+#include "core/orientation.h"
+#include "io/atomic_output.h"
+#include "io/brick_store.h"
+#include "io/json.h"
+#include "io/mesh_writer.h"
+#include "io/png_image.h"
+#include "io/process_stats.h"
+#include "io/renderer.h"
+#include "mpi/cli/commands.h"
+#include "mpi/extract_across_ranks.h"
+#include "mpi/rank_status.h"
+#include "mpi/view_across_ranks.h"
+#include "tools/args.h"
+#include "tools/extract_options.h"
+
+namespace vdiso::mpi::cli {
+
+namespace {
+
+using vdiso::cli::ExtractOptions;
+using vdiso::cli::UsageError;
+
+constexpr const char* kHelp =
+    "usage: mpirun -np N vdiso-mpi extract FILE.vdiso --iso V [options]\n"
+    "\n"
+    "vdiso extract's command line, shared by the ranks of the job (each opens FILE.vdiso with\n"
+    "its own cache of --cache-mb):\n"
+    "  --method octree (default)  the full surface: each rank extracts a contiguous run of the\n"
+    "                             active bricks (balanced by their sub-blocks holding V), the\n"
+    "                             ranks weld their borders and write one PLY together, the file\n"
+    "                             'vdiso extract' writes, byte for byte (-o MESH.ply, --stats)\n"
+    "  --method sage|wise         what the camera sees, shared by --partition; rank 0 gathers\n"
+    "                             the ranks' surfaces for --png, -o (any mesh format) and\n"
+    "                             --points-out\n"
+    "  --partition image|object   sage/wise: image (default): each rank a part of the image's\n"
+    "                             columns, reading only the bricks visible there; object: each\n"
+    "                             rank a depth slab of the volume, the ranks trading coverage\n"
+    "                             masks front to back as they go, so slabs behind skip what\n"
+    "                             slabs in front hide (full resolution: --lod-error 0, one\n"
+    "                             thread per rank)\n"
+    "  --exchange-bricks N        object: bricks a rank extracts between coverage trades\n"
+    "                             (default 4)\n"
+    "  --threads N                per rank (default 1: the ranks are the parallelism)\n"
+    "  --stats FILE               written by rank 0, with \"ranks\" and \"per_rank\"\n"
+    "\n"
+    "Not under MPI (run them with vdiso): --method noise, --path, --oracle, --level, --smooth,\n"
+    "--decimate, --largest, --min-piece; with octree also --png and meshes other than .ply.\n"
+    "A failure on any rank ends the job naming the rank, and leaves no output.\n"
+    "\n"
+    "The options, as vdiso extract takes them:\n\n";
+
+struct MpiExtractOptions {
+    ExtractOptions extract;
+    ViewPartition partition = ViewPartition::Image;
+    bool partitionGiven = false;
+    int exchangeBricks = 4;
+};
+
+int exitCodeOf(const std::exception& e) { return dynamic_cast<const UsageError*>(&e) ? 2 : 1; }
+
+// Takes out vdiso-mpi's own options, parses the rest as vdiso extract does, and refuses what is
+// not under MPI.
+MpiExtractOptions parse(int argc, char** argv) {
+    MpiExtractOptions m;
+    std::vector<char*> rest;
+    for (int i = 0; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--partition" || a == "--exchange-bricks") {
+            if (i + 1 >= argc) throw UsageError(a + " needs a value");
+            const std::string value = argv[++i];
+            if (a == "--exchange-bricks") {
+                m.exchangeBricks = int(vdiso::cli::parseInt(a, value, 1, 1 << 20));
+            } else if (value == "image" || value == "object") {
+                m.partition = value == "image" ? ViewPartition::Image : ViewPartition::Object;
+                m.partitionGiven = true;
+            } else {
+                throw UsageError("--partition expects image or object, not '" + value + "'");
+            }
+            continue;
+        }
+        rest.push_back(argv[i]);
+    }
+    ExtractOptions& o = m.extract = vdiso::cli::parseExtractOptions(int(rest.size()), rest.data());
+    if (o.help) return m;
+    const bool view = vdiso::cli::isViewDependent(o.method);
+    if (o.method == "noise") throw UsageError("--method noise is not under MPI (octree is): run it with vdiso");
+    if (o.orbitFrames > 0 || !o.pathFile.empty()) throw UsageError("--path is not under MPI: run it with vdiso");
+    if (o.oracle) throw UsageError("--oracle is not under MPI: run it with vdiso");
+    if (o.level != 0) throw UsageError("--level is not under MPI: run it with vdiso");
+    if (o.post.any())
+        throw UsageError("--smooth, --decimate, --largest and --min-piece are not under MPI: run them with vdiso");
+    if (o.threads == 0) o.threads = 1;
+    if (!view) {
+        if (m.partitionGiven) throw UsageError("--partition applies to --method sage or wise");
+        if (!o.pngPath.empty())
+            throw UsageError("--png with --method octree is not under MPI (sage draws the same picture): run it "
+                             "with vdiso");
+        if (!o.meshPath.empty() && vdiso::meshFormatFor(o.meshPath) != MeshFormat::Ply)
+            throw UsageError(o.meshPath + ": the octree method writes .ply meshes under MPI");
+    } else if (m.partition == ViewPartition::Object) {
+        if (o.lodErrorGiven && o.lodError > 0)
+            throw UsageError("--partition object extracts at full resolution (--lod-error 0): a coarser level's "
+                             "brick reaches across the ranks' slabs; --partition image takes --lod-error");
+        o.lodError = 0;
+        if (o.threads != 1) throw UsageError("--partition object runs one thread per rank (--threads 1)");
+    }
+    return m;
+}
+
+std::string octreeStats(const ExtractOptions& o, const RanksExtractResult& r) {
+    JsonObject s;
+    s.add("file", o.input).add("method", "octree").add("iso", *o.iso);
+    s.add("metacell", o.metaCellSize).add("threads", o.threads).add("ranks", r.ranks);
+    s.add("level", 0).add("levels", r.levels);
+    if (!o.meshPath.empty())
+        s.add("mesh_space", o.physicalMeshes.value_or(true) && r.hasOrientation ? "physical" : "volume");
+    s.add("triangles", r.triangles).add("vertices", r.vertices);
+    s.add("extract_s", r.seconds).add("read_method", r.readMethod);
+    s.add("bricks_loaded", r.bricksLoaded).add("bricks_active", r.bricksActive);
+    s.add("bytes_read", r.bytesRead).add("nodes_visited", r.nodesVisited);
+    s.add("meta_cells_active", r.metaCellsActive).add("cells_active", r.cellsActive);
+    s.add("partition_weight", "active sub-blocks");
+    std::string perRank = "[";
+    for (size_t k = 0; k < r.perRank.size(); ++k) {
+        const RankExtractFigures& f = r.perRank[k];
+        JsonObject p;
+        p.add("rank", int64_t(k)).add("bricks", f.bricks).add("first_brick", f.firstBrick);
+        p.add("last_brick", f.lastBrick).add("weight", f.weight);
+        p.add("bricks_loaded", f.bricksLoaded).add("bytes_read", f.bytesRead);
+        p.add("triangles", f.triangles).add("vertices_owned", f.verticesOwned);
+        p.add("vertices_borrowed", f.verticesBorrowed);
+        p.add("seconds", f.seconds).add("extract_s", f.extractSeconds);
+        p.add("io_s", f.ioSeconds).add("decode_s", f.decodeSeconds);
+        perRank += (k ? ", " : "") + p.str();
+    }
+    s.addRaw("per_rank", perRank + "]");
+    s.add("peak_rss_mb_rank0", peakRssMb());
+    return s.str();
+}
+
+std::string viewStats(const MpiExtractOptions& m, const BrickStoreReader& store, const RanksViewResult& r,
+                      const std::string& viewName, int threads, std::optional<double> drawSeconds) {
+    const ExtractOptions& o = m.extract;
+    const ExtractStats& stats = r.stats;
+    JsonObject s;
+    s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
+    s.add("metacell", o.metaCellSize).add("threads", threads).add("ranks", r.ranks);
+    s.add("partition", r.partition == ViewPartition::Image ? "image" : "object");
+    if (r.partition == ViewPartition::Object) {
+        s.add("slab_axis", std::string(1, "xyz"[r.axis])).add("eye_slab", r.eyeSlab);
+        s.add("exchange_bricks", m.exchangeBricks).add("coverage_rounds", r.rounds);
+        s.add("coverage_bytes_per_rank", r.maskBytes);
+    }
+    s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks);
+    s.add("capped_faces", stats.view.cappedFaces).add("levels", store.header().levelCount);
+    if (!o.meshPath.empty() || !o.pointsPath.empty())
+        s.add("mesh_space",
+              o.physicalMeshes.value_or(true) && store.volume().hasOrientation ? "physical" : "volume");
+    s.add("triangles", stats.triangles).add("points", stats.view.points).add("vertices", stats.vertices);
+    s.add("gathered_bytes", r.gatheredBytes);
+    s.add("extract_s", r.seconds).add("read_method", store.readMethod());
+    s.add("bricks_loaded", r.bricksLoaded).add("bricks_active", stats.bricksActive);
+    s.add("bytes_read", r.bytesRead).add("nodes_visited", stats.nodesVisited);
+    s.add("meta_cells_active", stats.metaCellsActive).add("cells_active", stats.cellsActive);
+    const ViewCounters& v = stats.view;
+    s.add("culled_range", v.culledByRange).add("culled_frustum", v.culledByFrustum);
+    s.add("culled_occlusion", v.culledByOcclusion).add("culled_region", v.culledByRegion);
+    s.add("dropped_subpixel", v.droppedSubPixel).add("cells_culled", v.cellsCulled);
+    s.add("bricks_culled_by_sub_blocks", v.bricksCulledBySubBlocks).add("polygons_hidden", v.polygonsHidden);
+    if (drawSeconds) s.add("draw_s", *drawSeconds);
+    s.add("view", viewName);
+    std::string perRank = "[";
+    for (size_t k = 0; k < r.perRank.size(); ++k) {
+        const RankViewFigures& f = r.perRank[k];
+        JsonObject p;
+        p.add("rank", int64_t(k));
+        if (r.partition == ViewPartition::Image)
+            p.add("first_column", int64_t(f.partBegin)).add("end_column", int64_t(f.partEnd));
+        else
+            p.add("first_layer", int64_t(f.partBegin)).add("end_layer", int64_t(f.partEnd));
+        p.add("bricks_loaded", f.bricksLoaded).add("bytes_read", f.bytesRead);
+        p.add("bricks_active", f.bricksActive).add("triangles", f.triangles).add("points", f.points);
+        p.add("culled_region", f.culledByRegion).add("culled_occlusion", f.culledByOcclusion);
+        p.add("seconds", f.seconds).add("io_s", f.ioSeconds).add("decode_s", f.decodeSeconds);
+        perRank += (k ? ", " : "") + p.str();
+    }
+    s.addRaw("per_rank", perRank + "]");
+    s.add("peak_rss_mb_rank0", peakRssMb());
+    return s.str();
+}
+
+// Rank 0 writes the statistics and prints the summary.
+void report(const ExtractOptions& o, const std::string& json, const std::string& summary) {
+    if (o.statsPath == "-") {
+        std::fputs((json + "\n").c_str(), stdout);
+    } else if (!o.statsPath.empty()) {
+        AtomicOutputFile out(o.statsPath, o.overwrite);
+        const std::string text = json + "\n";
+        out.append(text.data(), text.size());
+        out.commit();
+    }
+    if (!o.quiet && o.statsPath != "-") std::printf("%s\n", summary.c_str());
+}
+
+int runOctree(const Communicator& comm, const ExtractOptions& o) {
+    RanksExtractOptions run;
+    run.store = o.input;
+    run.iso = *o.iso;
+    run.metaCellSize = o.metaCellSize;
+    run.threads = o.threads;
+    run.cacheBytes = o.cacheMb << 20;
+    run.meshPath = o.meshPath;
+    run.overwrite = o.overwrite;
+    run.physicalMeshes = o.physicalMeshes.value_or(true);
+    run.cold = o.cold;
+    const RanksExtractResult r = extractOctreeAcrossRanks(comm, run);
+    runPhase(comm, [&] {
+        if (comm.rank() != 0) return;
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      "octree iso %g on %d ranks: %llu triangles, %llu vertices, %.3f s, %llu bricks read (%.1f MB)",
+                      *o.iso, r.ranks, (unsigned long long)r.triangles, (unsigned long long)r.vertices, r.seconds,
+                      (unsigned long long)r.bricksLoaded, double(r.bytesRead) / 1e6);
+        report(o, octreeStats(o, r), line);
+    }, exitCodeOf);
+    return 0;
+}
+
+int runView(const Communicator& comm, const MpiExtractOptions& m) {
+    const ExtractOptions& o = m.extract;
+    std::optional<BrickStoreReader> store;
+    std::optional<BrickCache> cache;
+    Camera camera;
+    ViewChoice view;
+    RanksViewOptions run;
+    runPhase(comm, [&] {
+        store.emplace(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
+        cache.emplace(*store, o.cacheMb << 20);
+        camera = vdiso::cli::extractCameras(o, store->volume(), view).front();
+        CachePlan plan;
+        try {
+            plan = planCacheUse(*cache, true, o.prefetch, o.threads, o.threads);
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
+        }
+        ViewExtractOptions& v = run.view;
+        v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso) : ViewExtractOptions::wise(*o.iso);
+        v.metaCellSize = o.metaCellSize;
+        if (o.scanPolygons) v.scanPolygons = *o.scanPolygons;
+        if (o.estimateBox) v.estimateBox = *o.estimateBox;
+        if (o.points) v.points = *o.points;
+        if (o.bottomUp) v.bottomUp = *o.bottomUp;
+        if (o.cellTests) v.cellTests = *o.cellTests;
+        if (o.occlusion) v.occlusion = *o.occlusion;
+        if (o.capSeams) v.capSeams = *o.capSeams;
+        v.prefetchBricks = plan.prefetchBricks;
+        v.prefetchReaders = o.readers;
+        v.threads = plan.threads;
+        v.lodError = o.lodError;
+        run.partition = m.partition;
+        run.exchangeBricks = m.exchangeBricks;
+    }, exitCodeOf);
+    RanksViewResult r = extractViewAcrossRanks(comm, *cache, camera, run);
+    runPhase(comm, [&] {
+        if (comm.rank() != 0) return;
+        const SpaceTransform transform =
+            o.physicalMeshes.value_or(true) ? volumeToPhysical(store->volume()) : SpaceTransform{};
+        if (!o.meshPath.empty()) writeMesh(o.meshPath, r.mesh, o.overwrite, o.meshCompress, transform);
+        if (!o.pointsPath.empty()) writePointsPly(o.pointsPath, r.points, o.overwrite, transform);
+        std::optional<double> drawSeconds;
+        if (!o.pngPath.empty()) {
+            const RenderResult picture = renderSurface(r.mesh, r.points, camera);
+            writePng(o.pngPath, picture.image, o.overwrite);
+            drawSeconds = picture.drawSeconds;
+        }
+        char line[320];
+        std::snprintf(line, sizeof line,
+                      "%s iso %g on %d ranks by %s: %llu triangles, %llu points, %.3f s, %llu bricks read (%.1f MB)",
+                      o.method.c_str(), *o.iso, r.ranks, r.partition == ViewPartition::Image ? "image" : "object",
+                      (unsigned long long)r.stats.triangles, (unsigned long long)r.stats.view.points, r.seconds,
+                      (unsigned long long)r.bricksLoaded, double(r.bytesRead) / 1e6);
+        report(o, viewStats(m, *store, r, o.cameraPath.empty() ? viewChoiceName(view) : o.cameraPath, run.view.threads,
+                            drawSeconds),
+               line);
+    }, exitCodeOf);
+    return 0;
+}
+
+}  // namespace
+
+int runExtractAcrossRanks(const Communicator& comm, int argc, char** argv) {
+    MpiExtractOptions m;
+    // The same parse on every rank; existing outputs refused by rank 0 before any work.
+    runPhase(comm, [&] {
+        m = parse(argc, argv);
+        const ExtractOptions& o = m.extract;
+        if (o.help || comm.rank() != 0) return;
+        vdiso::cli::refuseExistingOutputs({&o.meshPath, &o.pngPath, &o.statsPath, &o.pointsPath}, o.overwrite);
+    }, exitCodeOf);
+    if (m.extract.help) {
+        if (comm.rank() == 0) {
+            std::fputs(kHelp, stdout);
+            std::fputs(vdiso::cli::kExtractHelp, stdout);
+        }
+        return 0;
+    }
+    return vdiso::cli::isViewDependent(m.extract.method) ? runView(comm, m) : runOctree(comm, m.extract);
+}
+
+}  // namespace vdiso::mpi::cli
