@@ -87,6 +87,9 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     mine.triangles = numbering.triangles;
     mine.verticesOwned = numbering.ownedVertices;
     mine.verticesBorrowed = numbering.borrowedVertices;
+    mine.weldBytesSent = numbering.bytesSent;
+    if (!options.meshPath.empty())
+        mine.meshBytes = numbering.ownedVertices * kPlyVertexBytes + numbering.triangles * kPlyFaceBytes;
     mine.seconds = secondsSince(start);
 
     RanksExtractResult result;
@@ -107,13 +110,14 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     const auto d = [&](double v) { return comm.gather(v, 0); };
     const auto bricks = u(mine.bricks), first = u(uint64_t(mine.firstBrick)), last = u(uint64_t(mine.lastBrick)),
                weight = u(mine.weight), loaded = u(mine.bricksLoaded), bytes = u(mine.bytesRead),
-               triangles = u(mine.triangles), owned = u(mine.verticesOwned), borrowed = u(mine.verticesBorrowed);
+               triangles = u(mine.triangles), owned = u(mine.verticesOwned), borrowed = u(mine.verticesBorrowed),
+               weld = u(mine.weldBytesSent), meshBytes = u(mine.meshBytes);
     const auto seconds = d(mine.seconds), extractSeconds = d(mine.extractSeconds), ioSeconds = d(mine.ioSeconds),
                decodeSeconds = d(mine.decodeSeconds);
     for (size_t r = 0; r < bricks.size(); ++r)
         result.perRank.push_back({bricks[r], int64_t(first[r]), int64_t(last[r]), weight[r], loaded[r], bytes[r],
-                                  triangles[r], owned[r], borrowed[r], seconds[r], extractSeconds[r], ioSeconds[r],
-                                  decodeSeconds[r]});
+                                  triangles[r], owned[r], borrowed[r], weld[r], meshBytes[r], seconds[r],
+                                  extractSeconds[r], ioSeconds[r], decodeSeconds[r]});
     result.seconds = secondsSince(start);
     return result;
 }

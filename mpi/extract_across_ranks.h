@@ -37,6 +37,8 @@ struct RankExtractFigures {
     uint64_t weight = 0;          // the part's weight (active sub-blocks)
     uint64_t bricksLoaded = 0, bytesRead = 0;
     uint64_t triangles = 0, verticesOwned = 0, verticesBorrowed = 0;
+    uint64_t weldBytesSent = 0;   // to other ranks, welding
+    uint64_t meshBytes = 0;       // its records in the PLY
     double seconds = 0;           // extraction, welding and writing on this rank
     double extractSeconds = 0, ioSeconds = 0, decodeSeconds = 0;
 };

@@ -58,6 +58,8 @@ RankMeshNumbering weldAcrossRanks(const Communicator& comm, const BrickPartition
             answers[r].push_back(v == UINT32_MAX ? kBorrowed : global[v]);
         }
     const std::vector<std::vector<uint64_t>> answered = comm.exchange(answers);
+    for (size_t r = 0; r < ranks; ++r)
+        if (int(r) != comm.rank()) num.bytesSent += (keys[r].size() + answers[r].size()) * sizeof(uint64_t);
 
     // Every rank reaches here: errors thrown now are the same collective step on each.
     if (num.totalVertices > UINT32_MAX)

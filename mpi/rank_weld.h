@@ -26,6 +26,7 @@ struct RankMeshNumbering {
     uint64_t firstVertex = 0, ownedVertices = 0, totalVertices = 0;
     uint64_t firstTriangle = 0, triangles = 0, totalTriangles = 0;
     uint64_t borrowedVertices = 0;  // this rank's vertices owned by an earlier rank
+    uint64_t bytesSent = 0;         // edge keys asked and numbers answered, to other ranks
 };
 
 // Collective. `mesh`: this rank's part (partition.part(comm.rank())) as extractOctree made it,

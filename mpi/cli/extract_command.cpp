@@ -140,7 +140,8 @@ std::string octreeStats(const ExtractOptions& o, const RanksExtractResult& r) {
         p.add("last_brick", f.lastBrick).add("weight", f.weight);
         p.add("bricks_loaded", f.bricksLoaded).add("bytes_read", f.bytesRead);
         p.add("triangles", f.triangles).add("vertices_owned", f.verticesOwned);
-        p.add("vertices_borrowed", f.verticesBorrowed);
+        p.add("vertices_borrowed", f.verticesBorrowed).add("weld_bytes_sent", f.weldBytesSent);
+        p.add("mesh_bytes", f.meshBytes);
         p.add("seconds", f.seconds).add("extract_s", f.extractSeconds);
         p.add("io_s", f.ioSeconds).add("decode_s", f.decodeSeconds);
         perRank += (k ? ", " : "") + p.str();
