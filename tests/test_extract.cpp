@@ -153,6 +153,62 @@ TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
 // sample type, partial bricks and meta-cell sizes that do and do not divide the brick.
 // Edge slots are told apart by vertex number, which restarts with a new mesh: an extractor
 // used on one mesh and then another must make the second as a fresh extractor does.
+// What each process of a shared extraction does (mpi/): parts of the active bricks, each
+// numbering its own vertices and listing those on edges a brick outside it shares. The parts'
+// triangles together are the whole surface's, and a vertex two parts make is the same point in
+// both, so welding by edge key (or writing triangles alone, as STL does) gives the whole mesh.
+TEST(ExtractParts, PartsMakeTheWholeSurfaceAndAgreeOnTheirBorders) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {48, 48, 48};
+    auto source = test::synthBrickSource(p, 8);
+    const double iso = turbulenceIso(ScalarType::U16);
+    TriangleMesh whole;
+    extractOctree(*source, {iso, 4}, whole);
+    const std::vector<int64_t> active = octreeActiveBricks(*source, iso);
+    ASSERT_GT(active.size(), 30u);
+    const size_t cuts[4] = {0, active.size() / 3, 2 * active.size() / 3, active.size()};
+    std::vector<std::array<float, 9>> together;
+    std::vector<TriangleMesh> parts(3);
+    std::vector<EdgeVertexMap> borders(3);
+    size_t vertices = 0, bordered = 0;
+    for (int k = 0; k < 3; ++k) {
+        FullExtractOptions o{iso, 4};
+        o.bricks = std::span<const int64_t>(active).subspan(cuts[k], cuts[k + 1] - cuts[k]);
+        o.borderVertices = &borders[size_t(k)];
+        extractOctree(*source, o, parts[size_t(k)]);
+        EXPECT_GT(parts[size_t(k)].triangleCount(), 0u);
+        EXPECT_GT(borders[size_t(k)].size(), 0u) << "part " << k << " meets another";
+        const auto t = test::canonicalTriangles(parts[size_t(k)]);
+        together.insert(together.end(), t.begin(), t.end());
+        vertices += parts[size_t(k)].vertexCount();
+        bordered += borders[size_t(k)].size();
+    }
+    auto expected = test::canonicalTriangles(whole);
+    std::sort(expected.begin(), expected.end());
+    std::sort(together.begin(), together.end());
+    EXPECT_TRUE(expected == together);
+    // Every border vertex is made by another part too, at the same point, bit for bit; welding
+    // them leaves the whole mesh's vertex count.
+    size_t shared = 0;
+    for (int k = 0; k < 3; ++k)
+        borders[size_t(k)].forEach([&](uint64_t key, uint32_t v) {
+            bool elsewhere = false, earlier = false;
+            for (int other = 0; other < 3; ++other) {
+                if (other == k) continue;
+                const uint32_t w = borders[size_t(other)].find(key);
+                if (w == UINT32_MAX) continue;
+                elsewhere = true;
+                EXPECT_EQ(parts[size_t(k)].positions[v], parts[size_t(other)].positions[w]) << "edge " << key;
+                earlier = earlier || other < k;
+            }
+            EXPECT_TRUE(elsewhere) << "edge " << key << " of part " << k;
+            shared += earlier;  // a vertex counted once, by the first part making it
+        });
+    EXPECT_GT(bordered, 0u);
+    EXPECT_EQ(vertices - shared, whole.vertexCount());
+}
+
 TEST(BrickExtractor, ReusedOnAnotherMeshMakesTheSameSurface) {
     SynthParams p;
     p.kind = SynthKind::Head;
