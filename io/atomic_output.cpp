@@ -14,11 +14,9 @@
 
 namespace vdiso {
 
-namespace {
-
 // What may stand at an output path: nothing, or a regular file (directly or through links) that is
 // none of the inputs. Throws otherwise.
-void checkReplaceable(const std::string& path, bool overwrite, const std::vector<std::string>& inputs) {
+void checkOutputReplaceable(const std::string& path, bool overwrite, const std::vector<std::string>& inputs) {
     struct stat link;
     if (::lstat(path.c_str(), &link) != 0) return;  // nothing there (or a dangling path)
     if (!overwrite) throwIoError(path, "already exists (pass --force to replace it)");
@@ -35,12 +33,28 @@ void checkReplaceable(const std::string& path, bool overwrite, const std::vector
     }
 }
 
-}  // namespace
+void writeAllAt(int fd, const void* data, size_t n, uint64_t offset, const std::string& path) {
+    const char* p = static_cast<const char*>(data);
+    while (n > 0) {
+        ssize_t w = ::pwrite(fd, p, n, off_t(offset));
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            throwSystemError(path, "write failed", errno);
+        }
+        p += w;
+        n -= size_t(w);
+        offset += uint64_t(w);
+    }
+}
+
+void startWriteback(int fd, uint64_t offset, uint64_t n) {
+    ::sync_file_range(fd, off_t(offset), off_t(n), SYNC_FILE_RANGE_WRITE);
+}
 
 AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite,
                                    const std::vector<std::string>& inputs)
     : mPath(std::move(path)), mOverwrite(overwrite) {
-    checkReplaceable(mPath, mOverwrite, inputs);
+    checkOutputReplaceable(mPath, mOverwrite, inputs);
     // An unnamed file in the output's directory: nothing to leave behind if the process dies
     // (SIGKILL, the OOM killer), since the file system frees it with its last descriptor.
     const std::string directory = std::filesystem::path(mPath).parent_path().string();
@@ -74,25 +88,13 @@ AtomicOutputFile::~AtomicOutputFile() {
 }
 
 void AtomicOutputFile::writeAt(const void* data, size_t n, uint64_t offset) {
-    const char* p = static_cast<const char*>(data);
-    while (n > 0) {
-        ssize_t w = ::pwrite(mFd, p, n, off_t(offset));
-        if (w < 0) {
-            if (errno == EINTR) continue;
-            throwSystemError(mPath, "write failed", errno);
-        }
-        p += w;
-        n -= size_t(w);
-        offset += uint64_t(w);
-    }
-    mSize = std::max(mSize, offset);
+    writeAllAt(mFd, data, n, offset, mPath);
+    mSize = std::max(mSize, offset + n);
 }
 
 void AtomicOutputFile::append(const void* data, size_t n) { writeAt(data, n, mSize); }
 
-void AtomicOutputFile::startWriteback(uint64_t offset, uint64_t n) {
-    ::sync_file_range(mFd, off_t(offset), off_t(n), SYNC_FILE_RANGE_WRITE);
-}
+void AtomicOutputFile::startWriteback(uint64_t offset, uint64_t n) { vdiso::startWriteback(mFd, offset, n); }
 
 void AtomicOutputFile::commit() {
     if (::fsync(mFd) != 0) throwSystemError(mPath, "cannot flush", errno);

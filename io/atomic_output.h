@@ -17,6 +17,20 @@
 
 namespace vdiso {
 
+// Writes all of `n` bytes at `offset` of the file open as `fd`; throws IoError naming `path` on
+// failure (disk full). The one write loop of AtomicOutputFile and of writers that share a file.
+void writeAllAt(int fd, const void* data, size_t n, uint64_t offset, const std::string& path);
+
+// Starts writing [offset, offset + n) of `fd` back to disk without waiting (sync_file_range):
+// a hint, whose failures surface at the flush.
+void startWriteback(int fd, uint64_t offset, uint64_t n);
+
+// Whether an output may be written at `path`: throws IoError naming it if something is there
+// and `overwrite` is false, or (even with `overwrite`) if it is not a regular file (a device, a
+// FIFO, a directory; through a symbolic link too) or is one of `inputs` under another name
+// (compared by device and inode). Nothing there passes.
+void checkOutputReplaceable(const std::string& path, bool overwrite, const std::vector<std::string>& inputs);
+
 class AtomicOutputFile {
 public:
     // Creates the temporary file; throws IoError naming `path` if it cannot be written. Also
