@@ -59,6 +59,16 @@ public:
         if (got < n && std::ferror(mFile)) throwSystemError(mPath, "read failed", errno);
         return got;
     }
+    // A seek, refused (as the reading skip would fail) where it would pass the file's end.
+    void skip(uint64_t n) override {
+        struct stat st;
+        const off_t at = ftello(mFile);
+        if (at < 0 || ::fstat(fileno(mFile), &st) != 0) throwSystemError(mPath, "cannot seek", errno);
+        if (n > uint64_t(st.st_size) - std::min<uint64_t>(uint64_t(at), uint64_t(st.st_size)))
+            throwIoError(mPath, "ends before the data it declares");
+        if (fseeko(mFile, off_t(n), SEEK_CUR) != 0)
+            throwSystemError(mPath, "cannot skip " + std::to_string(n) + " bytes", errno);
+    }
 
 private:
     FILE* mFile = nullptr;

@@ -15,8 +15,9 @@ public:
     virtual ~ByteStream() = default;
     // Reads up to n bytes; returns how many were read (less than n only at the end of input).
     virtual size_t read(void* dst, size_t n) = 0;
-    // Discards n bytes; throws if the input ends first.
-    void skip(uint64_t n);
+    // Discards n bytes; throws if the input ends first. A plain file seeks; a gzip stream
+    // decompresses what it discards.
+    virtual void skip(uint64_t n);
     // Reads exactly n bytes or throws "<path>: ends after N bytes of <what>".
     void readExact(void* dst, size_t n, const char* what);
     // True when no byte is left.

@@ -78,6 +78,13 @@ public:
         }
     }
 
+    // Files passed over are not opened.
+    void skip(int64_t count) override {
+        if (count < 0 || count > int64_t(mVolume.slices.size()) - mNext)
+            throwIoError(mName, "has fewer slices than asked for");
+        mNext += count;
+    }
+
     std::string name() const override { return mName; }
     std::vector<std::string> files() const override {
         std::vector<std::string> paths;

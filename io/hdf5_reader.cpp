@@ -81,6 +81,12 @@ public:
         }
     }
 
+    // Each read is a hyperslab from slice mNext: passing over slices reads none.
+    void skip(int64_t count) override {
+        if (count < 0 || count > mInfo.dims[2] - mNext) throwIoError(mName, "has fewer slices than asked for");
+        mNext += count;
+    }
+
     std::string name() const override { return mName; }
     std::vector<std::string> files() const override { return {mFile}; }
 

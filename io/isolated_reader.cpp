@@ -1,5 +1,6 @@
 #include "io/isolated_reader.h"
 
+#include <stdexcept>
 #include <vector>
 
 #include "core/interrupt.h"
@@ -10,7 +11,7 @@ namespace vdiso {
 namespace {
 
 // In the helper: opens the reader, describes it, then serves 'R' (read N slices, each sent as
-// its own reply) and 'F' (finish) until the socket closes.
+// its own reply), 'S' (skip N slices, one reply) and 'F' (finish) until the socket closes.
 void serveReader(int fd, const std::function<std::unique_ptr<SliceReader>()>& open) {
     std::unique_ptr<SliceReader> reader;
     try {
@@ -34,8 +35,9 @@ void serveReader(int fd, const std::function<std::unique_ptr<SliceReader>()>& op
         uint64_t count = 0;
         if (!receiveAll(fd, &command, 1) || !receiveAll(fd, &count, sizeof(count))) return;
         try {
-            if (command == 'F') {
-                reader->finish();
+            if (command == 'F' || command == 'S') {
+                if (command == 'F') reader->finish();
+                else reader->skip(int64_t(count));
                 if (!sendReply(fd, 0, "")) return;
                 continue;
             }
@@ -101,6 +103,15 @@ public:
                 died("reading it");
             throw IoError(message);
         }
+    }
+
+    // The helper's reader skips (cheaply where it can); nothing crosses the socket but a reply.
+    void skip(int64_t count) override {
+        if (count < 0) throw std::invalid_argument(mName + ": cannot skip a negative count of slices");
+        throwIfInterrupted(mName);
+        command('S', uint64_t(count));
+        std::string body;
+        if (reply(body, "skipping in it") != 0) throw IoError(body);
     }
 
     void finish() override {

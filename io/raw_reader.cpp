@@ -1,6 +1,9 @@
 #include "io/raw_reader.h"
 
+#include <stdexcept>
 #include <utility>
+
+#include "core/checked_math.h"
 
 #include "io/error.h"
 
@@ -23,6 +26,11 @@ void StreamSliceDecoder::read(ByteStream& in, int64_t sliceSamples, int64_t coun
                       out + size_t(s) * size_t(sliceSamples) * outSize, mStoreType, mScaled,
                       mSlope, mIntercept);
     }
+}
+
+void StreamSliceDecoder::skip(ByteStream& in, int64_t sliceSamples, int64_t count) const {
+    if (count < 0) throw std::invalid_argument(in.path() + ": cannot skip a negative count of slices");
+    in.skip(checkedMul(checkedMul(uint64_t(count), uint64_t(sliceSamples)), uint64_t(fileScalarSize(mFileType))));
 }
 
 void throwFileSizeMismatch(const std::string& path, uint64_t have, uint64_t need,
@@ -50,6 +58,7 @@ public:
     void read(void* dst, int64_t count) override {
         mDecoder.read(*mIn, mInfo.sliceSamples(), count, dst);
     }
+    void skip(int64_t count) override { mDecoder.skip(*mIn, mInfo.sliceSamples(), count); }
     void finish() override {
         if (mCheckTrailingData && !mIn->atEnd())
             throwIoError(mIn->path(), "holds more data than its header describes");

@@ -39,6 +39,8 @@ public:
         : mFileType(fileType), mSwap(swapBytes), mStoreType(storeType), mScaled(scaled),
           mSlope(slope), mIntercept(intercept) {}
     void read(ByteStream& in, int64_t sliceSamples, int64_t count, void* dst);
+    // Passes over `count` slices of `in` (ByteStream::skip: a seek, or decompression).
+    void skip(ByteStream& in, int64_t sliceSamples, int64_t count) const;
 
 private:
     FileScalar mFileType;

@@ -341,6 +341,13 @@ public:
         }
     }
 
+    // Pages are counted, not decoded: the next read steps to its page (directories only).
+    void skip(int64_t count) override {
+        if (count < 0 || count > int64_t(mPages.size()) - mNext)
+            throwIoError(mName, "has " + std::to_string(mPages.size()) + " pages, fewer than asked");
+        mNext += count;
+    }
+
     std::string name() const override { return mName; }
     std::vector<std::string> files() const override { return mFiles; }
 

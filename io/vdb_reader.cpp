@@ -70,6 +70,15 @@ public:
         mNextZ += count;
     }
 
+    // Each read samples the grid from slice mNextZ: passing over slices samples none.
+    void skip(int64_t count) override {
+        if (count < 0 || mNextZ + count > mInfo.dims[2])
+            throwIoError(mPath, "skip of " + std::to_string(count) + " slices from slice " +
+                                    std::to_string(mNextZ) + " runs past the grid's " +
+                                    std::to_string(mInfo.dims[2]));
+        mNextZ += count;
+    }
+
     std::string name() const override { return mPath; }
 
 private:

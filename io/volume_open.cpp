@@ -31,6 +31,12 @@ public:
         synthesizeSlices(mParams, mNextZ, count, dst);
         mNextZ += count;
     }
+    // Each slice is a function of its z: passing over slices generates none.
+    void skip(int64_t count) override {
+        if (count < 0 || count > mInfo.dims[2] - mNextZ)
+            throwIoError(name(), "has fewer slices than asked for");
+        mNextZ += count;
+    }
     std::string name() const override {
         return mParams.kind == SynthKind::Head ? "synth:head" : "synth:turbulence";
     }
@@ -50,6 +56,7 @@ public:
     }
     const VolumeInfo& info() const override { return mInfo; }
     void read(void* dst, int64_t count) override { mInner->read(dst, count); }
+    void skip(int64_t count) override { mInner->skip(count); }
     void finish() override { mInner->finish(); }
     std::string name() const override { return mInner->name(); }
     std::vector<std::string> files() const override { return mInner->files(); }

@@ -192,6 +192,12 @@ public:
         }
     }
 
+    // Chunks are loaded by the read that needs them: passing over slices loads none.
+    void skip(int64_t count) override {
+        if (count < 0 || count > mInfo.dims[2] - mNext) throwIoError(mName, "has fewer slices than asked for");
+        mNext += count;
+    }
+
     std::string name() const override { return mName; }
     std::vector<std::string> files() const override { return {mImage.arrayDir.string()}; }
 
