@@ -1,11 +1,9 @@
 #include <cstdio>
-#include <algorithm>
-#include <cstring>
 
-#include "core/orientation.h"
 #include "io/store_writer.h"
 #include "io/volume_open.h"
 #include "tools/args.h"
+#include "tools/convert_args.h"
 #include "tools/commands.h"
 #include "tools/progress_bar.h"
 
@@ -19,129 +17,39 @@ constexpr const char* kHelp =
     "\n"
     "Converts a volume into a brick store, streaming: memory stays a few slabs whatever the\n"
     "volume's size. The output appears only when complete; a failure leaves none.\n"
-    "\n"
-    "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .mha .mhd\n"
-    "(MetaImage), .h5 .hdf5 (HDF5: FILE.h5:/path/to/dataset, or the file if it holds one 3-D\n"
-    "dataset), .vdb (OpenVDB), a Zarr array or OME-Zarr image folder (v2 or v3),\n"
-    ".tif .tiff (a multi-page TIFF or BigTIFF); a folder of .tif slices, or a quoted glob such\n"
-    "as 'scan/slice_*.tif' (slices in natural order: slice_2 before slice_10); DICOM: a folder\n"
-    "(with its subfolders), a DICOMDIR, one .dcm file (its series) or a list of files; anything\n"
-    "else is raw and needs --dims and --type.\n"
-    "\n"
-    "any input:\n"
-    "  --spacing S | X,Y,Z     sample spacing, replacing the file's (TIFF has none: default 1)\n"
-    "raw input:\n"
-    "  --dims X,Y,Z            samples per axis (x fastest in the file)\n"
-    "  --type T                u8, i16, u16, f32 (also i8, i32, u32, f64: stored as i16/f32)\n"
-    "  --endian little|big     byte order (default little)\n"
-    "  --header-bytes N        bytes to skip before the samples (default 0)\n"
-    "DICOM input:\n"
-    "  --series UID            the series to convert, when the input holds several (the error\n"
-    "                          lists them)\n"
-    "OME-Zarr input:\n"
-    "  --scale-level N         the multiscales level to read (default 0, the finest); named\n"
-    "                          so because --level is the store's zstd level\n"
-    "OpenVDB input:\n"
-    "  --grid NAME             the float grid to convert (default: the first)\n"
+    "\n";
+
+constexpr const char* kHelpEnd =
     "other:\n"
     "  --quiet                 no progress bar or summary\n"
     "store:\n";
-
-std::optional<FileScalar> parseFileScalar(const std::string& name) {
-    static const std::pair<const char*, FileScalar> kNames[] = {
-        {"u8", FileScalar::U8},   {"i8", FileScalar::I8},   {"i16", FileScalar::I16},
-        {"u16", FileScalar::U16}, {"i32", FileScalar::I32}, {"u32", FileScalar::U32},
-        {"f32", FileScalar::F32}, {"f64", FileScalar::F64}};
-    for (const auto& [n, t] : kNames)
-        if (name == n) return t;
-    return std::nullopt;
-}
 
 }  // namespace
 
 int runConvert(int argc, char** argv) {
     Args args(argc, argv, 1);
-    std::vector<std::string> positional;
-    InputOptions input;
-    RawOptions raw;
-    bool dimsGiven = false, typeGiven = false, rawOnlyGiven = false, quiet = false;
-    StoreWriteOptions store;
+    ConvertArgParser parser;
     while (!args.done()) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {
             std::fputs(kHelp, stdout);
+            std::fputs(kConvertInputHelp, stdout);
+            std::fputs(kHelpEnd, stdout);
             std::fputs(kStoreWriteOptionsHelp, stdout);
             return 0;
-        } else if (a == "--dims") {
-            raw.dims = parseDims(a, args.value(a));
-            dimsGiven = true;
-        } else if (a == "--type") {
-            const std::string t = args.value(a);
-            const auto type = parseFileScalar(t);
-            if (!type)
-                throw UsageError("unknown type '" + t +
-                                 "' (expected u8, i16, u16, f32, i8, i32, u32 or f64)");
-            raw.type = *type;
-            typeGiven = true;
-        } else if (a == "--spacing") {
-            raw.spacing = parseSpacing(a, args.value(a));
-            input.spacing = raw.spacing;
-        } else if (a == "--endian") {
-            const std::string e = args.value(a);
-            if (e != "little" && e != "big") throw UsageError("--endian expects little or big");
-            raw.bigEndian = e == "big";
-            rawOnlyGiven = true;
-        } else if (a == "--header-bytes") {
-            raw.headerBytes = uint64_t(parseInt(a, args.value(a), 0, int64_t(1) << 50));
-            rawOnlyGiven = true;
-        } else if (a == "--series") {
-            input.series = args.value(a);
-        } else if (a == "--scale-level") {
-            input.scaleLevel = int(parseInt(a, args.value(a), 0, 64));
-        } else if (a == "--grid") {
-            input.grid = args.value(a);
-        } else if (takeStoreWriteOption(a, args, store)) {
-        } else if (a == "--quiet") {
-            quiet = true;
-        } else if (!a.empty() && a[0] == '-' && a != "-") {
-            throw UsageError("unknown option '" + a + "'");
-        } else {
-            positional.push_back(a);
         }
+        if (!parser.take(a, args)) throw UsageError("unknown option '" + a + "'");
     }
-    if (positional.size() < 2) throw UsageError("expects INPUT and OUTPUT");
-    if (dimsGiven != typeGiven) throw UsageError("raw input needs both --dims and --type");
-    if (rawOnlyGiven && !dimsGiven)
-        throw UsageError("--endian and --header-bytes apply to raw input, which needs --dims "
-                         "and --type");
-    if (dimsGiven) input.raw = raw;
-    const std::string outPath = positional.back();
-    positional.pop_back();
-    for (const std::string& inPath : positional)
-        if (inPath == outPath) throw UsageError("INPUT and OUTPUT are the same file");
-    if (positional.size() > 1 && dimsGiven)
-        throw UsageError("raw input is one file: expects INPUT and OUTPUT");
+    const ConvertArgs c = parser.finish();
+    const std::string& outPath = c.output;
+    const StoreWriteOptions& store = c.store;
+    const bool quiet = c.quiet;
 
-    auto source = openVolume(positional, input);
+    auto source = openVolume(c.inputs, c.input);
     const VolumeInfo& info = source->info();
     const StoreWriteSummary s = writeBrickStore(
         *source, outPath, store, progressBar("convert", double(info.byteSize()), quiet));
-    if (!quiet)
-        std::printf("wrote %s: %lldx%lldx%lld %s, %lld bricks of %d^3 cells in %d level%s (coarse "
-                    "levels +%.1f%%), %.1f MB in, %.1f MB stored (ratio %.2f), %.2f s, %.0f MB/s\n",
-                    outPath.c_str(), (long long)info.dims[0], (long long)info.dims[1],
-                    (long long)info.dims[2], scalarTypeName(info.type), (long long)s.bricks,
-                    store.brickSize, s.levels, s.levels == 1 ? "" : "s",
-                    100.0 * double(s.coarseBytes) / double(std::max<uint64_t>(s.level0Bytes, 1)),
-                    s.inputBytes / 1e6, s.fileBytes / 1e6,
-                    double(s.inputBytes) / double(s.fileBytes), s.seconds,
-                    s.inputBytes / 1e6 / s.seconds);
-    // Whether meshes will land in patient space: worth a line, as a file may lack it silently.
-    if (!quiet)
-        std::printf(info.hasOrientation
-                        ? "  orientation: axes i, j, k toward %s (meshes are written in LPS)\n"
-                        : "  orientation: none in %s (meshes are written in volume space)\n",
-                    info.hasOrientation ? axisSidesCode(info.direction).c_str() : source->name().c_str());
+    if (!quiet) printConvertSummary(outPath, "", info, s, store.brickSize, source->name());
     return 0;
 }
 
