@@ -1,19 +1,16 @@
 #include "mpi/collective_ply.h"
 
 #include <mpi.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <climits>
-#include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <vector>
 
 #include "io/error.h"
 #include "io/mesh_writer.h"
 #include "mpi/rank_status.h"
+#include "mpi/shared_output.h"
 
 namespace vdiso::mpi {
 
@@ -21,8 +18,6 @@ namespace {
 
 // Bytes per collective write call: MPI counts are int.
 constexpr size_t kWriteChunk = size_t(1) << 30;
-
-int exitCodeOne(const std::exception&) { return 1; }
 
 std::string mpiErrorText(int code) {
     char text[MPI_MAX_ERROR_STRING];
@@ -70,18 +65,9 @@ void writeAtAll(const Communicator& comm, MPI_File file, const std::vector<unsig
 
 void writePlyCollectively(const Communicator& comm, const std::string& path, bool overwrite,
                           const TriangleMesh& part, const RankMeshNumbering& numbering) {
-    // Rank 0 names the temporary file; the others learn it.
-    std::string temporary;
-    runPhase(comm, [&] {
-        if (comm.rank() != 0) return;
-        if (!overwrite && std::filesystem::exists(path))
-            throwIoError(path, "already exists (pass --force to replace it)");
-        temporary = path + ".partial.mpi." + std::to_string(::getpid());
-    }, exitCodeOne);
-    temporary = comm.broadcast(temporary, 0);
-    auto removeTemporary = [&] {
-        if (comm.rank() == 0) std::remove(temporary.c_str());
-    };
+    // Rank 0 names the temporary file; the others learn it. It goes unless committed.
+    RankSharedOutput output(comm, path, overwrite);
+    const std::string& temporary = output.temporary();
 
     MPI_File file = MPI_FILE_NULL;
     std::string error;
@@ -92,7 +78,6 @@ void writePlyCollectively(const Communicator& comm, const std::string& path, boo
         agreeAllSucceeded(comm, !error.empty(), error);
     } catch (...) {
         if (file != MPI_FILE_NULL) MPI_File_close(&file);
-        removeTemporary();
         throw;
     }
 
@@ -111,26 +96,9 @@ void writePlyCollectively(const Communicator& comm, const std::string& path, boo
     if (int code = MPI_File_sync(file); code != MPI_SUCCESS && error.empty()) error = "sync failed: " + mpiErrorText(code);
     if (int code = MPI_File_close(&file); code != MPI_SUCCESS && error.empty())
         error = "close failed: " + mpiErrorText(code);
-    try {
-        if (!error.empty()) error = temporary + ": " + error;
-        agreeAllSucceeded(comm, !error.empty(), error);
-        // Into place: without overwrite, link() refuses a file that appeared meanwhile.
-        runPhase(comm, [&] {
-            if (comm.rank() != 0) return;
-            if (overwrite) {
-                if (std::rename(temporary.c_str(), path.c_str()) != 0)
-                    throwIoError(path, std::string("cannot rename into place: ") + std::strerror(errno));
-            } else {
-                if (::link(temporary.c_str(), path.c_str()) != 0)
-                    throwIoError(path, errno == EEXIST ? std::string("already exists (pass --force to replace it)")
-                                                       : std::string("cannot link into place: ") + std::strerror(errno));
-                ::unlink(temporary.c_str());
-            }
-        }, exitCodeOne);
-    } catch (...) {
-        removeTemporary();
-        throw;
-    }
+    if (!error.empty()) error = temporary + ": " + error;
+    agreeAllSucceeded(comm, !error.empty(), error);
+    output.commit();  // into place: without overwrite, link() refuses a file that appeared meanwhile
 }
 
 }  // namespace vdiso::mpi

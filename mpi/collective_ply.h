@@ -2,7 +2,7 @@
 // the file is the one `vdiso extract -o MESH.ply` writes, byte for byte.
 //
 // Rank 0 refuses an existing output (without `overwrite`) and names a temporary file beside
-// it (OUTPUT.partial.mpi.<pid>); all ranks open it (MPI_File_open) and write their records at
+// it (OUTPUT.partial.mpi.<pid>, shared_output.h); all ranks open it (MPI_File_open) and write their records at
 // the offsets the welded numbering gives (MPI_File_write_at_all: rank r's vertex records at
 // header + firstVertex * 24, its faces after all vertices at firstTriangle * 13), rank 0 the
 // header with the totals. Only when every rank has written, synced and closed it does rank 0

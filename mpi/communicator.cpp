@@ -157,4 +157,43 @@ std::vector<std::vector<uint64_t>> Communicator::exchange(const std::vector<std:
 
 void Communicator::barrier() const { check(MPI_Barrier(MPI_Comm_f2c(MPI_Fint(mHandle))), "MPI_Barrier"); }
 
+std::vector<uint64_t> Communicator::allgather(uint64_t value) const {
+    std::vector<uint64_t> all(static_cast<size_t>(mSize));
+    check(MPI_Allgather(&value, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, MPI_Comm_f2c(MPI_Fint(mHandle))),
+          "MPI_Allgather");
+    return all;
+}
+
+void Communicator::sumInto(std::vector<uint64_t>& values, int root) const {
+    const MPI_Comm comm = MPI_Comm_f2c(MPI_Fint(mHandle));
+    const int n = countOf(values.size(), "MPI_Reduce");
+    if (mRank == root)
+        check(MPI_Reduce(MPI_IN_PLACE, values.data(), n, MPI_UINT64_T, MPI_SUM, root, comm), "MPI_Reduce");
+    else
+        check(MPI_Reduce(values.data(), nullptr, n, MPI_UINT64_T, MPI_SUM, root, comm), "MPI_Reduce");
+}
+
+void Communicator::transfer(const std::vector<Send>& sends, const std::vector<Receive>& receives) const {
+    constexpr uint64_t kPiece = uint64_t(1) << 30;
+    constexpr int kTag = 7;
+    const MPI_Comm comm = MPI_Comm_f2c(MPI_Fint(mHandle));
+    std::vector<MPI_Request> requests;
+    // Posted before anything is waited on, so that no pair of ranks waits on the other.
+    for (const Receive& r : receives)
+        for (uint64_t at = 0; at < r.size; at += kPiece) {
+            requests.emplace_back();
+            check(MPI_Irecv(static_cast<char*>(r.bytes) + at, int(std::min(kPiece, r.size - at)), MPI_BYTE, r.rank,
+                            kTag, comm, &requests.back()),
+                  "MPI_Irecv");
+        }
+    for (const Send& s : sends)
+        for (uint64_t at = 0; at < s.size; at += kPiece) {
+            requests.emplace_back();
+            check(MPI_Isend(static_cast<const char*>(s.bytes) + at, int(std::min(kPiece, s.size - at)), MPI_BYTE,
+                            s.rank, kTag, comm, &requests.back()),
+                  "MPI_Isend");
+        }
+    check(MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+}
+
 }  // namespace vdiso::mpi

@@ -61,6 +61,28 @@ public:
     std::vector<std::vector<uint64_t>> exchange(const std::vector<std::vector<uint64_t>>& send) const;
     void barrier() const;
 
+    // Every rank's `value`, rank by rank, on every rank (MPI_Allgather).
+    std::vector<uint64_t> allgather(uint64_t value) const;
+    // Adds every rank's `values` element by element into `root`'s (MPI_Reduce); the others'
+    // are left as they were. The same size on every rank.
+    void sumInto(std::vector<uint64_t>& values, int root) const;
+
+    // Byte regions sent to and received from other ranks, point to point (MPI_Isend,
+    // MPI_Irecv), returning when all are done. Not collective: every send must meet its
+    // receive on the other rank (the same pair, in the same order, the same size), or both wait
+    // forever. Regions may exceed MPI's int counts: they go in pieces of 1 GiB.
+    struct Send {
+        int rank;
+        const void* bytes;
+        uint64_t size;
+    };
+    struct Receive {
+        int rank;
+        void* bytes;
+        uint64_t size;
+    };
+    void transfer(const std::vector<Send>& sends, const std::vector<Receive>& receives) const;
+
 private:
     explicit Communicator(int handle);
     int mHandle;  // the MPI communicator as a Fortran handle (MPI_Comm_c2f), so <mpi.h> stays out
