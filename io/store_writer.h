@@ -12,6 +12,8 @@
 // at 4 KiB-aligned offsets by a writer thread while the next rows are encoded, with writeback
 // to disk started as they go. The header and index are
 // written last and the file is renamed into place only when complete (AtomicOutputFile).
+// The pieces (encoding, placing, the histogram, the header) are io/brick_encoder.h's, which the
+// MPI converter (mpi/convert_across_ranks.h) shares, so both write the same store.
 #pragma once
 
 #include <cstdint>

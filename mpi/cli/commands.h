@@ -7,5 +7,6 @@
 namespace vdiso::mpi::cli {
 
 int runExtractAcrossRanks(const Communicator& comm, int argc, char** argv);  // argv[0] is "extract"
+int runConvertAcrossRanks(const Communicator& comm, int argc, char** argv);  // argv[0] is "convert"
 
 }  // namespace vdiso::mpi::cli

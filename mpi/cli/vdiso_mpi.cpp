@@ -23,11 +23,13 @@ constexpr const char* kUsage =
     "usage: mpirun -np N vdiso-mpi <command> [options]\n"
     "\n"
     "commands (under MPI so far):\n"
+    "  convert INPUT OUTPUT.vdiso [options]   vdiso convert's command line, shared by the ranks:\n"
+    "                                         each reads and bricks its own slab, one store\n"
     "  extract FILE.vdiso --iso V [options]   vdiso extract's command line, shared by the ranks:\n"
     "                                         octree (one welded PLY written together), sage and\n"
     "                                         wise (by parts of the image or of the volume)\n"
     "\n"
-    "convert, synth, info, compare and serve are not yet under MPI: run them with vdiso.\n";
+    "synth, info, compare and serve are not yet under MPI: run them with vdiso.\n";
 
 }  // namespace
 
@@ -42,8 +44,9 @@ int main(int argc, char** argv) {
     const std::string command = argv[1];
     try {
         if (command == "extract") return mpi::cli::runExtractAcrossRanks(comm, argc - 1, argv + 1);
+        if (command == "convert") return mpi::cli::runConvertAcrossRanks(comm, argc - 1, argv + 1);
         if (printer) {
-            if (command == "convert" || command == "synth" || command == "info" || command == "compare" ||
+            if (command == "synth" || command == "info" || command == "compare" ||
                 command == "serve")
                 std::fprintf(stderr, "vdiso-mpi: %s is not yet under MPI: run it with vdiso\n", command.c_str());
             else
