@@ -1,14 +1,13 @@
 // vdiso-mpi under mpirun with 3 ranks (oversubscribed: the machine may have fewer cores): the
-// mesh is the single process's byte for byte, the statistics show each rank's share, and a
-// failure on one rank ends the job with one message naming it and no output. Built only when
-// MPI was found (tests/CMakeLists.txt defines VDISO_MPI_COMMAND).
+// mesh (extract) and the store (convert) are the single process's, the statistics show each
+// rank's share, and a failure on one rank ends the job with one message naming it and no
+// output. Built only when MPI was found (tests/CMakeLists.txt defines VDISO_MPI_COMMAND).
 #ifdef VDISO_MPI_COMMAND
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -16,34 +15,18 @@
 #include "io/brick_store.h"
 #include "io/image_compare.h"
 #include "io/png_image.h"
+#include "tests/mpi_test_util.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
 namespace {
 
-// CI runs as root, which OpenMPI refuses unless told twice. Under AddressSanitizer, leak
-// detection is off for the ranks: OpenMPI leaves some 120 KB of its own allocations at
-// MPI_Finalize, from components it has already unloaded (so no suppression can name them). The
-// same extraction code is leak-checked in vdiso's own tests; ASan's other checks and UBSan stay.
-test::CommandResult runMpi(int ranks, const std::string& args) {
-    const std::string leaks = VDISO_UNDER_ASAN ? "ASAN_OPTIONS=\"${ASAN_OPTIONS:-}:detect_leaks=0\" " : "";
-    return test::runCommand("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + leaks +
-                            std::string(VDISO_MPI_COMMAND) + " --oversubscribe -np " + std::to_string(ranks) +
-                            " " + VDISO_MPI_BINARY + " " + args);
-}
+using test::numbers;
+using test::runMpi;
 
 std::string text(const std::string& path) {
     const auto bytes = test::readFile(path);
     return std::string(bytes.begin(), bytes.end());
-}
-
-// The values of `"key": N` in `json`, in order (per_rank's entries after the totals).
-std::vector<uint64_t> numbers(const std::string& json, const std::string& key) {
-    std::vector<uint64_t> out;
-    const std::regex re("\"" + key + "\": (-?[0-9]+)");
-    for (auto it = std::sregex_iterator(json.begin(), json.end(), re); it != std::sregex_iterator(); ++it)
-        out.push_back(uint64_t(std::stoll((*it)[1])));
-    return out;
 }
 
 // The 3-rank mesh against the single process's, and the per-rank figures against the totals.
@@ -137,9 +120,9 @@ TEST(MpiExtract, MissingStoreAndRefusals) {
     EXPECT_FALSE(std::filesystem::exists(mesh));
     // Not yet under MPI: other commands, methods and formats; existing output without --force.
     ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 24 --brick 8 --quiet").exitCode, 0);
-    r = runMpi(2, "convert a b");
+    r = runMpi(2, "info a");
     EXPECT_EQ(r.exitCode, 2);
-    EXPECT_NE(r.output.find("convert is not yet under MPI"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("info is not yet under MPI"), std::string::npos) << r.output;
     r = runMpi(2, "extract " + store + " --iso 600.5 --method noise");
     EXPECT_EQ(r.exitCode, 2);
     EXPECT_NE(r.output.find("--method noise is not under MPI"), std::string::npos) << r.output;
