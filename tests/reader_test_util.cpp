@@ -116,6 +116,31 @@ void expectValues(SliceReader& reader, const std::vector<double>& want) {
     for (size_t i = 0; i < want.size(); ++i) ASSERT_EQ(got[i], want[i]) << "sample " << i;
 }
 
+void expectSkipMatchesRead(const std::function<std::unique_ptr<SliceReader>()>& open) {
+    std::vector<unsigned char> all;
+    int64_t depth = 0;
+    size_t sliceBytes = 0;
+    {
+        auto whole = open();
+        depth = whole->info().dims[2];
+        sliceBytes = size_t(whole->info().sliceSamples()) * scalarSize(whole->info().type);
+        all = readAllSamples(*whole, 3);
+        ASSERT_EQ(all.size(), size_t(depth) * sliceBytes);
+    }
+    for (int64_t k = 0; k <= depth; ++k) {
+        SCOPED_TRACE("skip " + std::to_string(k));
+        auto reader = open();
+        reader->skip(k / 2);
+        reader->skip(k - k / 2);
+        std::vector<unsigned char> rest(size_t(depth - k) * sliceBytes);
+        if (k < depth) reader->read(rest.data(), depth - k);
+        ASSERT_TRUE(std::equal(rest.begin(), rest.end(), all.begin() + ptrdiff_t(size_t(k) * sliceBytes)));
+        EXPECT_NO_THROW(reader->finish());
+    }
+    auto reader = open();
+    EXPECT_THROW(reader->skip(depth + 1), IoError);
+}
+
 void expectDoubleEq(const glm::dvec3& got, const glm::dvec3& want) {
     for (int a = 0; a < 3; ++a)
         EXPECT_DOUBLE_EQ(got[a], want[a]) << "axis "

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,12 @@ std::vector<double> readAllValues(SliceReader& reader);
 
 // Reads everything and checks it sample by sample against `want`.
 void expectValues(SliceReader& reader, const std::vector<double>& want);
+
+// SliceReader::skip against reading: for every k from 0 to the depth, a fresh reader from
+// `open` that skips k slices (in two steps when it can) and reads the rest delivers the bytes a
+// reader that reads everything delivers from slice k on, and then finishes without complaint;
+// skipping past the end throws IoError.
+void expectSkipMatchesRead(const std::function<std::unique_ptr<SliceReader>()>& open);
 
 // EXPECT_DOUBLE_EQ per axis: spacings computed as vector lengths may be off in the last bit.
 void expectDoubleEq(const glm::dvec3& got, const glm::dvec3& want);

@@ -584,5 +584,11 @@ TEST(DicomSeries, ShearedStackIsRefused) {
     expectIoError([&] { arrangeDicomSeries(headers, "x"); }, {"gantry tilt"});
 }
 
+TEST_F(DicomReader, SkipPassesOverFilesAndMatchesReading) {
+    SliceSpec s;
+    writeSeries(path("series"), s, 6);
+    test::expectSkipMatchesRead([&] { return openVolume(path("series"), {}); });
+}
+
 }  // namespace
 }  // namespace vdiso

@@ -262,5 +262,21 @@ TEST_F(Hdf5Errors, EveryTruncation) {
     }
 }
 
+TEST_F(Hdf5Reader, SkipInTheHelperMatchesReading) {
+    hid_t f = create("v.h5");
+    DatasetSpec contiguous;
+    addDataset(f, contiguous, testValues(contiguous.type));
+    DatasetSpec chunked = contiguous;
+    chunked.name = "/chunked";
+    chunked.type = FileScalar::F64;  // converted a slice at a time
+    chunked.chunk = {3, 2, 4};
+    addDataset(f, chunked, testValues(chunked.type));
+    H5Fclose(f);
+    for (const char* dataset : {":/volume", ":/chunked"}) {
+        SCOPED_TRACE(dataset);
+        test::expectSkipMatchesRead([&] { return openHdf5Volume(path("v.h5") + dataset); });
+    }
+}
+
 }  // namespace
 }  // namespace vdiso

@@ -472,5 +472,15 @@ TEST_F(NrrdErrors, MalformedHeaderValues) {
     expectIoError([&] { openNrrdVolume(dirs); }, {dirs, "'space directions' has 2 entries"});
 }
 
+TEST_F(NrrdReader, SkipSeeksInRawAndDecompressesGzip) {
+    for (const char* encoding : {"raw", "gzip"}) {
+        SCOPED_TRACE(encoding);
+        const std::string samples = encodeSamples(testValues(FileScalar::I32), FileScalar::I32, false);
+        const std::string p = write("vol.nrrd", header("int32", encoding) + "\n" +
+                                                    (std::string(encoding) == "raw" ? samples : gzipBytes(samples)));
+        test::expectSkipMatchesRead([&] { return openNrrdVolume(p); });
+    }
+}
+
 }  // namespace
 }  // namespace vdiso

@@ -3,6 +3,7 @@
 
 #include "io/error.h"
 #include "io/raw_reader.h"
+#include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -87,6 +88,23 @@ TEST(RawReader, TooSmallDimensionIsRefused) {
     RawOptions o;
     o.dims = {8, 1, 1};
     EXPECT_NE(errorOf(path, o).find("at least 2 samples"), std::string::npos);
+}
+
+TEST(RawReader, SkipSeeksAndMatchesReading) {
+    ScratchDir dir;
+    const std::string path = dir.file("v.raw");
+    std::string bytes = "HDR";
+    for (int i = 0; i < 7 * 5 * 6 * 2; ++i) bytes += char(i * 37 % 251);
+    test::writeFile(path, bytes);
+    RawOptions o;
+    o.dims = {7, 5, 6};
+    o.type = FileScalar::U16;
+    o.bigEndian = true;
+    o.headerBytes = 3;
+    test::expectSkipMatchesRead([&] { return openRawVolume(path, o); });
+    o.type = FileScalar::I8;  // decoded into the store's i16
+    o.dims = {7, 10, 6};
+    test::expectSkipMatchesRead([&] { return openRawVolume(path, o); });
 }
 
 }  // namespace

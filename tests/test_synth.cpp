@@ -8,6 +8,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include "io/volume_open.h"
+#include "tests/reader_test_util.h"
+
 namespace vdiso {
 namespace {
 
@@ -217,6 +220,13 @@ TEST(SynthTurbulence, RaysCrossManySheets) {
             }
         }
         EXPECT_GT(double(crossings) / double(rays), 2.0);
+    }
+}
+
+TEST(SynthDeterminism, SkipMatchesReading) {
+    for (SynthKind kind : {SynthKind::Head, SynthKind::Turbulence}) {
+        const SynthParams p = params(kind, {9, 8, 7}, ScalarType::U16);
+        test::expectSkipMatchesRead([&] { return openSynthVolume(p); });
     }
 }
 

@@ -432,5 +432,15 @@ TEST_F(TiffErrors, EveryTruncationAndFlippedByte) {
     }
 }
 
+TEST_F(TiffReader, SkipCountsPagesAndSliceFiles) {
+    const Dims3 d = test::kDims;
+    const std::vector<double> values = tiffValues(FileScalar::U16, d);
+    writeStack(path("stack.tif"), d, FileScalar::U16, values, {});
+    test::expectSkipMatchesRead([&] { return openTiffVolume(path("stack.tif")); });
+    for (int64_t z = 0; z < d[2]; ++z)
+        writeSlice(path("slices/s" + std::to_string(z) + ".tif"), d, FileScalar::U16, values, z);
+    test::expectSkipMatchesRead([&] { return openTiffVolume(path("slices")); });
+}
+
 }  // namespace
 }  // namespace vdiso

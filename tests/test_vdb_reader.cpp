@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "io/error.h"
+#include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -104,6 +105,12 @@ TEST(VdbReader, ReadsTheActiveBoundingBox) {
     size_t background = 0;
     for (float value : v) background += value == 2.5f;
     EXPECT_EQ(background, v.size() - 3);
+}
+
+TEST(VdbReader, SkipMatchesReading) {
+    TempFile file(".vdb");
+    writeDensityAndOther(file.path());
+    test::expectSkipMatchesRead([&] { return openVdbVolume(file.path(), "density"); });
 }
 
 TEST(VdbReader, SelectsTheGridByName) {

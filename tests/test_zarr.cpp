@@ -306,5 +306,11 @@ TEST_F(ZarrErrors, UnsupportedAndMalformedMetadataAreNamed) {
     expectIoError([&] { openZarrVolume(path("p"), 1); }, {"plain Zarr array", "no level 1"});
 }
 
+TEST_F(ZarrReader, SkipMatchesReadingAcrossChunks) {
+    ArraySpec a;  // 9 slices in chunks of 5: skips that end inside, at and past a chunk
+    writeArray(path("a"), a);
+    test::expectSkipMatchesRead([&] { return openVolume(path("a"), {}); });
+}
+
 }  // namespace
 }  // namespace vdiso
