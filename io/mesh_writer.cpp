@@ -17,12 +17,22 @@ namespace vdiso {
 
 namespace {
 
+void encodePlyVertex(const glm::vec3& position, const glm::vec3& normal, unsigned char* record) {
+    const float v[6] = {position.x, position.y, position.z, normal.x, normal.y, normal.z};
+    std::memcpy(record, v, kPlyVertexBytes);
+}
+
+void encodePlyFace(const uint32_t* indices, unsigned char* record) {
+    record[0] = 3;
+    std::memcpy(record + 1, indices, 12);
+}
+
 void putVertices(BufferedAppender& w, std::span<const glm::vec3> positions,
                  std::span<const glm::vec3> normals) {
     for (size_t i = 0; i < positions.size(); ++i) {
-        float v[6] = {positions[i].x, positions[i].y, positions[i].z,
-                      normals[i].x,   normals[i].y,   normals[i].z};
-        w.put(v, sizeof v);
+        unsigned char record[kPlyVertexBytes];
+        encodePlyVertex(positions[i], normals[i], record);
+        w.put(record, sizeof record);
     }
 }
 
@@ -44,6 +54,19 @@ std::string plyMeshHeader(uint64_t vertices, uint64_t triangles) {
     return head + "comment " + std::string(padding, '.') + "\n" + tail;
 }
 
+std::vector<unsigned char> plyVertexRecords(const TriangleMesh& part) {
+    std::vector<unsigned char> bytes(part.positions.size() * kPlyVertexBytes);
+    for (size_t i = 0; i < part.positions.size(); ++i)
+        encodePlyVertex(part.positions[i], part.normals[i], bytes.data() + i * kPlyVertexBytes);
+    return bytes;
+}
+
+std::vector<unsigned char> plyFaceRecords(const TriangleMesh& part) {
+    std::vector<unsigned char> bytes(part.triangleCount() * kPlyFaceBytes);
+    for (size_t t = 0; t < part.triangleCount(); ++t) encodePlyFace(&part.indices[3 * t], bytes.data() + t * kPlyFaceBytes);
+    return bytes;
+}
+
 namespace {
 
 // PLY and OBJ: vertex records go to the output as they come, face records to a side file,
@@ -59,9 +82,8 @@ public:
         if (mPly) {
             putVertices(mVertexWriter, part.positions, part.normals);
             for (size_t t = 0; t < part.triangleCount(); ++t) {
-                unsigned char face[13];
-                face[0] = 3;
-                std::memcpy(face + 1, &part.indices[3 * t], 12);
+                unsigned char face[kPlyFaceBytes];
+                encodePlyFace(&part.indices[3 * t], face);
                 mFaces.put(face, sizeof face);
             }
         } else {

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/mesh.h"
 #include "core/orientation.h"
@@ -60,11 +61,14 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh, bool overwrite
                bool compress = false, const SpaceTransform& transform = {});
 
 // The binary PLY layout of .ply meshes, for writers that place the records themselves
-// (mpi/collective_ply.h): a header of exactly kPlyHeaderBytes (padded by a comment, so the
+// (mpi/collective_mesh.h): a header of exactly kPlyHeaderBytes (padded by a comment, so the
 // counts' digits do not move what follows), then one record per vertex (position, normal: six
 // little-endian floats), then one per triangle (a uchar 3 and three little-endian u32 indices).
 constexpr size_t kPlyHeaderBytes = 512, kPlyVertexBytes = 24, kPlyFaceBytes = 13;
 std::string plyMeshHeader(uint64_t vertices, uint64_t triangles);
+// The records of `part`'s vertices, and of its triangles (indices as they are), end to end.
+std::vector<unsigned char> plyVertexRecords(const TriangleMesh& part);
+std::vector<unsigned char> plyFaceRecords(const TriangleMesh& part);
 
 // Points with normals as a PLY vertex list (SAGE's sub-pixel points), mapped by `transform`.
 void writePointsPly(const std::string& path, const PointSet& points, bool overwrite,

@@ -15,7 +15,7 @@ namespace vdiso {
 
 namespace {
 
-constexpr size_t kHeaderBytes = 80;
+constexpr size_t kTextBytes = 80;
 
 // A vertex as the side file keeps it.
 struct VertexRecord {
@@ -36,15 +36,20 @@ glm::vec3 facetNormal(const VertexRecord& a, const VertexRecord& b, const Vertex
     return glm::vec3(0.0f);
 }
 
+// Triangle v's record: its facet normal, its corners, a zero attribute.
+void encodeTriangle(const VertexRecord (&v)[3], unsigned char* record) {
+    const glm::vec3 n = facetNormal(v[0], v[1], v[2]);
+    std::memcpy(record, &n, 12);
+    for (int k = 0; k < 3; ++k) std::memcpy(record + 12 + 12 * k, &v[k].position, 12);
+    record[48] = record[49] = 0;
+}
+
 class StlWriter final : public MeshFormatWriter {
 public:
     StlWriter(const std::string& path, bool overwrite)
         : mOut(path, overwrite), mEarlier(path, ".vertices") {
-        char header[kHeaderBytes] = {};
-        // Not starting with "solid": some readers take such a file for ASCII STL.
-        std::strncpy(header, "vdiso isosurface (binary STL)", sizeof header);
-        mWriter.put(header, sizeof header);
-        putRaw(mWriter, uint32_t(0));  // the count, written by finish()
+        const auto header = stlHeader(0);  // the count, written by finish()
+        mWriter.put(header.data(), header.size());
     }
 
     void append(const TriangleMesh& part) override {
@@ -55,12 +60,9 @@ public:
             const VertexRecord v[3] = {vertex(part, part.indices[3 * t]),
                                        vertex(part, part.indices[3 * t + 1]),
                                        vertex(part, part.indices[3 * t + 2])};
-            float record[12];
-            const glm::vec3 n = facetNormal(v[0], v[1], v[2]);
-            std::memcpy(record, &n, 12);
-            for (int k = 0; k < 3; ++k) std::memcpy(record + 3 + 3 * k, &v[k].position, 12);
+            unsigned char record[kStlTriangleBytes];
+            encodeTriangle(v, record);
             mWriter.put(record, sizeof record);
-            putRaw(mWriter, uint16_t(0));
         }
         for (size_t i = 0; i < part.positions.size(); ++i) {
             const VertexRecord r{part.positions[i], part.normals[i]};
@@ -72,7 +74,7 @@ public:
     void finish() override {
         mWriter.flush();
         const auto count = uint32_t(mTriangles);
-        mOut.writeAt(&count, sizeof count, kHeaderBytes);
+        mOut.writeAt(&count, sizeof count, kTextBytes);
         mOut.commit();
     }
 
@@ -118,6 +120,28 @@ private:
 };
 
 }  // namespace
+
+std::array<unsigned char, kStlHeaderBytes> stlHeader(uint32_t triangles) {
+    std::array<unsigned char, kStlHeaderBytes> header{};
+    // Not starting with "solid": some readers take such a file for ASCII STL.
+    const char text[] = "vdiso isosurface (binary STL)";
+    std::memcpy(header.data(), text, sizeof text - 1);
+    std::memcpy(header.data() + kTextBytes, &triangles, sizeof triangles);
+    return header;
+}
+
+std::vector<unsigned char> stlTriangleRecords(const TriangleMesh& part) {
+    std::vector<unsigned char> bytes(part.triangleCount() * kStlTriangleBytes);
+    for (size_t t = 0; t < part.triangleCount(); ++t) {
+        VertexRecord v[3];
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t i = part.indices[3 * t + size_t(k)];
+            v[k] = {part.positions[i], part.normals[i]};
+        }
+        encodeTriangle(v, bytes.data() + t * kStlTriangleBytes);
+    }
+    return bytes;
+}
 
 std::unique_ptr<MeshFormatWriter> makeStlWriter(const std::string& path, bool overwrite) {
     return std::make_unique<StlWriter>(path, overwrite);

@@ -9,13 +9,25 @@
 // not fit the count: an IoError.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
+
+#include "core/mesh.h"
 
 namespace vdiso {
 
 class MeshFormatWriter;
 
 std::unique_ptr<MeshFormatWriter> makeStlWriter(const std::string& path, bool overwrite);
+
+// The layout, for writers that place the records themselves (mpi/collective_mesh.h): the header
+// (80 bytes and the count) and kStlTriangleBytes per triangle.
+constexpr size_t kStlHeaderBytes = 84, kStlTriangleBytes = 50;
+std::array<unsigned char, kStlHeaderBytes> stlHeader(uint32_t triangles);
+// The records of `part`'s triangles, whose indices refer to its own vertices, end to end.
+std::vector<unsigned char> stlTriangleRecords(const TriangleMesh& part);
 
 }  // namespace vdiso

@@ -10,8 +10,9 @@
 #include "core/orientation.h"
 #include "io/brick_store.h"
 #include "io/mesh_writer.h"
+#include "io/stl_writer.h"
 #include "mpi/brick_partition.h"
-#include "mpi/collective_ply.h"
+#include "mpi/collective_mesh.h"
 #include "mpi/rank_status.h"
 #include "mpi/rank_weld.h"
 
@@ -31,8 +32,10 @@ int exitCodeOne(const std::exception&) { return 1; }
 
 RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const RanksExtractOptions& options) {
     const auto start = Clock::now();
-    if (!options.meshPath.empty() && meshFormatFor(options.meshPath) != MeshFormat::Ply)
-        throw std::invalid_argument(options.meshPath + ": only .ply meshes are written under MPI for now");
+    const bool ply = !options.meshPath.empty() && meshFormatFor(options.meshPath) == MeshFormat::Ply;
+    const bool stl = !options.meshPath.empty() && meshFormatFor(options.meshPath) == MeshFormat::Stl;
+    if (!options.meshPath.empty() && !ply && !stl)
+        throw std::invalid_argument(options.meshPath + ": the octree method writes .ply and .stl meshes under MPI");
     std::optional<BrickStoreReader> store;
     std::optional<BrickCache> cache;
     std::optional<LevelSource> level;
@@ -70,15 +73,20 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     }, exitCodeOne);
     mine.extractSeconds = secondsSince(start);
 
-    // Weld across ranks, then map to the output space (as vdiso extract does, piece by piece).
-    RankMeshNumbering numbering;
+    // Map to the output space (as vdiso extract does, piece by piece; skipped when it is the
+    // identity, as MeshFileWriter skips it: 0 + -0 is +0, so bytes would differ). STL shares no
+    // vertex: its triangles go out as each rank made them. Welding across ranks gives PLY's
+    // one numbering (and everyone's vertex counts).
     runPhase(comm, [&] {
-        numbering = weldAcrossRanks(comm, partition, level->volume(), level->layout(), border, mesh);
-        // Skipped when it is the identity, as MeshFileWriter skips it (0 + -0 is +0: bytes would differ).
         const SpaceTransform transform = volumeToPhysical(store->volume());
         if (options.physicalMeshes && !transform.isIdentity()) transformMesh(transform, mesh);
     }, exitCodeOne);
-    if (!options.meshPath.empty()) writePlyCollectively(comm, options.meshPath, options.overwrite, mesh, numbering);
+    if (stl) writeStlCollectively(comm, options.meshPath, options.overwrite, mesh);
+    RankMeshNumbering numbering;
+    runPhase(comm, [&] {
+        numbering = weldAcrossRanks(comm, partition, level->volume(), level->layout(), border, mesh);
+    }, exitCodeOne);
+    if (ply) writePlyCollectively(comm, options.meshPath, options.overwrite, mesh, numbering);
 
     mine.bricksLoaded = io.misses;
     mine.bytesRead = io.bytesRead;
@@ -88,8 +96,10 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     mine.verticesOwned = numbering.ownedVertices;
     mine.verticesBorrowed = numbering.borrowedVertices;
     mine.weldBytesSent = numbering.bytesSent;
-    if (!options.meshPath.empty())
+    if (ply)
         mine.meshBytes = numbering.ownedVertices * kPlyVertexBytes + numbering.triangles * kPlyFaceBytes;
+    else if (stl)
+        mine.meshBytes = numbering.triangles * kStlTriangleBytes;
     mine.seconds = secondsSince(start);
 
     RanksExtractResult result;

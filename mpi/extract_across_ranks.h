@@ -4,7 +4,7 @@
 // Every rank opens the store with its own cache, builds the same list of active bricks and
 // partition (brick_partition.h), extracts its part with its own threads
 // (FullExtractOptions::bricks), welds across ranks (rank_weld.h) and writes its records into
-// one PLY (collective_ply.h). Phases end in a collective status check (rank_status.h): a
+// one mesh file (collective_mesh.h). Phases end in a collective status check (rank_status.h): a
 // failure on any rank throws RankFailure on every rank, naming the first failing rank and its
 // message, and leaves no output.
 #pragma once

@@ -1,5 +1,5 @@
 // One output file that every rank of a job writes, appearing under its name only when all of
-// them succeeded: what `vdiso-mpi extract` (collective_ply.h) and `vdiso-mpi convert`
+// them succeeded: what `vdiso-mpi extract` (collective_mesh.h) and `vdiso-mpi convert`
 // (convert_across_ranks.h) write into.
 //
 // Rank 0 refuses an existing output (without `overwrite`; even with it, anything but a regular

@@ -45,6 +45,15 @@ void expectSameAsSingleProcess(const std::string& synthArgs, double iso, const s
     ASSERT_GT(a.size(), 512u);
     EXPECT_EQ(a.size(), b.size());
     EXPECT_TRUE(a == b) << "the 3-rank PLY differs from the single process's";
+    // STL: each rank's own triangles, no welding, at the offsets of the ranks before it.
+    const std::string oneStl = dir.file("one.stl"), threeStl = dir.file("three.stl");
+    r = test::runVdiso("extract " + store + " --iso " + isoText + " --quiet -o " + oneStl);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = runMpi(3, "extract " + store + " --iso " + isoText + " --quiet -o " + threeStl + extra);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto c = test::readFile(oneStl), d = test::readFile(threeStl);
+    ASSERT_GT(c.size(), 84u);
+    EXPECT_TRUE(c == d) << "the 3-rank STL differs from the single process's";
 
     const std::string json = text(stats);
     EXPECT_NE(json.find("\"ranks\": 3"), std::string::npos) << json;
@@ -131,7 +140,7 @@ TEST(MpiExtract, MissingStoreAndRefusals) {
     EXPECT_NE(r.output.find("--png with --method octree is not under MPI"), std::string::npos) << r.output;
     r = runMpi(2, "extract " + store + " --iso 600.5 -o " + dir.file("h.obj"));
     EXPECT_EQ(r.exitCode, 2);
-    EXPECT_NE(r.output.find("writes .ply meshes under MPI"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("writes .ply and .stl meshes under MPI"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir.file("h.obj")));
     test::writeFile(mesh, std::string("keep"));
     r = runMpi(2, "extract " + store + " --iso 600.5 -o " + mesh);

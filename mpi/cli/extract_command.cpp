@@ -40,7 +40,7 @@ constexpr const char* kHelp =
     "  --method octree (default)  the full surface: each rank extracts a contiguous run of the\n"
     "                             active bricks (balanced by their sub-blocks holding V), the\n"
     "                             ranks weld their borders and write one PLY together, the file\n"
-    "                             'vdiso extract' writes, byte for byte (-o MESH.ply, --stats)\n"
+    "                             'vdiso extract' writes, byte for byte (-o MESH.ply or .stl)\n"
     "  --method sage|wise         what the camera sees, shared by --partition; rank 0 gathers\n"
     "                             the ranks' surfaces for --png, -o (any mesh format) and\n"
     "                             --points-out\n"
@@ -56,7 +56,7 @@ constexpr const char* kHelp =
     "  --stats FILE               written by rank 0, with \"ranks\" and \"per_rank\"\n"
     "\n"
     "Not under MPI (run them with vdiso): --method noise, --path, --oracle, --level, --smooth,\n"
-    "--decimate, --largest, --min-piece; with octree also --png and meshes other than .ply.\n"
+    "--decimate, --largest, --min-piece; with octree also --png and meshes other than .ply, .stl.\n"
     "A failure on any rank ends the job naming the rank, and leaves no output.\n"
     "\n"
     "The options, as vdiso extract takes them:\n\n";
@@ -107,8 +107,9 @@ MpiExtractOptions parse(int argc, char** argv) {
         if (!o.pngPath.empty())
             throw UsageError("--png with --method octree is not under MPI (sage draws the same picture): run it "
                              "with vdiso");
-        if (!o.meshPath.empty() && vdiso::meshFormatFor(o.meshPath) != MeshFormat::Ply)
-            throw UsageError(o.meshPath + ": the octree method writes .ply meshes under MPI");
+        if (!o.meshPath.empty() && vdiso::meshFormatFor(o.meshPath) != MeshFormat::Ply &&
+            vdiso::meshFormatFor(o.meshPath) != MeshFormat::Stl)
+            throw UsageError(o.meshPath + ": the octree method writes .ply and .stl meshes under MPI");
     } else if (m.partition == ViewPartition::Object) {
         if (o.lodErrorGiven && o.lodError > 0)
             throw UsageError("--partition object extracts at full resolution (--lod-error 0): a coarser level's "

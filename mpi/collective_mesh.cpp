@@ -1,4 +1,4 @@
-#include "mpi/collective_ply.h"
+#include "mpi/collective_mesh.h"
 
 #include <mpi.h>
 
@@ -9,6 +9,7 @@
 
 #include "io/error.h"
 #include "io/mesh_writer.h"
+#include "io/stl_writer.h"
 #include "mpi/rank_status.h"
 #include "mpi/shared_output.h"
 
@@ -24,25 +25,6 @@ std::string mpiErrorText(int code) {
     int length = 0;
     MPI_Error_string(code, text, &length);
     return std::string(text, size_t(length));
-}
-
-std::vector<unsigned char> vertexRecords(const TriangleMesh& part) {
-    std::vector<unsigned char> bytes(part.positions.size() * kPlyVertexBytes);
-    for (size_t i = 0; i < part.positions.size(); ++i) {
-        const float v[6] = {part.positions[i].x, part.positions[i].y, part.positions[i].z,
-                            part.normals[i].x,   part.normals[i].y,   part.normals[i].z};
-        std::memcpy(bytes.data() + i * kPlyVertexBytes, v, kPlyVertexBytes);
-    }
-    return bytes;
-}
-
-std::vector<unsigned char> faceRecords(const TriangleMesh& part) {
-    std::vector<unsigned char> bytes(part.triangleCount() * kPlyFaceBytes);
-    for (size_t t = 0; t < part.triangleCount(); ++t) {
-        bytes[t * kPlyFaceBytes] = 3;
-        std::memcpy(bytes.data() + t * kPlyFaceBytes + 1, &part.indices[3 * t], 12);
-    }
-    return bytes;
 }
 
 // Writes `bytes` at `offset` with every rank: as many collective calls on each rank as the
@@ -61,10 +43,16 @@ void writeAtAll(const Communicator& comm, MPI_File file, const std::vector<unsig
     }
 }
 
-}  // namespace
+// A region of the file this rank writes.
+struct Region {
+    std::vector<unsigned char> bytes;
+    uint64_t offset;
+};
 
-void writePlyCollectively(const Communicator& comm, const std::string& path, bool overwrite,
-                          const TriangleMesh& part, const RankMeshNumbering& numbering) {
+// Opens the shared temporary file, writes every rank's `regions` (each rank as many, in order),
+// syncs, closes and puts the file into place.
+void writeRegionsCollectively(const Communicator& comm, const std::string& path, bool overwrite,
+                              const std::vector<Region>& regions) {
     // Rank 0 names the temporary file; the others learn it. It goes unless committed.
     RankSharedOutput output(comm, path, overwrite);
     const std::string& temporary = output.temporary();
@@ -83,22 +71,45 @@ void writePlyCollectively(const Communicator& comm, const std::string& path, boo
 
     // MPI_File_set_size truncates a file left by an earlier run under the same name.
     if (int code = MPI_File_set_size(file, 0); code != MPI_SUCCESS) error = "truncate failed: " + mpiErrorText(code);
-    const std::vector<unsigned char> header = [&] {
-        if (comm.rank() != 0) return std::vector<unsigned char>();
-        const std::string text = plyMeshHeader(numbering.totalVertices, numbering.totalTriangles);
-        return std::vector<unsigned char>(text.begin(), text.end());
-    }();
-    writeAtAll(comm, file, header, 0, error);
-    writeAtAll(comm, file, vertexRecords(part), kPlyHeaderBytes + numbering.firstVertex * kPlyVertexBytes, error);
-    writeAtAll(comm, file, faceRecords(part),
-               kPlyHeaderBytes + numbering.totalVertices * kPlyVertexBytes + numbering.firstTriangle * kPlyFaceBytes,
-               error);
+    for (const Region& region : regions) writeAtAll(comm, file, region.bytes, region.offset, error);
     if (int code = MPI_File_sync(file); code != MPI_SUCCESS && error.empty()) error = "sync failed: " + mpiErrorText(code);
     if (int code = MPI_File_close(&file); code != MPI_SUCCESS && error.empty())
         error = "close failed: " + mpiErrorText(code);
     if (!error.empty()) error = temporary + ": " + error;
     agreeAllSucceeded(comm, !error.empty(), error);
     output.commit();  // into place: without overwrite, link() refuses a file that appeared meanwhile
+}
+
+}  // namespace
+
+void writePlyCollectively(const Communicator& comm, const std::string& path, bool overwrite,
+                          const TriangleMesh& part, const RankMeshNumbering& numbering) {
+    std::vector<unsigned char> header;
+    if (comm.rank() == 0) {
+        const std::string text = plyMeshHeader(numbering.totalVertices, numbering.totalTriangles);
+        header.assign(text.begin(), text.end());
+    }
+    writeRegionsCollectively(
+        comm, path, overwrite,
+        {{std::move(header), 0},
+         {plyVertexRecords(part), kPlyHeaderBytes + numbering.firstVertex * kPlyVertexBytes},
+         {plyFaceRecords(part),
+          kPlyHeaderBytes + numbering.totalVertices * kPlyVertexBytes + numbering.firstTriangle * kPlyFaceBytes}});
+}
+
+void writeStlCollectively(const Communicator& comm, const std::string& path, bool overwrite,
+                          const TriangleMesh& part) {
+    const uint64_t first = comm.exclusiveSum(part.triangleCount()), total = comm.sum(part.triangleCount());
+    // The same on every rank: refused alike, before any file is made.
+    if (total > UINT32_MAX)
+        throw RankFailure(0, 1, path + ": " + std::to_string(total) + " triangles, too many for STL's 32-bit count");
+    std::vector<unsigned char> header;
+    if (comm.rank() == 0) {
+        const auto bytes = stlHeader(uint32_t(total));
+        header.assign(bytes.begin(), bytes.end());
+    }
+    writeRegionsCollectively(comm, path, overwrite,
+                             {{std::move(header), 0}, {stlTriangleRecords(part), kStlHeaderBytes + first * kStlTriangleBytes}});
 }
 
 }  // namespace vdiso::mpi
