@@ -77,7 +77,10 @@ class CoverageExchange {
 public:
     virtual ~CoverageExchange() = default;
     // Between two nodes of the traversal, `bricks` acquired so far: may cover more pixels of
-    // `pyramid` (OcclusionPyramid::coverTiles, then propagate()).
+    // `pyramid` (OcclusionPyramid::coverTiles, then propagate()). May throw to end the
+    // extraction (another process failed): the traversal unwinds (its reads ahead stop, pinned
+    // bricks are released), ended() is not called, and the exception leaves
+    // extractViewDependent.
     virtual void between(OcclusionPyramid& pyramid, int64_t bricks) = 0;
     // The traversal has ended with `pyramid` as its coverage.
     virtual void ended(const OcclusionPyramid& pyramid) = 0;

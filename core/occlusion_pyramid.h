@@ -75,7 +75,10 @@ public:
     // The bottom level as it stands: one word per 8x8 tile, rows of wordsX(0) tiles, bits outside
     // the image set. One process's coverage as exchanged with others (mpi/): width * height / 8
     // bytes, 128 KB for 1024 x 1024.
-    std::span<const uint64_t> tiles() const { return {mWords.data(), size_t(mWordsX[0]) * size_t(mWordsY[0])}; }
+    std::span<const uint64_t> tiles() const { return {mWords.data(), tileCount(mWidth, mHeight)}; }
+    static size_t tileCount(int width, int height) {
+        return size_t((width + kTileSize - 1) / kTileSize) * size_t((height + kTileSize - 1) / kTileSize);
+    }
     // Covers the pixels set in `tiles` (laid out as tiles() of a pyramid of the same size); then
     // propagate(). Returns whether any was not covered before.
     bool coverTiles(std::span<const uint64_t> tiles);

@@ -135,11 +135,6 @@ private:
 inline int64_t brickRowsPerGroup(const BrickLayout& layout) {
     return std::max<int64_t>(1, 128 / layout.brickCounts[0]);
 }
-// Groups in one layer of `layout`.
-inline int64_t groupsPerLayer(const BrickLayout& layout) {
-    const int64_t rows = brickRowsPerGroup(layout);
-    return (layout.brickCounts[1] + rows - 1) / rows;
-}
 
 inline uint64_t alignToStore(uint64_t v) {
     return (v + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;

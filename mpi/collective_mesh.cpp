@@ -59,7 +59,7 @@ void writeRegionsCollectively(const Communicator& comm, const std::string& path,
 
     MPI_File file = MPI_FILE_NULL;
     std::string error;
-    const int openCode = MPI_File_open(MPI_COMM_WORLD, temporary.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY,
+    const int openCode = MPI_File_open(MPI_Comm_f2c(MPI_Fint(comm.handle())), temporary.c_str(), MPI_MODE_CREATE | MPI_MODE_WRONLY,
                                        MPI_INFO_NULL, &file);
     if (openCode != MPI_SUCCESS) error = "cannot create " + temporary + ": " + mpiErrorText(openCode);
     try {
@@ -69,8 +69,6 @@ void writeRegionsCollectively(const Communicator& comm, const std::string& path,
         throw;
     }
 
-    // MPI_File_set_size truncates a file left by an earlier run under the same name.
-    if (int code = MPI_File_set_size(file, 0); code != MPI_SUCCESS) error = "truncate failed: " + mpiErrorText(code);
     for (const Region& region : regions) writeAtAll(comm, file, region.bytes, region.offset, error);
     if (int code = MPI_File_sync(file); code != MPI_SUCCESS && error.empty()) error = "sync failed: " + mpiErrorText(code);
     if (int code = MPI_File_close(&file); code != MPI_SUCCESS && error.empty())

@@ -60,19 +60,14 @@ std::vector<uint64_t> Communicator::exclusiveOr(std::span<const uint64_t> bits) 
     return result;
 }
 
-std::vector<unsigned char> Communicator::gatherBytes(std::span<const unsigned char> bytes, int root) const {
+void Communicator::gatherBytes(std::span<const unsigned char> bytes, int root, std::span<unsigned char> into) const {
     const MPI_Comm comm = MPI_Comm_f2c(MPI_Fint(mHandle));
-    // Every rank learns the total first, so that all refuse an oversized gather alike.
-    const uint64_t total = sum(bytes.size());
-    countOf(size_t(total), "MPI_Gatherv");
-    const int count = int(bytes.size());
+    const int count = countOf(bytes.size(), "MPI_Gatherv");
     std::vector<int> counts(mRank == root ? size_t(mSize) : 0), offsets(counts.size());
     check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm), "MPI_Gather");
-    std::vector<unsigned char> all(mRank == root ? size_t(total) : 0);
     for (size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
-    check(MPI_Gatherv(bytes.data(), count, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE, root, comm),
+    check(MPI_Gatherv(bytes.data(), count, MPI_BYTE, into.data(), counts.data(), offsets.data(), MPI_BYTE, root, comm),
           "MPI_Gatherv");
-    return all;
 }
 
 uint64_t Communicator::exclusiveSum(uint64_t value) const {

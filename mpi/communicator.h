@@ -36,6 +36,10 @@ public:
     int rank() const { return mRank; }
     int size() const { return mSize; }
 
+    // The communicator as a Fortran handle, for the MPI calls made outside communicator.cpp
+    // (MPI-IO): MPI_Comm_f2c(handle()).
+    int handle() const { return mHandle; }
+
     // The same ranks in the opposite order (rank r here is rank size() - 1 - r there).
     Communicator reversed() const;
 
@@ -50,9 +54,10 @@ public:
     // `values` from every rank, rank by rank, on rank `root` (empty elsewhere).
     std::vector<uint64_t> gather(uint64_t value, int root) const;
     std::vector<double> gather(double value, int root) const;
-    // Every rank's bytes, one after another in rank order, on `root` (empty elsewhere); at most
-    // 2 GiB in all (MPI counts are int): more throws MpiError on every rank.
-    std::vector<unsigned char> gatherBytes(std::span<const unsigned char> bytes, int root) const;
+    // Every rank's bytes, one after another in rank order, into `into` on `root` (unused
+    // elsewhere). The caller sizes `into` to the ranks' total (sum()) before, so that nothing can
+    // fail on one rank between the collective calls; at most 2 GiB in all (MPI counts are int).
+    void gatherBytes(std::span<const unsigned char> bytes, int root, std::span<unsigned char> into) const;
     // `root`'s value on every rank.
     int broadcast(int value, int root) const;
     std::string broadcast(const std::string& value, int root) const;

@@ -30,7 +30,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int exitCodeOne(const std::exception&) { return 1; }
 // Options that do not suit the volume (--levels beyond its count, say) are wrong usage, the
 // same on every rank.
 int exitCodeOfOptions(const std::exception& e) { return dynamic_cast<const std::invalid_argument*>(&e) ? 2 : 1; }
@@ -376,7 +375,7 @@ RanksConvertResult convertAcrossRanks(const Communicator& comm, const SliceReade
         if (describeVolume(info) != first)
             throwIoError(source->name(), "is " + describeVolume(info) + " here but " + first +
                                              " on rank 0: every rank must read the same input");
-    }, exitCodeOne);
+    });
 
     // The output, refused by rank 0 if it exists (or is an input), and this rank's descriptor.
     RankSharedOutput output(comm, options.output, options.store.overwrite,
@@ -388,7 +387,7 @@ RanksConvertResult convertAcrossRanks(const Communicator& comm, const SliceReade
         if (file.fd < 0) throwSystemError(output.temporary(), "cannot open", errno);
         conversion = std::make_unique<RankConversion>(comm, *source, info, options.store, file.fd,
                                                       output.temporary(), options.output);
-    }, exitCodeOne);
+    });
 
     // The conversion, whose every collective step tells whether a rank failed.
     {
@@ -454,7 +453,7 @@ RanksConvertResult convertAcrossRanks(const Communicator& comm, const SliceReade
         const int fd = file.fd;
         file.fd = -1;
         if (::close(fd) != 0) throwSystemError(output.temporary(), "cannot close", errno);
-    }, exitCodeOne);
+    });
     output.commit();
 
     // Each rank's figures, on rank 0.

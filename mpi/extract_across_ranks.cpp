@@ -26,8 +26,6 @@ double secondsSince(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-int exitCodeOne(const std::exception&) { return 1; }
-
 }  // namespace
 
 RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const RanksExtractOptions& options) {
@@ -70,7 +68,7 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
             stats.nodesVisited = nodes;
         }
         io = cache->counters();
-    }, exitCodeOne);
+    });
     mine.extractSeconds = secondsSince(start);
 
     // Map to the output space (as vdiso extract does, piece by piece; skipped when it is the
@@ -80,12 +78,12 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     runPhase(comm, [&] {
         const SpaceTransform transform = volumeToPhysical(store->volume());
         if (options.physicalMeshes && !transform.isIdentity()) transformMesh(transform, mesh);
-    }, exitCodeOne);
+    });
     if (stl) writeStlCollectively(comm, options.meshPath, options.overwrite, mesh);
     RankMeshNumbering numbering;
     runPhase(comm, [&] {
         numbering = weldAcrossRanks(comm, partition, level->volume(), level->layout(), border, mesh);
-    }, exitCodeOne);
+    });
     if (ply) writePlyCollectively(comm, options.meshPath, options.overwrite, mesh, numbering);
 
     mine.bricksLoaded = io.misses;

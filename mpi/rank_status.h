@@ -10,6 +10,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "mpi/communicator.h"
 
@@ -55,6 +56,12 @@ void runPhase(const Communicator& comm, Phase&& phase, ExitCodeOf&& exitCodeOf) 
         code = exitCodeOf(e);
     }
     agreeAllSucceeded(comm, failed, message, code);
+}
+
+// The same, every exception an error (exit code 1).
+template <class Phase>
+void runPhase(const Communicator& comm, Phase&& phase) {
+    runPhase(comm, std::forward<Phase>(phase), [](const std::exception&) { return 1; });
 }
 
 }  // namespace vdiso::mpi

@@ -13,12 +13,6 @@
 
 namespace vdiso::mpi {
 
-namespace {
-
-int exitCodeOne(const std::exception&) { return 1; }
-
-}  // namespace
-
 RankSharedOutput::RankSharedOutput(const Communicator& comm, std::string path, bool overwrite,
                                    const std::vector<std::string>& inputs)
     : mComm(comm), mPath(std::move(path)), mOverwrite(overwrite) {
@@ -32,7 +26,7 @@ RankSharedOutput::RankSharedOutput(const Communicator& comm, std::string path, b
         if (fd < 0) throwSystemError(mPath, "cannot write its temporary file " + temporary, errno);
         mTemporary = temporary;  // ours from here: removed when we go
         ::close(fd);
-    }, exitCodeOne);
+    });
     mTemporary = comm.broadcast(temporary, 0);
 }
 
@@ -52,7 +46,7 @@ void RankSharedOutput::commit() {
                                                         : std::string("cannot link into place: ") + std::strerror(errno));
                 ::unlink(mTemporary.c_str());
             }
-    }, exitCodeOne);  // on failure the destructor removes the temporary
+    });  // on failure the destructor removes the temporary
     mCommitted = true;
 }
 

@@ -1,6 +1,7 @@
 #include "mpi/view_across_ranks.h"
 
 #include <chrono>
+#include <climits>
 #include <cstring>
 #include <optional>
 #include <stdexcept>
@@ -16,8 +17,6 @@ namespace vdiso::mpi {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-int exitCodeOne(const std::exception&) { return 1; }
 
 // Thrown from a coverage round when another rank has failed: it ends this rank's traversal
 // without being a failure of its own (the failing rank is the one named).
@@ -52,7 +51,9 @@ private:
 
     // One round: every rank says whether it still runs and whether it failed, and gives its
     // coverage to the scans; the coverage of the slabs in front is merged `into` the pyramid.
-    // Returns how many ranks still run.
+    // The slabs in front of slab s are DepthSlabs::inFront's: those from the eye's slab up to s
+    // (the ascending scan, to which the slabs below the eye's give nothing) or down to s (the
+    // descending scan on the reversed communicator). Returns how many ranks still run.
     uint64_t round(std::span<const uint64_t> tiles, bool running, bool failed, OcclusionPyramid* into) {
         const uint64_t state = mWorld.sum((running ? 1 : 0) + (failed ? kFailedFlag : 0));
         mFailed = mFailed || state >= kFailedFlag;
@@ -157,8 +158,8 @@ RanksViewResult extractViewAcrossRanks(const Communicator& comm, BrickCache& cac
         mine.partBegin = int(slabs.cuts[size_t(comm.rank())]);
         mine.partEnd = int(slabs.cuts[size_t(comm.rank()) + 1]);
         reversed.emplace(comm.reversed());
-        const size_t tiles = size_t((camera.width + 7) / 8) * size_t((camera.height + 7) / 8);
-        rounds.emplace(comm, *reversed, slabs.eyeSlab, tiles, options.exchangeBricks);
+        rounds.emplace(comm, *reversed, slabs.eyeSlab, OcclusionPyramid::tileCount(camera.width, camera.height),
+                       options.exchangeBricks);
         view.region = &region;
         view.coverage = &*rounds;
     } else {
@@ -184,7 +185,7 @@ RanksViewResult extractViewAcrossRanks(const Communicator& comm, BrickCache& cac
             throw;
         }
         if (rounds) rounds->finish(false);
-    }, exitCodeOne);
+    });
     const CacheCounters io = cache.counters() - before;
     mine.bricksLoaded = io.misses;
     mine.bytesRead = io.bytesRead;
@@ -197,13 +198,24 @@ RanksViewResult extractViewAcrossRanks(const Communicator& comm, BrickCache& cac
     mine.culledByOcclusion = stats.view.culledByOcclusion;
     mine.seconds = std::chrono::duration<double>(Clock::now() - start).count();
 
-    // Rank 0 gathers the surface, for the picture and the mesh file.
-    const std::vector<unsigned char> part = packed(mesh, points);
-    result.gatheredBytes = comm.sum(part.size());
-    runPhase(comm, [&] {
-        const std::vector<unsigned char> all = comm.gatherBytes(part, 0);
-        if (comm.rank() == 0) appendPacked(all, result.mesh, result.points);
-    }, exitCodeOne);
+    // Rank 0 gathers the surface, for the picture and the mesh file: each rank packs its part
+    // and rank 0 makes room for all of them, each step agreed on, so that no rank can fail while
+    // the others are inside the gather.
+    if (options.gather) {
+        std::vector<unsigned char> part, all;
+        runPhase(comm, [&] { part = packed(mesh, points); });
+        result.gatheredBytes = comm.sum(part.size());
+        runPhase(comm, [&] {
+            if (result.gatheredBytes > uint64_t(INT_MAX))
+                throw std::runtime_error("the ranks' visible surface is " + std::to_string(result.gatheredBytes >> 20) +
+                                         " MiB, more than rank 0 can gather at once (2 GiB)");
+            if (comm.rank() == 0) all.resize(size_t(result.gatheredBytes));
+        });
+        comm.gatherBytes(part, 0, all);
+        runPhase(comm, [&] {
+            if (comm.rank() == 0) appendPacked(all, result.mesh, result.points);
+        });
+    }
 
     // Statistics: summed on every rank, each rank's on rank 0.
     const auto sum = [&](auto v) { return decltype(v)(comm.sum(uint64_t(v))); };

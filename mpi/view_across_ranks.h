@@ -38,6 +38,7 @@ struct RanksViewOptions {
     ViewExtractOptions view;  // threads per rank (1 for Object); its part is set here
     ViewPartition partition = ViewPartition::Image;
     int exchangeBricks = 4;   // Object: bricks a rank acquires between coverage rounds
+    bool gather = true;       // rank 0 gathers the surface (for a picture or a mesh file)
 };
 
 // One rank's share and figures.
@@ -53,14 +54,15 @@ struct RanksViewResult {
     int ranks = 1;
     ViewPartition partition = ViewPartition::Image;
     int axis = -1, eyeSlab = -1;  // Object: the slabs' axis and the eye's slab
-    // Rank 0: every rank's output, in rank order, and the ranks' statistics summed.
+    // Rank 0: every rank's output, in rank order (with options.gather), and the ranks'
+    // statistics summed (bricksActive too: a brick two ranks extract counts twice).
     TriangleMesh mesh;
     PointSet points;
     ExtractStats stats;
     uint64_t bricksLoaded = 0, bytesRead = 0;  // summed over ranks (a brick two ranks read counts twice)
     uint64_t rounds = 0;          // Object: coverage rounds
     uint64_t maskBytes = 0;       // Object: bytes of coverage each rank gave per scan, times the scans
-    uint64_t gatheredBytes = 0;   // triangles and points sent to rank 0
+    uint64_t gatheredBytes = 0;   // triangles and points sent to rank 0 (0 without options.gather)
     double seconds = 0;           // the whole job, on rank 0
     std::vector<RankViewFigures> perRank;  // rank 0: one per rank
 };

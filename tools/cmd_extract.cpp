@@ -43,12 +43,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
                         MetaCellRangeCache& ranges, const MinMaxTree* tree, const ProgressFn& progress,
                         std::string& summary) {
     const CacheCounters before = cache.counters();
-    CachePlan plan;
-    try {
-        plan = planCacheUse(cache, isViewDependent(o.method), o.prefetch, o.threads, machineThreads());
-    } catch (const std::invalid_argument& e) {
-        throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
-    }
+    const CachePlan plan = planCache(o, cache, machineThreads());
     // Without a picture to draw, the mesh goes to its file as it is extracted: memory holds a
     // bounded part of it. A picture needs the whole mesh, so then it is held.
     TriangleMesh mesh;
@@ -62,22 +57,9 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     ExtractStats stats;
     std::optional<MeshPostStats> post;
     if (isViewDependent(o.method)) {
-        ViewExtractOptions v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso)
-                                                  : ViewExtractOptions::wise(*o.iso);
-        v.metaCellSize = o.metaCellSize;
-        if (o.scanPolygons) v.scanPolygons = *o.scanPolygons;
-        if (o.estimateBox) v.estimateBox = *o.estimateBox;
-        if (o.points) v.points = *o.points;
-        if (o.bottomUp) v.bottomUp = *o.bottomUp;
-        if (o.cellTests) v.cellTests = *o.cellTests;
-        if (o.occlusion) v.occlusion = *o.occlusion;
-        if (o.capSeams) v.capSeams = *o.capSeams;
-        v.prefetchBricks = plan.prefetchBricks;
-        v.prefetchReaders = o.readers;
-        v.threads = plan.threads;
+        ViewExtractOptions v = viewExtractOptions(o, plan);
         v.rangeCache = &ranges;
         v.tree = tree;
-        v.lodError = o.lodError;
         stats = extractViewDependent(cache, *camera, v, mesh, points, progress);
     } else {
         FullExtractOptions extract{*o.iso, o.metaCellSize, plan.threads};

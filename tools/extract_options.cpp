@@ -297,6 +297,31 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
     return o;
 }
 
+CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaultThreads) {
+    try {
+        return planCacheUse(cache, isViewDependent(o.method), o.prefetch, o.threads, defaultThreads);
+    } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
+    }
+}
+
+ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& plan) {
+    ViewExtractOptions v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso) : ViewExtractOptions::wise(*o.iso);
+    v.metaCellSize = o.metaCellSize;
+    if (o.scanPolygons) v.scanPolygons = *o.scanPolygons;
+    if (o.estimateBox) v.estimateBox = *o.estimateBox;
+    if (o.points) v.points = *o.points;
+    if (o.bottomUp) v.bottomUp = *o.bottomUp;
+    if (o.cellTests) v.cellTests = *o.cellTests;
+    if (o.occlusion) v.occlusion = *o.occlusion;
+    if (o.capSeams) v.capSeams = *o.capSeams;
+    v.prefetchBricks = plan.prefetchBricks;
+    v.prefetchReaders = o.readers;
+    v.threads = plan.threads;
+    v.lodError = o.lodError;
+    return v;
+}
+
 std::vector<Camera> extractCameras(const ExtractOptions& o, const VolumeInfo& volume, ViewChoice& view) {
     const glm::dvec3 boundsMin = volume.origin;
     const glm::dvec3 boundsMax = volume.worldMax();

@@ -6,9 +6,12 @@
 #include <string>
 #include <vector>
 
+#include "cache/brick_cache.h"
+#include "cache/cache_plan.h"
 #include "core/brick_extractor.h"
 #include "core/brick_prefetcher.h"
 #include "core/camera.h"
+#include "core/extract_view.h"
 #include "core/mesh_slabs.h"
 #include "core/volume.h"
 
@@ -49,6 +52,13 @@ bool isViewDependent(const std::string& method);
 // Parses vdiso extract's arguments (argv[0] is "extract") and checks them against each other;
 // throws UsageError. With --help or -h, returns at once with `help` set.
 ExtractOptions parseExtractOptions(int argc, char** argv);
+
+// How the brick cache is shared (threads, prefetch) for these options, `defaultThreads` when
+// --threads was not given; throws UsageError naming --cache-mb when it is too small.
+CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaultThreads);
+
+// The view-dependent options (sage or wise, with the switches given) for a plan.
+ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& plan);
 
 // The cameras the options ask for over `volume`: one (--camera, --view or its default), the
 // frames of a --path, or none (a full method without a picture); each with its clip planes.

@@ -82,8 +82,6 @@ MpiConvertCli parseConvert(int argc, char** argv) {
     return o;
 }
 
-int exitCodeOf(const std::exception& e) { return dynamic_cast<const UsageError*>(&e) ? 2 : 1; }
-
 std::string statsJson(const MpiConvertCli& o, const RanksConvertResult& r) {
     const StoreWriteSummary& t = r.summary;
     const VolumeInfo& v = r.volume;
@@ -143,14 +141,7 @@ int runConvertAcrossRanks(const Communicator& comm, int argc, char** argv) {
         comm, [&] { return openVolume(o.convert.inputs, o.convert.input); }, options);
     runPhase(comm, [&] {
         if (comm.rank() != 0) return;
-        const std::string text = statsJson(o, result) + "\n";
-        if (o.statsPath == "-") {
-            std::fputs(text.c_str(), stdout);
-        } else if (!o.statsPath.empty()) {
-            AtomicOutputFile out(o.statsPath, o.convert.store.overwrite);
-            out.append(text.data(), text.size());
-            out.commit();
-        }
+        writeStats(o.statsPath, statsJson(o, result), o.convert.store.overwrite);
         if (o.convert.quiet || o.statsPath == "-") return;
         printConvertSummary(o.convert.output, " on " + std::to_string(result.ranks) + " ranks", result.volume,
                             result.summary, o.convert.store.brickSize, result.sourceName);

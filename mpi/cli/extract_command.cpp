@@ -64,11 +64,9 @@ constexpr const char* kHelp =
 struct MpiExtractOptions {
     ExtractOptions extract;
     ViewPartition partition = ViewPartition::Image;
-    bool partitionGiven = false;
+    bool partitionGiven = false, exchangeGiven = false;
     int exchangeBricks = 4;
 };
-
-int exitCodeOf(const std::exception& e) { return dynamic_cast<const UsageError*>(&e) ? 2 : 1; }
 
 // Takes out vdiso-mpi's own options, parses the rest as vdiso extract does, and refuses what is
 // not under MPI.
@@ -82,6 +80,7 @@ MpiExtractOptions parse(int argc, char** argv) {
             const std::string value = argv[++i];
             if (a == "--exchange-bricks") {
                 m.exchangeBricks = int(vdiso::cli::parseInt(a, value, 1, 1 << 20));
+                m.exchangeGiven = true;
             } else if (value == "image" || value == "object") {
                 m.partition = value == "image" ? ViewPartition::Image : ViewPartition::Object;
                 m.partitionGiven = true;
@@ -102,6 +101,8 @@ MpiExtractOptions parse(int argc, char** argv) {
     if (o.post.any())
         throw UsageError("--smooth, --decimate, --largest and --min-piece are not under MPI: run them with vdiso");
     if (o.threads == 0) o.threads = 1;
+    if (m.exchangeGiven && (!view || m.partition != ViewPartition::Object))
+        throw UsageError("--exchange-bricks applies to --partition object");
     if (!view) {
         if (m.partitionGiven) throw UsageError("--partition applies to --method sage or wise");
         if (!o.pngPath.empty())
@@ -205,14 +206,7 @@ std::string viewStats(const MpiExtractOptions& m, const BrickStoreReader& store,
 
 // Rank 0 writes the statistics and prints the summary.
 void report(const ExtractOptions& o, const std::string& json, const std::string& summary) {
-    if (o.statsPath == "-") {
-        std::fputs((json + "\n").c_str(), stdout);
-    } else if (!o.statsPath.empty()) {
-        AtomicOutputFile out(o.statsPath, o.overwrite);
-        const std::string text = json + "\n";
-        out.append(text.data(), text.size());
-        out.commit();
-    }
+    writeStats(o.statsPath, json, o.overwrite);
     if (!o.quiet && o.statsPath != "-") std::printf("%s\n", summary.c_str());
 }
 
@@ -251,28 +245,13 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         store.emplace(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
         cache.emplace(*store, o.cacheMb << 20);
         camera = vdiso::cli::extractCameras(o, store->volume(), view).front();
-        CachePlan plan;
-        try {
-            plan = planCacheUse(*cache, true, o.prefetch, o.threads, o.threads);
-        } catch (const std::invalid_argument& e) {
-            throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
-        }
-        ViewExtractOptions& v = run.view;
-        v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso) : ViewExtractOptions::wise(*o.iso);
-        v.metaCellSize = o.metaCellSize;
-        if (o.scanPolygons) v.scanPolygons = *o.scanPolygons;
-        if (o.estimateBox) v.estimateBox = *o.estimateBox;
-        if (o.points) v.points = *o.points;
-        if (o.bottomUp) v.bottomUp = *o.bottomUp;
-        if (o.cellTests) v.cellTests = *o.cellTests;
-        if (o.occlusion) v.occlusion = *o.occlusion;
-        if (o.capSeams) v.capSeams = *o.capSeams;
-        v.prefetchBricks = plan.prefetchBricks;
-        v.prefetchReaders = o.readers;
-        v.threads = plan.threads;
-        v.lodError = o.lodError;
+        run.view = vdiso::cli::viewExtractOptions(o, vdiso::cli::planCache(o, *cache, o.threads));
         run.partition = m.partition;
         run.exchangeBricks = m.exchangeBricks;
+        run.gather = !o.meshPath.empty() || !o.pngPath.empty() || !o.pointsPath.empty();
+        if (m.partition == ViewPartition::Image && comm.size() > camera.width)
+            throw UsageError("--partition image: " + std::to_string(comm.size()) + " ranks for an image " +
+                             std::to_string(camera.width) + " pixels wide (one column each at least)");
     }, exitCodeOf);
     RanksViewResult r = extractViewAcrossRanks(comm, *cache, camera, run);
     runPhase(comm, [&] {

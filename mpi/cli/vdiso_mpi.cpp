@@ -26,8 +26,8 @@ constexpr const char* kUsage =
     "  convert INPUT OUTPUT.vdiso [options]   vdiso convert's command line, shared by the ranks:\n"
     "                                         each reads and bricks its own slab, one store\n"
     "  extract FILE.vdiso --iso V [options]   vdiso extract's command line, shared by the ranks:\n"
-    "                                         octree (one welded PLY written together), sage and\n"
-    "                                         wise (by parts of the image or of the volume)\n"
+    "                                         octree (one welded PLY or STL written together), sage\n"
+    "                                         and wise (by parts of the image or of the volume)\n"
     "\n"
     "synth, info, compare and serve are not yet under MPI: run them with vdiso.\n";
 

@@ -1,0 +1,23 @@
+#include "mpi/cli/commands.h"
+
+#include <cstdio>
+
+#include "io/atomic_output.h"
+#include "tools/args.h"
+
+namespace vdiso::mpi::cli {
+
+int exitCodeOf(const std::exception& e) { return dynamic_cast<const vdiso::cli::UsageError*>(&e) ? 2 : 1; }
+
+void writeStats(const std::string& path, const std::string& json, bool overwrite) {
+    const std::string text = json + "\n";
+    if (path == "-") {
+        std::fputs(text.c_str(), stdout);
+    } else if (!path.empty()) {
+        AtomicOutputFile out(path, overwrite);
+        out.append(text.data(), text.size());
+        out.commit();
+    }
+}
+
+}  // namespace vdiso::mpi::cli
