@@ -66,7 +66,7 @@ echo "| run | wall s | MB/s in | MB read per rank | MB written per rank | halo M
 echo "|---|---|---|---|---|---|---|"
 OUTS="$DATA/mpi_bench_out.vdiso"
 CONVERT=("$RAW" --dims 1024,1024,1024 --type u16 "$OUTS" --force --quiet)
-convertRow() {  # LABEL WALLS... (with per-rank figures from $TMP/c.json when given)
+convertRow() {  # LABEL JSON WALLS...: the median wall time; per-rank figures and peak from the last run
     local label=$1 json=$2; shift 2
     local s; s=$(median "$@")
     python3 - "$label" "$s" "$json" "$(stat -c %s "$RAW")" "$peak" <<'PY'

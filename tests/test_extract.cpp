@@ -149,10 +149,6 @@ TEST(ExtractThreads, ParallelChunksGiveTheSameWeldedSurface) {
     EXPECT_EQ(source.pinned(), 0);
 }
 
-// Meta-cell ranges against the min and max of each meta-cell's corner samples, for every
-// sample type, partial bricks and meta-cell sizes that do and do not divide the brick.
-// Edge slots are told apart by vertex number, which restarts with a new mesh: an extractor
-// used on one mesh and then another must make the second as a fresh extractor does.
 // What each process of a shared extraction does (mpi/): parts of the active bricks, each
 // numbering its own vertices and listing those on edges a brick outside it shares. The parts'
 // triangles together are the whole surface's, and a vertex two parts make is the same point in
@@ -209,6 +205,8 @@ TEST(ExtractParts, PartsMakeTheWholeSurfaceAndAgreeOnTheirBorders) {
     EXPECT_EQ(vertices - shared, whole.vertexCount());
 }
 
+// Edge slots are told apart by vertex number, which restarts with a new mesh: an extractor
+// used on one mesh and then another must make the second as a fresh extractor does.
 TEST(BrickExtractor, ReusedOnAnotherMeshMakesTheSameSurface) {
     SynthParams p;
     p.kind = SynthKind::Head;
@@ -233,6 +231,8 @@ TEST(BrickExtractor, ReusedOnAnotherMeshMakesTheSameSurface) {
     }
 }
 
+// Meta-cell ranges against the min and max of each meta-cell's corner samples, for every
+// sample type, partial bricks and meta-cell sizes that do and do not divide the brick.
 TEST(BrickExtractor, MetaCellRangesAreEachMetaCellsCornerRange) {
     std::mt19937 rng(11);
     for (ScalarType type : {ScalarType::U8, ScalarType::I16, ScalarType::U16, ScalarType::F32}) {

@@ -211,6 +211,32 @@ TEST(MpiView, SagePictureIsTheSingleProcessOnesByImageAndByObject) {
                                                         << " without";
 }
 
+// The eye inside the volume, in the middle slab, with a view wide enough to see slabs on both
+// sides of it: both coverage scans run (toward each side of the eye's slab).
+TEST(MpiView, ObjectPartitionWithTheEyeInsideTheVolume) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso"), one = dir.file("one.png"), three = dir.file("three.png"),
+                      cam = dir.file("cam.json"), stats = dir.file("s.json");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 96 --brick 8 --quiet").exitCode, 0);
+    test::writeFile(cam, std::string(R"({"eye": [47.5, 47.5, 47.5], "target": [57.5, 56.5, 49.5], "up": [0, 0, 1],)"
+                                     R"( "fov": 110, "width": 400, "height": 400})"));
+    const std::string common = "extract " + store + " --iso " + std::to_string(kHeadSkinIso) +
+                               " --method sage --lod-error 0 --quiet --camera " + cam + " ";
+    auto r = test::runVdiso(common + "--threads 1 --png " + one);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = runMpi(3, common + "--partition object --png " + three + " --stats " + stats);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const std::string json = text(stats);
+    EXPECT_NE(json.find("\"slab_axis\": \"x\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"eye_slab\": 1,"), std::string::npos) << json;
+    const std::vector<uint64_t> triangles = numbers(json, "triangles");  // the total, then each rank's
+    ASSERT_EQ(triangles.size(), 4u) << json;
+    for (size_t k = 1; k < 4; ++k) EXPECT_GT(triangles[k], 0u) << "rank " << k - 1 << ": " << json;
+    const ImageAgreement a = compareImages(readPng(one), readPng(three));
+    EXPECT_GT(a.referenceCovered, 10000u);
+    EXPECT_GE(a.agreement(), 0.995) << a.missing << " missing";
+}
+
 TEST(MpiView, CorruptBrickInOneSlabFailsTheJobNamingItsRank) {
     test::ScratchDir dir;
     const std::string store = dir.file("h.vdiso"), png = dir.file("h.png"), stats = dir.file("s.json");
@@ -267,6 +293,7 @@ TEST(MpiView, Refusals) {
         {"--method sage --path orbit:4 --png f%d.png", "--path is not under MPI"},
         {"--method sage --oracle", "--oracle is not under MPI"},
         {"--method sage --exchange-bricks 0", "--exchange-bricks"},
+        {"--method sage --exchange-bricks 8", "--exchange-bricks applies to --partition object"},
     };
     for (const auto& [options, message] : cases) {
         const auto r = runMpi(2, common + options);

@@ -90,7 +90,7 @@ TEST(RawReader, TooSmallDimensionIsRefused) {
     EXPECT_NE(errorOf(path, o).find("at least 2 samples"), std::string::npos);
 }
 
-TEST(RawReader, SkipSeeksAndMatchesReading) {
+TEST(RawReader, SkipMatchesReading) {
     ScratchDir dir;
     const std::string path = dir.file("v.raw");
     std::string bytes = "HDR";
