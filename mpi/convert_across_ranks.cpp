@@ -79,8 +79,7 @@ struct Descriptor {
 class CoarseSlabs {
 public:
     CoarseSlabs(const std::string& outputPath, const std::vector<BrickLevel>& levels, size_t sampleBytes,
-                int ranks, int rank)
-        : mOutputPath(outputPath) {
+                int ranks, int rank) {
         uint64_t total = 0;
         mLevels.resize(levels.size());
         for (size_t l = 1; l < levels.size(); ++l) {
@@ -122,7 +121,6 @@ private:
         size_t sliceBytes = 0;
         uint64_t offset = 0;
     };
-    std::string mOutputPath;
     std::vector<Slab> mLevels;
     std::optional<AtomicOutputFile> mFile;  // never committed: unnamed, gone with its descriptor
     unsigned char* mBytes = nullptr;

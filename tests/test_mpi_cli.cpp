@@ -22,12 +22,8 @@ namespace vdiso {
 namespace {
 
 using test::numbers;
+using test::readText;
 using test::runMpi;
-
-std::string text(const std::string& path) {
-    const auto bytes = test::readFile(path);
-    return std::string(bytes.begin(), bytes.end());
-}
 
 // The 3-rank mesh against the single process's, and the per-rank figures against the totals.
 void expectSameAsSingleProcess(const std::string& synthArgs, double iso, const std::string& extra) {
@@ -55,7 +51,7 @@ void expectSameAsSingleProcess(const std::string& synthArgs, double iso, const s
     ASSERT_GT(c.size(), 84u);
     EXPECT_TRUE(c == d) << "the 3-rank STL differs from the single process's";
 
-    const std::string json = text(stats);
+    const std::string json = readText(stats);
     EXPECT_NE(json.find("\"ranks\": 3"), std::string::npos) << json;
     const std::vector<uint64_t> triangles = numbers(json, "triangles"), bricks = numbers(json, "bricks"),
                                 owned = numbers(json, "vertices_owned"), vertices = numbers(json, "vertices"),
@@ -93,7 +89,7 @@ TEST(MpiExtract, CorruptBrickOnOneRankFailsTheJobWithoutOutput) {
     auto r = runMpi(3, "extract " + store + " --iso " + iso + " --quiet --stats " + stats);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     // A brick in rank 1's part: its stored bytes flipped, so its checksum fails there only.
-    const std::vector<uint64_t> first = numbers(text(stats), "first_brick");
+    const std::vector<uint64_t> first = numbers(readText(stats), "first_brick");
     ASSERT_EQ(first.size(), 3u);
     uint64_t offset = 0;
     {
@@ -146,10 +142,10 @@ TEST(MpiExtract, MissingStoreAndRefusals) {
     r = runMpi(2, "extract " + store + " --iso 600.5 -o " + mesh);
     EXPECT_EQ(r.exitCode, 2);
     EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
-    EXPECT_EQ(text(mesh), "keep");
+    EXPECT_EQ(readText(mesh), "keep");
     r = runMpi(2, "extract " + store + " --iso 600.5 --quiet --force -o " + mesh);
     EXPECT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_EQ(text(mesh).substr(0, 4), "ply\n");
+    EXPECT_EQ(readText(mesh).substr(0, 4), "ply\n");
 }
 
 // The picture of a view-dependent extraction shared by 3 ranks, against the single process's.
@@ -173,7 +169,7 @@ TEST(MpiView, SagePictureIsTheSingleProcessOnesByImageAndByObject) {
         ASSERT_EQ(r.exitCode, 0) << r.output;
         EXPECT_GE(pictureAgreement(one, png), 0.995) << partition;
         EXPECT_GT(std::filesystem::file_size(mesh), 1000u) << partition;  // any mesh format, from rank 0
-        const std::string json = text(stats);
+        const std::string json = readText(stats);
         EXPECT_NE(json.find("\"ranks\": 3"), std::string::npos) << json;
         EXPECT_NE(json.find("\"partition\": \"" + partition + "\""), std::string::npos) << json;
         const std::vector<uint64_t> triangles = numbers(json, "triangles"), loaded = numbers(json, "bricks_loaded");
@@ -206,7 +202,7 @@ TEST(MpiView, SagePictureIsTheSingleProcessOnesByImageAndByObject) {
     const std::string stats = dir.file("lone.json");
     r = runMpi(3, common + "--partition object --exchange-bricks 1000000 --stats " + stats);
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    const uint64_t lone = numbers(text(stats), "bricks_loaded").at(0);
+    const uint64_t lone = numbers(readText(stats), "bricks_loaded").at(0);
     EXPECT_LT(double(objectLoaded), 0.85 * double(lone)) << objectLoaded << " bricks with trades, " << lone
                                                         << " without";
 }
@@ -226,7 +222,7 @@ TEST(MpiView, ObjectPartitionWithTheEyeInsideTheVolume) {
     ASSERT_EQ(r.exitCode, 0) << r.output;
     r = runMpi(3, common + "--partition object --png " + three + " --stats " + stats);
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    const std::string json = text(stats);
+    const std::string json = readText(stats);
     EXPECT_NE(json.find("\"slab_axis\": \"x\""), std::string::npos) << json;
     EXPECT_NE(json.find("\"eye_slab\": 1,"), std::string::npos) << json;
     const std::vector<uint64_t> triangles = numbers(json, "triangles");  // the total, then each rank's
@@ -245,7 +241,7 @@ TEST(MpiView, CorruptBrickInOneSlabFailsTheJobNamingItsRank) {
         "extract " + store + " --iso " + std::to_string(kHeadSkinIso) + " --method sage --partition object ";
     auto r = runMpi(3, common + "--quiet --stats " + stats);
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    const std::string json = text(stats);
+    const std::string json = readText(stats);
     const std::vector<uint64_t> first = numbers(json, "first_layer"), end = numbers(json, "end_layer");
     ASSERT_EQ(first.size(), 3u) << json;
     const std::smatch axis = [&] {

@@ -25,12 +25,8 @@ namespace vdiso {
 namespace {
 
 using test::numbers;
+using test::readText;
 using test::runMpi;
-
-std::string text(const std::string& path) {
-    const auto bytes = test::readFile(path);
-    return std::string(bytes.begin(), bytes.end());
-}
 
 std::vector<unsigned char> storedBytes(const BrickStoreReader& store, int64_t id) {
     const std::span<const unsigned char> s = store.readStoredBrick(id);
@@ -119,7 +115,7 @@ std::string convertBothWays(const test::ScratchDir& dir, const std::string& inpu
     EXPECT_NE(r.output.find("wrote " + many + " on " + std::to_string(ranks) + " ranks: "), std::string::npos)
         << r.output;
     expectSameStore(one, many);
-    return std::filesystem::exists(stats) ? text(stats) : std::string();
+    return std::filesystem::exists(stats) ? readText(stats) : std::string();
 }
 
 // Every rank did a real share: a run of layers, read its slab (skipping to it), wrote bricks;
@@ -244,7 +240,7 @@ TEST(MpiConvert, RefusalsLeaveOutputsUntouched) {
     auto r = runMpi(2, "convert " + input + out);
     EXPECT_EQ(r.exitCode, 2) << r.output;
     EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
-    EXPECT_EQ(text(out), "keep");
+    EXPECT_EQ(readText(out), "keep");
     // Bad options: the same on every rank, one message, exit 2.
     for (const char* bad : {"--brick 1", "--levels 9", "--frobnicate"}) {
         r = runMpi(2, "convert " + input + dir.file("x.vdiso") + " " + bad);

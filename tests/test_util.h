@@ -44,6 +44,10 @@ inline void writeFile(const std::string& path, const std::string& text) {
     writeFile(path, text.data(), text.size());
 }
 std::vector<unsigned char> readFile(const std::string& path);
+inline std::string readText(const std::string& path) {
+    const std::vector<unsigned char> bytes = readFile(path);
+    return std::string(bytes.begin(), bytes.end());
+}
 
 struct CommandResult {
     int exitCode = -1;
