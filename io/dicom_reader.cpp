@@ -28,7 +28,7 @@ namespace {
 // its pixels).
 std::optional<DicomHeader> readDicomHeader(GdcmProcess& gdcm, const std::string& path) {
     const DicomStructure structure = checkDicomStructure(path, false);
-    const bool deflated = structure.transferSyntax == "1.2.840.10008.1.2.1.99";
+    const bool deflated = structure.transferSyntax == kDeflatedTransferSyntax;
     if (!structure.hasPixelData && !deflated) return std::nullopt;
     return gdcm.readHeader(path);
 }
@@ -57,6 +57,25 @@ std::vector<std::string> filesUnder(const std::string& dir) {
     }
     std::sort(files.begin(), files.end(), naturalLess);
     return files;
+}
+
+// Refuses pixel data that cannot hold what the header promises, before GDCM decodes it: native
+// data shorter than Rows x Columns x BitsAllocated / 8 (GDCM would copy the rest from beyond
+// its buffer), encapsulated data without a fragment. A deflated data set is checked in the
+// helper, after GDCM inflated it (io/gdcm_module).
+void checkPixelData(const DicomHeader& h, const DicomStructure& s) {
+    if (s.transferSyntax == kDeflatedTransferSyntax) return;
+    const uint64_t bits = uint64_t(fileScalarSize(h.pixelType)) * 8;
+    const uint64_t need = nativePixelBytes(h.rows, h.columns, 1, bits, 1);
+    if (s.encapsulated && s.fragments == 0)
+        throwIoError(h.path, "its encapsulated pixel data (transfer syntax " + s.transferSyntax +
+                                 ") has no fragment after its offset table");
+    if (!s.encapsulated && s.pixelBytes < need)
+        throwIoError(h.path, "its pixel data holds " + std::to_string(s.pixelBytes) +
+                                 " bytes where Rows x Columns x BitsAllocated/8 (" +
+                                 std::to_string(h.rows) + " x " + std::to_string(h.columns) +
+                                 " x " + std::to_string(bits / 8) + ") needs " +
+                                 std::to_string(need));
 }
 
 class DicomSliceReader final : public SliceReader {
@@ -94,7 +113,8 @@ public:
 
 private:
     void readSlice(const DicomHeader& h, unsigned char* dst) {
-        checkDicomStructure(h.path, true);  // also when it was sound at open: it may have changed
+        // Also when it was sound at open: it may have changed.
+        checkPixelData(h, checkDicomStructure(h.path, true));
         const size_t samples = size_t(h.rows) * h.columns;
         mScratch.resize(samples * fileScalarSize(h.pixelType));
         mGdcm->decodePixels(h, mScratch.data());

@@ -98,12 +98,16 @@ public:
                                     std::to_string(at));
         if (s.transferSyntax.empty())
             throwIoError(mPath, "its meta header names no transfer syntax (0002,0010)");
-        if (s.transferSyntax == "1.2.840.10008.1.2.1.99") return s;  // deflated: GDCM inflates
+        if (s.transferSyntax == kDeflatedTransferSyntax) return s;  // deflated: GDCM inflates
         Encoding data;
         data.explicitVR = s.transferSyntax != "1.2.840.10008.1.2";
         data.bigEndian = s.transferSyntax == "1.2.840.10008.1.2.2";
         walkDataSet(at, mSize, false, data, 0, true);
         s.hasPixelData = mSawPixelData;
+        s.encapsulated = mPixels.encapsulated;
+        s.pixelBytes = mPixels.pixelBytes;
+        s.fragments = mPixels.fragments;
+        s.offsetTableBytes = mPixels.offsetTableBytes;
         return s;
     }
 
@@ -176,13 +180,15 @@ private:
             if (topLevel && e.group == 0x7fe0 && e.element == 0x0010) {
                 mSawPixelData = true;
                 if (!mThroughPixelData) return at;
+                mPixels.encapsulated = e.length == kUndefinedLength;
+                if (!mPixels.encapsulated) mPixels.pixelBytes = e.length;
             }
             if (e.length != kUndefinedLength) {
                 if (enc.explicitVR && e.isVR("SQ"))
                     walkItems(e.value, e.value + e.length, false, enc, depth + 1);
                 at = e.value + e.length;
             } else if (e.group == 0x7fe0 && e.element == 0x0010 && enc.explicitVR) {
-                at = walkFragments(e.value, end);
+                at = walkFragments(e.value, end, topLevel);
             } else if (!enc.explicitVR || e.isVR("SQ")) {
                 at = walkItems(e.value, end, true, enc, depth + 1);
             } else if (e.isVR("UN")) {
@@ -214,15 +220,29 @@ private:
         return at;
     }
 
-    // Encapsulated pixel data: items of defined length up to the sequence end.
-    uint64_t walkFragments(uint64_t at, uint64_t end) {
+    // Encapsulated pixel data: items of defined length up to the sequence end, the first the
+    // basic offset table (empty, or a 32-bit offset per frame). Counted for the top level.
+    uint64_t walkFragments(uint64_t at, uint64_t end, bool topLevel) {
         const Encoding little{false, false};
+        bool first = true;
         while (at < end) {
             const Element item = readElement(at, end, little);
-            if (item.group == kItemGroup && item.element == kSequenceEnd) return item.value;
+            if (item.group == kItemGroup && item.element == kSequenceEnd) {
+                if (first) fail(at, item, "ends encapsulated pixel data that has no basic offset table");
+                return item.value;
+            }
             if (item.group != kItemGroup || item.element != kItem ||
                 item.length == kUndefinedLength)
                 fail(at, item, "stands where a pixel data fragment belongs");
+            if (first && item.length % 4 != 0)
+                fail(at, item, "is a basic offset table of " + std::to_string(item.length) +
+                                   " bytes, not a whole number of 32-bit offsets");
+            if (topLevel && first) mPixels.offsetTableBytes = item.length;
+            else if (topLevel) {
+                ++mPixels.fragments;
+                mPixels.pixelBytes += item.length;
+            }
+            first = false;
             at = item.value + item.length;
         }
         throwIoError(mPath, "ends inside its encapsulated pixel data");
@@ -233,9 +253,18 @@ private:
     uint64_t mSize;
     bool mThroughPixelData;
     bool mSawPixelData = false;
+    DicomStructure mPixels;  // only the pixel data's fields
 };
 
 }  // namespace
+
+uint64_t nativePixelBytes(uint64_t rows, uint64_t columns, uint64_t samplesPerPixel,
+                          uint64_t bitsAllocated, uint64_t frames) {
+    if (rows > 65535 || columns > 65535 || samplesPerPixel > 4 || bitsAllocated > 64 ||
+        bitsAllocated % 8 != 0 || frames > (uint64_t(1) << 31))
+        return 0;
+    return rows * columns * samplesPerPixel * (bitsAllocated / 8) * frames;
+}
 
 DicomStructure checkDicomStructure(const std::string& path, bool throughPixelData) {
     return Walker(path, throughPixelData).walk();

@@ -10,14 +10,30 @@
 // Files without the DICM signature (pre-Part-10) are refused here.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace vdiso {
 
+// Deflated explicit VR little endian: the data set after the meta header is a zlib stream.
+inline constexpr const char* kDeflatedTransferSyntax = "1.2.840.10008.1.2.1.99";
+
 struct DicomStructure {
     std::string transferSyntax;  // from the meta header (0002,0010)
     bool hasPixelData = false;   // (7FE0,0010) is there (always false for a deflated data set)
+    // The top-level pixel data as the walk found it (with `throughPixelData`): native, its
+    // value's length in bytes; encapsulated, the fragments after the basic offset table (their
+    // count and bytes) and the table's length.
+    bool encapsulated = false;
+    uint64_t pixelBytes = 0;
+    uint64_t fragments = 0;
+    uint64_t offsetTableBytes = 0;
 };
+
+// The bytes native pixel data must hold: Rows x Columns x SamplesPerPixel x BitsAllocated / 8
+// x NumberOfFrames (Part 5, 8.1.1); 0 when a factor is out of range.
+uint64_t nativePixelBytes(uint64_t rows, uint64_t columns, uint64_t samplesPerPixel,
+                          uint64_t bitsAllocated, uint64_t frames);
 
 // Walks the file up to the pixel data (7FE0,0010) or, with `throughPixelData`, to its end.
 // Throws IoError "<path>: ..." saying where (byte offset, tag) the structure breaks.

@@ -48,6 +48,7 @@ struct SliceSpec {
     double slope = 1.0, intercept = -1024.0;
     int instance = 1;
     bool jpegLossless = false;
+    uint32_t pixelDataBytes = 0;  // the pixel data's length: 0 for the whole image
 };
 
 // Stored value of pixel i of slice z: within 12 bits, different on every slice.
@@ -77,7 +78,8 @@ void writeSlice(const std::string& path, const SliceSpec& s, int64_t z) {
     std::vector<uint16_t> pixels(size_t(s.columns) * s.rows);
     for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = storedValue(z, int64_t(i));
     gdcm::DataElement data(gdcm::Tag(0x7fe0, 0x0010));
-    data.SetByteValue(reinterpret_cast<const char*>(pixels.data()), uint32_t(pixels.size() * 2));
+    data.SetByteValue(reinterpret_cast<const char*>(pixels.data()),
+                      s.pixelDataBytes ? s.pixelDataBytes : uint32_t(pixels.size() * 2));
     image.SetDataElement(data);
     if (s.jpegLossless) {
         gdcm::ImageChangeTransferSyntax change;
@@ -379,6 +381,76 @@ TEST_F(DicomErrors, TransferSyntaxGdcmCannotDecode) {
             test::readAllValues(*reader);
         },
         {files[1], "1.2.840.10008.1.2.4.94"});
+}
+
+// Pixel data shorter than Rows x Columns x BitsAllocated/8 says: GDCM would copy the rest from
+// beyond its buffer in the helper (a process's memory in the user's volume). Refused, naming the
+// file and both lengths, before GDCM decodes it.
+TEST_F(DicomErrors, PixelDataShorterThanItsHeaderIsRefused) {
+    SliceSpec s;
+    s.rows = 1028;
+    s.columns = 6;
+    s.isSigned = true;
+    s.pixelDataBytes = 48;
+    const std::vector<std::string> files = writeSeries(path("short"), s, 3);
+    for (const std::string& f : files) ASSERT_LT(std::filesystem::file_size(f), 2000u);
+    expectIoError(
+        [&] {
+            auto reader = openVolume(path("short"), {});
+            test::readAllValues(*reader);
+        },
+        {path("short/IM"), "pixel data holds 48 bytes", "1028 x 6 x 2", "needs 12336"});
+    // One byte short of the image is refused too; the whole image reads.
+    s.pixelDataBytes = 12336 - 2;
+    writeSeries(path("short2"), s, 2);
+    expectIoError(
+        [&] {
+            auto reader = openVolume(path("short2"), {});
+            test::readAllValues(*reader);
+        },
+        {path("short2/IM"), "holds 12334 bytes", "needs 12336"});
+    s.pixelDataBytes = 0;
+    writeSeries(path("whole"), s, 2);
+    auto reader = openVolume(path("whole"), {});
+    test::readAllValues(*reader);
+}
+
+// Encapsulated pixel data holding only its basic offset table, and a table that is not a whole
+// number of offsets: refused by name before GDCM sees them (its BasicOffsetTable asserts).
+TEST_F(DicomErrors, EncapsulatedPixelDataWithoutFragmentsIsRefused) {
+    SliceSpec s;
+    s.jpegLossless = true;
+    const std::vector<std::string> files = writeSeries(path("jpeg"), s, 2);
+    const std::vector<unsigned char> bytes = test::readFile(files[0]);
+    // The pixel data element: (7FE0,0010) OB, reserved, undefined length; then the offset table.
+    const unsigned char tag[] = {0xe0, 0x7f, 0x10, 0x00, 'O', 'B', 0, 0, 0xff, 0xff, 0xff, 0xff};
+    const auto at = std::search(bytes.begin(), bytes.end(), std::begin(tag), std::end(tag));
+    ASSERT_NE(at, bytes.end());
+    const size_t table = size_t(at - bytes.begin()) + sizeof(tag);
+    // Only the (empty) offset table, then the sequence end.
+    std::vector<unsigned char> noFragment(bytes.begin(), bytes.begin() + std::ptrdiff_t(table));
+    const unsigned char emptyTableAndEnd[] = {0xfe, 0xff, 0x00, 0xe0, 0, 0, 0, 0,
+                                              0xfe, 0xff, 0xdd, 0xe0, 0, 0, 0, 0};
+    noFragment.insert(noFragment.end(), std::begin(emptyTableAndEnd), std::end(emptyTableAndEnd));
+    test::writeFile(files[0], noFragment.data(), noFragment.size());
+    expectIoError(
+        [&] {
+            auto reader = openDicomFiles(files, "");
+            test::readAllValues(*reader);
+        },
+        {files[0], "no fragment"});
+    // An offset table of 6 bytes.
+    std::vector<unsigned char> oddTable(bytes.begin(), bytes.begin() + std::ptrdiff_t(table));
+    const unsigned char table6[] = {0xfe, 0xff, 0x00, 0xe0, 6, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+                                    0xfe, 0xff, 0xdd, 0xe0, 0, 0, 0, 0};
+    oddTable.insert(oddTable.end(), std::begin(table6), std::end(table6));
+    test::writeFile(files[0], oddTable.data(), oddTable.size());
+    expectIoError(
+        [&] {
+            auto reader = openDicomFiles(files, "");
+            test::readAllValues(*reader);
+        },
+        {files[0], "basic offset table of 6 bytes"});
 }
 
 TEST_F(DicomErrors, EveryTruncationOfASlice) {

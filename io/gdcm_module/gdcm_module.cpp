@@ -204,6 +204,15 @@ std::string decodeHere(const std::string& path, const DicomHeader& h, std::strin
                std::to_string(h.rows) + " single-channel " + std::to_string(bits) +
                "-bit image its header describes";
     const size_t bytes = size_t(h.rows) * h.columns * (bits / 8);
+    // Native data is copied as it is: it must hold the whole image (the parent checked the file
+    // as it saw it; this is what GDCM parsed, inflated if the data set was deflated).
+    if (const gdcm::ByteValue* native = image.GetDataElement().GetByteValue();
+        native && native->GetLength() < bytes)
+        return "its pixel data holds " + std::to_string(native->GetLength()) + " bytes where " +
+               std::to_string(h.columns) + " x " + std::to_string(h.rows) + " x " +
+               std::to_string(bits / 8) + " = " + std::to_string(bytes) + " are needed";
+    if (!image.GetDataElement().GetByteValue() && !image.GetDataElement().GetSequenceOfFragments())
+        return "its pixel data is neither native nor encapsulated";
     if (image.GetBufferLength() != bytes)
         return "its pixel data is " + std::to_string(image.GetBufferLength()) + " bytes where " +
                std::to_string(bytes) + " are needed";
