@@ -542,6 +542,9 @@ std::unique_ptr<SliceReader> openNrrdVolume(const std::string& path) {
                      "has no data: the header neither ends with a blank line nor names a "
                      "'data file'");
     const std::string dataPath = attached ? path : resolveDataFile(path, h.dataFile);
+    std::error_code ec;
+    if (!attached && std::filesystem::is_directory(dataPath, ec))
+        throwIoError(path, "its data file " + dataPath + " is a directory, not a file of samples");
     uint64_t start = attached ? h.headerBytes : 0;
     if (h.lineSkip > 0) start = skipLines(dataPath, start, h.lineSkip);
 

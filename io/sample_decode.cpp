@@ -52,7 +52,8 @@ Dst toStore(double v) {
     if constexpr (std::is_floating_point_v<Dst>) {
         return Dst(v);
     } else {
-        v = std::nearbyint(v);
+        // NaN has no integer: it becomes 0, as a missing sample does.
+        v = std::isnan(v) ? 0.0 : std::nearbyint(v);
         v = std::clamp(v, double(std::numeric_limits<Dst>::lowest()),
                        double(std::numeric_limits<Dst>::max()));
         return Dst(v);

@@ -26,6 +26,13 @@ const json& field(const json& j, const char* key, const std::string& where) {
     return *it;
 }
 
+// "64 x 64 x 64": a chunk shape in the file's axis order.
+std::string chunkShapeText(const std::vector<int64_t>& chunks) {
+    std::string text;
+    for (size_t a = 0; a < chunks.size(); ++a) text += (a ? " x " : "") + std::to_string(chunks[a]);
+    return text;
+}
+
 std::vector<int64_t> integers(const json& j, const char* what, const std::string& where) {
     if (!j.is_array()) throwIoError(where, std::string("\"") + what + "\" is not an array");
     std::vector<int64_t> v;
@@ -200,16 +207,19 @@ ZarrArrayMeta parseZarrArrayMeta(const std::string& text, int format, const std:
     }
     if (m.shape.empty() || m.shape.size() != m.chunks.size())
         throwIoError(where, "shape and chunks differ in length, or are empty");
-    double bytes = double(fileScalarSize(m.type));
+    // The chunk's byte count saturates instead of wrapping or leaving integers: the shape is
+    // the file's word, and may be any size.
+    uint64_t bytes = fileScalarSize(m.type);
     for (size_t a = 0; a < m.shape.size(); ++a) {
         if (m.shape[a] < 0 || m.chunks[a] < 1)
             throwIoError(where, "shape " + std::to_string(m.shape[a]) + " or chunk " +
                                     std::to_string(m.chunks[a]) + " is out of range");
-        bytes *= double(m.chunks[a]);
+        if (__builtin_mul_overflow(bytes, uint64_t(m.chunks[a]), &bytes)) bytes = UINT64_MAX;
     }
-    if (bytes > double(kMaxChunkBytes))
-        throwIoError(where, "chunks of " + std::to_string(uint64_t(bytes)) +
-                                " bytes are larger than vdiso reads (1 GiB)");
+    if (bytes > kMaxChunkBytes)
+        throwIoError(where, "chunks of " + chunkShapeText(m.chunks) + " samples (" +
+                                (bytes == UINT64_MAX ? std::string("over 2^64") : std::to_string(bytes)) +
+                                " bytes) are larger than vdiso reads (1 GiB)");
     return m;
 }
 

@@ -56,8 +56,17 @@ std::vector<unsigned char> encodeVertices(const std::vector<PackedVertex>& verti
     return out;
 }
 
+// The most vertices `bytes` of meshoptimizer's vertex codec can hold. Its densest form spends
+// 2 bits of control on each byte channel of a block of up to 256 vertices whose deltas are all
+// zero, so a vertex costs at least 1/128 of a byte whatever the codec's version: a count above
+// this bound is a lie, refused before anything is sized from it.
+constexpr uint64_t kMaxVerticesPerByte = 128;
+
 std::vector<PackedVertex> decodeVertices(const uint8_t* data, size_t bytes, uint32_t count,
                                          const char* what) {
+    if (uint64_t(count) > uint64_t(bytes) * kMaxVerticesPerByte)
+        throw ProtocolError(std::string("CHUNK: ") + std::to_string(count) + " " + what +
+                            " cannot be held in " + std::to_string(bytes) + " bytes");
     std::vector<PackedVertex> out(count);
     if (count == 0 && bytes == 0) return out;
     if (meshopt_decodeVertexBuffer(out.data(), count, sizeof(PackedVertex), data, bytes) != 0)
@@ -151,6 +160,10 @@ DecodedChunk decodeChunk(std::span<const uint8_t> message) {
     const ChunkHeader& h = d.header;
     const uint8_t* p = message.data() + kChunkHeaderBytes;
     const std::vector<PackedVertex> vertices = decodeVertices(p, h.vertexBytes, h.vertexCount, "vertices");
+    // The index codec spends at least one byte on each triangle.
+    if (h.triangleCount > h.indexBytes)
+        throw ProtocolError("CHUNK: " + std::to_string(h.triangleCount) + " triangles cannot be held in " +
+                            std::to_string(h.indexBytes) + " bytes");
     d.mesh.indices.resize(size_t(h.triangleCount) * 3);
     if (h.triangleCount &&
         meshopt_decodeIndexBuffer(d.mesh.indices.data(), d.mesh.indices.size(), sizeof(uint32_t),

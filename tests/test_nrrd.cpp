@@ -5,6 +5,7 @@
 #include <zlib.h>
 
 #include <stdexcept>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -329,6 +330,18 @@ TEST_F(NrrdReader, ByteSkipMinusOneReadsFromTheEnd) {
     auto reader = openNrrdVolume(
         write("tail.nhdr", header("ushort", "raw", "byte skip: -1\ndata file: tail.raw\n")));
     expectValues(*reader, FileScalar::U16);
+}
+
+TEST_F(NrrdErrors, DataFileThatIsADirectoryIsNamed) {
+    // Was "basic_filebuf::underflow error reading the file: Is a directory", the C++ library's
+    // words, when a line skip read into it.
+    std::filesystem::create_directories(path("dir.raw"));
+    for (const char* skip : {"line skip: 2\n", "", "byte skip: 4\n"}) {
+        SCOPED_TRACE(skip);
+        const std::string p =
+            write("dir.nhdr", header("short", "raw", std::string(skip) + "data file: dir.raw\n"));
+        expectIoError([&] { openNrrdVolume(p); }, {p, path("dir.raw"), "is a directory"});
+    }
 }
 
 TEST_F(NrrdErrors, RawDataShorterThanSizes) {

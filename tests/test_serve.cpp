@@ -40,6 +40,37 @@ namespace {
 
 using namespace serve;
 
+TEST(ServeChunkCodec, CountsBeyondTheirBytesAreRefusedBeforeAllocating) {
+    // Found by fuzz_protocol: a small CHUNK announcing 0x7fffe00f vertices made the decoder ask
+    // for 34 GB before the vertex codec saw that 40 bytes cannot hold them.
+    TriangleMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    mesh.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    mesh.indices = {0, 1, 2};
+    PointSet points;
+    points.positions = {{1, 2, 3}};
+    points.normals = {{0, 0, 1}};
+    const std::vector<uint8_t> message = encodeChunk(ChunkHeader{}, mesh, points);
+    for (const auto& [field, count, part] :
+         {std::tuple{"vertices", 0x7fffe00fu, "vertices cannot be held"},
+          std::tuple{"triangles", 0x7fffe00fu, "triangles cannot be held"},
+          std::tuple{"points", 0x7fffe00fu, "points cannot be held"}}) {
+        SCOPED_TRACE(field);
+        ChunkHeader h = readChunkHeader(message);
+        if (std::string(field) == "vertices") h.vertexCount = count;
+        if (std::string(field) == "triangles") h.triangleCount = count;
+        if (std::string(field) == "points") h.pointCount = count;
+        std::vector<uint8_t> lie = message;
+        writeChunkHeader(h, lie.data());
+        try {
+            decodeChunk(lie);
+            ADD_FAILURE() << "decoded";
+        } catch (const ProtocolError& e) {
+            EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Messages
 

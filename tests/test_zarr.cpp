@@ -298,6 +298,11 @@ TEST_F(ZarrErrors, UnsupportedAndMalformedMetadataAreNamed) {
             },
             {path("m"), part});
     }
+    // fuzz_zarr's finding (UBSan, float-cast-overflow): chunks of 5.5e17 elements made a byte
+    // count of 6.7e19, converted to an integer for the message.
+    write("h/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "float64", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [550000000, 1000000000, 100]}}, "fill_value": 0, "codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]})");
+    expectIoError([&] { openZarrVolume(path("h"), 0); },
+                  {path("h"), "550000000 x 1000000000 x 100 samples", "over 2^64", "1 GiB"});
     write("s/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "uint16", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [9, 10, 13]}}, "fill_value": 0, "codecs": [{"name": "sharding_indexed", "configuration": {}}]})");
     expectIoError([&] { openZarrVolume(path("s"), 0); }, {"sharded"});
     std::filesystem::create_directories(path("empty"));
