@@ -46,8 +46,7 @@ int GdcmProcess::call(char kind, const std::string& path, const std::string& req
         ok = receiveReply(fd, status, body);
     }
     if (!ok)
-        throwIoError(path, "GDCM " + mHelper.reap() +
-                               " reading it: the file is damaged or in a form GDCM cannot handle");
+        mHelper.died(path, "GDCM", "reading it", "the file is damaged or in a form GDCM cannot handle");
     if (status == 1) throwIoError(path, body);
     return status;
 }

@@ -94,17 +94,21 @@ void HelperProcess::start(const std::string& what, const std::function<void(int)
     mChild = pid;
 }
 
-std::string HelperProcess::reap() {
+void HelperProcess::died(const std::string& what, const std::string& library,
+                         const std::string& doing, const std::string& advice) {
     if (mSocket >= 0) ::close(mSocket);
     mSocket = -1;
     int status = 0;
     while (mChild > 0 && ::waitpid(mChild, &status, 0) < 0 && errno == EINTR) {
     }
     mChild = -1;
-    if (WIFSIGNALED(status))
-        return "was ended by signal " + std::to_string(WTERMSIG(status)) +
-               (WTERMSIG(status) == SIGABRT ? " (an assertion)" : "");
-    return "exited with status " + std::to_string(WEXITSTATUS(status));
+    const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+    const int exitStatus = WIFEXITED(status) ? WEXITSTATUS(status) : 0;
+    const std::string how = signal ? "was ended by signal " + std::to_string(signal) +
+                                         (signal == SIGABRT ? " (an assertion)" : "")
+                                   : "exited with status " + std::to_string(exitStatus);
+    throw HelperDied(what + ": " + library + " " + how + " " + doing + ": " + advice, signal,
+                     exitStatus);
 }
 
 }  // namespace vdiso

@@ -12,9 +12,21 @@
 #include <functional>
 #include <string>
 
+#include "io/error.h"
 #include "io/helper_wire.h"
 
 namespace vdiso {
+
+// A helper that died while serving a request: the file is refused (an IoError), and the fuzz
+// harness can tell a contained library abort (SIGABRT, from an assertion) from a crash, a
+// sanitizer report or an out-of-memory exit, which are findings (fuzz/fuzz_input.h).
+class HelperDied : public IoError {
+public:
+    HelperDied(const std::string& message, int endSignal, int endStatus)
+        : IoError(message), signal(endSignal), exitStatus(endStatus) {}
+    int signal;      // the signal that ended it, or 0
+    int exitStatus;  // its exit status when no signal ended it
+};
 
 // A child process running `serve(socket)` (which must not return: it ends with _exit), and the
 // parent's end of the socket. The child first resets fatal signals to their defaults (vdiso's
@@ -33,9 +45,11 @@ public:
     void start(const std::string& what, const std::function<void(int socket)>& serve);
     bool running() const { return mChild > 0; }
     int socket() const { return mSocket; }
-    // Waits for the child after the socket failed; returns how it ended ("was ended by signal 6
-    // (an assertion)", "exited with status 1").
-    std::string reap();
+    // Waits for the child after the socket failed and throws HelperDied: "<what>: <library>
+    // <how it ended> <doing>: <advice>", how it ended being "was ended by signal 6 (an
+    // assertion)" or "exited with status 1".
+    [[noreturn]] void died(const std::string& what, const std::string& library,
+                           const std::string& doing, const std::string& advice);
 
 private:
     int mSocket = -1;

@@ -135,9 +135,8 @@ private:
         return status;
     }
     [[noreturn]] void died(const char* doing) {
-        throwIoError(mName, mLibrary + " " + mHelper.reap() + " " + doing +
-                                ": the file is damaged or in a form " + mLibrary +
-                                " cannot handle");
+        mHelper.died(mName, mLibrary, doing,
+                     "the file is damaged or in a form " + mLibrary + " cannot handle");
     }
 
     std::string mName, mLibrary;
