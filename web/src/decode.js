@@ -8,22 +8,38 @@
 //   - points stay interleaved, the decoder's output used as the vertex buffer directly;
 //   - triangle vertices are split into position (3 x u16) and normal (1 x u16) arrays, because
 //     THREE.BatchedMesh (where they go, see scene.js) copies plain attributes only.
+//
+// Every count is checked against the bytes that hold it (protocol.js: checkChunkSection) before
+// anything is sized from it, here too and not only in decodeServerMessage, because the decoder
+// sizes its output (in its WebAssembly memory, which never shrinks) from the count alone. What
+// the decoder throws comes out as an Error naming the section.
 import { MeshoptDecoder } from 'meshoptimizer/decoder';
-import { VERTEX_BYTES } from './protocol.js';
+import { VERTEX_BYTES, checkChunkSection, minIndexBytes, minVertexBytes } from './protocol.js';
 
 export const decoderReady = MeshoptDecoder.ready;
 
-function decodeVertices(data, count) {
+function decodeWith(what, decode) {
+  try {
+    decode();
+  } catch (error) {
+    throw new Error(`CHUNK ${what} do not decode: ${error?.message || error}`);
+  }
+}
+
+function decodeVertices(data, count, what) {
+  checkChunkSection(what, count, data.length, minVertexBytes);
   const vertices = new Uint16Array(4 * count);
+  if (count === 0) return vertices;
   // The decoder copies bytes into its target, so the target must be a byte view.
-  MeshoptDecoder.decodeVertexBuffer(new Uint8Array(vertices.buffer), count, VERTEX_BYTES, data);
+  decodeWith(what, () => MeshoptDecoder.decodeVertexBuffer(new Uint8Array(vertices.buffer), count, VERTEX_BYTES, data));
   return vertices;
 }
 
 // Triangles of a chunk: { positions: Uint16Array(3n), normals: Uint16Array(n), indices: Uint32Array(3t) }.
 export function decodeTriangles(chunk) {
   const { vertexCount, triangleCount } = chunk;
-  const vertices = decodeVertices(chunk.vertexData, vertexCount);
+  checkChunkSection('triangles', triangleCount, chunk.indexData.length, minIndexBytes);
+  const vertices = decodeVertices(chunk.vertexData, vertexCount, 'vertices');
   const positions = new Uint16Array(3 * vertexCount);
   const normals = new Uint16Array(vertexCount);
   for (let v = 0, p = 0, q = 0; v < vertexCount; ++v, p += 3, q += 4) {
@@ -33,7 +49,9 @@ export function decodeTriangles(chunk) {
     normals[v] = vertices[q + 3];
   }
   const indices = new Uint32Array(3 * triangleCount);
-  MeshoptDecoder.decodeIndexBuffer(new Uint8Array(indices.buffer), 3 * triangleCount, 4, chunk.indexData);
+  if (triangleCount > 0) {
+    decodeWith('triangles', () => MeshoptDecoder.decodeIndexBuffer(new Uint8Array(indices.buffer), 3 * triangleCount, 4, chunk.indexData));
+  }
   // In a BatchedMesh an index past the chunk's vertices would silently draw another chunk's.
   for (let i = 0; i < indices.length; ++i) {
     if (indices[i] >= vertexCount) throw new Error(`CHUNK index ${indices[i]} beyond its ${vertexCount} vertices`);
@@ -43,5 +61,5 @@ export function decodeTriangles(chunk) {
 
 // Points of a chunk, interleaved as on the wire: Uint16Array(4n).
 export function decodePoints(chunk) {
-  return decodeVertices(chunk.pointData, chunk.pointCount);
+  return decodeVertices(chunk.pointData, chunk.pointCount, 'points');
 }

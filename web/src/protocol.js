@@ -20,6 +20,42 @@ export const CHUNK_FLAG_CACHEABLE = 1;
 export const TRANSIENT_BRICK = 0xffffffff;
 // Triangle vertices and points alike: u16 x, y, z in the chunk's box, then i8 u, v (octahedral normal).
 export const VERTEX_BYTES = 8;
+// The most vertices, triangles or points one CHUNK may hold. The server's chunks are one brick's
+// surface (32^3 cells by default, at most 5 triangles each: 163840) or a transient batch of
+// about 32768 vertices and points; 2^24 is far above both, and still what a page can decode (a
+// count costs at most 16 bytes of typed arrays, so 256 MiB per section) rather than what a
+// hostile header asks for.
+export const CHUNK_MAX_COUNT = 1 << 24;
+
+// The fewest bytes in which meshoptimizer's codecs can hold `count` items: a section shorter
+// than that is refused before anything is allocated for its count, since the decoder (like
+// decode.js) sizes its output from the count and looks at the bytes only afterwards. Both bounds
+// are the decoder's own (meshoptimizer 1.3, src/vertexcodec.cpp and src/indexcodec.cpp), so every
+// section it accepts passes them, and its encoder reaches them.
+//
+// Vertex codec, 8-byte vertices (the decoder reads formats 0 and 1, refusing others): a header
+// byte, a tail (the first vertex; in format 1 also the channel modes) padded to 24 bytes in
+// format 1 (32 in format 0), and between them one block per 256 vertices, each at least 2 bytes
+// (format 1's two control bytes with every byte channel coded as zero; a format 0 block takes at
+// least 8). So n vertices take at least 25 + 2 * ceil(n / 256) bytes: at most 128 per byte.
+export function minVertexBytes(count) {
+  return count === 0 ? 0 : 25 + 2 * Math.ceil(count / 256);
+}
+
+// Index codec (meshopt_decodeIndexBuffer refuses less): a header byte, one code byte per
+// triangle and a 16-byte table, so t triangles take at least 17 + t bytes.
+export function minIndexBytes(triangles) {
+  return triangles === 0 ? 0 : 17 + triangles;
+}
+
+// Throws unless `count` items (at most CHUNK_MAX_COUNT) fit in `bytes` by `minBytes`; an empty
+// section has no bytes at all (the server writes none for it).
+export function checkChunkSection(what, count, bytes, minBytes) {
+  if (count > CHUNK_MAX_COUNT) throw new Error(`CHUNK of ${count} ${what}: at most ${CHUNK_MAX_COUNT}`);
+  if (count === 0 && bytes !== 0) throw new Error(`CHUNK of 0 ${what} has ${bytes} bytes of them`);
+  const least = minBytes(count);
+  if (bytes < least) throw new Error(`CHUNK of ${count} ${what} has ${bytes} bytes of them, less than the ${least} they take`);
+}
 
 const LE = true;
 
@@ -96,6 +132,15 @@ function decodeChunk(buffer, view) {
   if (chunk.cacheable === (chunk.brick === TRANSIENT_BRICK)) {
     throw new Error(`CHUNK brick ${chunk.brick} disagrees with its cacheable flag`);
   }
+  // The counts against the sections that hold them, here on arrival (and again in decode.js,
+  // next to the allocations), so a malformed chunk never reaches the cache.
+  checkChunkSection('vertices', chunk.vertexCount, vertexBytes, minVertexBytes);
+  checkChunkSection('triangles', chunk.triangleCount, indexBytes, minIndexBytes);
+  checkChunkSection('points', chunk.pointCount, pointBytes, minVertexBytes);
+  // The server sends the vertices its triangles use: one without the other is malformed.
+  if ((chunk.vertexCount === 0) !== (chunk.triangleCount === 0)) {
+    throw new Error(`CHUNK of ${chunk.vertexCount} vertices and ${chunk.triangleCount} triangles`);
+  }
   let offset = CHUNK_HEADER_BYTES;
   chunk.vertexData = new Uint8Array(buffer, offset, vertexBytes);
   offset += vertexBytes;
@@ -107,6 +152,8 @@ function decodeChunk(buffer, view) {
 
 function decodeRefs(buffer, view) {
   if (buffer.byteLength < REFS_HEADER_BYTES) throw new Error(`REFS of ${buffer.byteLength} bytes is shorter than its header`);
+  // The count against the length: the bricks are a view of the message, never a copy, so this
+  // also bounds what is made from them.
   const count = view.getUint32(8, LE);
   if (buffer.byteLength !== REFS_HEADER_BYTES + 4 * count) {
     throw new Error(`REFS of ${buffer.byteLength} bytes announces ${count} bricks`);
@@ -123,6 +170,7 @@ function decodeRefs(buffer, view) {
 
 // A binary message from the server: a CHUNK or a REFS. Throws on anything malformed.
 export function decodeServerMessage(buffer) {
+  if (!(buffer instanceof ArrayBuffer)) throw new Error('binary message is not an ArrayBuffer');
   if (buffer.byteLength < 4) throw new Error(`binary message of ${buffer.byteLength} bytes`);
   const view = new DataView(buffer);
   const type = view.getUint8(0);
