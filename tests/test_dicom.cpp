@@ -451,6 +451,13 @@ TEST_F(DicomErrors, EncapsulatedPixelDataWithoutFragmentsIsRefused) {
             test::readAllValues(*reader);
         },
         {files[0], "basic offset table of 6 bytes"});
+    // fuzz_dicom's finding: an offset table claiming 3.7 GB in a small file, which GDCM reads
+    // (and allocated) with the header, before the pixels were asked for.
+    std::vector<unsigned char> hugeTable = bytes;
+    const unsigned char claim[] = {0x00, 0x00, 0x00, 0xe0};
+    std::copy(std::begin(claim), std::end(claim), hugeTable.begin() + std::ptrdiff_t(table + 4));
+    test::writeFile(files[0], hugeTable.data(), hugeTable.size());
+    expectIoError([&] { openDicomFiles(files, ""); }, {files[0], "3758096384 bytes, past the end"});
 }
 
 TEST_F(DicomErrors, EveryTruncationOfASlice) {
