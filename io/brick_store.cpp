@@ -66,82 +66,47 @@ double ValueHistogram::quantile(double fraction) const {
     return hi;
 }
 
-namespace {
-
-void preadExact(int fd, void* dst, size_t n, uint64_t offset, const std::string& path,
-                const char* what) {
-    auto* p = static_cast<char*>(dst);
-    size_t done = 0;
-    while (done < n) {
-        ssize_t r = ::pread(fd, p + done, n - done, off_t(offset + done));
-        if (r < 0) {
-            if (errno == EINTR) continue;
-            throwSystemError(path, std::string("cannot read ") + what + " at byte offset " +
-                                       std::to_string(offset + done), errno);
-        }
-        if (r == 0)
-            throwIoError(path, std::string("ends inside the ") + what + " (byte offset " +
-                                   std::to_string(offset + done) + "): the file is truncated");
-        done += size_t(r);
-    }
-}
-
-}  // namespace
-
 BrickStoreReader::BrickStoreReader(std::string path, ReadMode mode)
-    : mPath(std::move(path)), mMode(mode) {
-    mFd = ::open(mPath.c_str(), O_RDONLY | O_CLOEXEC);
-    if (mFd < 0) throwSystemError(mPath, "cannot open", errno);
-    try {
-        const off_t end = ::lseek(mFd, 0, SEEK_END);
-        if (end < 0) throwSystemError(mPath, "cannot seek", errno);
-        mFileBytes = uint64_t(end);
-        if (mFileBytes < kStoreHeaderBytes) {
-            unsigned char magic[8] = {};
-            ssize_t got = ::pread(mFd, magic, 8, 0);
-            if (got == 8 && std::equal(magic, magic + 8, store_format::kHeaderMagic))
-                throwIoError(mPath, "is truncated inside its header (" +
-                                        std::to_string(mFileBytes) + " bytes)");
-            throwIoError(mPath, "not a vdiso brick store (wrong magic; convert volumes with "
-                                "'vdiso convert' first)");
-        }
-        std::vector<unsigned char> headerBytes(kStoreHeaderBytes);
-        preadExact(mFd, headerBytes.data(), headerBytes.size(), 0, mPath, "header");
-        mHeader = store_format::decodeHeader(headerBytes.data(), headerBytes.size(), mPath);
-        mLayout = BrickLayout(mHeader.volume.dims, mHeader.brickSize);
-        mLevels = brickLevels(mHeader.volume, mHeader.brickSize, mHeader.levelCount);
-        // Compared without a sum that could wrap: both numbers come from the file.
-        if (mHeader.indexOffset < kStoreHeaderBytes || mHeader.indexBytes > mFileBytes ||
-            mHeader.indexOffset > mFileBytes - mHeader.indexBytes)
-            throwIoError(mPath, "index is missing or truncated: it needs " +
-                                    std::to_string(mHeader.indexBytes) + " bytes from byte offset " +
-                                    std::to_string(mHeader.indexOffset) + " but the file has " +
-                                    std::to_string(mFileBytes));
-        std::vector<unsigned char> indexBytes(mHeader.indexBytes);
-        preadExact(mFd, indexBytes.data(), indexBytes.size(), mHeader.indexOffset, mPath, "index");
-        store_format::decodeIndex(indexBytes.data(), indexBytes.size(), mHeader, mLayout, mPath,
-                                  mIndex, mHistogram, mSubBlocks);
-        if (mMode == ReadMode::Cold) {
-            // Start cold: whatever of the file the page cache holds (from conversion, an
-            // earlier run, or the header and index just read) is dropped.
-            ::posix_fadvise(mFd, 0, 0, POSIX_FADV_DONTNEED);
-            mDirectFd = ::open(mPath.c_str(), O_RDONLY | O_CLOEXEC | O_DIRECT);
-        }
-    } catch (...) {
-        ::close(mFd);
-        throw;
+    : BrickStoreReader(std::move(path), StoreOpenOptions{mode, {}}) {}
+
+BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& options)
+    : mSource(openByteSource(path, options.mode, options.remote, kStoreHeaderBytes)),
+      mPath(mSource->name()),
+      mMode(options.mode) {
+    mFileBytes = mSource->size();
+    if (mFileBytes < kStoreHeaderBytes) {
+        unsigned char magic[8] = {};
+        if (mFileBytes >= 8) mSource->read(0, 8, magic, "header");
+        if (mFileBytes >= 8 && std::equal(magic, magic + 8, store_format::kHeaderMagic))
+            throwIoError(mPath, "is truncated inside its header (" + std::to_string(mFileBytes) + " bytes)");
+        throwIoError(mPath, "not a vdiso brick store (wrong magic; convert volumes with "
+                            "'vdiso convert' first)");
     }
+    std::vector<unsigned char> headerBytes(kStoreHeaderBytes);
+    mSource->read(0, headerBytes.size(), headerBytes.data(), "header");
+    mHeader = store_format::decodeHeader(headerBytes.data(), headerBytes.size(), mPath);
+    mLayout = BrickLayout(mHeader.volume.dims, mHeader.brickSize);
+    mLevels = brickLevels(mHeader.volume, mHeader.brickSize, mHeader.levelCount);
+    // Compared without a sum that could wrap: both numbers come from the file.
+    if (mHeader.indexOffset < kStoreHeaderBytes || mHeader.indexBytes > mFileBytes ||
+        mHeader.indexOffset > mFileBytes - mHeader.indexBytes)
+        throwIoError(mPath, "index is missing or truncated: it needs " +
+                                std::to_string(mHeader.indexBytes) + " bytes from byte offset " +
+                                std::to_string(mHeader.indexOffset) + " but the file has " +
+                                std::to_string(mFileBytes));
+    // In pieces, which a remote source fetches at once.
+    std::vector<unsigned char> indexBytes(mHeader.indexBytes);
+    std::vector<ByteRange> pieces;
+    constexpr size_t kIndexPiece = size_t(1) << 20;
+    for (size_t at = 0; at < indexBytes.size(); at += kIndexPiece)
+        pieces.push_back({mHeader.indexOffset + at, std::min(kIndexPiece, indexBytes.size() - at),
+                          indexBytes.data() + at});
+    mSource->readMany(pieces, "index");
+    store_format::decodeIndex(indexBytes.data(), indexBytes.size(), mHeader, mLayout, mPath,
+                              mIndex, mHistogram, mSubBlocks);
 }
 
-BrickStoreReader::~BrickStoreReader() {
-    ::close(mFd);
-    if (mDirectFd >= 0) ::close(mDirectFd);
-}
-
-const char* BrickStoreReader::readMethod() const {
-    if (mMode == ReadMode::Buffered) return "buffered";
-    return mDirectFd >= 0 ? "direct" : "fadvise";
-}
+BrickStoreReader::~BrickStoreReader() = default;
 
 namespace {
 
@@ -183,25 +148,7 @@ std::span<const unsigned char> BrickStoreReader::readStoredBrick(int64_t id) con
                                 std::to_string(mIndex.size()) + ")");
     const BrickEntry& e = mIndex[size_t(id)];
     thread_local AlignedBuffer buffer;
-    if (mDirectFd >= 0) {
-        // Whole aligned blocks; the padding after a brick (or the index) fills the last one.
-        const size_t blocks = (size_t(e.storedBytes) + kStoreAlignment - 1) / kStoreAlignment;
-        const size_t length = std::min<uint64_t>(blocks * kStoreAlignment, mFileBytes - e.offset);
-        const size_t aligned = (length + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;
-        unsigned char* block = buffer.reserve(aligned);
-        size_t done = 0;
-        while (done < e.storedBytes) {
-            const ssize_t r = ::pread(mDirectFd, block + done, aligned - done, off_t(e.offset + done));
-            if (r < 0 && errno == EINTR) continue;
-            if (r < 0) throwSystemError(mPath, "cannot read brick " + std::to_string(id), errno);
-            if (r == 0) failBrick(id, "the file ends inside the brick: it is truncated");
-            done += size_t(r);
-        }
-    } else {
-        preadExact(mFd, buffer.reserve(e.storedBytes), e.storedBytes, e.offset, mPath, "brick data");
-        if (mMode == ReadMode::Cold)
-            ::posix_fadvise(mFd, off_t(e.offset), off_t(e.storedBytes), POSIX_FADV_DONTNEED);
-    }
+    mSource->read(e.offset, e.storedBytes, buffer.reserve(e.storedBytes), "brick data");
     const std::span<const unsigned char> bytes(buffer.data, e.storedBytes);
     if (store_format::crc32Of(bytes.data(), bytes.size()) != e.checksum)
         failBrick(id, "checksum mismatch (the brick is corrupt)");

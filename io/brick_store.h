@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -22,6 +23,7 @@
 #include "core/brick_levels.h"
 #include "core/brick_source.h"
 #include "core/volume.h"
+#include "io/byte_source.h"
 
 namespace vdiso {
 
@@ -83,22 +85,25 @@ struct StoreHeader {
     uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded), all levels
 };
 
-// How bricks are read. Buffered: through the page cache (repeated runs hit memory). Cold: the
-// file's pages are dropped at open and every brick is read from the disk, so I/O times mean
-// what they say. Cold reads use O_DIRECT (aligned reads of whole 4 KiB blocks; the format
-// aligns every brick for it); where the file system refuses O_DIRECT (tmpfs), each brick's
-// pages are dropped after it is read instead (posix_fadvise DONTNEED). coldMethod() says which.
-enum class ReadMode { Buffered, Cold };
+// How a store is opened: local files by ReadMode (io/byte_source.h), remote ones by their URL
+// and RemoteOptions.
+struct StoreOpenOptions {
+    ReadMode mode = ReadMode::Buffered;
+    RemoteOptions remote;
+};
 
 class BrickStoreReader {
 public:
-    // Reads and validates header and index. Throws IoError naming the file and the problem
-    // (wrong magic, newer version, bad header checksum, truncated or corrupt index, ...).
+    // Reads and validates header and index, from a file or a URL (http://, https://, s3://).
+    // Throws IoError naming the file and the problem (wrong magic, newer version, bad header
+    // checksum, truncated or corrupt index, a server's refusal, ...).
     explicit BrickStoreReader(std::string path, ReadMode mode = ReadMode::Buffered);
+    BrickStoreReader(std::string path, const StoreOpenOptions& options);
     ~BrickStoreReader();
     BrickStoreReader(const BrickStoreReader&) = delete;
     BrickStoreReader& operator=(const BrickStoreReader&) = delete;
 
+    // The path, or the URL without its query (which may hold a signature).
     const std::string& path() const { return mPath; }
     const StoreHeader& header() const { return mHeader; }
     const VolumeInfo& volume() const { return mHeader.volume; }
@@ -113,8 +118,11 @@ public:
     const std::vector<SubBlockCode>& subBlockCodes() const { return mSubBlocks; }
     uint64_t fileBytes() const { return mFileBytes; }
     ReadMode readMode() const { return mMode; }
-    // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read).
-    const char* readMethod() const;
+    // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read); "http",
+    // "https" or "s3" for a remote store.
+    const char* readMethod() const { return mSource->method(); }
+    // The remote object a URL opened, or null for a local file.
+    const RemoteFile* remote() const { return mSource->remote(); }
     // Bytes one decoded brick takes: (B+3)^3 samples.
     size_t brickBytes() const { return size_t(mLayout.samplesPerBrick()) * scalarSize(volume().type); }
 
@@ -133,9 +141,8 @@ public:
 private:
     [[noreturn]] void failBrick(int64_t id, const std::string& what) const;
 
+    std::unique_ptr<ByteSource> mSource;
     std::string mPath;
-    int mFd = -1;
-    int mDirectFd = -1;  // O_DIRECT descriptor in cold mode, when the file system allows it
     ReadMode mMode = ReadMode::Buffered;
     uint64_t mFileBytes = 0;
     StoreHeader mHeader;

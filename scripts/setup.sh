@@ -18,6 +18,8 @@ packages=(
   libhdf5-dev                             # HDF5 datasets (io/hdf5_reader.h)
   libblosc-dev                            # Zarr chunks (io/zarr_array.h)
   libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
+  libcurl4-openssl-dev                    # remote stores over HTTP(S) and S3 (io/remote)
+  nginx-light python3-botocore curl openssl   # their tests' servers (tests/remote/)
 )
 
 missing=()

@@ -1,0 +1,394 @@
+#include "io/remote/remote_file.h"
+
+#include <curl/curl.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "io/error.h"
+#include "io/remote/s3_location.h"
+
+namespace vdiso {
+
+bool isRemoteLocation(const std::string& location) {
+    return location.rfind("http://", 0) == 0 || location.rfind("https://", 0) == 0 ||
+           location.rfind("s3://", 0) == 0;
+}
+
+std::string displayLocation(const std::string& location) {
+    std::string shown = location.substr(0, location.find_first_of("?#"));
+    const size_t scheme = shown.find("://");
+    if (scheme != std::string::npos) {
+        const size_t hostEnd = shown.find('/', scheme + 3);
+        const size_t at = shown.rfind('@', hostEnd);
+        if (at != std::string::npos && at > scheme) shown.erase(scheme + 3, at - scheme - 2);
+    }
+    return shown;
+}
+
+namespace {
+
+void initCurlOnce() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        if (curl_global_init(CURL_GLOBAL_DEFAULT) != CURLE_OK)
+            throw IoError("libcurl cannot be initialised: remote stores cannot be read");
+    });
+}
+
+// What one transfer received. Headers are those of the last response (redirects reset them).
+struct Transfer {
+    CURL* curl = nullptr;
+    unsigned char* dst = nullptr;
+    size_t capacity = 0;
+    size_t got = 0;
+    bool overflow = false;
+    long status = 0;
+    std::string contentRange, etag, lastModified, errorBody;
+};
+
+size_t onHeader(char* data, size_t size, size_t count, void* user) {
+    auto& t = *static_cast<Transfer*>(user);
+    const std::string_view line(data, size * count);
+    if (line.rfind("HTTP/", 0) == 0) {
+        t.contentRange.clear();
+        t.etag.clear();
+        t.lastModified.clear();
+        return line.size();
+    }
+    const size_t colon = line.find(':');
+    if (colon == std::string_view::npos) return line.size();
+    std::string name(line.substr(0, colon));
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::string_view value = line.substr(colon + 1);
+    while (!value.empty() && (value.front() == ' ' || value.front() == '\t')) value.remove_prefix(1);
+    while (!value.empty() && (value.back() == '\r' || value.back() == '\n' || value.back() == ' '))
+        value.remove_suffix(1);
+    if (name == "content-range") t.contentRange = value;
+    else if (name == "etag") t.etag = value;
+    else if (name == "last-modified") t.lastModified = value;
+    return line.size();
+}
+
+size_t onBody(char* data, size_t size, size_t count, void* user) {
+    auto& t = *static_cast<Transfer*>(user);
+    const size_t n = size * count;
+    curl_easy_getinfo(t.curl, CURLINFO_RESPONSE_CODE, &t.status);
+    if (t.status != 206) {
+        // An error's body says why (S3's XML); a whole object where a range was asked is refused
+        // by the caller from the status.
+        if (t.errorBody.size() < 4096) t.errorBody.append(data, std::min(n, 4096 - t.errorBody.size()));
+        return t.status == 200 ? 0 : n;
+    }
+    if (n > t.capacity - t.got) {
+        t.overflow = true;
+        return 0;
+    }
+    std::memcpy(t.dst + t.got, data, n);
+    t.got += n;
+    return n;
+}
+
+// "<Code>NoSuchKey</Code>" and the message of S3's XML error body, if there is one.
+std::string s3ErrorText(const std::string& body) {
+    auto element = [&](const char* name) -> std::string {
+        const std::string open = std::string("<") + name + ">", close = std::string("</") + name + ">";
+        const size_t a = body.find(open);
+        if (a == std::string::npos) return {};
+        const size_t b = body.find(close, a);
+        return b == std::string::npos ? std::string() : body.substr(a + open.size(), b - a - open.size());
+    };
+    const std::string code = element("Code"), message = element("Message");
+    if (code.empty()) return {};
+    return ": " + code + (message.empty() ? std::string() : " (" + message + ")");
+}
+
+// "bytes A-B/TOTAL" into its numbers; nullopt when it is not that.
+std::optional<std::array<uint64_t, 3>> parseContentRange(const std::string& text) {
+    std::array<uint64_t, 3> v{};
+    if (std::sscanf(text.c_str(), "bytes %lu-%lu/%lu", &v[0], &v[1], &v[2]) != 3 || v[1] < v[0] ||
+        v[1] >= v[2])
+        return std::nullopt;
+    return v;
+}
+
+const char* reasonOf(long status) {
+    switch (status) {
+        case 400: return " (Bad Request)";
+        case 401: return " (Unauthorized)";
+        case 403: return " (Forbidden)";
+        case 404: return " (Not Found)";
+        case 405: return " (Method Not Allowed)";
+        case 412: return " (Precondition Failed)";
+        case 416: return " (Range Not Satisfiable)";
+        case 429: return " (Too Many Requests)";
+        case 500: return " (Internal Server Error)";
+        case 502: return " (Bad Gateway)";
+        case 503: return " (Service Unavailable)";
+        case 504: return " (Gateway Timeout)";
+    }
+    return "";
+}
+
+bool retriedCurlError(CURLcode rc) {
+    switch (rc) {
+        case CURLE_COULDNT_CONNECT:
+        case CURLE_OPERATION_TIMEDOUT:
+        case CURLE_RECV_ERROR:
+        case CURLE_SEND_ERROR:
+        case CURLE_PARTIAL_FILE:
+        case CURLE_GOT_NOTHING:
+        case CURLE_HTTP2:
+        case CURLE_HTTP2_STREAM: return true;
+        default: return false;
+    }
+}
+
+}  // namespace
+
+struct RemoteFile::Impl {
+    RemoteOptions options;
+    std::string url;  // what is requested: the location, or an s3:// location's http(s) URL
+    std::optional<S3Location> s3;
+    std::string sigv4, userPassword;
+    curl_slist* headers = nullptr;  // fixed headers: S3's payload hash and session token
+    std::string condition;          // "If-Match: ..." or "If-Unmodified-Since: ...", once pinned
+    CURLSH* share = nullptr;
+    std::mutex shareLocks[CURL_LOCK_DATA_LAST];
+    std::mutex poolLock;
+    std::condition_variable poolFree;
+    std::vector<CURL*> idle;
+    int inUse = 0;
+
+    ~Impl() {
+        for (CURL* c : idle) curl_easy_cleanup(c);
+        if (share) curl_share_cleanup(share);
+        curl_slist_free_all(headers);
+    }
+
+    CURL* take() {
+        std::unique_lock lock(poolLock);
+        poolFree.wait(lock, [&] { return inUse < options.connections; });
+        ++inUse;
+        if (!idle.empty()) {
+            CURL* c = idle.back();
+            idle.pop_back();
+            return c;
+        }
+        lock.unlock();
+        CURL* c = curl_easy_init();
+        if (!c) {
+            give(nullptr);
+            throw std::bad_alloc();
+        }
+        return c;
+    }
+
+    void give(CURL* c) {
+        {
+            std::lock_guard lock(poolLock);
+            if (c) idle.push_back(c);
+            --inUse;
+        }
+        poolFree.notify_one();
+    }
+};
+
+RemoteFile::RemoteFile(const std::string& location, const RemoteOptions& options, size_t headBytes)
+    : mImpl(std::make_unique<Impl>()), mName(displayLocation(location)) {
+    initCurlOnce();
+    Impl& d = *mImpl;
+    d.options = options;
+    d.options.connections = std::clamp(options.connections, 1, 256);
+    d.options.attempts = std::clamp(options.attempts, 1, 16);
+    if (d.options.caFile.empty() && std::getenv("AWS_CA_BUNDLE")) d.options.caFile = std::getenv("AWS_CA_BUNDLE");
+    if (location.rfind("s3://", 0) == 0) {
+        d.s3 = resolveS3Location(location, options);
+        d.url = d.s3->url;
+        mScheme = "s3";
+        if (!d.s3->accessKey.empty()) {
+            d.sigv4 = "aws:amz:" + d.s3->region + ":s3";
+            d.userPassword = d.s3->accessKey + ":" + d.s3->secretKey;
+            // S3 wants the payload's hash in a header of its own; a GET has none to sign.
+            d.headers = curl_slist_append(d.headers, "x-amz-content-sha256: UNSIGNED-PAYLOAD");
+            if (!d.s3->sessionToken.empty())
+                d.headers = curl_slist_append(d.headers, ("x-amz-security-token: " + d.s3->sessionToken).c_str());
+        }
+    } else {
+        d.url = location;
+        mScheme = location.rfind("https://", 0) == 0 ? "https" : "http";
+    }
+    d.share = curl_share_init();
+    if (!d.share) throw std::bad_alloc();
+    curl_share_setopt(d.share, CURLSHOPT_LOCKFUNC,
+                      +[](CURL*, curl_lock_data data, curl_lock_access, void* user) {
+                          static_cast<Impl*>(user)->shareLocks[data].lock();
+                      });
+    curl_share_setopt(d.share, CURLSHOPT_UNLOCKFUNC, +[](CURL*, curl_lock_data data, void* user) {
+        static_cast<Impl*>(user)->shareLocks[data].unlock();
+    });
+    curl_share_setopt(d.share, CURLSHOPT_USERDATA, &d);
+    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_CONNECT);
+    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_DNS);
+    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_SSL_SESSION);
+
+    // The head: its Content-Range gives the size, its ETag the version every later read pins.
+    mHead.resize(std::max<size_t>(headBytes, 1));
+    const Answer head = fetch(0, mHead.size(), mHead.data(), true);
+    mSize = head.total;
+    mHead.resize(head.bytes);
+    if (head.etag.size() > 2 && head.etag.rfind("W/", 0) != 0) {
+        mVersion = head.etag;
+        d.condition = "If-Match: " + head.etag;
+    } else if (!head.lastModified.empty()) {
+        mVersion = "Last-Modified: " + head.lastModified;
+        d.condition = "If-Unmodified-Since: " + head.lastModified;
+    }
+}
+
+RemoteFile::~RemoteFile() = default;
+
+void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
+    if (n == 0) return;
+    if (offset > mSize || n > mSize - offset)
+        throwIoError(mName, "has " + std::to_string(mSize) + " bytes: no range " + std::to_string(offset) +
+                                "-" + std::to_string(offset + n - 1));
+    if (offset + n <= mHead.size()) {
+        std::memcpy(dst, mHead.data() + offset, n);
+        return;
+    }
+    fetch(offset, n, dst, false);
+}
+
+RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening) const {
+    Impl& d = *mImpl;
+    const std::string range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
+    std::string lastProblem;
+    for (int attempt = 0; attempt < d.options.attempts; ++attempt) {
+        if (attempt > 0)
+            std::this_thread::sleep_for(std::chrono::milliseconds(100 << std::min(attempt - 1, 6)));
+        CURL* curl = d.take();
+        Transfer t;
+        t.curl = curl;
+        t.dst = static_cast<unsigned char*>(dst);
+        t.capacity = n;
+        curl_slist* headers = nullptr;
+        for (const curl_slist* h = d.headers; h; h = h->next) headers = curl_slist_append(headers, h->data);
+        if (!d.condition.empty()) headers = curl_slist_append(headers, d.condition.c_str());
+        curl_easy_reset(curl);
+        curl_easy_setopt(curl, CURLOPT_URL, d.url.c_str());
+        curl_easy_setopt(curl, CURLOPT_SHARE, d.share);
+        curl_easy_setopt(curl, CURLOPT_RANGE, range.c_str());
+        curl_easy_setopt(curl, CURLOPT_HTTPHEADER, headers);
+        curl_easy_setopt(curl, CURLOPT_PROTOCOLS_STR, "http,https");
+        curl_easy_setopt(curl, CURLOPT_REDIR_PROTOCOLS_STR, "http,https");
+        curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, 1L);
+        curl_easy_setopt(curl, CURLOPT_MAXREDIRS, 8L);
+        curl_easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
+        curl_easy_setopt(curl, CURLOPT_PIPEWAIT, 1L);
+        curl_easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
+        curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(d.options.connectTimeoutMs));
+        curl_easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
+        curl_easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, d.options.stallTimeoutMs / 1000)));
+        curl_easy_setopt(curl, CURLOPT_HEADERFUNCTION, onHeader);
+        curl_easy_setopt(curl, CURLOPT_HEADERDATA, &t);
+        curl_easy_setopt(curl, CURLOPT_WRITEFUNCTION, onBody);
+        curl_easy_setopt(curl, CURLOPT_WRITEDATA, &t);
+        curl_easy_setopt(curl, CURLOPT_USERAGENT, "vdiso");
+        if (!d.options.caFile.empty()) curl_easy_setopt(curl, CURLOPT_CAINFO, d.options.caFile.c_str());
+        if (!d.sigv4.empty()) {
+            curl_easy_setopt(curl, CURLOPT_AWS_SIGV4, d.sigv4.c_str());
+            curl_easy_setopt(curl, CURLOPT_USERPWD, d.userPassword.c_str());
+        }
+        char curlError[CURL_ERROR_SIZE] = {};
+        curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, curlError);
+        const CURLcode rc = curl_easy_perform(curl);
+        curl_easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
+        curl_easy_setopt(curl, CURLOPT_HTTPHEADER, nullptr);
+        curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, nullptr);
+        curl_slist_free_all(headers);
+        d.give(curl);
+        ++mRequests;
+        mBytesFetched += t.got;
+
+        if (t.status == 200)
+            throwIoError(mName, "is served without byte ranges (HTTP 200 to a Range request): vdiso "
+                                "reads remote stores by ranges, so the server must honour them");
+        if (t.overflow)
+            throwIoError(mName, "sent more than the " + std::to_string(n) + " bytes of range " + range +
+                                    " it announced");
+        if (rc != CURLE_OK) {
+            const std::string what = curlError[0] ? curlError : curl_easy_strerror(rc);
+            if (retriedCurlError(rc)) {
+                lastProblem = what;
+                continue;
+            }
+            if (rc == CURLE_TOO_MANY_REDIRECTS)
+                throwIoError(mName, "redirects too often (a loop?): " + what);
+            throwIoError(mName, what);
+        }
+        if (t.status == 206) {
+            const auto r = parseContentRange(t.contentRange);
+            // Opening asks for the head, which may be longer than a small object.
+            const uint64_t last = opening && r ? std::min<uint64_t>(offset + n, (*r)[2]) - 1 : offset + n - 1;
+            if (!r || (*r)[0] != offset || (*r)[1] != last)
+                throwIoError(mName, "answered range " + range + " with Content-Range '" + t.contentRange +
+                                        "': the server is broken or the object changed");
+            if (t.got != last - offset + 1) {
+                lastProblem = "the body of range " + range + " ended after " + std::to_string(t.got) +
+                              " of " + std::to_string(last - offset + 1) + " bytes";
+                continue;
+            }
+            if (!opening && (*r)[2] != mSize)
+                throwIoError(mName, "now has " + std::to_string((*r)[2]) + " bytes where it had " +
+                                        std::to_string(mSize) + " when opened: it was replaced while being read");
+            return Answer{(*r)[2], t.got, t.etag, t.lastModified};
+        }
+        const std::string said = "HTTP " + std::to_string(t.status) + reasonOf(t.status) + s3ErrorText(t.errorBody);
+        if (t.status == 412)
+            throwIoError(mName, "was replaced while being read (version " + mVersion + " no longer matches: " +
+                                    said + ")");
+        if (t.status == 416 && opening) throwIoError(mName, "is empty (" + said + ")");
+        if (t.status >= 500 || t.status == 429) {
+            lastProblem = said;
+            continue;
+        }
+        throwIoError(mName, said + (t.status == 416 ? " for range " + range : std::string()));
+    }
+    throwIoError(mName, lastProblem + " (tried " + std::to_string(d.options.attempts) + " times)");
+}
+
+void RemoteFile::readMany(std::span<const ByteRange> ranges) const {
+    if (ranges.empty()) return;
+    const size_t workers = std::min<size_t>(ranges.size(), size_t(mImpl->options.connections));
+    std::atomic<size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failureLock;
+    auto work = [&] {
+        for (size_t i; (i = next.fetch_add(1)) < ranges.size();) {
+            try {
+                read(ranges[i].offset, ranges[i].bytes, ranges[i].dst);
+            } catch (...) {
+                std::lock_guard lock(failureLock);
+                if (!failure) failure = std::current_exception();
+                next = ranges.size();
+            }
+        }
+    };
+    std::vector<std::thread> threads;
+    for (size_t w = 1; w < workers; ++w) threads.emplace_back(work);
+    work();
+    for (std::thread& t : threads) t.join();
+    if (failure) std::rethrow_exception(failure);
+}
+
+}  // namespace vdiso

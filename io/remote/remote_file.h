@@ -1,0 +1,89 @@
+// One object over HTTP(S) or S3, read by byte ranges with libcurl: the store reader's source
+// when it is given a URL (io/byte_source.h).
+//
+// Opening sends one ranged GET for the object's first bytes (the store's header), which pins
+// its size and version: the ETag, or Last-Modified when the server gives no strong ETag. Every
+// later read is a ranged GET sent with If-Match (If-Unmodified-Since), so an object replaced
+// while it is read is an error naming it, never a picture mixed from two versions; and the
+// answer's Content-Range must be exactly the range asked for, within the size pinned at open.
+// s3:// locations are signed with SigV4 by libcurl (io/remote/s3_location.h says where the
+// endpoint, region and credentials come from); a request without credentials is anonymous.
+//
+// Reads are thread-safe and run concurrently, each on an easy handle from a pool that shares one
+// connection cache (HTTP/2 streams multiplex over one connection where the server offers it;
+// otherwise up to RemoteOptions::connections HTTP/1.1 connections are kept alive). A 5xx, a 429,
+// a broken or truncated transfer and a request without a byte for the stall timeout are tried
+// again, up to RemoteOptions::attempts times with doubling pauses from 100 ms; other 4xx, TLS
+// failures and redirect loops are errors at once. Errors are IoErrors naming the URL (without
+// its query, which may hold a signature) and what the server said.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "io/remote/remote_options.h"
+
+namespace vdiso {
+
+// True for http://, https:// and s3:// locations.
+bool isRemoteLocation(const std::string& location);
+
+// The location as shown in messages and statistics: without userinfo or query.
+std::string displayLocation(const std::string& location);
+
+struct ByteRange {
+    uint64_t offset = 0;
+    size_t bytes = 0;
+    void* dst = nullptr;
+};
+
+class RemoteFile {
+public:
+    // Throws IoError naming the location when it cannot be reached, is refused, is empty or is
+    // served without byte ranges.
+    RemoteFile(const std::string& location, const RemoteOptions& options, size_t headBytes);
+    ~RemoteFile();
+    RemoteFile(const RemoteFile&) = delete;
+    RemoteFile& operator=(const RemoteFile&) = delete;
+
+    const std::string& name() const { return mName; }
+    uint64_t size() const { return mSize; }
+    // The version pinned at open: the ETag as the server sent it, or "Last-Modified: ...".
+    const std::string& version() const { return mVersion; }
+    // "http", "https" or "s3".
+    const char* scheme() const { return mScheme; }
+
+    // Exactly n bytes at `offset` into dst. Throws IoError naming the URL and what is wrong.
+    void read(uint64_t offset, size_t n, void* dst) const;
+    // The ranges at once, as many in flight as the pool allows; throws the first error.
+    void readMany(std::span<const ByteRange> ranges) const;
+
+    // Requests sent (tries included) and object bytes received, since open.
+    uint64_t requests() const { return mRequests.load(); }
+    uint64_t bytesFetched() const { return mBytesFetched.load(); }
+
+private:
+    struct Answer {
+        uint64_t total = 0;  // the object's size, from Content-Range
+        size_t bytes = 0;
+        std::string etag, lastModified;
+    };
+    // One ranged GET with its tries; `opening` accepts a shorter range (a small object's head)
+    // and pins nothing.
+    Answer fetch(uint64_t offset, size_t n, void* dst, bool opening) const;
+
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+    std::string mName;
+    const char* mScheme = "http";
+    uint64_t mSize = 0;
+    std::string mVersion;
+    std::vector<unsigned char> mHead;  // the first bytes, kept from the open
+    mutable std::atomic<uint64_t> mRequests{0}, mBytesFetched{0};
+};
+
+}  // namespace vdiso

@@ -1,0 +1,32 @@
+// How remote stores are reached (io/remote/remote_file.h): what a front end gathers from its
+// flags and the environment, and passes down with the URL.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace vdiso {
+
+enum class S3Addressing { Auto, Path, VirtualHost };
+
+struct RemoteOptions {
+    // s3:// URLs: the endpoint ("https://s3.eu-west-1.amazonaws.com", "http://127.0.0.1:9000");
+    // empty: AWS_ENDPOINT_URL_S3 or AWS_ENDPOINT_URL, else AWS's endpoint for the region.
+    std::string s3Endpoint;
+    // Auto: virtual-host style on AWS's own endpoints, path style on any other endpoint (as
+    // MinIO, Ceph and most local servers want).
+    S3Addressing s3Addressing = S3Addressing::Auto;
+    // Requests without credentials even when some are found (public buckets).
+    bool anonymous = false;
+    // A file of CA certificates for HTTPS instead of the system's (AWS_CA_BUNDLE when empty).
+    std::string caFile;
+    // Requests in flight at once (the connection pool's size).
+    int connections = 32;
+    // Attempts of a request that failed on a 5xx, a timeout or a broken connection.
+    int attempts = 4;
+    // Milliseconds to connect, and without a byte received before a request is a straggler.
+    int64_t connectTimeoutMs = 10000;
+    int64_t stallTimeoutMs = 15000;
+};
+
+}  // namespace vdiso
