@@ -46,7 +46,7 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
 
     // Open, partition and extract this rank's part.
     runPhase(comm, [&] {
-        store.emplace(options.store, options.cold ? ReadMode::Cold : ReadMode::Buffered);
+        store.emplace(options.store, StoreOpenOptions{options.cold ? ReadMode::Cold : ReadMode::Buffered, options.remote});
         cache.emplace(*store, options.cacheBytes);
         level.emplace(*cache, 0);
         const CachePlan plan = planCacheUse(*cache, false, 32, options.threads, options.threads);

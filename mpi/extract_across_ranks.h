@@ -14,12 +14,14 @@
 #include <vector>
 
 #include "core/brick_extractor.h"
+#include "io/remote/remote_options.h"
 #include "mpi/communicator.h"
 
 namespace vdiso::mpi {
 
 struct RanksExtractOptions {
-    std::string store;
+    std::string store;     // a path or a URL
+    RemoteOptions remote;  // for a URL
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
     int threads = 1;                      // per rank

@@ -58,6 +58,18 @@ class WsSession;
 
 }  // namespace
 
+// A frame looks 8 bricks ahead with 2 readers a strip; over a network, where each read waits a
+// round trip, 32 with 8.
+SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
+    SessionSettings s{o.threads, o.metaCellSize, 8, 2, size_t(32) << 20, o.lodError};
+    for (size_t i = 0; i < stores.size(); ++i)
+        if (stores[i].reader->remote()) {
+            s.prefetchBricks = 32;
+            s.prefetchReaders = 8;
+        }
+    return s;
+}
+
 struct Server::Impl {
     ServeOptions options;
     StoreCatalog stores;
@@ -80,8 +92,8 @@ struct Server::Impl {
     net::signal_set signals{ioc};
 
     explicit Impl(const ServeOptions& o)
-        : options(o), stores(o.stores, o.cacheBytes, o.iso), web(o.webRoot),
-          settings{o.threads, o.metaCellSize, 8, size_t(32) << 20, o.lodError}, gate(frameSlots(stores, settings)),
+        : options(o), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
+          settings(sessionSettings(o, stores)), gate(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 
     void accept();

@@ -15,10 +15,13 @@
 #include <string>
 #include <vector>
 
+#include "io/remote/remote_options.h"
+
 namespace vdiso::serve {
 
 struct ServeOptions {
-    std::vector<std::string> stores;
+    std::vector<std::string> stores;  // paths or URLs
+    RemoteOptions remote;             // for stores at URLs
     std::optional<double> iso;  // every store's default isovalue; else Otsu's threshold
     std::string host = "127.0.0.1";
     uint16_t port = 8080;  // 0: the system chooses

@@ -62,10 +62,11 @@ std::string describe(const ServedStore& s) {
 }  // namespace
 
 StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes,
-                           std::optional<double> iso) {
+                           std::optional<double> iso, const RemoteOptions& remote) {
     if (paths.empty()) throw IoError("no store to serve");
     mStores.reserve(paths.size());
-    for (const std::string& path : paths) {
+    for (const std::string& location : paths) {
+        const std::string path = displayLocation(location);
         ServedStore s;
         s.name = std::filesystem::path(path).stem().string();
         // Names go to browsers in text messages, which must be UTF-8 (one bad byte and the
@@ -75,7 +76,7 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
         for (const ServedStore& other : mStores)
             if (other.name == s.name)
                 throw IoError(path + ": a store named '" + s.name + "' is served already");
-        s.reader = std::make_unique<BrickStoreReader>(path);
+        s.reader = std::make_unique<BrickStoreReader>(location, StoreOpenOptions{ReadMode::Buffered, remote});
         if (uint64_t(s.reader->index().size()) >= kNoBrick)
             throw IoError(path + ": " + std::to_string(s.reader->index().size()) +
                           " bricks; the protocol numbers bricks in 32 bits");

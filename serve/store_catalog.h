@@ -31,10 +31,10 @@ struct ServedStore {
 
 class StoreCatalog {
 public:
-    // Opens every store (throws IoError naming the file that fails) and gives each a cache of
+    // Opens every store, a path or a URL (throws IoError naming the one that fails) and gives each a cache of
     // cacheBytes / stores.size(). Two stores of the same name are refused.
     StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes,
-                 std::optional<double> iso);
+                 std::optional<double> iso, const RemoteOptions& remote = {});
 
     size_t size() const { return mStores.size(); }
     ServedStore& operator[](size_t i) { return mStores[i]; }

@@ -181,6 +181,7 @@ std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point ar
     options.metaCellSize = mSettings.metaCellSize;
     options.threads = mSettings.threads;
     options.prefetchBricks = mSettings.prefetchBricks;
+    options.prefetchReaders = mSettings.prefetchReaders;
     options.stream = &stream;
     options.rangeCache = store.ranges.get();
     options.tree = store.tree.get();

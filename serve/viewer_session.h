@@ -30,6 +30,7 @@ struct SessionSettings {
     int threads = 1;        // image strips per frame (core/extract_view.h)
     int metaCellSize = 4;
     int prefetchBricks = 8;  // per frame
+    int prefetchReaders = 2;  // threads loading them, per strip (more for stores at URLs)
     size_t outboxBytes = size_t(32) << 20;
     // Levels of detail (core/view_levels.h): a VIEW's final frame is extracted at this error in
     // pixels (0: level 0 only); on a store with levels, a first frame at kCoarsePassFactor times

@@ -124,4 +124,42 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
     return true;
 }
 
+const char* const kRemoteOptionsHelp =
+    "remote stores (STORE as https://HOST/PATH.vdiso, http://... or s3://BUCKET/KEY.vdiso):\n"
+    "  --s3-endpoint URL       S3 endpoint (default AWS_ENDPOINT_URL_S3, AWS_ENDPOINT_URL, else\n"
+    "                          AWS's for the region: AWS_REGION, AWS_DEFAULT_REGION, the profile's)\n"
+    "  --s3-addressing path|virtual   bucket in the path or in the host name (default: virtual\n"
+    "                          on AWS, path on other endpoints)\n"
+    "  --no-sign-request       anonymous requests (public buckets); otherwise credentials from\n"
+    "                          AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY, AWS_SESSION_TOKEN or\n"
+    "                          the AWS_PROFILE profile of ~/.aws/credentials\n"
+    "  --ca-file FILE          CA certificates for HTTPS (default AWS_CA_BUNDLE, else the system's)\n"
+    "  --remote-timeout S      seconds without a byte before a request is tried again (default 15)\n"
+    "  --connections N         requests in flight at once (default 32)\n";
+
+bool takeRemoteOption(const std::string& flag, Args& args, RemoteOptions& options) {
+    if (flag == "--s3-endpoint") {
+        options.s3Endpoint = args.value(flag);
+    } else if (flag == "--s3-addressing") {
+        const std::string v = args.value(flag);
+        if (v == "path")
+            options.s3Addressing = S3Addressing::Path;
+        else if (v == "virtual")
+            options.s3Addressing = S3Addressing::VirtualHost;
+        else
+            throw UsageError("--s3-addressing expects path or virtual, not '" + v + "'");
+    } else if (flag == "--no-sign-request") {
+        options.anonymous = true;
+    } else if (flag == "--ca-file") {
+        options.caFile = args.value(flag);
+    } else if (flag == "--remote-timeout") {
+        options.stallTimeoutMs = 1000 * parseInt(flag, args.value(flag), 1, 3600);
+    } else if (flag == "--connections") {
+        options.connections = int(parseInt(flag, args.value(flag), 1, 256));
+    } else {
+        return false;
+    }
+    return true;
+}
+
 }  // namespace vdiso::cli

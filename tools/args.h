@@ -11,6 +11,7 @@
 #include <glm/vec3.hpp>
 
 #include "core/volume.h"
+#include "io/remote/remote_options.h"
 #include "io/store_writer.h"
 
 namespace vdiso::cli {
@@ -55,5 +56,12 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
 
 // Help lines for those options.
 extern const char* const kStoreWriteOptionsHelp;
+
+// The options every command that reads a store takes for a remote one (http://, https://,
+// s3://): --s3-endpoint, --s3-addressing, --no-sign-request, --ca-file, --remote-timeout,
+// --connections. Consumes `flag` (and its value) and returns true if it is one.
+bool takeRemoteOption(const std::string& flag, Args& args, RemoteOptions& options);
+// Help lines for those options.
+extern const char* const kRemoteOptionsHelp;
 
 }  // namespace vdiso::cli

@@ -112,7 +112,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
 
     const VolumeInfo& volume = store.volume();
     JsonObject s;
-    s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
+    s.add("file", store.path()).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", plan.threads);
     if (isViewDependent(o.method))
         s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks)
@@ -138,6 +138,10 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
+    // A remote store: every request sent (the open's, the index's, retries) and the bytes they
+    // brought, from the open on.
+    if (const RemoteFile* remote = store.remote())
+        s.add("remote_requests", remote->requests()).add("remote_bytes", remote->bytesFetched());
     s.add("prefetch", plan.threads > 1 && !isViewDependent(o.method) ? 0 : plan.prefetchBricks);
     s.add("readers", o.readers);
     // I/O the extraction did not wait for: read and decode time spent ahead of it (summed over
@@ -190,15 +194,17 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
 }  // namespace
 
 int runExtract(int argc, char** argv) {
-    const ExtractOptions o = parseExtractOptions(argc, argv);
+    ExtractOptions o = parseExtractOptions(argc, argv);
     if (o.help) {
         std::fputs(kExtractHelp, stdout);
+        std::fputs(kRemoteOptionsHelp, stdout);
         return 0;
     }
     // Existing outputs are refused before the work starts, not after minutes of extraction.
     refuseExistingOutputs({&o.meshPath, &o.pngPath, &o.statsPath, &o.pointsPath}, o.overwrite);
 
-    const BrickStoreReader store(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
+    const BrickStoreReader store(o.input, StoreOpenOptions{o.cold ? ReadMode::Cold : ReadMode::Buffered, o.remote});
+    if (store.remote()) adaptToRemoteStore(o);
     BrickCache cache(store, o.cacheMb << 20);
     if (o.level >= store.header().levelCount)
         throw UsageError("--level " + std::to_string(o.level) + ": " + o.input + " holds " +

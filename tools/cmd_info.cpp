@@ -18,7 +18,7 @@ namespace vdiso::cli {
 namespace {
 
 constexpr const char* kHelp =
-    "usage: vdiso info FILE.vdiso [--iso V] [--json]\n"
+    "usage: vdiso info FILE.vdiso|URL [--iso V] [--json]\n"
     "\n"
     "Describes a brick store from its header and index alone (no brick is read):\n"
     "dimensions, type, spacing, origin, orientation, bricks, levels of detail (each level's bricks and stored\n"
@@ -85,15 +85,18 @@ int runInfo(int argc, char** argv) {
     std::string path;
     std::optional<double> iso;
     bool json = false;
+    RemoteOptions remote;
     while (!args.done()) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {
             std::fputs(kHelp, stdout);
+            std::fputs(kRemoteOptionsHelp, stdout);
             return 0;
         } else if (a == "--iso") {
             iso = parseDouble(a, args.value(a));
         } else if (a == "--json") {
             json = true;
+        } else if (takeRemoteOption(a, args, remote)) {
         } else if (!a.empty() && a[0] == '-') {
             throw UsageError("unknown option '" + a + "'");
         } else if (path.empty()) {
@@ -104,7 +107,7 @@ int runInfo(int argc, char** argv) {
     }
     if (path.empty()) throw UsageError("expects FILE.vdiso");
 
-    const BrickStoreReader store(path);
+    const BrickStoreReader store(path, StoreOpenOptions{ReadMode::Buffered, remote});
     const StoreHeader& h = store.header();
     const VolumeInfo& v = h.volume;
     const BrickLayout& l = store.layout();
@@ -125,7 +128,7 @@ int runInfo(int argc, char** argv) {
                    std::to_string(t[2]) + "]";
         };
         JsonObject o;
-        o.add("file", path).add("format_version", int64_t(h.formatVersion));
+        o.add("file", store.path()).add("format_version", int64_t(h.formatVersion));
         o.addRaw("dims", triple(v.dims)).add("type", scalarTypeName(v.type));
         o.addRaw("spacing", "[" + std::to_string(v.spacing.x) + ", " + std::to_string(v.spacing.y) +
                                 ", " + std::to_string(v.spacing.z) + "]");

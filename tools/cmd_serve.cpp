@@ -44,6 +44,7 @@ int runServe(int argc, char** argv) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {
             std::fputs(kHelp, stdout);
+            std::fputs(kRemoteOptionsHelp, stdout);
             return 0;
         } else if (a == "--iso") {
             o.iso = parseDouble(a, args.value(a));
@@ -67,6 +68,7 @@ int runServe(int argc, char** argv) {
                 throw UsageError("--token expects at least 16 characters of hex digits, '-' or '_'");
         } else if (a == "--web") {
             o.webRoot = args.value(a);
+        } else if (takeRemoteOption(a, args, o.remote)) {
         } else if (!a.empty() && a[0] == '-') {
             throw UsageError("unknown option '" + a + "'");
         } else {

@@ -101,7 +101,7 @@ const char* const kExtractHelp =
     "                            visible; for octree/noise the active bricks, with --threads 1\n"
     "                            (with more threads no reader thread runs: stats say prefetch 0)\n"
     "  --readers N               threads reading those bricks, so N reads wait on the disk at\n"
-    "                            once (default 2)\n"
+    "                            once (default 2; 16 for a store at a URL, with --prefetch 128)\n"
     "  --cache-mb N              brick cache budget in MB (default 1024)\n"
     "  --cold                    drop the store's pages from the page cache first and read\n"
     "                            every brick from disk (O_DIRECT), so io_s is disk time\n"
@@ -231,8 +231,11 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
             o.threads = int(parseInt(a, args.value(a), 1, 256));
         } else if (a == "--prefetch") {
             o.prefetch = int(parseInt(a, args.value(a), 0, 4096));
+            o.prefetchGiven = true;
         } else if (a == "--readers") {
-            o.readers = int(parseInt(a, args.value(a), 1, 16));
+            o.readers = int(parseInt(a, args.value(a), 1, 64));
+            o.readersGiven = true;
+        } else if (takeRemoteOption(a, args, o.remote)) {
         } else if (a == "--cache-mb") {
             o.cacheMb = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30));
         } else if (a == "--cold") {
@@ -303,6 +306,11 @@ CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaul
     } catch (const std::invalid_argument& e) {
         throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
     }
+}
+
+void adaptToRemoteStore(ExtractOptions& o) {
+    if (!o.readersGiven) o.readers = kRemoteReaders;
+    if (!o.prefetchGiven) o.prefetch = kRemotePrefetch;
 }
 
 ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& plan) {

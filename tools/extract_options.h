@@ -14,6 +14,7 @@
 #include "core/extract_view.h"
 #include "core/mesh_slabs.h"
 #include "core/volume.h"
+#include "io/remote/remote_options.h"
 
 namespace vdiso::cli {
 
@@ -41,6 +42,8 @@ struct ExtractOptions {
     int threads = 0;  // 0: the machine's cores (as many as the cache allows strips for)
     int prefetch = 32;
     int readers = BrickPrefetcher::kDefaultReaders;
+    bool prefetchGiven = false, readersGiven = false;
+    RemoteOptions remote;  // for a store at a URL
     uint64_t cacheMb = 1024;
     bool overwrite = false, quiet = false, cold = false, help = false;
     bool meshCompress = false;  // --mesh-compress (.glb only)
@@ -56,6 +59,12 @@ ExtractOptions parseExtractOptions(int argc, char** argv);
 // How the brick cache is shared (threads, prefetch) for these options, `defaultThreads` when
 // --threads was not given; throws UsageError naming --cache-mb when it is too small.
 CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaultThreads);
+
+// Readers and look-ahead for a store read over the network, unless given: a request waits a
+// round trip where a disk read waits a seek, so more are kept in flight
+// (kRemoteReaders per strip, kRemotePrefetch bricks ahead).
+constexpr int kRemoteReaders = 16, kRemotePrefetch = 128;
+void adaptToRemoteStore(ExtractOptions& o);
 
 // The view-dependent options (sage or wise, with the switches given) for a plan.
 ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& plan);

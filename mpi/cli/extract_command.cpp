@@ -213,6 +213,7 @@ void report(const ExtractOptions& o, const std::string& json, const std::string&
 int runOctree(const Communicator& comm, const ExtractOptions& o) {
     RanksExtractOptions run;
     run.store = o.input;
+    run.remote = o.remote;
     run.iso = *o.iso;
     run.metaCellSize = o.metaCellSize;
     run.threads = o.threads;
@@ -242,7 +243,7 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
     ViewChoice view;
     RanksViewOptions run;
     runPhase(comm, [&] {
-        store.emplace(o.input, o.cold ? ReadMode::Cold : ReadMode::Buffered);
+        store.emplace(o.input, StoreOpenOptions{o.cold ? ReadMode::Cold : ReadMode::Buffered, o.remote});
         cache.emplace(*store, o.cacheMb << 20);
         camera = vdiso::cli::extractCameras(o, store->volume(), view).front();
         run.view = vdiso::cli::viewExtractOptions(o, vdiso::cli::planCache(o, *cache, o.threads));
