@@ -14,6 +14,7 @@
 #include <optional>
 #include <thread>
 
+#include "core/interrupt.h"
 #include "io/error.h"
 #include "io/remote/s3_location.h"
 
@@ -48,6 +49,8 @@ void initCurlOnce() {
 // What one transfer received. Headers are those of the last response (redirects reset them).
 struct Transfer {
     CURL* curl = nullptr;
+    const std::atomic<uint64_t>* failures = nullptr;  // the object's permanent failures so far
+    uint64_t failuresAtStart = 0;
     unsigned char* dst = nullptr;
     size_t capacity = 0;
     size_t got = 0;
@@ -77,6 +80,13 @@ size_t onHeader(char* data, size_t size, size_t count, void* user) {
     else if (name == "etag") t.etag = value;
     else if (name == "last-modified") t.lastModified = value;
     return line.size();
+}
+
+// Ends a transfer on Ctrl-C, and when another read of the object failed for good meanwhile:
+// the frame that wanted both is lost, so its other requests stop instead of running their tries.
+int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
+    const auto& t = *static_cast<Transfer*>(user);
+    return interruptRequested() || t.failures->load() != t.failuresAtStart;
 }
 
 size_t onBody(char* data, size_t size, size_t count, void* user) {
@@ -164,6 +174,9 @@ struct RemoteFile::Impl {
     std::string condition;          // "If-Match: ..." or "If-Unmodified-Since: ...", once pinned
     CURLSH* share = nullptr;
     std::mutex shareLocks[CURL_LOCK_DATA_LAST];
+    std::atomic<uint64_t> failures{0};  // reads that failed for good
+    std::mutex failureLock;
+    std::string failure;  // the last one's message, which the reads it ended repeat
     std::mutex poolLock;
     std::condition_variable poolFree;
     std::vector<CURL*> idle;
@@ -272,13 +285,33 @@ void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
 RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening) const {
     Impl& d = *mImpl;
     const std::string range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
+    // A failure for good counts once, and ends the object's other transfers (onProgress).
+    const uint64_t failuresAtStart = d.failures.load();
+    auto fail = [&](const std::string& what) {
+        std::lock_guard lock(d.failureLock);
+        d.failure = mName + ": " + what;
+        ++d.failures;
+        return IoError(d.failure);
+    };
+    auto abandoned = [&] {
+        std::lock_guard lock(d.failureLock);
+        return IoError(d.failure);
+    };
     std::string lastProblem;
     for (int attempt = 0; attempt < d.options.attempts; ++attempt) {
-        if (attempt > 0)
-            std::this_thread::sleep_for(std::chrono::milliseconds(100 << std::min(attempt - 1, 6)));
+        if (attempt > 0) {
+            const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(100 << std::min(attempt - 1, 6));
+            while (std::chrono::steady_clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested())
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        throwIfInterrupted(mName);
+        if (d.failures.load() != failuresAtStart)
+            throw abandoned();
         CURL* curl = d.take();
         Transfer t;
         t.curl = curl;
+        t.failures = &d.failures;
+        t.failuresAtStart = failuresAtStart;
         t.dst = static_cast<unsigned char*>(dst);
         t.capacity = n;
         curl_slist* headers = nullptr;
@@ -294,7 +327,6 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, 1L);
         curl_easy_setopt(curl, CURLOPT_MAXREDIRS, 8L);
         curl_easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
-        curl_easy_setopt(curl, CURLOPT_PIPEWAIT, 1L);
         curl_easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
         curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(d.options.connectTimeoutMs));
         curl_easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
@@ -303,6 +335,9 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_setopt(curl, CURLOPT_HEADERDATA, &t);
         curl_easy_setopt(curl, CURLOPT_WRITEFUNCTION, onBody);
         curl_easy_setopt(curl, CURLOPT_WRITEDATA, &t);
+        curl_easy_setopt(curl, CURLOPT_NOPROGRESS, 0L);
+        curl_easy_setopt(curl, CURLOPT_XFERINFOFUNCTION, onProgress);
+        curl_easy_setopt(curl, CURLOPT_XFERINFODATA, &t);
         curl_easy_setopt(curl, CURLOPT_USERAGENT, "vdiso");
         if (!d.options.caFile.empty()) curl_easy_setopt(curl, CURLOPT_CAINFO, d.options.caFile.c_str());
         if (!d.sigv4.empty()) {
@@ -321,27 +356,34 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         mBytesFetched += t.got;
 
         if (t.status == 200)
-            throwIoError(mName, "is served without byte ranges (HTTP 200 to a Range request): vdiso "
+            throw fail("is served without byte ranges (HTTP 200 to a Range request): vdiso "
                                 "reads remote stores by ranges, so the server must honour them");
         if (t.overflow)
-            throwIoError(mName, "sent more than the " + std::to_string(n) + " bytes of range " + range +
+            throw fail("sent more than the " + std::to_string(n) + " bytes of range " + range +
                                     " it announced");
+        if (rc == CURLE_ABORTED_BY_CALLBACK) {
+            throwIfInterrupted(mName);
+            throw abandoned();
+        }
         if (rc != CURLE_OK) {
             const std::string what = curlError[0] ? curlError : curl_easy_strerror(rc);
             if (retriedCurlError(rc)) {
-                lastProblem = what;
+                lastProblem = rc == CURLE_OPERATION_TIMEDOUT
+                                  ? "no answer for " + std::to_string(std::max<int64_t>(1, d.options.stallTimeoutMs / 1000)) +
+                                        " s (" + what + ")"
+                                  : what;
                 continue;
             }
             if (rc == CURLE_TOO_MANY_REDIRECTS)
-                throwIoError(mName, "redirects too often (a loop?): " + what);
-            throwIoError(mName, what);
+                throw fail("redirects too often (a loop?): " + what);
+            throw fail(what);
         }
         if (t.status == 206) {
             const auto r = parseContentRange(t.contentRange);
             // Opening asks for the head, which may be longer than a small object.
             const uint64_t last = opening && r ? std::min<uint64_t>(offset + n, (*r)[2]) - 1 : offset + n - 1;
             if (!r || (*r)[0] != offset || (*r)[1] != last)
-                throwIoError(mName, "answered range " + range + " with Content-Range '" + t.contentRange +
+                throw fail("answered range " + range + " with Content-Range '" + t.contentRange +
                                         "': the server is broken or the object changed");
             if (t.got != last - offset + 1) {
                 lastProblem = "the body of range " + range + " ended after " + std::to_string(t.got) +
@@ -349,22 +391,22 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
                 continue;
             }
             if (!opening && (*r)[2] != mSize)
-                throwIoError(mName, "now has " + std::to_string((*r)[2]) + " bytes where it had " +
+                throw fail("now has " + std::to_string((*r)[2]) + " bytes where it had " +
                                         std::to_string(mSize) + " when opened: it was replaced while being read");
             return Answer{(*r)[2], t.got, t.etag, t.lastModified};
         }
         const std::string said = "HTTP " + std::to_string(t.status) + reasonOf(t.status) + s3ErrorText(t.errorBody);
         if (t.status == 412)
-            throwIoError(mName, "was replaced while being read (version " + mVersion + " no longer matches: " +
+            throw fail("was replaced while being read (version " + mVersion + " no longer matches: " +
                                     said + ")");
-        if (t.status == 416 && opening) throwIoError(mName, "is empty (" + said + ")");
+        if (t.status == 416 && opening) fail("is empty (" + said + ")");
         if (t.status >= 500 || t.status == 429) {
             lastProblem = said;
             continue;
         }
-        throwIoError(mName, said + (t.status == 416 ? " for range " + range : std::string()));
+        throw fail(said + (t.status == 416 ? " for range " + range : std::string()));
     }
-    throwIoError(mName, lastProblem + " (tried " + std::to_string(d.options.attempts) + " times)");
+    throw fail(lastProblem + " (tried " + std::to_string(d.options.attempts) + " times)");
 }
 
 void RemoteFile::readMany(std::span<const ByteRange> ranges) const {

@@ -1,0 +1,322 @@
+// Stores at URLs (io/remote/remote_file.h) against real servers on loopback, started here:
+// Debian's nginx serving a folder, and an S3-style server whose SigV4 check is botocore's
+// (tests/remote/README.md). Pictures, meshes and `info` from a URL equal the local file's; every
+// bad moment (a status, a truncated body, a wrong Content-Range, a server that never answers or
+// dies, a redirect loop, a TLS failure, an object replaced while read) is an error naming the URL.
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "io/brick_store.h"
+#include "io/error.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+const std::string kSource = VDISO_SOURCE_DIR;
+const std::string kPython = "/usr/bin/python3";
+
+// A server process started with a pipe on its stdin (it stops when the pipe closes: when this
+// object goes, or this process dies) that prints "PORT n" first.
+class LoopbackServer {
+public:
+    LoopbackServer(const std::vector<std::string>& argv, const std::string& log) {
+        int in[2], out[2];
+        if (::pipe2(in, O_CLOEXEC) != 0 || ::pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
+        mPid = ::fork();
+        if (mPid == 0) {
+            ::dup2(in[0], STDIN_FILENO);
+            ::dup2(out[1], STDOUT_FILENO);
+            const int err = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+            if (err >= 0) ::dup2(err, STDERR_FILENO);
+            std::vector<char*> args;
+            for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+            args.push_back(nullptr);
+            ::execv(args[0], args.data());
+            ::_exit(127);
+        }
+        ::close(in[0]);
+        ::close(out[1]);
+        mStdin = in[1];
+        mStdout = out[0];
+        std::string line;
+        for (char c; line.find('\n') == std::string::npos;) {
+            pollfd p{mStdout, POLLIN, 0};
+            if (::poll(&p, 1, 20000) <= 0 || ::read(mStdout, &c, 1) != 1)
+                throw std::runtime_error("the server did not start: " + test::readText(log));
+            line += c;
+        }
+        mPort = std::stoi(line.substr(line.find(' ') + 1));
+    }
+    ~LoopbackServer() { stop(); }
+    int port() const { return mPort; }
+    // Ends it now (SIGKILL: a server dying, no goodbye).
+    void stop() {
+        if (mPid <= 0) return;
+        ::kill(mPid, SIGKILL);
+        ::waitpid(mPid, nullptr, 0);
+        mPid = -1;
+        ::close(mStdin);
+        ::close(mStdout);
+    }
+
+private:
+    pid_t mPid = -1;
+    int mStdin = -1, mStdout = -1;
+    int mPort = 0;
+};
+
+constexpr const char* kKey = "AKIDVDISOTEST";
+constexpr const char* kSecret = "vdiso-test-secret";
+constexpr const char* kToken = "vdiso-session-token";
+
+class RemoteStore : public ::testing::Test {
+protected:
+    void SetUp() override {
+        std::filesystem::create_directories(mDir.path() / "bkt");
+        const test::CommandResult r = test::runVdiso("synth " + file("bkt/head.vdiso") +
+                                                     " --kind head --size 96 --quiet");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+    }
+    std::string file(const std::string& name) const { return mDir.file(name); }
+
+    LoopbackServer nginx(const std::vector<std::string>& extra = {}) {
+        std::vector<std::string> argv = {kPython, kSource + "/tests/remote/start_nginx.py", "--root",
+                                         file("bkt"), "--lifetime", "300", "--tmpdir", mDir.path().string()};
+        argv.insert(argv.end(), extra.begin(), extra.end());
+        return LoopbackServer(argv, file("nginx.log"));
+    }
+    LoopbackServer s3(const std::vector<std::string>& extra = {}) {
+        std::vector<std::string> argv = {kPython, kSource + "/tests/remote/s3_server.py", "--root", mDir.path().string(),
+                                         "--cred", std::string(kKey) + ":" + kSecret + ":" + kToken,
+                                         "--lifetime", "300"};
+        argv.insert(argv.end(), extra.begin(), extra.end());
+        return LoopbackServer(argv, file("s3.log"));
+    }
+    // The environment a signed S3 run takes its credentials and endpoint from.
+    static std::string s3Env(int port) {
+        return "env AWS_ACCESS_KEY_ID=" + std::string(kKey) + " AWS_SECRET_ACCESS_KEY=" + kSecret +
+               " AWS_SESSION_TOKEN=" + kToken + " AWS_ENDPOINT_URL=http://127.0.0.1:" + std::to_string(port) +
+               " AWS_REGION=us-east-1 AWS_SHARED_CREDENTIALS_FILE=/nonexistent AWS_CONFIG_FILE=/nonexistent ";
+    }
+    static void control(int port, const std::string& json) {
+        const test::CommandResult r = test::runCommand("curl -sf -X POST --data '" + json +
+                                                       "' http://127.0.0.1:" + std::to_string(port) + "/__control");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+    }
+    // extract's picture, its PLY and its stats, for a store at `location`.
+    test::CommandResult extract(const std::string& prefix, const std::string& location, const std::string& name,
+                                const std::string& extra = "") {
+        return test::runCommand(prefix + VDISO_BINARY + " extract '" + location +
+                                "' --iso 600.5 --method sage --size 256x256 --png " + file(name + ".png") +
+                                " -o " + file(name + ".ply") + " --stats " + file(name + ".json") + " " + extra);
+    }
+    void expectSameAsLocal(const std::string& name) {
+        static bool local = false;
+        if (!local || !std::filesystem::exists(file("local.png"))) {
+            const test::CommandResult r = extract("", file("bkt/head.vdiso"), "local");
+            ASSERT_EQ(r.exitCode, 0) << r.output;
+            local = true;
+        }
+        EXPECT_EQ(test::readFile(file(name + ".png")), test::readFile(file("local.png"))) << name;
+        EXPECT_EQ(test::readFile(file(name + ".ply")), test::readFile(file("local.ply"))) << name;
+    }
+    static void expectError(const test::CommandResult& r, std::initializer_list<std::string> parts) {
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        for (const std::string& p : parts) EXPECT_NE(r.output.find(p), std::string::npos) << p << " not in: " << r.output;
+    }
+
+    test::ScratchDir mDir;
+};
+
+TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
+    LoopbackServer server = nginx();
+    const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/head.vdiso";
+    test::CommandResult r = extract("", url, "http");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("http");
+    const std::string stats = test::readText(file("http.json"));
+    EXPECT_NE(stats.find("\"read_method\": \"http\""), std::string::npos) << stats;
+    EXPECT_NE(stats.find("\"file\": \"" + url + "\""), std::string::npos) << stats;
+    // Only what the view needs crossed: the local run's brick bytes, the header and the index.
+    const BrickStoreReader local(file("bkt/head.vdiso"));
+    const auto number = [](const std::string& json, const std::string& key) {
+        const size_t at = json.find("\"" + key + "\": ");
+        return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 4));
+    };
+    const std::string localStats = test::readText(file("local.json"));
+    EXPECT_LE(number(stats, "remote_bytes"),
+              number(localStats, "bytes_read") + double(kStoreHeaderBytes + local.header().indexBytes));
+    EXPECT_LT(number(stats, "remote_bytes"), double(local.fileBytes()) * 0.9);
+
+    // info reads the same header, index and histogram; a query in the URL is not shown.
+    const test::CommandResult remoteInfo = test::runVdiso("info --json '" + url + "?X-Amz-Signature=secret'");
+    const test::CommandResult localInfo = test::runVdiso("info --json " + file("bkt/head.vdiso"));
+    ASSERT_EQ(remoteInfo.exitCode, 0) << remoteInfo.output;
+    EXPECT_EQ(remoteInfo.output.find("secret"), std::string::npos) << remoteInfo.output;
+    auto withoutFile = [](std::string json) { return json.substr(json.find("\"format_version\"")); };
+    EXPECT_EQ(withoutFile(remoteInfo.output), withoutFile(localInfo.output));
+
+    r = test::runVdiso("info http://127.0.0.1:" + std::to_string(server.port()) + "/missing.vdiso");
+    expectError(r, {"/missing.vdiso", "HTTP 404 (Not Found)"});
+}
+
+TEST_F(RemoteStore, S3SignedWithEnvironmentOrProfilePathOrVirtualHost) {
+    LoopbackServer server = s3();
+    const int port = server.port();
+    ASSERT_EQ(extract(s3Env(port), "s3://bkt/head.vdiso", "s3").exitCode, 0);
+    expectSameAsLocal("s3");
+    EXPECT_NE(test::readText(file("s3.json")).find("\"read_method\": \"s3\""), std::string::npos);
+
+    // Virtual-host addressing: bkt.localhost resolves to loopback.
+    test::CommandResult r = extract(s3Env(port), "s3://bkt/head.vdiso", "vhost",
+                                    "--s3-addressing virtual --s3-endpoint http://localhost:" + std::to_string(port));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("vhost");
+
+    // Credentials from a profile of the shared credentials file.
+    test::writeFile(file("credentials"), "[other]\naws_access_key_id = nobody\naws_secret_access_key = x\n\n"
+                                         "[vdiso]\naws_access_key_id = " + std::string(kKey) +
+                                         "\naws_secret_access_key = " + kSecret + "\naws_session_token = " + kToken + "\n");
+    r = extract("env -u AWS_ACCESS_KEY_ID -u AWS_SECRET_ACCESS_KEY -u AWS_SESSION_TOKEN AWS_PROFILE=vdiso "
+                "AWS_SHARED_CREDENTIALS_FILE=" + file("credentials") + " AWS_CONFIG_FILE=/nonexistent "
+                "AWS_REGION=us-east-1 ",
+                "s3://bkt/head.vdiso", "profile", "--s3-endpoint http://127.0.0.1:" + std::to_string(port));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("profile");
+}
+
+TEST_F(RemoteStore, S3RefusalsAreNamed) {
+    LoopbackServer server = s3({"--public", "open"});
+    const int port = server.port();
+    const std::string env = s3Env(port);
+    // The signature is checked by botocore, not by us: a wrong secret is refused.
+    test::CommandResult r = extract(env + "AWS_SECRET_ACCESS_KEY=wrong ", "s3://bkt/head.vdiso", "bad");
+    expectError(r, {"s3://bkt/head.vdiso", "HTTP 403 (Forbidden): SignatureDoesNotMatch"});
+    EXPECT_FALSE(std::filesystem::exists(file("bad.png")));
+    // Without credentials a private bucket is refused; a public one reads anonymously.
+    r = extract(env, "s3://bkt/head.vdiso", "anon", "--no-sign-request");
+    expectError(r, {"s3://bkt/head.vdiso", "HTTP 403 (Forbidden): AccessDenied"});
+    std::filesystem::create_directories(mDir.path() / "open");
+    std::filesystem::copy_file(file("bkt/head.vdiso"), file("open/head.vdiso"));
+    r = extract(env, "s3://open/head.vdiso", "public", "--no-sign-request");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("public");
+    r = extract(env, "s3://bkt/nothere.vdiso", "none");
+    expectError(r, {"s3://bkt/nothere.vdiso", "HTTP 404 (Not Found): NoSuchKey"});
+    r = test::runVdiso("info s3://bucket-only");
+    expectError(r, {"s3://bucket-only", "a bucket and a key"});
+}
+
+TEST_F(RemoteStore, PassingFailuresAreTriedAgain) {
+    LoopbackServer server = s3();
+    const int port = server.port();
+    // Two 503s, a truncated body, a dropped connection: each request is tried again.
+    control(port, R"([{"op":"fault","action":"status","status":503,"count":2,"skip":3},)"
+                  R"({"op":"fault","action":"truncate","bytes":100,"count":1,"skip":6},)"
+                  R"({"op":"fault","action":"drop","count":1,"skip":9}])");
+    const test::CommandResult r = extract(s3Env(port), "s3://bkt/head.vdiso", "retried");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("retried");
+}
+
+TEST_F(RemoteStore, BadMomentsAreErrorsNamingTheUrl) {
+    LoopbackServer server = s3();
+    const int port = server.port();
+    const std::string env = s3Env(port);
+    struct Case {
+        const char* fault;
+        std::vector<std::string> parts;
+    };
+    const Case cases[] = {
+        {R"({"op":"fault","action":"status","status":500,"count":-1,"skip":2})", {"HTTP 500", "tried 4 times"}},
+        {R"({"op":"fault","action":"status","status":403,"count":-1,"skip":2})", {"HTTP 403 (Forbidden)"}},
+        {R"({"op":"fault","action":"truncate","bytes":10,"count":-1,"skip":2})", {"tried 4 times"}},
+        {R"({"op":"fault","action":"bad_content_range","count":-1,"skip":2})", {"Content-Range"}},
+        {R"({"op":"fault","action":"ignore_range","count":-1})", {"without byte ranges"}},
+        {R"({"op":"fault","action":"redirect","status":307,"count":-1})", {"redirects too often"}},
+        {R"({"op":"fault","action":"hang","count":-1,"skip":2})", {"tried 4 times"}},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.fault);
+        control(port, std::string("[{\"op\":\"clear_faults\"},") + c.fault + "]");
+        const test::CommandResult r = extract(env, "s3://bkt/head.vdiso", "bad", "--remote-timeout 1 --force");
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find("s3://bkt/head.vdiso"), std::string::npos) << r.output;
+        for (const std::string& p : c.parts) EXPECT_NE(r.output.find(p), std::string::npos) << p << ": " << r.output;
+        EXPECT_FALSE(std::filesystem::exists(file("bad.png")));
+        EXPECT_FALSE(std::filesystem::exists(file("bad.ply")));
+    }
+}
+
+TEST_F(RemoteStore, ObjectReplacedWhileReadIsAnError) {
+    LoopbackServer server = s3();
+    const int port = server.port();
+    StoreOpenOptions options;
+    options.remote.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
+    ::setenv("AWS_ACCESS_KEY_ID", kKey, 1);
+    ::setenv("AWS_SECRET_ACCESS_KEY", kSecret, 1);
+    ::setenv("AWS_SESSION_TOKEN", kToken, 1);
+    const BrickStoreReader store("s3://bkt/head.vdiso", options);
+    std::vector<unsigned char> brick(store.brickBytes());
+    store.readBrick(0, brick.data());
+    // The same size, other bytes: only the pinned ETag tells.
+    std::vector<unsigned char> other = test::readFile(file("bkt/head.vdiso"));
+    other[other.size() / 2] ^= 1;
+    test::writeFile(file("bkt/head.vdiso"), other.data(), other.size());
+    try {
+        store.readBrick(1, brick.data());
+        ADD_FAILURE() << "read a brick of the replaced object";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("s3://bkt/head.vdiso: was replaced while being read"), std::string::npos)
+            << e.what();
+    }
+    ::unsetenv("AWS_ACCESS_KEY_ID");
+    ::unsetenv("AWS_SECRET_ACCESS_KEY");
+    ::unsetenv("AWS_SESSION_TOKEN");
+}
+
+TEST_F(RemoteStore, ServerDyingMidReadIsAnError) {
+    LoopbackServer server = nginx();
+    const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/head.vdiso";
+    StoreOpenOptions options;
+    options.remote.attempts = 2;
+    const BrickStoreReader store(url, options);
+    std::vector<unsigned char> brick(store.brickBytes());
+    store.readBrick(0, brick.data());
+    server.stop();
+    try {
+        store.readBrick(1, brick.data());
+        ADD_FAILURE() << "read a brick from a stopped server";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find(url + ": "), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("tried 2 times"), std::string::npos) << e.what();
+    }
+}
+
+TEST_F(RemoteStore, HttpsNeedsTheRightAuthority) {
+    ASSERT_EQ(test::runCommand("sh " + kSource + "/tests/remote/gen_cert.sh " + mDir.path().string() +
+                               " && sh " + kSource + "/tests/remote/gen_cert.sh " + mDir.path().string() + " other")
+                  .exitCode,
+              0);
+    LoopbackServer server = nginx({"--tls", file("server.crt"), file("server.key")});
+    const std::string url = "https://localhost:" + std::to_string(server.port()) + "/head.vdiso";
+    test::CommandResult r = extract("", url, "https", "--ca-file " + file("server.crt"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("https");
+    r = extract("", url, "tls", "--ca-file " + file("other.crt"));
+    expectError(r, {url, "certificate"});
+}
+
+}  // namespace
+}  // namespace vdiso
