@@ -17,6 +17,7 @@
 #include "io/file_list.h"
 #include "io/file_names.h"
 #include "io/gdcm_process.h"
+#include "io/jpeg_frame_header.h"
 #include "io/sample_decode.h"
 
 namespace vdiso {
@@ -60,6 +61,37 @@ std::vector<std::string> filesUnder(const std::string& dir) {
     return files;
 }
 
+// JPEG baseline, extended, lossless (14 and 14 SV1) and JPEG-LS: a frame header (SOFn, SOF55)
+// in the first fragment says what the decoder will make.
+bool isJpegSyntax(const std::string& uid) {
+    for (const char* jpeg : {"1.2.840.10008.1.2.4.50", "1.2.840.10008.1.2.4.51", "1.2.840.10008.1.2.4.57",
+                             "1.2.840.10008.1.2.4.70", "1.2.840.10008.1.2.4.80", "1.2.840.10008.1.2.4.81"})
+        if (uid == jpeg) return true;
+    return false;
+}
+
+// The first fragment's frame header must describe the image the DICOM header does (GDCM's JPEG
+// codec trusts it, and crashed on 250-bit samples: fuzz_dicom).
+void checkJpegFrame(const DicomHeader& h, const DicomStructure& s, uint64_t bitsAllocated) {
+    std::vector<unsigned char> head(size_t(std::min<uint64_t>(s.firstFragmentBytes, 65536)));
+    std::ifstream in(h.path, std::ios::binary);
+    if (!in.seekg(std::streamoff(s.firstFragmentOffset)).read(reinterpret_cast<char*>(head.data()),
+                                                            std::streamsize(head.size())))
+        throwIoError(h.path, "cannot read its first pixel data fragment");
+    const std::optional<JpegFrameHeader> f = readJpegFrameHeader(head.data(), head.size());
+    if (!f)
+        throwIoError(h.path, "its JPEG pixel data (transfer syntax " + s.transferSyntax +
+                                 ") has no frame header in its first fragment");
+    if (f->precision < 2 || uint64_t(f->precision) > bitsAllocated || f->components != 1 ||
+        f->columns != h.columns || (f->lines != h.rows && f->lines != 0))
+        throwIoError(h.path, "its JPEG data describes a " + std::to_string(f->columns) + " x " +
+                                 std::to_string(f->lines) + " image of " + std::to_string(f->precision) +
+                                 "-bit samples in " + std::to_string(f->components) +
+                                 " component(s), where its header says " + std::to_string(h.columns) +
+                                 " x " + std::to_string(h.rows) + ", single-channel, BitsAllocated " +
+                                 std::to_string(bitsAllocated));
+}
+
 // Refuses pixel data that cannot hold what the header promises, before GDCM decodes it: native
 // data shorter than Rows x Columns x BitsAllocated / 8 (GDCM would copy the rest from beyond
 // its buffer), encapsulated data without a fragment. A deflated data set is checked in the
@@ -71,6 +103,7 @@ void checkPixelData(const DicomHeader& h, const DicomStructure& s) {
     if (s.encapsulated && s.fragments == 0)
         throwIoError(h.path, "its encapsulated pixel data (transfer syntax " + s.transferSyntax +
                                  ") has no fragment after its offset table");
+    if (s.encapsulated && isJpegSyntax(s.transferSyntax)) checkJpegFrame(h, s, bits);
     if (!s.encapsulated && s.pixelBytes < need)
         throwIoError(h.path, "its pixel data holds " + std::to_string(s.pixelBytes) +
                                  " bytes where Rows x Columns x BitsAllocated/8 (" +

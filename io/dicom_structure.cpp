@@ -108,6 +108,8 @@ public:
         s.pixelBytes = mPixels.pixelBytes;
         s.fragments = mPixels.fragments;
         s.offsetTableBytes = mPixels.offsetTableBytes;
+        s.firstFragmentOffset = mPixels.firstFragmentOffset;
+        s.firstFragmentBytes = mPixels.firstFragmentBytes;
         return s;
     }
 
@@ -239,6 +241,10 @@ private:
                                    " bytes, not a whole number of 32-bit offsets");
             if (topLevel && first) mPixels.offsetTableBytes = item.length;
             else if (topLevel) {
+                if (mPixels.fragments == 0) {
+                    mPixels.firstFragmentOffset = item.value;
+                    mPixels.firstFragmentBytes = item.length;
+                }
                 ++mPixels.fragments;
                 mPixels.pixelBytes += item.length;
             }

@@ -28,6 +28,7 @@ struct DicomStructure {
     uint64_t pixelBytes = 0;
     uint64_t fragments = 0;
     uint64_t offsetTableBytes = 0;
+    uint64_t firstFragmentOffset = 0, firstFragmentBytes = 0;  // encapsulated: where it is
 };
 
 // The bytes native pixel data must hold: Rows x Columns x SamplesPerPixel x BitsAllocated / 8
