@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-30}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(nrrd nifti raw tiff dicom metaimage hdf5 zarr store camera_json protocol)
+[ ${#targets[@]} -gt 0 ] || targets=(nrrd nifti raw tiff dicom metaimage hdf5 zarr store camera_json protocol remote)
 scripts/setup.sh
 scripts/build_sanitized.sh "${targets[@]/#/fuzz_}" fuzz_helper_selftest
 

@@ -27,6 +27,8 @@ struct RemoteOptions {
     // Milliseconds to connect, and without a byte received before a request is a straggler.
     int64_t connectTimeoutMs = 10000;
     int64_t stallTimeoutMs = 15000;
+    // Follow 3xx answers (at most 8). Off where the answers are untrusted test input (fuzz).
+    bool followRedirects = true;
 };
 
 }  // namespace vdiso
