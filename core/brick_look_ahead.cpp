@@ -5,8 +5,8 @@
 namespace vdiso {
 
 BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
-                               size_t depth, int readers)
-    : mSource(source), mTree(tree), mLevels(levels), mCuller(levels.culler(0)), mDepth(depth),
+                               size_t depth, int readers, size_t near)
+    : mSource(source), mTree(tree), mLevels(levels), mCuller(levels.culler(0)), mDepth(depth), mNear(near),
       mPrefetcher(source, depth, readers) {
     if (mDepth > 0 && !tree.nodes().empty()) mStack.push_back(0);
 }
@@ -85,7 +85,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         if (ahead.item != kNotPushed) continue;
         bool settled = harmless(ahead.rect, current);
         for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, mAhead[j].rect);
-        if (!settled && (k >= kNearBricks || mostlyBehind(ahead.rect, current))) break;
+        if (!settled && (k >= mNear || mostlyBehind(ahead.rect, current))) break;
         ahead.item = mPrefetcher.push(ahead.brick);
     }
 }

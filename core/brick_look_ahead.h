@@ -14,7 +14,7 @@
 // found; and bricks are handed to the reader threads, in order, while each is settled: where
 // its screen box meets this brick's or any earlier one's, every pixel is covered already, so
 // nothing drawn before its turn can hide it and reading it now cannot be wasted. The next
-// kNearBricks go regardless, so reads keep ahead where boxes overlap, unless most of one's box
+// `near` (kNearBricks) go regardless, so reads keep ahead where boxes overlap, unless most of one's box
 // lies in this brick's (closeups: it is likely behind this one and hidden by it). A brick the
 // source holds in memory already when it is found is neither handed over nor tested again (a
 // warm cache would otherwise wake a reader per brick, and re-test the bricks ahead at every
@@ -39,9 +39,11 @@ class BrickLookAhead {
 public:
     static constexpr size_t kNearBricks = 2;
 
-    // depth 0: nothing is read ahead (every call does nothing).
+    // depth 0: nothing is read ahead (every call does nothing). `near`: the bricks next in
+    // turn handed over unsettled (kNearBricks for a disk; more where a read waits a round trip).
     BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
-                   size_t depth, int readers = BrickPrefetcher::kDefaultReaders);
+                   size_t depth, int readers = BrickPrefetcher::kDefaultReaders,
+                   size_t near = kNearBricks);
 
     // The traversal is about to acquire `brick` (it acquires it itself).
     void beforeAcquire(int64_t brick);
@@ -72,6 +74,7 @@ private:
     const ViewLevels& mLevels;
     const ViewCuller& mCuller;  // level 0's: the tree's
     size_t mDepth;
+    size_t mNear;
     BrickPrefetcher mPrefetcher;
     std::vector<uint32_t> mStack;       // the cursor: nodes still to visit, nearest on top
     std::deque<AheadBrick> mAhead;      // found, in the traversal's order

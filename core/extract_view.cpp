@@ -50,7 +50,8 @@ public:
           mStats(stats), mPixels(camera), mPyramid(camera.width, camera.height),
           mLevels(source, tree, camera, mPyramid, options.iso, options.estimateBox, options.lodError),
           mCuller(mLevels.culler(0)),
-          mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders) {
+          mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders,
+                     size_t(std::max(options.prefetchNear, 0))) {
         mLevels.confineTo(options.region);
         coverOutsideStrip(mPyramid, column0, column1);
         for (int l = 0; l < mLevels.count(); ++l) {

@@ -107,6 +107,9 @@ struct ViewExtractOptions {
     // more than this many bricks.
     int prefetchBricks = 0;
     int prefetchReaders = BrickPrefetcher::kDefaultReaders;  // threads reading them
+    // Bricks next in turn read ahead before they are known to show (core/brick_look_ahead.h):
+    // a few for a disk, more for a store at a URL, where each read waits a round trip.
+    int prefetchNear = 2;  // BrickLookAhead::kNearBricks
     // Vertical strips of the image extracted in parallel, one thread each, with about as many
     // active bricks projecting into each. A strip's traversal treats the rest of the image as
     // covered, so it extracts what shows in its strip; a cell showing on both sides of a strip

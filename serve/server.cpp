@@ -59,13 +59,14 @@ class WsSession;
 }  // namespace
 
 // A frame looks 8 bricks ahead with 2 readers a strip; over a network, where each read waits a
-// round trip, 32 with 8.
+// round trip, 32 with 8, of which 16 are read before they are known to show.
 SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
-    SessionSettings s{o.threads, o.metaCellSize, 8, 2, size_t(32) << 20, o.lodError};
+    SessionSettings s{o.threads, o.metaCellSize, 8, 2, 2, size_t(32) << 20, o.lodError};
     for (size_t i = 0; i < stores.size(); ++i)
         if (stores[i].reader->remote()) {
             s.prefetchBricks = 32;
             s.prefetchReaders = 8;
+            s.prefetchNear = 16;
         }
     return s;
 }

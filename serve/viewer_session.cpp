@@ -182,6 +182,7 @@ std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point ar
     options.threads = mSettings.threads;
     options.prefetchBricks = mSettings.prefetchBricks;
     options.prefetchReaders = mSettings.prefetchReaders;
+    options.prefetchNear = mSettings.prefetchNear;
     options.stream = &stream;
     options.rangeCache = store.ranges.get();
     options.tree = store.tree.get();

@@ -31,6 +31,7 @@ struct SessionSettings {
     int metaCellSize = 4;
     int prefetchBricks = 8;  // per frame
     int prefetchReaders = 2;  // threads loading them, per strip (more for stores at URLs)
+    int prefetchNear = 2;     // of them read before they are known to show (BrickLookAhead)
     size_t outboxBytes = size_t(32) << 20;
     // Levels of detail (core/view_levels.h): a VIEW's final frame is extracted at this error in
     // pixels (0: level 0 only); on a store with levels, a first frame at kCoarsePassFactor times

@@ -148,7 +148,9 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     const std::string stats = test::readText(file("http.json"));
     EXPECT_NE(stats.find("\"read_method\": \"http\""), std::string::npos) << stats;
     EXPECT_NE(stats.find("\"file\": \"" + url + "\""), std::string::npos) << stats;
-    // Only what the view needs crossed: the local run's brick bytes, the header and the index.
+    // Only what the view needs crossed: the header, the index, and the local run's brick bytes
+    // with at most 30% more read ahead on speculation (core/brick_look_ahead.h: a store at a
+    // URL has bricks read before they are known to show, where a disk has only 2).
     const BrickStoreReader local(file("bkt/head.vdiso"));
     const auto number = [](const std::string& json, const std::string& key) {
         const size_t at = json.find("\"" + key + "\": ");
@@ -156,7 +158,7 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     };
     const std::string localStats = test::readText(file("local.json"));
     EXPECT_LE(number(stats, "remote_bytes"),
-              number(localStats, "bytes_read") + double(kStoreHeaderBytes + local.header().indexBytes));
+              1.3 * number(localStats, "bytes_read") + double(kStoreHeaderBytes + local.header().indexBytes));
     EXPECT_LT(number(stats, "remote_bytes"), double(local.fileBytes()) * 0.9);
 
     // info reads the same header, index and histogram; a query in the URL is not shown.

@@ -311,6 +311,7 @@ CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaul
 void adaptToRemoteStore(ExtractOptions& o) {
     if (!o.readersGiven) o.readers = kRemoteReaders;
     if (!o.prefetchGiven) o.prefetch = kRemotePrefetch;
+    o.prefetchNear = kRemoteNear;
 }
 
 ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& plan) {
@@ -325,6 +326,7 @@ ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& 
     if (o.capSeams) v.capSeams = *o.capSeams;
     v.prefetchBricks = plan.prefetchBricks;
     v.prefetchReaders = o.readers;
+    v.prefetchNear = o.prefetchNear;
     v.threads = plan.threads;
     v.lodError = o.lodError;
     return v;

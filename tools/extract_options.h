@@ -43,6 +43,7 @@ struct ExtractOptions {
     int prefetch = 32;
     int readers = BrickPrefetcher::kDefaultReaders;
     bool prefetchGiven = false, readersGiven = false;
+    int prefetchNear = 2;  // BrickLookAhead::kNearBricks; kRemoteNear for a store at a URL
     RemoteOptions remote;  // for a store at a URL
     uint64_t cacheMb = 1024;
     bool overwrite = false, quiet = false, cold = false, help = false;
@@ -62,8 +63,9 @@ CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaul
 
 // Readers and look-ahead for a store read over the network, unless given: a request waits a
 // round trip where a disk read waits a seek, so more are kept in flight
-// (kRemoteReaders per strip, kRemotePrefetch bricks ahead).
-constexpr int kRemoteReaders = 16, kRemotePrefetch = 128;
+// (kRemoteReaders per strip, kRemotePrefetch bricks ahead, of which kRemoteNear are read
+// before they are known to show).
+constexpr int kRemoteReaders = 16, kRemotePrefetch = 128, kRemoteNear = 32;
 void adaptToRemoteStore(ExtractOptions& o);
 
 // The view-dependent options (sage or wise, with the switches given) for a plan.

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Remote stores: the distant, normal and closeup views of a generated head read over HTTP with
+# a round-trip delay, against the same views read cold from the local disk and against
+# downloading the whole store first. The server is tests/remote/s3_server.py on loopback (a
+# public bucket, no signature, so the server's own signature check does not count), which
+# holds each request's first byte for DELAY_MS: the delay is in user space, as this kernel has
+# no netem. No bandwidth limit is applied (loopback); see bench/RESULTS.md for what that means.
+#
+#   bench/remote.sh [SIZE] [DELAY_MS]     (default 512 and 20; the store is kept in data/bench/)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+size=${1:-512}
+delay=${2:-20}
+vdiso=build/bin/vdiso
+source bench/cold_run.sh
+mkdir -p data/bench/bucket
+store=data/bench/bucket/head$size.vdiso
+[ -f "$store" ] || $vdiso synth "$store" --kind head --size "$size" --quiet
+work=$(mktemp -d)
+trap 'exec 3>&-; rm -rf "$work"' EXIT
+
+# The server dies with this script (its stdin is our pipe).
+exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public bucket \
+            --delay-ms "$delay" --lifetime 3600 > "$work/port" 2> "$work/server.log")
+for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
+port=$(awk '/PORT/{print $2}' "$work/port")
+url=s3://bucket/head$size.vdiso
+remote=(--no-sign-request --s3-endpoint "http://127.0.0.1:$port")
+
+number() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
+
+bytes=$(stat -c %s "$store")
+echo "| view | local cold s | local MB read | remote s | remote MB fetched | requests | whole store at 1 Gbit/s, s |"
+echo "|---|---|---|---|---|---|---|"
+# Downloading first: the store's bytes at 1 Gbit/s plus one round trip (loopback is faster).
+download=$(python3 -c "print(round($bytes / 125e6 + $delay / 1000, 2))")
+for view in distant normal closeup; do
+  drop
+  read -r local_s _ < <(measure $vdiso extract "$store" --iso 600.5 --method sage --view $view --size 1024x1024 \
+                          --cold --stats "$work/local.json" --quiet --force)
+  read -r remote_s _ < <(measure $vdiso extract "$url" "${remote[@]}" --iso 600.5 --method sage --view $view \
+                           --size 1024x1024 --stats "$work/remote.json" --quiet --force)
+  printf "| %s | %s | %.1f | %s | %.1f | %s | %s |\n" $view "$local_s" \
+    "$(python3 -c "print($(number "$work/local.json" bytes_read)/1e6)")" "$remote_s" \
+    "$(python3 -c "print($(number "$work/remote.json" remote_bytes)/1e6)")" "$(number "$work/remote.json" remote_requests)" \
+    "$download"
+done
+echo "(${size}^3 head with levels, sage, 1 frame, ${delay} ms before each answer's first byte, $(nproc) cores; $cold local runs)"
