@@ -225,6 +225,7 @@ private:
             t.fail(where + "has " + std::to_string(TIFFNumberOfStrips(tif)) + " strips where " +
                    std::to_string(f.height) + " rows of " + std::to_string(rowsPerStrip) +
                    " per strip need " + std::to_string(strips));
+        checkChunksInFile(t, where, false);
         const size_t inSize = fileScalarSize(f.type), outSize = scalarSize(storeType);
         const bool direct = fileScalarOf(storeType) == f.type;
         const uint64_t rowBytes = uint64_t(f.width) * inSize;
@@ -248,6 +249,25 @@ private:
         }
     }
 
+    // Every strip or tile must lie inside the file, before libtiff reads one: an offset whose
+    // end passes 2^63 made read() fail, and libtiff 4.5.0 took the -1 for a byte count and
+    // zeroed memory before its buffer (fuzz_tiff campaign). An offset or count of 0 is an entry
+    // the file lacks (libtiff fills missing entries with 0).
+    static void checkChunksInFile(const TiffHandle& t, const std::string& where, bool tiled) {
+        TIFF* tif = t.tif();
+        std::error_code ec;
+        const uint64_t fileSize = std::filesystem::file_size(t.path(), ec);
+        if (ec) t.fail(where + "cannot be measured: " + ec.message());
+        const uint32_t n = tiled ? TIFFNumberOfTiles(tif) : TIFFNumberOfStrips(tif);
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint64_t off = TIFFGetStrileOffset(tif, i), bytes = TIFFGetStrileByteCount(tif, i);
+            if (off == 0 || bytes == 0 || off > fileSize || bytes > fileSize - off)
+                t.fail(where + (tiled ? "tile " : "strip ") + std::to_string(i) + " (" + std::to_string(bytes) +
+                       " bytes at offset " + std::to_string(off) + ") lies outside the file of " +
+                       std::to_string(fileSize) + " bytes");
+        }
+    }
+
     void readTiles(const TiffHandle& t, const std::string& where, const PageFormat& f,
                    ScalarType storeType, unsigned char* dst) {
         TIFF* tif = t.tif();
@@ -267,6 +287,7 @@ private:
                    " bytes where " + std::to_string(tileWidth) + " x " +
                    std::to_string(tileHeight) + " samples need " + std::to_string(tileBytes));
         mScratch.resize(tileBytes);
+        checkChunksInFile(t, where, true);
         for (uint32_t y = 0; y < f.height; y += tileHeight) {
             for (uint32_t x = 0; x < f.width; x += tileWidth) {
                 const uint32_t tile = TIFFComputeTile(tif, x, y, 0, 0);
