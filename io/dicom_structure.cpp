@@ -103,14 +103,9 @@ public:
         data.explicitVR = s.transferSyntax != "1.2.840.10008.1.2";
         data.bigEndian = s.transferSyntax == "1.2.840.10008.1.2.2";
         walkDataSet(at, mSize, false, data, 0, true);
-        s.hasPixelData = mSawPixelData;
-        s.encapsulated = mPixels.encapsulated;
-        s.pixelBytes = mPixels.pixelBytes;
-        s.fragments = mPixels.fragments;
-        s.offsetTableBytes = mPixels.offsetTableBytes;
-        s.firstFragmentOffset = mPixels.firstFragmentOffset;
-        s.firstFragmentBytes = mPixels.firstFragmentBytes;
-        return s;
+        mPixels.transferSyntax = s.transferSyntax;
+        mPixels.hasPixelData = mSawPixelData;
+        return mPixels;
     }
 
 private:
@@ -259,7 +254,7 @@ private:
     uint64_t mSize;
     bool mThroughPixelData;
     bool mSawPixelData = false;
-    DicomStructure mPixels;  // only the pixel data's fields
+    DicomStructure mPixels;  // the pixel data's fields as the walk finds them; then the result
 };
 
 }  // namespace
