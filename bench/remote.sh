@@ -7,6 +7,7 @@
 # no netem. No bandwidth limit is applied (loopback); see bench/RESULTS.md for what that means.
 #
 #   bench/remote.sh [SIZE] [DELAY_MS]     (default 512 and 20; the store is kept in data/bench/)
+#   bench/remote.sh NAME.vdiso DELAY_MS ISO   a store already in data/bench/bucket/ (a real scan)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size=${1:-512}
@@ -14,7 +15,9 @@ delay=${2:-20}
 vdiso=build/bin/vdiso
 source bench/cold_run.sh
 mkdir -p data/bench/bucket
-store=data/bench/bucket/head$size.vdiso
+iso=${3:-600.5}
+if [[ "$size" == *.vdiso ]]; then name=$size; else name=head$size.vdiso; fi
+store=data/bench/bucket/$name
 [ -f "$store" ] || $vdiso synth "$store" --kind head --size "$size" --quiet
 work=$(mktemp -d)
 trap 'exec 3>&-; rm -rf "$work"' EXIT
@@ -24,7 +27,7 @@ exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public 
             --delay-ms "$delay" --lifetime 3600 > "$work/port" 2> "$work/server.log")
 for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
 port=$(awk '/PORT/{print $2}' "$work/port")
-url=s3://bucket/head$size.vdiso
+url=s3://bucket/$name
 remote=(--no-sign-request --s3-endpoint "http://127.0.0.1:$port")
 
 number() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
@@ -39,14 +42,14 @@ $vdiso info "$url" "${remote[@]}" > /dev/null
 for view in distant normal closeup; do
   # Remote first, the server's file in its page cache (an object store's own caching and disks
   # are outside what is measured); then the local run, cold.
-  read -r remote_s _ < <(measure $vdiso extract "$url" "${remote[@]}" --iso 600.5 --method sage --view $view \
+  read -r remote_s _ < <(measure $vdiso extract "$url" "${remote[@]}" --iso "$iso" --method sage --view $view \
                            --size 1024x1024 --stats "$work/remote.json" --quiet --force)
   drop
-  read -r local_s _ < <(measure $vdiso extract "$store" --iso 600.5 --method sage --view $view --size 1024x1024 \
+  read -r local_s _ < <(measure $vdiso extract "$store" --iso "$iso" --method sage --view $view --size 1024x1024 \
                           --cold --stats "$work/local.json" --quiet --force)
   printf "| %s | %s | %.1f | %s | %.1f | %s | %s |\n" $view "$local_s" \
     "$(python3 -c "print($(number "$work/local.json" bytes_read)/1e6)")" "$remote_s" \
     "$(python3 -c "print($(number "$work/remote.json" remote_bytes)/1e6)")" "$(number "$work/remote.json" remote_requests)" \
     "$download"
 done
-echo "(${size}^3 head with levels, sage, 1 frame, ${delay} ms before each answer's first byte, $(nproc) cores; $cold local runs; remote runs with the server's file in its page cache)"
+echo "($name with levels, sage, 1 frame, ${delay} ms before each answer's first byte, $(nproc) cores; $cold local runs; remote runs with the server's file in its page cache)"
