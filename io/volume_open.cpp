@@ -13,6 +13,7 @@
 #include "io/nifti_reader.h"
 #include "io/nrrd_reader.h"
 #include "io/tiff_reader.h"
+#include "io/remote/remote_file.h"
 #include "io/zarr_reader.h"
 #include "io/vdb_reader.h"
 
@@ -71,6 +72,15 @@ const char* const kKnownInputs =
     ".tif/.tiff, .dcm, a DICOMDIR, a Zarr or OME-Zarr folder, or a folder of TIFF slices or "
     "DICOM files; for a raw file give --dims and --type";
 
+// A name that says a format vdiso reads from local files only.
+bool looksLikeLocalOnlyFormat(const std::string& path) {
+    const std::string name = path.substr(0, path.find_first_of("?#"));
+    for (const char* suffix : {".nrrd", ".nhdr", ".nii", ".nii.gz", ".hdr", ".img", ".vdb", ".mha",
+                               ".mhd", ".h5", ".hdf5", ".tif", ".tiff", ".dcm", ".raw", ".vdiso"})
+        if (endsWithIgnoreCase(name, suffix)) return true;
+    return false;
+}
+
 InputFormat detectFolderFormat(const std::string& path) {
     if (looksLikeZarr(path)) return InputFormat::Zarr;
     if (!listFolder(path, {".tif", ".tiff"}).empty()) return InputFormat::Tiff;
@@ -82,6 +92,14 @@ InputFormat detectFolderFormat(const std::string& path) {
 }  // namespace
 
 InputFormat detectInputFormat(const std::string& path, const InputOptions& options) {
+    // Over the network, chunked formats only: each chunk is fetched when its layer is read.
+    if (isRemoteLocation(path)) {
+        if (options.raw || looksLikeLocalOnlyFormat(path))
+            throwIoError(displayLocation(path), "is read from a URL only as Zarr or OME-Zarr (a "
+                                                "prefix holding .zarray, .zattrs or zarr.json): "
+                                                "download other formats first");
+        return InputFormat::Zarr;
+    }
     if (options.raw) return InputFormat::Raw;
     if (endsWithIgnoreCase(path, ".nrrd") || endsWithIgnoreCase(path, ".nhdr"))
         return InputFormat::Nrrd;
@@ -115,7 +133,7 @@ std::unique_ptr<SliceReader> openInFormat(const std::string& path, const InputOp
         case InputFormat::Dicom: return openDicomVolume(path, options.series);
         case InputFormat::MetaImage: return openMetaImageVolume(path);
         case InputFormat::Hdf5: return openHdf5Volume(path);
-        case InputFormat::Zarr: return openZarrVolume(path, options.scaleLevel);
+        case InputFormat::Zarr: return openZarrVolume(path, options.scaleLevel, options.remote);
         case InputFormat::Vdb: break;
     }
     return openVdbVolume(path, options.grid);

@@ -7,6 +7,7 @@
 
 #include "core/synth.h"
 #include "io/raw_reader.h"
+#include "io/remote/remote_options.h"
 #include "io/slice_reader.h"
 
 namespace vdiso {
@@ -21,6 +22,7 @@ struct InputOptions {
     std::optional<glm::dvec3> spacing;
     std::string series;  // DICOM: the SeriesInstanceUID to read (empty: the only series)
     int scaleLevel = 0;  // OME-Zarr: the multiscales level to read (0: the finest)
+    RemoteOptions remote;  // how a URL (Zarr, OME-Zarr) is reached
 };
 
 // Raw when options.raw is set; otherwise from the name: .nrrd/.nhdr, .nii/.nii.gz/.hdr, .vdb,
@@ -31,6 +33,7 @@ struct InputOptions {
 // names no file (quoted on the command line) is a stack of TIFF slices. A file with another
 // name whose bytes start like a TIFF or a DICOM file is read as one. Throws IoError for an input it does not
 // recognise, saying how to read it as raw.
+// A URL (http://, https://, s3://) is Zarr or OME-Zarr, the formats read from the network.
 InputFormat detectInputFormat(const std::string& path, const InputOptions& options);
 
 // Opens `path` in its format. Throws IoError naming the file on any problem.

@@ -13,6 +13,7 @@
 #include "io/error.h"
 #include "io/text_file.h"
 #include "io/zarr_array.h"
+#include "io/zarr_keys.h"
 
 namespace vdiso {
 namespace {
@@ -27,20 +28,26 @@ bool isFile(const fs::path& p) {
     return fs::is_regular_file(p, ec);
 }
 
-json readJson(const fs::path& file) {
-    const std::string text = readBoundedText(file.string(), kMaxMetadataBytes, "Zarr metadata");
+// A metadata document's text, or nullopt when the key does not exist.
+std::optional<std::string> readText(const ZarrKeys& keys, const std::string& key) {
+    const auto bytes = keys.get(key, kMaxMetadataBytes);
+    if (!bytes) return std::nullopt;
+    return std::string(bytes->begin(), bytes->end());
+}
+
+json parseJson(const ZarrKeys& keys, const std::string& key, const std::string& text) {
     try {
         return json::parse(text);
     } catch (const json::exception& e) {
-        throwIoError(file.string(), std::string("is not valid JSON: ") + e.what());
+        throwIoError(keys.where(key), std::string("is not valid JSON: ") + e.what());
     }
 }
 
-ZarrArrayMeta readArrayMeta(const fs::path& dir, int format) {
-    const fs::path file = dir / (format == 2 ? ".zarray" : "zarr.json");
-    if (!isFile(file)) throwIoError(dir.string(), "holds no " + file.filename().string() + ": not a Zarr array");
-    return parseZarrArrayMeta(readBoundedText(file.string(), kMaxMetadataBytes, "Zarr metadata"),
-                              format, file.string());
+ZarrArrayMeta readArrayMeta(const ZarrKeys& keys, const std::string& dir, int format) {
+    const std::string name = format == 2 ? ".zarray" : "zarr.json", key = joinZarrKey(dir, name);
+    const auto text = readText(keys, key);
+    if (!text) throwIoError(dir.empty() ? keys.name() : keys.where(dir), "holds no " + name + ": not a Zarr array");
+    return parseZarrArrayMeta(*text, format, keys.where(key));
 }
 
 // The three spatial axes of an array: its last three, the ones before them of size 1.
@@ -87,18 +94,18 @@ void applyTransforms(const json& list, size_t n, glm::dvec3& spacing, glm::dvec3
 }
 
 struct ZarrImage {
-    fs::path arrayDir;
+    std::string arrayDir;  // the array's key prefix ("" for the root)
     ZarrArrayMeta meta;
     glm::dvec3 spacing{1.0}, origin{0.0};
 };
 
 // "0 (512 x 512 x 300), 1 (256 x 256 x 150)": the levels, for a level out of range.
-std::string levelList(const fs::path& root, const json& datasets, int format) {
+std::string levelList(const ZarrKeys& keys, const json& datasets, int format) {
     std::string text;
     for (size_t i = 0; i < datasets.size(); ++i) {
         text += (i ? ", " : "") + std::to_string(i);
         try {
-            const ZarrArrayMeta m = readArrayMeta(root / datasets[i].value("path", std::string()), format);
+            const ZarrArrayMeta m = readArrayMeta(keys, datasets[i].value("path", std::string()), format);
             const Dims3 d = spatialDims(m, "");
             text += " (" + std::to_string(d[0]) + " x " + std::to_string(d[1]) + " x " +
                     std::to_string(d[2]) + ")";
@@ -108,7 +115,7 @@ std::string levelList(const fs::path& root, const json& datasets, int format) {
     return text;
 }
 
-ZarrImage openMultiscale(const fs::path& root, const json& multiscales, int format, int level,
+ZarrImage openMultiscale(const ZarrKeys& keys, const json& multiscales, int format, int level,
                          const std::string& where) {
     if (!multiscales.is_array() || multiscales.empty() || !multiscales[0].is_object())
         throwIoError(where, "has no multiscales image metadata");
@@ -117,7 +124,7 @@ ZarrImage openMultiscale(const fs::path& root, const json& multiscales, int form
     if (!datasets.is_array() || datasets.empty()) throwIoError(where, "its multiscales list no datasets");
     if (level < 0 || size_t(level) >= datasets.size())
         throwIoError(where, "has no level " + std::to_string(level) + "; its levels are " +
-                                levelList(root, datasets, format));
+                                levelList(keys, datasets, format));
     const json& ds = datasets[size_t(level)];
     const std::string path = ds.is_object() ? ds.value("path", std::string()) : "";
     const fs::path relative(path);
@@ -125,8 +132,10 @@ ZarrImage openMultiscale(const fs::path& root, const json& multiscales, int form
         std::any_of(relative.begin(), relative.end(), [](const fs::path& p) { return p == ".."; }))
         throwIoError(where, "dataset path \"" + path + "\" does not name a folder inside the image");
     ZarrImage image;
-    image.arrayDir = root / relative;
-    image.meta = readArrayMeta(image.arrayDir, format);
+    image.arrayDir = relative.lexically_normal().generic_string();
+    while (!image.arrayDir.empty() && image.arrayDir.back() == '/') image.arrayDir.pop_back();
+    if (image.arrayDir == ".") image.arrayDir.clear();
+    image.meta = readArrayMeta(keys, image.arrayDir, format);
     const size_t n = image.meta.shape.size();
     const json axes = ms.value("axes", json());
     if (axes.is_array() && axes.size() == n && n >= 3)
@@ -139,32 +148,31 @@ ZarrImage openMultiscale(const fs::path& root, const json& multiscales, int form
     return image;
 }
 
-ZarrImage locate(const std::string& path, int level) {
-    const fs::path root(path);
-    auto plain = [&](int format) {
+ZarrImage locate(const ZarrKeys& keys, int level) {
+    const std::string& path = keys.name();
+    auto plain = [&](int format, const std::string& text) {
         if (level != 0)
             throwIoError(path, "is a plain Zarr array: it has no level " + std::to_string(level));
         ZarrImage image;
-        image.arrayDir = root;
-        image.meta = readArrayMeta(root, format);
+        image.meta = parseZarrArrayMeta(text, format, keys.where(format == 2 ? ".zarray" : "zarr.json"));
         return image;
     };
     try {
-        if (isFile(root / ".zarray")) return plain(2);
-        if (isFile(root / "zarr.json")) {
-            const json j = readJson(root / "zarr.json");
+        if (const auto text = readText(keys, ".zarray")) return plain(2, *text);
+        if (const auto text = readText(keys, "zarr.json")) {
+            const json j = parseJson(keys, "zarr.json", *text);
             if (!j.is_object()) throwIoError(path, "zarr.json is not a JSON object");
-            if (j.value("node_type", std::string()) == "array") return plain(3);
+            if (j.value("node_type", std::string()) == "array") return plain(3, *text);
             const json attributes = j.value("attributes", json::object());
             const json ome = attributes.is_object() ? attributes.value("ome", json::object()) : json();
             const json ms = ome.is_object() && ome.contains("multiscales") ? ome["multiscales"]
                                                                            : attributes.value("multiscales", json());
-            return openMultiscale(root, ms, 3, level, path);
+            return openMultiscale(keys, ms, 3, level, path);
         }
-        if (isFile(root / ".zattrs")) {
-            const json attributes = readJson(root / ".zattrs");
+        if (const auto text = readText(keys, ".zattrs")) {
+            const json attributes = parseJson(keys, ".zattrs", *text);
             if (!attributes.is_object()) throwIoError(path, ".zattrs is not a JSON object");
-            return openMultiscale(root, attributes.value("multiscales", json()), 2, level, path);
+            return openMultiscale(keys, attributes.value("multiscales", json()), 2, level, path);
         }
     } catch (const json::exception& e) {
         throwIoError(path, std::string("its metadata has a field of the wrong kind: ") + e.what());
@@ -174,8 +182,8 @@ ZarrImage locate(const std::string& path, int level) {
 
 class ZarrSliceReader final : public SliceReader {
 public:
-    ZarrSliceReader(std::string name, ZarrImage image, const VolumeInfo& info)
-        : mName(std::move(name)), mImage(std::move(image)), mInfo(info) {}
+    ZarrSliceReader(std::string name, std::unique_ptr<ZarrKeys> keys, ZarrImage image, const VolumeInfo& info)
+        : mName(std::move(name)), mKeys(std::move(keys)), mImage(std::move(image)), mInfo(info) {}
 
     const VolumeInfo& info() const override { return mInfo; }
 
@@ -199,7 +207,11 @@ public:
     }
 
     std::string name() const override { return mName; }
-    std::vector<std::string> files() const override { return {mImage.arrayDir.string()}; }
+    // A remote array is no file an output could overwrite.
+    std::vector<std::string> files() const override {
+        if (mKeys->isRemote()) return {};
+        return {mImage.arrayDir.empty() ? mKeys->name() : mKeys->where(mImage.arrayDir)};
+    }
 
 private:
     void loadLayer(int64_t layer) {
@@ -219,48 +231,33 @@ private:
         std::vector<int64_t> index(n, 0);
         index[n - 3] = layer;
         const bool swap = m.bigEndian != hostIsBigEndian();
-        for (int64_t y0 = 0; y0 < ny; y0 += cy) {
-            throwIfInterrupted(mName);
+        // The layer's chunks, a row of chunks after another: fetched together when remote.
+        std::vector<std::string> chunkKeys;
+        for (int64_t y0 = 0; y0 < ny; y0 += cy)
             for (int64_t x0 = 0; x0 < nx; x0 += cx) {
                 index[n - 2] = y0 / cy;
                 index[n - 1] = x0 / cx;
-                const fs::path file = mImage.arrayDir / m.chunkKey(index);
-                const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
-                if (!readChunk(file)) {
-                    fillRegion(depth, x0, y0, cols, rows);
-                    continue;
-                }
-                for (int64_t lz = 0; lz < depth; ++lz)
-                    for (int64_t ly = 0; ly < rows; ++ly)
-                        decodeSamples(mChunk.data() + size_t((lz * cy + ly) * cx) * inSize, m.type,
-                                      swap, size_t(cols),
-                                      mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * outSize,
-                                      mInfo.type);
+                chunkKeys.push_back(joinZarrKey(mImage.arrayDir, m.chunkKey(index)));
             }
-        }
+        const int64_t columns = (nx + cx - 1) / cx;
+        // No encoding makes a chunk much larger than its samples: a bigger one is not one.
+        const uint64_t bound = m.chunkBytes() + m.chunkBytes() / 8 + 65536;
+        mKeys->forEach(chunkKeys, bound, [&](size_t i, const unsigned char* data, size_t size) {
+            const int64_t y0 = int64_t(i) / columns * cy, x0 = int64_t(i) % columns * cx;
+            const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
+            if (!data) {
+                fillRegion(depth, x0, y0, cols, rows);
+                return;
+            }
+            decodeZarrChunk(m, data, size, mChunk.data(), mKeys->where(chunkKeys[i]));
+            for (int64_t lz = 0; lz < depth; ++lz)
+                for (int64_t ly = 0; ly < rows; ++ly)
+                    decodeSamples(mChunk.data() + size_t((lz * cy + ly) * cx) * inSize, m.type, swap,
+                                  size_t(cols),
+                                  mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * outSize,
+                                  mInfo.type);
+        });
         mLayerIndex = layer;
-    }
-
-    // Decodes the chunk file into mChunk; false when it is missing (the fill value's chunk).
-    bool readChunk(const fs::path& file) {
-        std::error_code ec;
-        const auto status = fs::status(file, ec);
-        if (!fs::exists(status)) return false;
-        const std::string where = file.string();
-        if (!fs::is_regular_file(status)) throwIoError(where, "is not a chunk file");
-        // No encoding makes a chunk much larger than its samples: a bigger file is not one.
-        const uint64_t bound = mImage.meta.chunkBytes() + mImage.meta.chunkBytes() / 8 + 65536;
-        const uint64_t size = fs::file_size(file, ec);
-        if (ec) throwIoError(where, "cannot be read: " + ec.message());
-        if (size > bound)
-            throwIoError(where, "is " + std::to_string(size) + " bytes, more than a chunk of " +
-                                    std::to_string(mImage.meta.chunkBytes()) + " can take");
-        mStored.resize(size_t(size));
-        std::ifstream in(file, std::ios::binary);
-        if (!in.read(reinterpret_cast<char*>(mStored.data()), std::streamsize(size)))
-            throwIoError(where, "cannot be read");
-        decodeZarrChunk(mImage.meta, mStored.data(), mStored.size(), mChunk.data(), where);
-        return true;
     }
 
     void fillRegion(int64_t depth, int64_t x0, int64_t y0, int64_t cols, int64_t rows) {
@@ -278,9 +275,10 @@ private:
     }
 
     std::string mName;
+    std::unique_ptr<ZarrKeys> mKeys;
     ZarrImage mImage;
     VolumeInfo mInfo;
-    std::vector<unsigned char> mLayer, mChunk, mStored;
+    std::vector<unsigned char> mLayer, mChunk;
     int64_t mLayerIndex = -1;
     int64_t mNext = 0;
 };
@@ -294,16 +292,18 @@ bool looksLikeZarr(const std::string& dir) {
     return false;
 }
 
-std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level) {
-    ZarrImage image = locate(path, level);
+std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level, const RemoteOptions& remote) {
+    auto keys = std::make_unique<ZarrKeys>(path, remote);
+    ZarrImage image = locate(*keys, level);
+    const std::string arrayWhere = image.arrayDir.empty() ? keys->name() : keys->where(image.arrayDir);
     VolumeInfo info;
-    info.dims = spatialDims(image.meta, image.arrayDir.string());
-    requireVolumeDims(path, info.dims);
+    info.dims = spatialDims(image.meta, arrayWhere);
+    requireVolumeDims(keys->name(), info.dims);
     info.type = storeTypeFor(image.meta.type, false);
     info.spacing = image.spacing;
     info.origin = image.origin;
-    const std::string name = level == 0 ? path : path + " (level " + std::to_string(level) + ")";
-    return std::make_unique<ZarrSliceReader>(name, std::move(image), info);
+    const std::string name = level == 0 ? keys->name() : keys->name() + " (level " + std::to_string(level) + ")";
+    return std::make_unique<ZarrSliceReader>(name, std::move(keys), std::move(image), info);
 }
 
 }  // namespace vdiso

@@ -17,13 +17,16 @@
 #include <memory>
 #include <string>
 
+#include "io/remote/remote_options.h"
 #include "io/slice_reader.h"
 
 namespace vdiso {
 
 // Throws IoError naming the store (and the chunk, for chunk errors) on any problem; for a level
 // out of range, the message lists the levels and their shapes.
-std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level);
+// `path` may be a URL (https://, http://, s3://: io/zarr_keys.h), reached with `remote`.
+std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level,
+                                            const RemoteOptions& remote = {});
 
 // True if `dir` holds Zarr metadata (.zarray, .zgroup, .zattrs or zarr.json).
 bool looksLikeZarr(const std::string& dir);

@@ -5,12 +5,7 @@
 // dies, a redirect loop, a TLS failure, an object replaced while read) is an error naming the URL.
 #include <gtest/gtest.h>
 
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
+#include <cstdlib>
 #include <chrono>
 #include <string>
 #include <thread>
@@ -18,67 +13,19 @@
 
 #include "io/brick_store.h"
 #include "io/error.h"
+#include "tests/loopback_servers.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
 namespace {
 
 const std::string kSource = VDISO_SOURCE_DIR;
-const std::string kPython = "/usr/bin/python3";
 
-// A server process started with a pipe on its stdin (it stops when the pipe closes: when this
-// object goes, or this process dies) that prints "PORT n" first.
-class LoopbackServer {
-public:
-    LoopbackServer(const std::vector<std::string>& argv, const std::string& log) {
-        int in[2], out[2];
-        if (::pipe2(in, O_CLOEXEC) != 0 || ::pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
-        mPid = ::fork();
-        if (mPid == 0) {
-            ::dup2(in[0], STDIN_FILENO);
-            ::dup2(out[1], STDOUT_FILENO);
-            const int err = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-            if (err >= 0) ::dup2(err, STDERR_FILENO);
-            std::vector<char*> args;
-            for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-            args.push_back(nullptr);
-            ::execv(args[0], args.data());
-            ::_exit(127);
-        }
-        ::close(in[0]);
-        ::close(out[1]);
-        mStdin = in[1];
-        mStdout = out[0];
-        std::string line;
-        for (char c; line.find('\n') == std::string::npos;) {
-            pollfd p{mStdout, POLLIN, 0};
-            if (::poll(&p, 1, 20000) <= 0 || ::read(mStdout, &c, 1) != 1)
-                throw std::runtime_error("the server did not start: " + test::readText(log));
-            line += c;
-        }
-        mPort = std::stoi(line.substr(line.find(' ') + 1));
-    }
-    ~LoopbackServer() { stop(); }
-    int port() const { return mPort; }
-    // Ends it now (SIGKILL: a server dying, no goodbye).
-    void stop() {
-        if (mPid <= 0) return;
-        ::kill(mPid, SIGKILL);
-        ::waitpid(mPid, nullptr, 0);
-        mPid = -1;
-        ::close(mStdin);
-        ::close(mStdout);
-    }
-
-private:
-    pid_t mPid = -1;
-    int mStdin = -1, mStdout = -1;
-    int mPort = 0;
-};
-
-constexpr const char* kKey = "AKIDVDISOTEST";
-constexpr const char* kSecret = "vdiso-test-secret";
-constexpr const char* kToken = "vdiso-session-token";
+using test::LoopbackServer;
+using test::s3Env;
+constexpr const char* kKey = test::kS3Key;
+constexpr const char* kSecret = test::kS3Secret;
+constexpr const char* kToken = test::kS3Token;
 
 class RemoteStore : public ::testing::Test {
 protected:
@@ -91,29 +38,12 @@ protected:
     std::string file(const std::string& name) const { return mDir.file(name); }
 
     LoopbackServer nginx(const std::vector<std::string>& extra = {}) {
-        std::vector<std::string> argv = {kPython, kSource + "/tests/remote/start_nginx.py", "--root",
-                                         file("bkt"), "--lifetime", "300", "--tmpdir", mDir.path().string()};
-        argv.insert(argv.end(), extra.begin(), extra.end());
-        return LoopbackServer(argv, file("nginx.log"));
+        return test::startNginx(file("bkt"), mDir.path().string(), file("nginx.log"), extra);
     }
     LoopbackServer s3(const std::vector<std::string>& extra = {}) {
-        std::vector<std::string> argv = {kPython, kSource + "/tests/remote/s3_server.py", "--root", mDir.path().string(),
-                                         "--cred", std::string(kKey) + ":" + kSecret + ":" + kToken,
-                                         "--lifetime", "300"};
-        argv.insert(argv.end(), extra.begin(), extra.end());
-        return LoopbackServer(argv, file("s3.log"));
+        return test::startS3(mDir.path().string(), file("s3.log"), extra);
     }
-    // The environment a signed S3 run takes its credentials and endpoint from.
-    static std::string s3Env(int port) {
-        return "env AWS_ACCESS_KEY_ID=" + std::string(kKey) + " AWS_SECRET_ACCESS_KEY=" + kSecret +
-               " AWS_SESSION_TOKEN=" + kToken + " AWS_ENDPOINT_URL=http://127.0.0.1:" + std::to_string(port) +
-               " AWS_REGION=us-east-1 AWS_SHARED_CREDENTIALS_FILE=/nonexistent AWS_CONFIG_FILE=/nonexistent ";
-    }
-    static void control(int port, const std::string& json) {
-        const test::CommandResult r = test::runCommand("curl -sf -X POST --data '" + json +
-                                                       "' http://127.0.0.1:" + std::to_string(port) + "/__control");
-        ASSERT_EQ(r.exitCode, 0) << r.output;
-    }
+    static void control(int port, const std::string& json) { ASSERT_TRUE(test::controlS3(port, json)); }
     // extract's picture, its PLY and its stats, for a store at `location`.
     test::CommandResult extract(const std::string& prefix, const std::string& location, const std::string& name,
                                 const std::string& extra = "") {

@@ -19,6 +19,7 @@
 #include "io/volume_open.h"
 #include "io/zarr_array.h"
 #include "io/zarr_reader.h"
+#include "tests/loopback_servers.h"
 #include "tests/reader_test_util.h"
 
 namespace vdiso {
@@ -174,12 +175,15 @@ TEST_F(ZarrReader, PlainArraysEveryCodecBothFormats) {
 }
 
 // An OME-Zarr image with two levels: level 1 is every other sample, at twice the spacing.
-void writeOmeImage(const std::filesystem::path& root, int format) {
+void writeOmeImage(const std::filesystem::path& root, int format, const Dims3& dims = {13, 10, 9},
+                   std::function<bool(int64_t, int64_t, int64_t)> skip = {}) {
     ArraySpec full;
     full.format = format;
     full.extraAxes = 2;  // t, c
+    full.dims = dims;
+    full.skip = std::move(skip);
     ArraySpec half = full;
-    half.dims = {7, 5, 5};
+    half.dims = {(dims[0] + 1) / 2, (dims[1] + 1) / 2, (dims[2] + 1) / 2};
     half.step = 2;
     writeArray(root / "0", full);
     writeArray(root / "1", half);
@@ -250,6 +254,67 @@ TEST_F(ZarrReader, ConvertsFromTheCommandLine) {
     EXPECT_EQ(test::compareStoreWithSamples(store, std::vector<unsigned char>(samples.begin(), samples.end())), "");
     const auto wrong = test::runVdiso("convert " + path("img.zarr") + "/0/zarr.json " + path("x.vdiso") + " --scale-level 1");
     EXPECT_NE(wrong.exitCode, 0);
+}
+
+// An OME-Zarr at a URL converts to the very store its folder does: over nginx (HTTP, OME-Zarr
+// 0.4) and over S3 (signed, the signature checked by botocore; OME-Zarr 0.5), with missing
+// chunks the fill value and more chunks in a layer than requests in flight. What cannot be read
+// is an error naming the URL, and leaves no output.
+TEST_F(ZarrReader, ConvertsFromUrlsToTheSameStore) {
+    const Dims3 dims{61, 47, 23};
+    auto holes = [](int64_t kx, int64_t ky, int64_t kz) { return (kx + 2 * ky + 3 * kz) % 7 == 0; };
+    writeOmeImage(path("srv/bkt/v04.ome.zarr"), 2, dims, holes);
+    writeOmeImage(path("srv/bkt/v05.ome.zarr"), 3, dims, holes);
+    auto convert = [&](const std::string& env, const std::string& input, const std::string& out,
+                       const std::string& extra = "") {
+        return test::runCommand(env + VDISO_BINARY + " convert '" + input + "' " + path(out) +
+                                " --brick 8 --quiet --connections 3 " + extra);
+    };
+    for (const char* name : {"v04", "v05"})
+        for (const char* level : {"0", "1"}) {
+            const auto r = convert("", path("srv/bkt/") + name + ".ome.zarr",
+                                   std::string(name) + "_" + level + "_local.vdiso", std::string("--scale-level ") + level);
+            ASSERT_EQ(r.exitCode, 0) << r.output;
+        }
+    {
+        test::LoopbackServer nginx = test::startNginx(path("srv"), path(""), path("nginx.log"));
+        const std::string url = "http://127.0.0.1:" + std::to_string(nginx.port()) + "/bkt/v04.ome.zarr";
+        for (const char* level : {"0", "1"}) {
+            SCOPED_TRACE(level);
+            const auto r = convert("", url, std::string("v04_") + level + "_http.vdiso", std::string("--scale-level ") + level);
+            ASSERT_EQ(r.exitCode, 0) << r.output;
+            EXPECT_EQ(test::readFile(path(std::string("v04_") + level + "_http.vdiso")),
+                      test::readFile(path(std::string("v04_") + level + "_local.vdiso")));
+        }
+        // A corrupt chunk is named by its URL; nothing at the URL says so; other formats are
+        // read from files only.
+        test::writeFile(path("srv/bkt/v04.ome.zarr/0/0.0.1.1.1"), "not a blosc chunk");
+        auto r = convert("", url, "bad.vdiso");
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find(url + "/0/0.0.1.1.1"), std::string::npos) << r.output;
+        r = convert("", url + "/../nothing.zarr", "bad.vdiso");
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find("holds no Zarr metadata"), std::string::npos) << r.output;
+        r = convert("", "http://127.0.0.1:" + std::to_string(nginx.port()) + "/bkt/head.nii.gz", "bad.vdiso");
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find("only as Zarr or OME-Zarr"), std::string::npos) << r.output;
+        EXPECT_FALSE(std::filesystem::exists(path("bad.vdiso")));
+    }
+    // Level 1 only: the S3 server checks each signature in Python, a few ms a request.
+    test::LoopbackServer s3 = test::startS3(path("srv"), path("s3.log"));
+    for (const char* level : {"1"}) {
+        SCOPED_TRACE(level);
+        const auto r = convert(test::s3Env(s3.port()), "s3://bkt/v05.ome.zarr", std::string("v05_") + level + "_s3.vdiso",
+                               std::string("--scale-level ") + level);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_EQ(test::readFile(path(std::string("v05_") + level + "_s3.vdiso")),
+                  test::readFile(path(std::string("v05_") + level + "_local.vdiso")));
+    }
+    const auto r = convert(test::s3Env(s3.port()) + "AWS_SECRET_ACCESS_KEY=wrong ", "s3://bkt/v05.ome.zarr", "bad.vdiso");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("s3://bkt/v05.ome.zarr/"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("HTTP 403 (Forbidden): SignatureDoesNotMatch"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(path("bad.vdiso")));
 }
 
 TEST_F(ZarrErrors, CorruptChunkIsNamed) {

@@ -125,7 +125,8 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
 }
 
 const char* const kRemoteOptionsHelp =
-    "remote stores (STORE as https://HOST/PATH.vdiso, http://... or s3://BUCKET/KEY.vdiso):\n"
+    "remote data (a store as https://HOST/PATH.vdiso, http://... or s3://BUCKET/KEY.vdiso; for\n"
+    "convert, a Zarr or OME-Zarr at such a URL):\n"
     "  --s3-endpoint URL       S3 endpoint (default AWS_ENDPOINT_URL_S3, AWS_ENDPOINT_URL, else\n"
     "                          AWS's for the region: AWS_REGION, AWS_DEFAULT_REGION, the profile's)\n"
     "  --s3-addressing path|virtual   bucket in the path or in the host name (default: virtual\n"

@@ -36,6 +36,7 @@ int runConvert(int argc, char** argv) {
             std::fputs(kConvertInputHelp, stdout);
             std::fputs(kHelpEnd, stdout);
             std::fputs(kStoreWriteOptionsHelp, stdout);
+            std::fputs(kRemoteOptionsHelp, stdout);
             return 0;
         }
         if (!parser.take(a, args)) throw UsageError("unknown option '" + a + "'");

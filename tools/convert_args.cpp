@@ -26,7 +26,8 @@ std::optional<FileScalar> parseFileScalar(const std::string& name) {
 const char* const kConvertInputHelp =
     "input formats (by name): .nrrd .nhdr (NRRD), .nii .nii.gz .hdr (NIfTI-1), .mha .mhd\n"
     "(MetaImage), .h5 .hdf5 (HDF5: FILE.h5:/path/to/dataset, or the file if it holds one 3-D\n"
-    "dataset), .vdb (OpenVDB), a Zarr array or OME-Zarr image folder (v2 or v3),\n"
+    "dataset), .vdb (OpenVDB), a Zarr array or OME-Zarr image folder (v2 or v3), or one at a\n"
+    "URL (https://HOST/PATH.zarr, http://..., s3://BUCKET/PATH.zarr: chunks fetched many at once),\n"
     ".tif .tiff (a multi-page TIFF or BigTIFF); a folder of .tif slices, or a quoted glob such\n"
     "as 'scan/slice_*.tif' (slices in natural order: slice_2 before slice_10); DICOM: a folder\n"
     "(with its subfolders), a DICOMDIR, one .dcm file (its series) or a list of files; anything\n"
@@ -76,6 +77,7 @@ bool ConvertArgParser::take(const std::string& a, Args& args) {
         mArgs.input.scaleLevel = int(parseInt(a, args.value(a), 0, 64));
     } else if (a == "--grid") {
         mArgs.input.grid = args.value(a);
+    } else if (takeRemoteOption(a, args, mArgs.input.remote)) {
     } else if (takeStoreWriteOption(a, args, mArgs.store)) {
     } else if (a == "--quiet") {
         mArgs.quiet = true;

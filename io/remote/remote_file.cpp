@@ -38,14 +38,6 @@ std::string displayLocation(const std::string& location) {
 
 namespace {
 
-void initCurlOnce() {
-    static std::once_flag once;
-    std::call_once(once, [] {
-        if (curl_global_init(CURL_GLOBAL_DEFAULT) != CURLE_OK)
-            throw IoError("libcurl cannot be initialised: remote stores cannot be read");
-    });
-}
-
 // What one transfer received. Headers are those of the last response (redirects reset them).
 struct Transfer {
     CURL* curl = nullptr;
@@ -166,66 +158,29 @@ bool retriedCurlError(CURLcode rc) {
 }  // namespace
 
 struct RemoteFile::Impl {
-    RemoteOptions options;
+    std::shared_ptr<RemoteSession> session;
     std::string url;  // what is requested: the location, or an s3:// location's http(s) URL
     std::optional<S3Location> s3;
     std::string sigv4, userPassword;
     curl_slist* headers = nullptr;  // fixed headers: S3's payload hash and session token
     std::string condition;          // "If-Match: ..." or "If-Unmodified-Since: ...", once pinned
-    CURLSH* share = nullptr;
-    std::mutex shareLocks[CURL_LOCK_DATA_LAST];
     std::atomic<uint64_t> failures{0};  // reads that failed for good
     std::mutex failureLock;
     std::string failure;  // the last one's message, which the reads it ended repeat
-    std::mutex poolLock;
-    std::condition_variable poolFree;
-    std::vector<CURL*> idle;
-    int inUse = 0;
 
-    ~Impl() {
-        for (CURL* c : idle) curl_easy_cleanup(c);
-        if (share) curl_share_cleanup(share);
-        curl_slist_free_all(headers);
-    }
-
-    CURL* take() {
-        std::unique_lock lock(poolLock);
-        poolFree.wait(lock, [&] { return inUse < options.connections; });
-        ++inUse;
-        if (!idle.empty()) {
-            CURL* c = idle.back();
-            idle.pop_back();
-            return c;
-        }
-        lock.unlock();
-        CURL* c = curl_easy_init();
-        if (!c) {
-            give(nullptr);
-            throw std::bad_alloc();
-        }
-        return c;
-    }
-
-    void give(CURL* c) {
-        {
-            std::lock_guard lock(poolLock);
-            if (c) idle.push_back(c);
-            --inUse;
-        }
-        poolFree.notify_one();
-    }
+    ~Impl() { curl_slist_free_all(headers); }
 };
 
 RemoteFile::RemoteFile(const std::string& location, const RemoteOptions& options, size_t headBytes)
+    : RemoteFile(std::make_shared<RemoteSession>(options), location, headBytes) {}
+
+RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string& location,
+                       size_t headBytes)
     : mImpl(std::make_unique<Impl>()), mName(displayLocation(location)) {
-    initCurlOnce();
     Impl& d = *mImpl;
-    d.options = options;
-    d.options.connections = std::clamp(options.connections, 1, 256);
-    d.options.attempts = std::clamp(options.attempts, 1, 16);
-    if (d.options.caFile.empty() && std::getenv("AWS_CA_BUNDLE")) d.options.caFile = std::getenv("AWS_CA_BUNDLE");
+    d.session = std::move(session);
     if (location.rfind("s3://", 0) == 0) {
-        d.s3 = resolveS3Location(location, options);
+        d.s3 = resolveS3Location(location, d.session->options());
         d.url = d.s3->url;
         mScheme = "s3";
         if (!d.s3->accessKey.empty()) {
@@ -240,19 +195,6 @@ RemoteFile::RemoteFile(const std::string& location, const RemoteOptions& options
         d.url = location;
         mScheme = location.rfind("https://", 0) == 0 ? "https" : "http";
     }
-    d.share = curl_share_init();
-    if (!d.share) throw std::bad_alloc();
-    curl_share_setopt(d.share, CURLSHOPT_LOCKFUNC,
-                      +[](CURL*, curl_lock_data data, curl_lock_access, void* user) {
-                          static_cast<Impl*>(user)->shareLocks[data].lock();
-                      });
-    curl_share_setopt(d.share, CURLSHOPT_UNLOCKFUNC, +[](CURL*, curl_lock_data data, void* user) {
-        static_cast<Impl*>(user)->shareLocks[data].unlock();
-    });
-    curl_share_setopt(d.share, CURLSHOPT_USERDATA, &d);
-    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_CONNECT);
-    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_DNS);
-    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_SSL_SESSION);
 
     // The head: its Content-Range gives the size, its ETag the version every later read pins.
     mHead.resize(std::max<size_t>(headBytes, 1));
@@ -270,6 +212,9 @@ RemoteFile::RemoteFile(const std::string& location, const RemoteOptions& options
 
 RemoteFile::~RemoteFile() = default;
 
+uint64_t RemoteFile::requests() const { return mImpl->session->requests.load(); }
+uint64_t RemoteFile::bytesFetched() const { return mImpl->session->bytesFetched.load(); }
+
 void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
     if (n == 0) return;
     if (offset > mSize || n > mSize - offset)
@@ -284,6 +229,7 @@ void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
 
 RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening) const {
     Impl& d = *mImpl;
+    const RemoteOptions& options = d.session->options();
     const std::string range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
     // A failure for good counts once, and ends the object's other transfers (onProgress).
     const uint64_t failuresAtStart = d.failures.load();
@@ -298,7 +244,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         return IoError(d.failure);
     };
     std::string lastProblem;
-    for (int attempt = 0; attempt < d.options.attempts; ++attempt) {
+    for (int attempt = 0; attempt < options.attempts; ++attempt) {
         if (attempt > 0) {
             const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(100 << std::min(attempt - 1, 6));
             while (std::chrono::steady_clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested())
@@ -307,7 +253,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         throwIfInterrupted(mName);
         if (d.failures.load() != failuresAtStart)
             throw abandoned();
-        CURL* curl = d.take();
+        CURL* curl = d.session->take();
         Transfer t;
         t.curl = curl;
         t.failures = &d.failures;
@@ -317,20 +263,18 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_slist* headers = nullptr;
         for (const curl_slist* h = d.headers; h; h = h->next) headers = curl_slist_append(headers, h->data);
         if (!d.condition.empty()) headers = curl_slist_append(headers, d.condition.c_str());
-        curl_easy_reset(curl);
         curl_easy_setopt(curl, CURLOPT_URL, d.url.c_str());
-        curl_easy_setopt(curl, CURLOPT_SHARE, d.share);
         curl_easy_setopt(curl, CURLOPT_RANGE, range.c_str());
         curl_easy_setopt(curl, CURLOPT_HTTPHEADER, headers);
         curl_easy_setopt(curl, CURLOPT_PROTOCOLS_STR, "http,https");
         curl_easy_setopt(curl, CURLOPT_REDIR_PROTOCOLS_STR, "http,https");
-        curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, long(d.options.followRedirects));
+        curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, long(options.followRedirects));
         curl_easy_setopt(curl, CURLOPT_MAXREDIRS, 8L);
         curl_easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
         curl_easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
-        curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(d.options.connectTimeoutMs));
+        curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(options.connectTimeoutMs));
         curl_easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
-        curl_easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, d.options.stallTimeoutMs / 1000)));
+        curl_easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, options.stallTimeoutMs / 1000)));
         curl_easy_setopt(curl, CURLOPT_HEADERFUNCTION, onHeader);
         curl_easy_setopt(curl, CURLOPT_HEADERDATA, &t);
         curl_easy_setopt(curl, CURLOPT_WRITEFUNCTION, onBody);
@@ -339,7 +283,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_setopt(curl, CURLOPT_XFERINFOFUNCTION, onProgress);
         curl_easy_setopt(curl, CURLOPT_XFERINFODATA, &t);
         curl_easy_setopt(curl, CURLOPT_USERAGENT, "vdiso");
-        if (!d.options.caFile.empty()) curl_easy_setopt(curl, CURLOPT_CAINFO, d.options.caFile.c_str());
+        if (!options.caFile.empty()) curl_easy_setopt(curl, CURLOPT_CAINFO, options.caFile.c_str());
         if (!d.sigv4.empty()) {
             curl_easy_setopt(curl, CURLOPT_AWS_SIGV4, d.sigv4.c_str());
             curl_easy_setopt(curl, CURLOPT_USERPWD, d.userPassword.c_str());
@@ -351,9 +295,9 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_setopt(curl, CURLOPT_HTTPHEADER, nullptr);
         curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, nullptr);
         curl_slist_free_all(headers);
-        d.give(curl);
-        ++mRequests;
-        mBytesFetched += t.got;
+        d.session->give(curl);
+        ++d.session->requests;
+        d.session->bytesFetched += t.got;
 
         if (t.status == 200)
             throw fail("is served without byte ranges (HTTP 200 to a Range request): vdiso "
@@ -369,7 +313,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
             const std::string what = curlError[0] ? curlError : curl_easy_strerror(rc);
             if (retriedCurlError(rc)) {
                 lastProblem = rc == CURLE_OPERATION_TIMEDOUT
-                                  ? "no answer for " + std::to_string(std::max<int64_t>(1, d.options.stallTimeoutMs / 1000)) +
+                                  ? "no answer for " + std::to_string(std::max<int64_t>(1, options.stallTimeoutMs / 1000)) +
                                         " s (" + what + ")"
                                   : what;
                 continue;
@@ -399,19 +343,23 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         if (t.status == 412)
             throw fail("was replaced while being read (version " + mVersion + " no longer matches: " +
                                     said + ")");
-        if (t.status == 416 && opening) fail("is empty (" + said + ")");
+        if (t.status == 416 && opening) throw fail("is empty (" + said + ")");
         if (t.status >= 500 || t.status == 429) {
             lastProblem = said;
             continue;
         }
+        if (t.status == 404) {
+            IoError e = fail(said);
+            throw RemoteNotFound(e.what());
+        }
         throw fail(said + (t.status == 416 ? " for range " + range : std::string()));
     }
-    throw fail(lastProblem + " (tried " + std::to_string(d.options.attempts) + " times)");
+    throw fail(lastProblem + " (tried " + std::to_string(options.attempts) + " times)");
 }
 
 void RemoteFile::readMany(std::span<const ByteRange> ranges) const {
     if (ranges.empty()) return;
-    const size_t workers = std::min<size_t>(ranges.size(), size_t(mImpl->options.connections));
+    const size_t workers = std::min<size_t>(ranges.size(), size_t(mImpl->session->options().connections));
     std::atomic<size_t> next{0};
     std::exception_ptr failure;
     std::mutex failureLock;

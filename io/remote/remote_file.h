@@ -25,7 +25,9 @@
 #include <string>
 #include <vector>
 
+#include "io/error.h"
 #include "io/remote/remote_options.h"
+#include "io/remote/remote_session.h"
 
 namespace vdiso {
 
@@ -34,6 +36,12 @@ bool isRemoteLocation(const std::string& location);
 
 // The location as shown in messages and statistics: without userinfo or query.
 std::string displayLocation(const std::string& location);
+
+// A location that does not exist (HTTP 404): Zarr's missing chunks, which are the fill value.
+class RemoteNotFound : public IoError {
+public:
+    using IoError::IoError;
+};
 
 struct ByteRange {
     uint64_t offset = 0;
@@ -46,6 +54,9 @@ public:
     // Throws IoError naming the location when it cannot be reached, is refused, is empty or is
     // served without byte ranges.
     RemoteFile(const std::string& location, const RemoteOptions& options, size_t headBytes);
+    // The same, in a session shared with other objects (the connections it keeps are reused).
+    // An object that does not exist (404) is a RemoteNotFound.
+    RemoteFile(std::shared_ptr<RemoteSession> session, const std::string& location, size_t headBytes);
     ~RemoteFile();
     RemoteFile(const RemoteFile&) = delete;
     RemoteFile& operator=(const RemoteFile&) = delete;
@@ -62,9 +73,9 @@ public:
     // The ranges at once, as many in flight as the pool allows; throws the first error.
     void readMany(std::span<const ByteRange> ranges) const;
 
-    // Requests sent (tries included) and object bytes received, since open.
-    uint64_t requests() const { return mRequests.load(); }
-    uint64_t bytesFetched() const { return mBytesFetched.load(); }
+    // Requests sent (tries included) and object bytes received by the session.
+    uint64_t requests() const;
+    uint64_t bytesFetched() const;
 
 private:
     struct Answer {
@@ -83,7 +94,6 @@ private:
     uint64_t mSize = 0;
     std::string mVersion;
     std::vector<unsigned char> mHead;  // the first bytes, kept from the open
-    mutable std::atomic<uint64_t> mRequests{0}, mBytesFetched{0};
 };
 
 }  // namespace vdiso

@@ -23,6 +23,7 @@ using vdiso::cli::Args;
 using vdiso::cli::ConvertArgParser;
 using vdiso::cli::ConvertArgs;
 using vdiso::cli::kConvertInputHelp;
+using vdiso::cli::kRemoteOptionsHelp;
 using vdiso::cli::kStoreWriteOptionsHelp;
 using vdiso::cli::parseInt;
 using vdiso::cli::printConvertSummary;
@@ -130,6 +131,7 @@ int runConvertAcrossRanks(const Communicator& comm, int argc, char** argv) {
             std::fputs(kConvertInputHelp, stdout);
             std::fputs(kHelpEnd, stdout);
             std::fputs(kStoreWriteOptionsHelp, stdout);
+            std::fputs(kRemoteOptionsHelp, stdout);
         }
         return 0;
     }

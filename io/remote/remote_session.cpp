@@ -1,0 +1,87 @@
+#include "io/remote/remote_session.h"
+
+#include <curl/curl.h>
+
+#include <algorithm>
+#include <condition_variable>
+#include <cstdlib>
+#include <mutex>
+#include <new>
+
+#include "io/error.h"
+
+namespace vdiso {
+
+struct RemoteSession::Impl {
+    RemoteOptions options;
+    CURLSH* share = nullptr;
+    std::mutex shareLocks[CURL_LOCK_DATA_LAST];
+    std::mutex poolLock;
+    std::condition_variable poolFree;
+    int inUse = 0;
+};
+
+RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_unique<Impl>()) {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        if (curl_global_init(CURL_GLOBAL_DEFAULT) != CURLE_OK)
+            throw IoError("libcurl cannot be initialised: remote data cannot be read");
+    });
+    Impl& d = *mImpl;
+    d.options = options;
+    d.options.connections = std::clamp(options.connections, 1, 256);
+    d.options.attempts = std::clamp(options.attempts, 1, 16);
+    if (d.options.caFile.empty() && std::getenv("AWS_CA_BUNDLE")) d.options.caFile = std::getenv("AWS_CA_BUNDLE");
+    d.share = curl_share_init();
+    if (!d.share) throw std::bad_alloc();
+    curl_share_setopt(d.share, CURLSHOPT_LOCKFUNC,
+                      +[](CURL*, curl_lock_data data, curl_lock_access, void* user) {
+                          static_cast<Impl*>(user)->shareLocks[data].lock();
+                      });
+    curl_share_setopt(d.share, CURLSHOPT_UNLOCKFUNC, +[](CURL*, curl_lock_data data, void* user) {
+        static_cast<Impl*>(user)->shareLocks[data].unlock();
+    });
+    curl_share_setopt(d.share, CURLSHOPT_USERDATA, &d);
+    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_CONNECT);
+    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_DNS);
+    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_SSL_SESSION);
+}
+
+RemoteSession::~RemoteSession() {
+    if (mImpl->share) curl_share_cleanup(mImpl->share);
+}
+
+const RemoteOptions& RemoteSession::options() const { return mImpl->options; }
+
+// A fresh easy handle for every transfer, never one used before: libcurl 7.88 (Debian 12) frees
+// a transfer's stored headers when the next one starts but keeps a pointer to the last, so a
+// reused handle whose next answer begins with a folded header line read freed memory (found by
+// fuzz_remote; libcurl 8.0 clears the pointer). Connections, DNS and TLS sessions are reused
+// through the share all the same; a handle costs microseconds beside a request.
+CURL* RemoteSession::take() {
+    Impl& d = *mImpl;
+    {
+        std::unique_lock lock(d.poolLock);
+        d.poolFree.wait(lock, [&] { return d.inUse < d.options.connections; });
+        ++d.inUse;
+    }
+    CURL* c = curl_easy_init();
+    if (!c) {
+        give(nullptr);
+        throw std::bad_alloc();
+    }
+    curl_easy_setopt(c, CURLOPT_SHARE, d.share);
+    return c;
+}
+
+void RemoteSession::give(CURL* c) {
+    Impl& d = *mImpl;
+    if (c) curl_easy_cleanup(c);
+    {
+        std::lock_guard lock(d.poolLock);
+        --d.inUse;
+    }
+    d.poolFree.notify_one();
+}
+
+}  // namespace vdiso

@@ -1,0 +1,42 @@
+// What the objects read from one place share: libcurl's connection cache, DNS and TLS sessions
+// (so a second object reuses the first one's connection), the bound of RemoteOptions::connections
+// requests in flight, and the counts of requests and bytes.
+// A store's one object (io/remote/remote_file.h) has a session of its own; the chunks of a Zarr
+// array over HTTP or S3 (io/zarr_keys.h) share one.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+#include "io/remote/remote_options.h"
+
+typedef void CURL;
+
+namespace vdiso {
+
+class RemoteSession {
+public:
+    // The options clamped to what they may be (1-256 connections, 1-16 attempts) and AWS_CA_BUNDLE
+    // applied. Throws IoError when libcurl cannot be initialised.
+    explicit RemoteSession(const RemoteOptions& options);
+    ~RemoteSession();
+    RemoteSession(const RemoteSession&) = delete;
+    RemoteSession& operator=(const RemoteSession&) = delete;
+
+    const RemoteOptions& options() const;
+
+    // A new easy handle set to share the session's caches, waiting while `connections` are in
+    // use; give it back (it is cleaned up) when its one transfer ends.
+    CURL* take();
+    void give(CURL* curl);
+
+    // Requests sent (tries included) and object bytes received by every object of the session.
+    std::atomic<uint64_t> requests{0}, bytesFetched{0};
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+};
+
+}  // namespace vdiso

@@ -1,0 +1,123 @@
+#include "io/zarr_keys.h"
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+#include "core/interrupt.h"
+#include "io/error.h"
+#include "io/remote/remote_file.h"
+#include "io/remote/remote_session.h"
+
+namespace vdiso {
+
+namespace fs = std::filesystem;
+
+std::string joinZarrKey(const std::string& prefix, const std::string& key) {
+    return prefix.empty() ? key : key.empty() ? prefix : prefix + "/" + key;
+}
+
+ZarrKeys::ZarrKeys(const std::string& root, const RemoteOptions& remote) : mRoot(root) {
+    if (isRemoteLocation(root)) {
+        while (mRoot.size() > 1 && mRoot.back() == '/') mRoot.pop_back();
+        mName = displayLocation(mRoot);
+        mSession = std::make_shared<RemoteSession>(remote);
+    } else {
+        mName = root;
+    }
+}
+
+ZarrKeys::~ZarrKeys() = default;
+
+std::string ZarrKeys::where(const std::string& key) const {
+    return mSession ? mName + "/" + key : (fs::path(mRoot) / key).string();
+}
+
+std::optional<std::vector<unsigned char>> ZarrKeys::get(const std::string& key, uint64_t maxBytes) const {
+    const std::string where = this->where(key);
+    auto tooLarge = [&](uint64_t size) {
+        throwIoError(where, "is " + std::to_string(size) + " bytes, more than the " +
+                                std::to_string(maxBytes) + " it may hold");
+    };
+    std::vector<unsigned char> bytes;
+    if (mSession) {
+        std::optional<RemoteFile> object;
+        try {
+            // The query (a presigned URL's signature) stays on the root, not the key.
+            const size_t query = mRoot.find('?');
+            const std::string url = query == std::string::npos
+                                        ? mRoot + "/" + key
+                                        : mRoot.substr(0, query) + "/" + key + mRoot.substr(query);
+            object.emplace(mSession, url, size_t(std::min<uint64_t>(maxBytes, SIZE_MAX - 1) + 1));
+        } catch (const RemoteNotFound&) {
+            return std::nullopt;
+        }
+        if (object->size() > maxBytes) tooLarge(object->size());
+        bytes.resize(size_t(object->size()));
+        object->read(0, bytes.size(), bytes.data());
+        return bytes;
+    }
+    std::error_code ec;
+    const auto status = fs::status(where, ec);
+    if (!fs::exists(status)) return std::nullopt;
+    if (!fs::is_regular_file(status)) throwIoError(where, "is not a file");
+    const uint64_t size = fs::file_size(where, ec);
+    if (ec) throwIoError(where, "cannot be read: " + ec.message());
+    if (size > maxBytes) tooLarge(size);
+    bytes.resize(size_t(size));
+    std::ifstream in(where, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
+        throwIoError(where, "cannot be read");
+    return bytes;
+}
+
+void ZarrKeys::forEach(const std::vector<std::string>& keys, uint64_t maxBytes, const Use& use) const {
+    if (!mSession) {
+        for (size_t i = 0; i < keys.size(); ++i) {
+            throwIfInterrupted(mName);
+            const auto bytes = get(keys[i], maxBytes);
+            use(i, bytes ? bytes->data() : nullptr, bytes ? bytes->size() : 0);
+        }
+        return;
+    }
+    // A batch of twice the connections: enough to keep every connection busy while the batch
+    // before is decoded, few enough that a batch's chunks are small beside the layer they fill.
+    const size_t connections = size_t(mSession->options().connections);
+    const size_t batch = 2 * connections;
+    std::vector<std::optional<std::vector<unsigned char>>> fetched(batch);
+    for (size_t first = 0; first < keys.size(); first += batch) {
+        const size_t n = std::min(batch, keys.size() - first);
+        std::atomic<size_t> next{0};
+        std::exception_ptr failure;
+        std::mutex failureLock;
+        auto work = [&] {
+            for (size_t i; (i = next.fetch_add(1)) < n;) {
+                try {
+                    fetched[i] = get(keys[first + i], maxBytes);
+                } catch (...) {
+                    std::lock_guard lock(failureLock);
+                    if (!failure) failure = std::current_exception();
+                    next = n;
+                }
+            }
+        };
+        std::vector<std::thread> threads;
+        for (size_t w = 1; w < std::min(n, connections); ++w) threads.emplace_back(work);
+        work();
+        for (std::thread& t : threads) t.join();
+        if (failure) std::rethrow_exception(failure);
+        for (size_t i = 0; i < n; ++i) {
+            const auto& bytes = fetched[i];
+            use(first + i, bytes ? bytes->data() : nullptr, bytes ? bytes->size() : 0);
+        }
+    }
+}
+
+uint64_t ZarrKeys::requests() const { return mSession ? mSession->requests.load() : 0; }
+uint64_t ZarrKeys::bytesFetched() const { return mSession ? mSession->bytesFetched.load() : 0; }
+
+}  // namespace vdiso

@@ -1,0 +1,56 @@
+// Where a Zarr hierarchy's keys (metadata documents and chunks) are read from: a local folder,
+// or a prefix over HTTP(S) or S3 (https://HOST/PATH.zarr, s3://BUCKET/PATH.zarr) whose keys
+// are objects. Remote keys are fetched whole, as ranged GETs of at most the bound the caller
+// gives (io/remote/remote_file.h: retries, timeouts, signing), through one RemoteSession so
+// their connections are reused, RemoteOptions::connections at a time; an object that does not
+// exist (404) is a missing key, as a missing file is.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/remote/remote_options.h"
+
+namespace vdiso {
+
+class RemoteSession;
+
+class ZarrKeys {
+public:
+    // `root` is a folder or a URL (io/remote/remote_file.h: isRemoteLocation).
+    ZarrKeys(const std::string& root, const RemoteOptions& remote);
+    ~ZarrKeys();
+
+    // The root as messages show it (a URL without its query).
+    const std::string& name() const { return mName; }
+    // "ROOT/KEY" as messages show it.
+    std::string where(const std::string& key) const;
+    bool isRemote() const { return mSession != nullptr; }
+
+    // The key's bytes, or nullopt when there is no such key. Throws IoError naming the key when
+    // it holds more than maxBytes, cannot be read, or (local) is not a file.
+    std::optional<std::vector<unsigned char>> get(const std::string& key, uint64_t maxBytes) const;
+
+    // Each key's bytes handed to use(i, data, size) in the order given (data null for a missing
+    // key); remote keys are fetched many at once, a batch ahead of their use, local ones in turn.
+    // Throws the first error, as get does.
+    using Use = std::function<void(size_t i, const unsigned char* data, size_t size)>;
+    void forEach(const std::vector<std::string>& keys, uint64_t maxBytes, const Use& use) const;
+
+    // Remote requests sent and bytes received (0 for a folder).
+    uint64_t requests() const;
+    uint64_t bytesFetched() const;
+
+private:
+    std::string mRoot, mName;
+    std::shared_ptr<RemoteSession> mSession;
+};
+
+// "a/b" from a prefix ("" for the root) and a key.
+std::string joinZarrKey(const std::string& prefix, const std::string& key);
+
+}  // namespace vdiso
