@@ -33,6 +33,7 @@
 #include "serve/server.h"
 #include "serve/viewer_client.h"
 #include "tests/extract_test_util.h"
+#include "tests/loopback_servers.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -778,6 +779,72 @@ TEST(ServeServer, OffersSeveralStores) {
         EXPECT_GT(mesh.triangleCount(), 0u);
     }
     server.stop();
+    serving.join();
+}
+
+// A store in a bucket is served as the local file is: the first frame's geometry is the local
+// server's. A frame whose bricks cannot be fetched ends in an error naming the URL and the
+// server stays up: once the bucket answers again, the next frame completes.
+TEST(ServeServer, StoreInABucket) {
+    test::ScratchDir dir;
+    writeWebRoot(dir);
+    std::filesystem::create_directories(dir.path() / "bkt");
+    SynthParams p;
+    p.dims = {72, 72, 72};
+    StoreWriteOptions o;
+    o.brickSize = 8;
+    const std::string local = dir.file("bkt/head.vdiso");
+    writeBrickStore(*openSynthVolume(p), local, o);
+    test::LoopbackServer s3 = test::startS3(dir.path().string(), dir.file("s3.log"), {"--public", "bkt"});
+    auto serve = [&](const std::string& store) {
+        ServeOptions s;
+        s.port = 0;
+        s.stores = {store};
+        s.webRoot = dir.file("web");
+        s.iso = kHeadSkinIso;
+        s.remote.s3Endpoint = "http://127.0.0.1:" + std::to_string(s3.port());
+        s.remote.anonymous = true;
+        s.remote.attempts = 2;
+        return std::make_unique<Server>(s);
+    };
+    auto frame = [](Server& server, const Camera& camera, uint32_t seq, TriangleMesh& mesh) {
+        ViewerClient client("127.0.0.1", server.port(), server.token());
+        client.hello();
+        const ClientFrame f = client.requestFrame(viewOf(camera, seq));
+        PointSet points;
+        if (f.status == "complete") client.assemble(f, mesh, points);
+        return f;
+    };
+    const Camera normal = presetFor(local, ViewPreset::Normal, 128);
+    const Camera behind = presetFor(local, ViewPreset::Closeup, 128, 180);
+    TriangleMesh want;
+    {
+        auto server = serve(local);
+        std::thread serving([&] { server->run(); });
+        EXPECT_EQ(frame(*server, normal, 1, want).status, "complete");
+        server->stop();
+        serving.join();
+    }
+    ASSERT_GT(want.triangleCount(), 0u);
+    auto server = serve("s3://bkt/head.vdiso");
+    std::thread serving([&] { server->run(); });
+    TriangleMesh got;
+    ClientFrame f = frame(*server, normal, 1, got);
+    EXPECT_EQ(f.status, "complete") << f.frameEnd;
+    EXPECT_EQ(test::canonicalTriangles(got), test::canonicalTriangles(want));
+
+    // Every GET answered 500: the frame behind the head needs bricks not yet fetched.
+    ASSERT_TRUE(test::controlS3(s3.port(), R"([{"op":"fault","action":"status","status":500,"count":-1}])"));
+    TriangleMesh none;
+    f = frame(*server, behind, 2, none);
+    EXPECT_EQ(f.status, "error") << f.frameEnd;
+    ASSERT_EQ(f.errors.size(), 1u);
+    EXPECT_NE(f.errors[0].find("s3://bkt/head.vdiso: HTTP 500"), std::string::npos) << f.errors[0];
+    ASSERT_TRUE(test::controlS3(s3.port(), R"([{"op":"clear_faults"}])"));
+    f = frame(*server, behind, 3, none);
+    EXPECT_EQ(f.status, "complete") << f.frameEnd;
+    EXPECT_GT(none.triangleCount(), 0u);
+    server->stop();
     serving.join();
 }
 
