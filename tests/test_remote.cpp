@@ -236,6 +236,80 @@ TEST_F(RemoteStore, ServerDyingMidReadIsAnError) {
     }
 }
 
+// --disk-cache keeps fetched ranges across runs and processes: a second run fetches only the
+// header that pins the version and reads the rest from the cache; two processes share it at
+// once; a damaged entry is fetched again; a new version of the object drops the old one's
+// entries; the bound holds; a folder that cannot be a cache is refused by name.
+TEST_F(RemoteStore, DiskCacheKeepsRangesAcrossRuns) {
+    LoopbackServer server = s3();
+    const std::string env = s3Env(server.port());
+    const std::string cache = file("cache");
+    const auto number = [](const std::string& json, const std::string& key) {
+        const size_t at = json.find("\"" + key + "\": ");
+        return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 4));
+    };
+    auto run = [&](const std::string& name, const std::string& extra = "") {
+        const test::CommandResult r = extract(env, "s3://bkt/head.vdiso", name, "--disk-cache " + cache + " " + extra);
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        expectSameAsLocal(name);
+        return test::readText(file(name + ".json"));
+    };
+    const std::string first = run("first");
+    EXPECT_EQ(number(first, "disk_cache_hits"), 0.0) << first;
+    const std::string second = run("second");
+    EXPECT_EQ(number(second, "remote_requests"), 1.0) << second;  // the header, which pins the version
+    EXPECT_EQ(number(second, "disk_cache_bytes"), number(first, "remote_bytes") - double(kStoreHeaderBytes))
+        << first << second;
+
+    // Two processes at once, and damaged entries: each still gets the very picture.
+    std::vector<std::filesystem::path> entries;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(cache))
+        if (e.is_regular_file()) entries.push_back(e.path());
+    ASSERT_GT(entries.size(), 2u);
+    for (size_t i = 0; i < entries.size(); i += 3) {
+        std::vector<unsigned char> bytes = test::readFile(entries[i].string());
+        bytes[bytes.size() / 2] ^= 0x40;
+        test::writeFile(entries[i].string(), bytes.data(), bytes.size());
+    }
+    const test::CommandResult both = test::runCommand(
+        "(" + env + VDISO_BINARY + " extract s3://bkt/head.vdiso --iso 600.5 --method sage --size 256x256 --png " +
+        file("p1.png") + " -o " + file("p1.ply") + " --disk-cache " + cache + " & " + env + VDISO_BINARY +
+        " extract s3://bkt/head.vdiso --iso 600.5 --method sage --size 256x256 --png " + file("p2.png") + " -o " +
+        file("p2.ply") + " --disk-cache " + cache + "; s=$?; wait $! && exit $s)");
+    ASSERT_EQ(both.exitCode, 0) << both.output;
+    expectSameAsLocal("p1");
+    expectSameAsLocal("p2");
+
+    // A new version of the object: the old one's entries go, and nothing of them is read.
+    const test::CommandResult other = test::runVdiso("synth " + file("bkt/head.vdiso") +
+                                                     " --kind head --size 80 --quiet --force");
+    ASSERT_EQ(other.exitCode, 0) << other.output;
+    const test::CommandResult r = extract(env, "s3://bkt/head.vdiso", "new", "--disk-cache " + cache);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(number(test::readText(file("new.json")), "disk_cache_hits"), 0.0);
+    size_t versions = 0;
+    for (const auto& object : std::filesystem::directory_iterator(cache))
+        for (const auto& version : std::filesystem::directory_iterator(object)) versions += version.is_directory();
+    EXPECT_EQ(versions, 1u);
+
+    // At most 1 MB kept: another object's old 2 MB entry goes first.
+    std::filesystem::create_directories(cache + "/0123456789abcdef/0123456789abcdef");
+    const std::string old = cache + "/0123456789abcdef/0123456789abcdef/0-2097148";
+    test::writeFile(old, std::string(size_t(2) << 20, 'x'));
+    std::filesystem::last_write_time(old, std::filesystem::file_time_type::clock::now() - std::chrono::hours(24));
+    ASSERT_EQ(extract(env, "s3://bkt/head.vdiso", "bounded", "--disk-cache " + cache + " --disk-cache-mb 1").exitCode, 0);
+    EXPECT_EQ(test::readFile(file("bounded.png")), test::readFile(file("new.png")));
+    uint64_t total = 0;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(cache))
+        if (e.is_regular_file()) total += e.file_size();
+    EXPECT_LE(total, uint64_t(1) << 20);
+    EXPECT_FALSE(std::filesystem::exists(old));
+    EXPECT_GT(total, 0u);
+
+    const test::CommandResult refused = extract(env, "s3://bkt/head.vdiso", "refused", "--disk-cache /proc/vdiso-cache");
+    expectError(refused, {"/proc/vdiso-cache", "disk cache"});
+}
+
 TEST_F(RemoteStore, HttpsNeedsTheRightAuthority) {
     // Under AddressSanitizer, LeakSanitizer's exit-time check ended the vdiso child of this
     // test with "LeakSanitizer has encountered a fatal error" after an HTTPS run (OpenSSL's

@@ -140,8 +140,10 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("read_method", store.readMethod());
     // A remote store: every request sent (the open's, the index's, retries) and the bytes they
     // brought, from the open on.
-    if (const RemoteFile* remote = store.remote())
+    if (const RemoteFile* remote = store.remote()) {
         s.add("remote_requests", remote->requests()).add("remote_bytes", remote->bytesFetched());
+        s.add("disk_cache_hits", remote->diskCacheHits()).add("disk_cache_bytes", remote->diskCacheBytes());
+    }
     s.add("prefetch", plan.threads > 1 && !isViewDependent(o.method) ? 0 : plan.prefetchBricks);
     s.add("readers", o.readers);
     // I/O the extraction did not wait for: read and decode time spent ahead of it (summed over

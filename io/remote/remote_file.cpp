@@ -16,6 +16,7 @@
 
 #include "core/interrupt.h"
 #include "io/error.h"
+#include "io/remote/disk_cache.h"
 #include "io/remote/s3_location.h"
 
 namespace vdiso {
@@ -208,12 +209,22 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
         mVersion = "Last-Modified: " + head.lastModified;
         d.condition = "If-Unmodified-Since: " + head.lastModified;
     }
+    const RemoteOptions& options = d.session->options();
+    if (!options.diskCacheDir.empty()) {
+        if (mVersion.empty())
+            throwIoError(mName, "is served without an ETag or Last-Modified: with no version to "
+                                "key them by, its ranges cannot be kept in a disk cache");
+        mDiskCache = std::make_unique<RangeDiskCache>(options.diskCacheDir, displayLocation(d.url), mVersion,
+                                                      options.diskCacheBytes);
+    }
 }
 
 RemoteFile::~RemoteFile() = default;
 
 uint64_t RemoteFile::requests() const { return mImpl->session->requests.load(); }
 uint64_t RemoteFile::bytesFetched() const { return mImpl->session->bytesFetched.load(); }
+uint64_t RemoteFile::diskCacheHits() const { return mDiskCache ? mDiskCache->hits() : 0; }
+uint64_t RemoteFile::diskCacheBytes() const { return mDiskCache ? mDiskCache->hitBytes() : 0; }
 
 void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
     if (n == 0) return;
@@ -224,7 +235,9 @@ void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
         std::memcpy(dst, mHead.data() + offset, n);
         return;
     }
+    if (mDiskCache && mDiskCache->read(offset, n, dst)) return;
     fetch(offset, n, dst, false);
+    if (mDiskCache) mDiskCache->write(offset, n, dst);
 }
 
 RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening) const {

@@ -14,7 +14,8 @@
 // otherwise up to RemoteOptions::connections HTTP/1.1 connections are kept alive). A 5xx, a 429,
 // a broken or truncated transfer and a request without a byte for the stall timeout are tried
 // again, up to RemoteOptions::attempts times with doubling pauses from 100 ms; other 4xx, TLS
-// failures and redirect loops are errors at once. Errors are IoErrors naming the URL (without
+// failures and redirect loops are errors at once. With RemoteOptions::diskCacheDir, ranges are
+// kept on disk for the pinned version (io/remote/disk_cache.h) and read from there when held. Errors are IoErrors naming the URL (without
 // its query, which may hold a signature) and what the server said.
 #pragma once
 
@@ -30,6 +31,8 @@
 #include "io/remote/remote_session.h"
 
 namespace vdiso {
+
+class RangeDiskCache;
 
 // True for http://, https:// and s3:// locations.
 bool isRemoteLocation(const std::string& location);
@@ -76,6 +79,9 @@ public:
     // Requests sent (tries included) and object bytes received by the session.
     uint64_t requests() const;
     uint64_t bytesFetched() const;
+    // Ranges, and their bytes, read from the disk cache instead (0 without one).
+    uint64_t diskCacheHits() const;
+    uint64_t diskCacheBytes() const;
 
 private:
     struct Answer {
@@ -94,6 +100,7 @@ private:
     uint64_t mSize = 0;
     std::string mVersion;
     std::vector<unsigned char> mHead;  // the first bytes, kept from the open
+    std::unique_ptr<RangeDiskCache> mDiskCache;
 };
 
 }  // namespace vdiso
