@@ -75,46 +75,36 @@ std::optional<std::vector<unsigned char>> ZarrKeys::get(const std::string& key, 
     return bytes;
 }
 
-void ZarrKeys::forEach(const std::vector<std::string>& keys, uint64_t maxBytes, const Use& use) const {
+ZarrKeys::Values ZarrKeys::getAll(const std::vector<std::string>& keys, uint64_t maxBytes) const {
+    Values values(keys.size());
     if (!mSession) {
         for (size_t i = 0; i < keys.size(); ++i) {
             throwIfInterrupted(mName);
-            const auto bytes = get(keys[i], maxBytes);
-            use(i, bytes ? bytes->data() : nullptr, bytes ? bytes->size() : 0);
+            values[i] = get(keys[i], maxBytes);
         }
-        return;
+        return values;
     }
-    // A batch of twice the connections: enough to keep every connection busy while the batch
-    // before is decoded, few enough that a batch's chunks are small beside the layer they fill.
-    const size_t connections = size_t(mSession->options().connections);
-    const size_t batch = 2 * connections;
-    std::vector<std::optional<std::vector<unsigned char>>> fetched(batch);
-    for (size_t first = 0; first < keys.size(); first += batch) {
-        const size_t n = std::min(batch, keys.size() - first);
-        std::atomic<size_t> next{0};
-        std::exception_ptr failure;
-        std::mutex failureLock;
-        auto work = [&] {
-            for (size_t i; (i = next.fetch_add(1)) < n;) {
-                try {
-                    fetched[i] = get(keys[first + i], maxBytes);
-                } catch (...) {
-                    std::lock_guard lock(failureLock);
-                    if (!failure) failure = std::current_exception();
-                    next = n;
-                }
+    const size_t n = keys.size();
+    std::atomic<size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failureLock;
+    auto work = [&] {
+        for (size_t i; (i = next.fetch_add(1)) < n;) {
+            try {
+                values[i] = get(keys[i], maxBytes);
+            } catch (...) {
+                std::lock_guard lock(failureLock);
+                if (!failure) failure = std::current_exception();
+                next = n;
             }
-        };
-        std::vector<std::thread> threads;
-        for (size_t w = 1; w < std::min(n, connections); ++w) threads.emplace_back(work);
-        work();
-        for (std::thread& t : threads) t.join();
-        if (failure) std::rethrow_exception(failure);
-        for (size_t i = 0; i < n; ++i) {
-            const auto& bytes = fetched[i];
-            use(first + i, bytes ? bytes->data() : nullptr, bytes ? bytes->size() : 0);
         }
-    }
+    };
+    std::vector<std::thread> threads;
+    for (size_t w = 1; w < std::min(n, size_t(mSession->options().connections)); ++w) threads.emplace_back(work);
+    work();
+    for (std::thread& t : threads) t.join();
+    if (failure) std::rethrow_exception(failure);
+    return values;
 }
 
 uint64_t ZarrKeys::requests() const { return mSession ? mSession->requests.load() : 0; }

@@ -7,7 +7,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,11 +34,10 @@ public:
     // it holds more than maxBytes, cannot be read, or (local) is not a file.
     std::optional<std::vector<unsigned char>> get(const std::string& key, uint64_t maxBytes) const;
 
-    // Each key's bytes handed to use(i, data, size) in the order given (data null for a missing
-    // key); remote keys are fetched many at once, a batch ahead of their use, local ones in turn.
-    // Throws the first error, as get does.
-    using Use = std::function<void(size_t i, const unsigned char* data, size_t size)>;
-    void forEach(const std::vector<std::string>& keys, uint64_t maxBytes, const Use& use) const;
+    // Every key's bytes (nullopt for a missing key), fetched RemoteOptions::connections at a
+    // time when remote, read in turn when local. Throws the first error, as get does.
+    using Values = std::vector<std::optional<std::vector<unsigned char>>>;
+    Values getAll(const std::vector<std::string>& keys, uint64_t maxBytes) const;
 
     // Remote requests sent and bytes received (0 for a folder).
     uint64_t requests() const;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <future>
 #include <fstream>
 #include <new>
 #include <nlohmann/json.hpp>
@@ -228,37 +229,63 @@ private:
             throwIoError(mName, "cannot hold a layer of chunks (" + std::to_string(depth) +
                                     " slices of " + std::to_string(nx) + " x " + std::to_string(ny) + ")");
         }
-        std::vector<int64_t> index(n, 0);
-        index[n - 3] = layer;
         const bool swap = m.bigEndian != hostIsBigEndian();
-        // The layer's chunks, a row of chunks after another: fetched together when remote.
-        std::vector<std::string> chunkKeys;
-        for (int64_t y0 = 0; y0 < ny; y0 += cy)
-            for (int64_t x0 = 0; x0 < nx; x0 += cx) {
-                index[n - 2] = y0 / cy;
-                index[n - 1] = x0 / cx;
-                chunkKeys.push_back(joinZarrKey(mImage.arrayDir, m.chunkKey(index)));
-            }
+        const std::vector<std::string> keys = layerKeys(layer);
         const int64_t columns = (nx + cx - 1) / cx;
-        // No encoding makes a chunk much larger than its samples: a bigger one is not one.
-        const uint64_t bound = m.chunkBytes() + m.chunkBytes() / 8 + 65536;
-        mKeys->forEach(chunkKeys, bound, [&](size_t i, const unsigned char* data, size_t size) {
+        auto decodeChunk = [&](size_t i, const std::optional<std::vector<unsigned char>>& bytes) {
             const int64_t y0 = int64_t(i) / columns * cy, x0 = int64_t(i) % columns * cx;
             const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
-            if (!data) {
+            if (!bytes) {
                 fillRegion(depth, x0, y0, cols, rows);
                 return;
             }
-            decodeZarrChunk(m, data, size, mChunk.data(), mKeys->where(chunkKeys[i]));
+            decodeZarrChunk(m, bytes->data(), bytes->size(), mChunk.data(), mKeys->where(keys[i]));
             for (int64_t lz = 0; lz < depth; ++lz)
                 for (int64_t ly = 0; ly < rows; ++ly)
                     decodeSamples(mChunk.data() + size_t((lz * cy + ly) * cx) * inSize, m.type, swap,
                                   size_t(cols),
                                   mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * outSize,
                                   mInfo.type);
-        });
+        };
+        if (!mKeys->isRemote()) {  // a chunk at a time: memory stays the layer
+            for (size_t i = 0; i < keys.size(); ++i) {
+                throwIfInterrupted(mName);
+                decodeChunk(i, mKeys->get(keys[i], chunkBound()));
+            }
+        } else {
+            // Remote: the layer's chunks were fetched while the layer before was decoded (or
+            // are fetched now), and the next layer's are fetched while this one is.
+            ZarrKeys::Values values = mAheadLayer == layer ? mAhead.get() : mKeys->getAll(keys, chunkBound());
+            mAheadLayer = -1;
+            if ((layer + 1) * cz < mInfo.dims[2]) {
+                mAheadLayer = layer + 1;
+                mAhead = std::async(std::launch::async, [this, next = layerKeys(layer + 1)] {
+                    return mKeys->getAll(next, chunkBound());
+                });
+            }
+            for (size_t i = 0; i < keys.size(); ++i) decodeChunk(i, values[i]);
+        }
         mLayerIndex = layer;
     }
+
+    // The layer's chunk keys, a row of chunks after another.
+    std::vector<std::string> layerKeys(int64_t layer) const {
+        const ZarrArrayMeta& m = mImage.meta;
+        const size_t n = m.shape.size();
+        std::vector<int64_t> index(n, 0);
+        index[n - 3] = layer;
+        std::vector<std::string> keys;
+        for (int64_t y = 0; y * m.chunks[n - 2] < mInfo.dims[1]; ++y)
+            for (int64_t x = 0; x * m.chunks[n - 1] < mInfo.dims[0]; ++x) {
+                index[n - 2] = y;
+                index[n - 1] = x;
+                keys.push_back(joinZarrKey(mImage.arrayDir, m.chunkKey(index)));
+            }
+        return keys;
+    }
+
+    // No encoding makes a chunk much larger than its samples: a bigger one is not one.
+    uint64_t chunkBound() const { return mImage.meta.chunkBytes() + mImage.meta.chunkBytes() / 8 + 65536; }
 
     void fillRegion(int64_t depth, int64_t x0, int64_t y0, int64_t cols, int64_t rows) {
         const size_t outSize = scalarSize(mInfo.type);
@@ -280,6 +307,8 @@ private:
     VolumeInfo mInfo;
     std::vector<unsigned char> mLayer, mChunk;
     int64_t mLayerIndex = -1;
+    std::future<ZarrKeys::Values> mAhead;  // remote: the next layer's chunks, being fetched
+    int64_t mAheadLayer = -1;
     int64_t mNext = 0;
 };
 

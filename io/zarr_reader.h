@@ -11,7 +11,8 @@
 //
 // Missing chunks are the fill value, as the Zarr specification says; a chunk that cannot be
 // decoded is an error naming its file. Streaming: one layer of chunks (the chunk depth in z,
-// across the whole slice) is decoded at a time, so memory is that layer whatever the depth.
+// across the whole slice) is decoded at a time, so memory is that layer whatever the depth; at
+// a URL, the next layer's stored chunks are fetched meanwhile, and held too.
 #pragma once
 
 #include <memory>
