@@ -27,10 +27,12 @@
 
 namespace vdiso {
 
+// 5: the index stored in compressed parts (io/index_parts.h): several times smaller, which is
+// what a remote store's open fetches. Version 4 stores open as before.
 // 4: the volume's orientation (direction matrix and whether the input had one) in the header.
 // 3: levels of detail (the header's level count; every level's bricks in the index). Version
 // 2 and 3 stores open as before, without orientation; version 2 ones with level 0 only.
-constexpr uint32_t kStoreFormatVersion = 4;
+constexpr uint32_t kStoreFormatVersion = 5;
 constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;

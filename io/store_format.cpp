@@ -11,6 +11,7 @@
 #include "core/orientation.h"
 #include "core/sub_blocks.h"
 #include "io/error.h"
+#include "io/index_parts.h"
 
 namespace vdiso::store_format {
 
@@ -231,7 +232,10 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     if (version >= 4) decodeOrientation(bytes, path, h.volume);
     if (brickCount != uint64_t(totalBricks(h)))
         throwIoError(path, "header's brick count does not match its dimensions and levels");
-    if (h.indexBytes != indexBytes(brickCount))
+    // Before version 5 the index is stored raw; from 5, in compressed parts (io/index_parts.h).
+    const uint64_t raw = indexBytes(brickCount);
+    if (version < 5 ? h.indexBytes != raw
+                    : h.indexBytes < packedIndexMin(raw) || h.indexBytes > packedIndexMax(raw))
         throwIoError(path, "header's index size does not match its brick count");
     return h;
 }
@@ -275,7 +279,7 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
         w.put<uint8_t>(code.hi);
     }
     w.put<uint32_t>(crc32Of(bytes.data(), w.at()));
-    return bytes;
+    return packIndex(bytes);
 }
 
 void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header,
@@ -283,6 +287,12 @@ void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header
                  std::vector<BrickEntry>& entries, ValueHistogram& histogram,
                  std::vector<SubBlockCode>& subBlocks) {
     const uint64_t count = uint64_t(totalBricks(header));
+    std::vector<unsigned char> unpacked;
+    if (header.formatVersion >= 5) {
+        unpacked = unpackIndex(bytes, n, indexBytes(count), path);
+        bytes = unpacked.data();
+        n = unpacked.size();
+    }
     if (n != indexBytes(count) || std::memcmp(bytes, kIndexMagic, 8) != 0)
         throwIoError(path, "index is missing or corrupt (wrong magic at byte offset " +
                                std::to_string(header.indexOffset) + ")");

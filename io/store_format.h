@@ -22,7 +22,8 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& hea
 // Validates and decodes; throws IoError("<path>: ...") on anything wrong.
 StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string& path);
 
-// `subBlocks`: kSubBlocksPerBrick codes per entry.
+// `subBlocks`: kSubBlocksPerBrick codes per entry. The index as the current version stores it
+// (packed).
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
                                        const ValueHistogram& histogram,
                                        const std::vector<SubBlockCode>& subBlocks);
@@ -30,11 +31,12 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
 // Bricks of every level of detail the header describes.
 int64_t totalBricks(const StoreHeader& header);
 
-// Size in bytes of the index of a store with `brickCount` bricks.
+// Size in bytes of the raw index of a store with `brickCount` bricks (stored as such before
+// version 5; packed in compressed parts from 5: io/index_parts.h).
 uint64_t indexBytes(uint64_t brickCount);
 
-// Validates (magic, count, checksum, every entry's offset and size against the file) and
-// decodes; throws IoError naming the file and, for a bad entry, the brick.
+// Validates (version 5: the parts; then magic, count, checksum, every entry's offset and size
+// against the file) and decodes; throws IoError naming the file and, for a bad entry, the brick.
 void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header,
                  const BrickLayout& layout, const std::string& path,
                  std::vector<BrickEntry>& entries, ValueHistogram& histogram,

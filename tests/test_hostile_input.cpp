@@ -177,13 +177,14 @@ protected:
         const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
         std::memcpy(bytes.data() + 160, &crc, 4);
     }
-    // `offset` within the index.
+    // `offset` within the raw index (packed again after).
     template <class T>
     void patchIndex(size_t offset, T value) {
-        unsigned char* index = bytes.data() + header.indexOffset;
-        std::memcpy(index + offset, &value, sizeof(T));
-        const uint32_t crc = store_format::crc32Of(index, header.indexBytes - 4);
-        std::memcpy(index + header.indexBytes - 4, &crc, 4);
+        bytes = test::rewriteStoreIndex(bytes, [&](std::vector<unsigned char>& index) {
+            std::memcpy(index.data() + offset, &value, sizeof(T));
+            const uint32_t crc = store_format::crc32Of(index.data(), index.size() - 4);
+            std::memcpy(index.data() + index.size() - 4, &crc, 4);
+        });
     }
     // The message opening the patched store (and reading every brick) gives; "" if none. Any
     // exception other than IoError is a failure: every refusal must name the file.

@@ -53,7 +53,8 @@ void expectSameStore(const std::string& single, const std::string& mpi) {
     EXPECT_EQ(h.valueMin, g.valueMin);
     EXPECT_EQ(h.valueMax, g.valueMax);
     EXPECT_EQ(h.storedBrickBytes, g.storedBrickBytes);
-    EXPECT_EQ(h.indexBytes, g.indexBytes);
+    // (The index's stored size is not compared: its parts are compressed, and the bricks'
+    // offsets in it differ, as the ranks write them in another order.)
 
     EXPECT_EQ(a.histogram().lo, b.histogram().lo);
     EXPECT_EQ(a.histogram().hi, b.histogram().hi);

@@ -204,10 +204,11 @@ TEST(StoreDecode, MalformedCompressedBrickIsReportedNotReturned) {
         // Overwrite the stream after its first bytes, then make both checksums agree.
         std::fill_n(b.begin() + std::ptrdiff_t(e.offset + 16), e.storedBytes - 16, uint8_t(0xff));
         const uint32_t brickCrc = store_format::crc32Of(b.data() + e.offset, e.storedBytes);
-        const uint64_t index = good.header().indexOffset, indexBytes = good.header().indexBytes;
-        std::memcpy(b.data() + index + 16 + 32 * id + 12, &brickCrc, 4);
-        const uint32_t indexCrc = store_format::crc32Of(b.data() + index, indexBytes - 4);
-        std::memcpy(b.data() + index + indexBytes - 4, &indexCrc, 4);
+        b = test::rewriteStoreIndex(b, [&](std::vector<unsigned char>& index) {
+            std::memcpy(index.data() + 16 + 32 * id + 12, &brickCrc, 4);
+            const uint32_t indexCrc = store_format::crc32Of(index.data(), index.size() - 4);
+            std::memcpy(index.data() + index.size() - 4, &indexCrc, 4);
+        });
         test::writeFile(path, b.data(), b.size());
         const BrickStoreReader bad(path);
         std::vector<unsigned char> brick(bad.brickBytes());

@@ -12,6 +12,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "io/index_parts.h"
+#include "io/store_format.h"
+
 namespace vdiso::test {
 
 std::string dataFile(const char* name) {
@@ -192,6 +195,27 @@ std::vector<unsigned char> bruteForceLevel(const std::vector<unsigned char>& sam
                 }
     });
     return out;
+}
+
+std::vector<unsigned char> rewriteStoreIndex(std::vector<unsigned char> bytes,
+                                             const std::function<void(std::vector<unsigned char>&)>& edit,
+                                             bool repack) {
+    uint64_t at = 0, stored = 0, raw = 0;
+    std::memcpy(&at, bytes.data() + 120, 8);
+    std::memcpy(&stored, bytes.data() + 128, 8);
+    std::memcpy(&raw, bytes.data() + at + 8, 8);  // the packed index's raw size
+    std::vector<unsigned char> index = store_format::unpackIndex(bytes.data() + at, size_t(stored), raw, "test");
+    edit(index);
+    if (repack) index = store_format::packIndex(index);
+    bytes.resize(size_t(at));
+    bytes.insert(bytes.end(), index.begin(), index.end());
+    const uint64_t size = index.size();
+    std::memcpy(bytes.data() + 128, &size, 8);
+    const uint32_t first = store_format::crc32Of(bytes.data(), 160);
+    std::memcpy(bytes.data() + 160, &first, 4);
+    const uint32_t whole = store_format::crc32Of(bytes.data(), 240);
+    std::memcpy(bytes.data() + 240, &whole, 4);
+    return bytes;
 }
 
 }  // namespace vdiso::test

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,13 @@ private:
 
 // Reads everything a source delivers, in slabs of `slab` slices (uneven on purpose).
 std::vector<unsigned char> readAllSamples(SliceReader& source, int64_t slab = 3);
+
+// A store file's bytes with its index edited as raw bytes (docs/store-format.md, "Index"): the
+// index is unpacked, `edit` changes it, and it is packed again (or, with repack false, left
+// raw as stores before version 5 hold it); the header's index size and checksums follow.
+std::vector<unsigned char> rewriteStoreIndex(std::vector<unsigned char> bytes,
+                                             const std::function<void(std::vector<unsigned char>&)>& edit,
+                                             bool repack = true);
 
 // Compares every stored sample of every brick of level `level` (ghosts included, clamped at the
 // borders) with `samples` (the whole level, x fastest), and each brick's index min/max with
