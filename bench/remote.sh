@@ -6,8 +6,11 @@
 # holds each request's first byte for DELAY_MS: the delay is in user space, as this kernel has
 # no netem. No bandwidth limit is applied (loopback); see bench/RESULTS.md for what that means.
 #
-#   bench/remote.sh [SIZE] [DELAY_MS]     (default 512 and 20; the store is kept in data/bench/)
-#   bench/remote.sh NAME.vdiso DELAY_MS ISO   a store already in data/bench/bucket/ (a real scan)
+#   bench/remote.sh [SIZE] [DELAY_MS] [ISO] [RATE_MBIT]   (default 512, 20, 600.5 and 0: no
+#                                          limit; the store is kept in data/bench/)
+#   bench/remote.sh NAME.vdiso DELAY_MS ISO [RATE_MBIT]   a store already in data/bench/bucket/
+#
+# RATE_MBIT caps the server's bodies at that many Mbit/s in all (1000: a 1 Gbit/s link).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size=${1:-512}
@@ -16,6 +19,7 @@ vdiso=build/bin/vdiso
 source bench/cold_run.sh
 mkdir -p data/bench/bucket
 iso=${3:-600.5}
+rate=${4:-0}
 if [[ "$size" == *.vdiso ]]; then name=$size; else name=head$size.vdiso; fi
 store=data/bench/bucket/$name
 [ -f "$store" ] || $vdiso synth "$store" --kind head --size "$size" --quiet
@@ -24,7 +28,7 @@ trap 'exec 3>&-; rm -rf "$work"' EXIT
 
 # The server dies with this script (its stdin is our pipe).
 exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public bucket \
-            --delay-ms "$delay" --lifetime 3600 > "$work/port" 2> "$work/server.log")
+            --delay-ms "$delay" --rate-mbit "$rate" --lifetime 3600 > "$work/port" 2> "$work/server.log")
 for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
 port=$(awk '/PORT/{print $2}' "$work/port")
 url=s3://bucket/$name
@@ -37,8 +41,9 @@ echo "| view | local cold s | local MB read | remote s | remote MB fetched | req
 echo "|---|---|---|---|---|---|---|---|---|"
 # Downloading first: the store's bytes at 1 Gbit/s plus one round trip (loopback is faster).
 download=$(python3 -c "print(round($bytes / 125e6 + $delay / 1000, 2))")
-# The test server hashes the whole object once for its ETag (S3 has it stored): done here first.
-$vdiso info "$url" "${remote[@]}" > /dev/null
+# The test server hashes the whole object once for its ETag (S3 has it stored): done here first,
+# with time for it (a minute for 28 GB).
+$vdiso info "$url" "${remote[@]}" --remote-timeout 900 > /dev/null
 for view in distant normal closeup; do
   # Remote first, the server's file in its page cache (an object store's own caching and disks
   # are outside what is measured); then the local run, cold.
@@ -56,4 +61,4 @@ for view in distant normal closeup; do
     "$(python3 -c "print($(number "$work/remote.json" remote_bytes)/1e6)")" "$(number "$work/remote.json" remote_requests)" \
     "$cached_s" "$(number "$work/cached.json" remote_requests)" "$download"
 done
-echo "($name with levels, sage, 1 frame, ${delay} ms before each answer's first byte, $(nproc) cores; $cold local runs; remote runs with the server's file in its page cache)"
+echo "($name with levels, sage, 1 frame, ${delay} ms before each answer's first byte, bodies capped at ${rate} Mbit/s (0: none), $(nproc) cores; $cold local runs; remote runs with the server's file in its page cache)"

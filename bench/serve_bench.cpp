@@ -3,6 +3,10 @@
 //
 //   vdiso_serve_bench STORE.vdiso --iso V [--size 1024] [--frames 36] [--threads 1]
 //                     [--cache-mb 4096] [--web DIR] [--images DIR] [--no-warmup]
+//                     [--s3-endpoint URL] [--no-sign-request]
+//
+// STORE may be a URL (http://, https://, s3://: the server reads it as vdiso serve would); the
+// summary's full-surface and SAGE figures, which read the whole store, are then left out.
 //
 // Orbit: the normal view turned 360/frames degrees a frame about the vertical axis. A first
 // client runs the orbit to warm the brick cache (unless --no-warmup: then the first frame is
@@ -59,7 +63,7 @@ uint64_t wholeFrameBytes(const ViewerClient& client, const ClientFrame& f) {
 int main(int argc, char** argv) {
     if (argc < 2) {
         std::fprintf(stderr, "usage: vdiso_serve_bench STORE.vdiso --iso V [--size N] [--frames N] "
-                             "[--threads N] [--cache-mb N] [--web DIR] [--images DIR] [--no-warmup] [--lod-error P]\n");
+                             "[--threads N] [--cache-mb N] [--web DIR] [--images DIR] [--no-warmup] [--lod-error P] [--s3-endpoint URL] [--no-sign-request]\n");
         return 2;
     }
     ServeOptions options;
@@ -83,6 +87,8 @@ int main(int argc, char** argv) {
         else if (a == "--images") images = next();
         else if (a == "--no-warmup") warmup = false;
         else if (a == "--lod-error") options.lodError = std::stod(next());
+        else if (a == "--s3-endpoint") options.remote.s3Endpoint = next();
+        else if (a == "--no-sign-request") options.remote.anonymous = true;
         else {
             std::fprintf(stderr, "unknown option %s\n", a.c_str());
             return 2;
@@ -92,7 +98,7 @@ int main(int argc, char** argv) {
     try {
         Server server(options);
         std::thread serving([&] { server.run(); });
-        const BrickStoreReader store(argv[1]);
+        const BrickStoreReader store(argv[1], StoreOpenOptions{ReadMode::Buffered, options.remote});
         const VolumeInfo& volume = store.volume();
         const std::vector<Camera> orbit =
             orbitCameras(ViewPreset::Normal, volume.origin, volume.worldMax(), size, size, frames);
@@ -144,7 +150,7 @@ int main(int argc, char** argv) {
         summary.add("first_frame_points", firstEnd["points"].get<uint64_t>());
         summary.add("bytes_per_triangle_first_frame",
                     double(measured[0].binaryBytes) / double(std::max<uint64_t>(1, firstEnd["triangles"].get<uint64_t>())));
-        {
+        if (!store.remote()) {
             // The full surface through the same codec, in one piece.
             BrickCache cache(store, options.cacheBytes);
             TriangleMesh full;

@@ -263,6 +263,25 @@ class ETagCache:
         return tag
 
 
+class LinkLimit:
+    """One link's bandwidth shared by every connection: a body's bytes leave no faster than
+    `mbit` megabits a second in all (bench: a 1 Gbit/s link without tc)."""
+
+    def __init__(self, mbit):
+        self.bytes_per_s = mbit * 1e6 / 8
+        self.lock = threading.Lock()
+        self.free_at = 0.0
+
+    def take(self, n):
+        with self.lock:
+            start = max(time.monotonic(), self.free_at)
+            self.free_at = start + n / self.bytes_per_s
+            until = self.free_at
+        wait = until - time.monotonic()
+        if wait > 0:
+            time.sleep(wait)
+
+
 class S3Server(ThreadingHTTPServer):
     daemon_threads = True
     allow_reuse_address = True
@@ -275,6 +294,7 @@ class S3Server(ThreadingHTTPServer):
         self.stats = Stats()
         self.etags = ETagCache()
         self.stopping = threading.Event()
+        self.link = None  # a LinkLimit with --rate-mbit
         self.ssl_ctx = None
         self.creds = {}
         for c in cfg.cred:
@@ -762,6 +782,8 @@ class Handler(BaseHTTPRequestHandler):
                 chunk = f.read(min(CHUNK if not rate else max(1, int(rate / 10)), remaining))
                 if not chunk:
                     break
+                if self.server.link:
+                    self.server.link.take(len(chunk))
                 self.wfile.write(chunk)
                 self.sent_bytes += len(chunk)
                 remaining -= len(chunk)
@@ -969,6 +991,8 @@ def main():
                     help="fault rule as JSON (same fields as the control op 'fault')")
     ap.add_argument("--delay-ms", type=int, default=0,
                     help="delay every GET/HEAD by this many ms before the first byte")
+    ap.add_argument("--rate-mbit", type=float, default=0,
+                    help="send object bodies no faster than this many Mbit/s in all (0: no limit)")
     ap.add_argument("--verbose", "-v", action="store_true")
     cfg = ap.parse_args()
     if cfg.vhost_suffix is None:
@@ -982,6 +1006,7 @@ def main():
     if ":" in cfg.bind:
         S3Server.address_family = socket.AF_INET6
     srv = S3Server((cfg.bind, cfg.port), Handler, cfg)
+    srv.link = LinkLimit(cfg.rate_mbit) if cfg.rate_mbit > 0 else None
     for f in cfg.fault:
         srv.faults.add(json.loads(f))
     if cfg.delay_ms:

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# vdiso serve on a store in a bucket: the first frames a fresh server gives a fresh client,
+# cold (no warm-up orbit), the store read through tests/remote/s3_server.py holding each
+# request's first byte for DELAY_MS (public bucket). The server opens the store (header and
+# index) before the client connects; the times are from the client's VIEW.
+#
+#   bench/remote_serve.sh NAME.vdiso [DELAY_MS] [ISO] [FRAMES] [RATE_MBIT]
+#                                          (a store in data/bench/bucket/; RATE_MBIT 0: no cap)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+name=$1
+delay=${2:-20}
+iso=${3:-600.5}
+frames=${4:-4}
+rate=${5:-0}
+work=$(mktemp -d)
+trap 'exec 3>&-; rm -rf "$work"' EXIT
+exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public bucket \
+            --delay-ms "$delay" --rate-mbit "$rate" --lifetime 3600 > "$work/port" 2> "$work/server.log")
+for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
+port=$(awk '/PORT/{print $2}' "$work/port")
+remote=(--no-sign-request --s3-endpoint "http://127.0.0.1:$port")
+# The test server hashes the object once for its ETag (an object store has it stored).
+build/bin/vdiso info "s3://bucket/$name" "${remote[@]}" --remote-timeout 900 > /dev/null
+build/bin/vdiso_serve_bench "s3://bucket/$name" --iso "$iso" --frames "$frames" --size 1024 --no-warmup \
+  --web web "${remote[@]}" > "$work/frames.json"
+echo "| frame | coarse frame complete ms | first geometry ms | complete ms | bricks read | triangles |"
+echo "|---|---|---|---|---|---|"
+python3 - "$work/frames.json" <<'PY'
+import json, sys
+for line in open(sys.argv[1]):
+    j = json.loads(line)
+    if j.get("summary"):
+        continue
+    print("| %d | %.0f | %.0f | %.0f | %d | %d |" % (j["frame"], j["client_coarse_complete_ms"],
+          j["client_first_geometry_ms"], j["client_complete_ms"], j["bricks_read"], j["triangles"]))
+PY
+echo "($name, ${delay} ms before each answer's first byte, 1024x1024, the normal view's orbit, $(nproc) cores)"
