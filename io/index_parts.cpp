@@ -65,8 +65,8 @@ std::vector<unsigned char> packIndex(const std::vector<unsigned char>& raw) {
     return out;
 }
 
-std::vector<unsigned char> unpackIndex(const unsigned char* stored, size_t n, uint64_t rawBytes,
-                                       const std::string& path) {
+std::unique_ptr<unsigned char[]> unpackIndex(const unsigned char* stored, size_t n, uint64_t rawBytes,
+                                             const std::string& path) {
     const uint64_t parts = partCount(rawBytes);
     const uint64_t directory = directoryBytes(parts);
     if (n < directory || std::memcmp(stored, kPackedMagic, 8) != 0)
@@ -81,14 +81,14 @@ std::vector<unsigned char> unpackIndex(const unsigned char* stored, size_t n, ui
     if (offsets.back() != n)
         throwIoError(path, "index parts hold " + std::to_string(offsets.back()) + " bytes where the header says " +
                                std::to_string(n));
-    std::vector<unsigned char> raw(rawBytes);
+    auto raw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
     std::atomic<int64_t> badPart{-1};
     tbb::parallel_for(uint64_t(0), parts, [&](uint64_t i) {
         const unsigned char* part = stored + offsets[i];
         const size_t size = size_t(offsets[i + 1] - offsets[i]);
         const size_t want = size_t(std::min<uint64_t>(kIndexPartBytes, rawBytes - i * kIndexPartBytes));
         const bool ok = load<uint32_t>(stored + kDirectoryHead + 8 * i + 4) == crc32Of(part, size) &&
-                        ZSTD_decompress(raw.data() + i * kIndexPartBytes, want, part, size) == want;
+                        ZSTD_decompress(raw.get() + i * kIndexPartBytes, want, part, size) == want;
         if (!ok) {
             int64_t none = -1;
             badPart.compare_exchange_strong(none, int64_t(i));

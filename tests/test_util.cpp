@@ -204,7 +204,8 @@ std::vector<unsigned char> rewriteStoreIndex(std::vector<unsigned char> bytes,
     std::memcpy(&at, bytes.data() + 120, 8);
     std::memcpy(&stored, bytes.data() + 128, 8);
     std::memcpy(&raw, bytes.data() + at + 8, 8);  // the packed index's raw size
-    std::vector<unsigned char> index = store_format::unpackIndex(bytes.data() + at, size_t(stored), raw, "test");
+    const auto unpacked = store_format::unpackIndex(bytes.data() + at, size_t(stored), raw, "test");
+    std::vector<unsigned char> index(unpacked.get(), unpacked.get() + raw);
     edit(index);
     if (repack) index = store_format::packIndex(index);
     bytes.resize(size_t(at));
