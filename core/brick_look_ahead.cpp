@@ -6,44 +6,19 @@ namespace vdiso {
 
 BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
                                size_t depth, int readers, size_t near)
-    : mSource(source), mTree(tree), mLevels(levels), mCuller(levels.culler(0)), mDepth(depth), mNear(near),
-      mPrefetcher(source, depth, readers) {
-    if (mDepth > 0 && !tree.nodes().empty()) mStack.push_back(0);
-}
+    : mSource(source), mCursor(tree, levels, levels.culler(0)), mDepth(depth), mNear(near),
+      mPrefetcher(source, depth, readers) {}
 
 bool BrickLookAhead::findNext() {
-    while (!mStack.empty()) {
-        const uint32_t index = mStack.back();
-        mStack.pop_back();
-        const MinMaxNode& node = mTree.nodes()[index];
-        if (mLevels.outsideRegion(node)) continue;
-        glm::dvec3 a, b;
-        mCuller.nodeBox(node, a, b);
-        ScreenBox box;
-        if (mCuller.cull({node.minValue, node.maxValue}, a, b, box) != Cull::None) continue;
-        const int level = mLevels.levelOf(node, a, b);
-        if (level == 0 && !node.isLeaf()) {
-            mTree.pushChildrenFarFirst(mStack, index, mCuller.eyeInBricks());
-            continue;
-        }
-        const ViewLevels::Brick at = mLevels.brickOf(node, level);
-        if (!mLevels.shows(at)) continue;
-        mAhead.push_back({index, at, at.id, mCuller.pixelRect(box), mSource.isResident(at.id) ? kResident : kNotPushed});
-        return true;
-    }
-    return false;
-}
-
-bool BrickLookAhead::stillShows(const AheadBrick& ahead) const {
-    const MinMaxNode& node = mTree.nodes()[ahead.node];
-    glm::dvec3 a, b;
-    mCuller.nodeBox(node, a, b);
-    ScreenBox box;
-    return mCuller.cull({node.minValue, node.maxValue}, a, b, box) == Cull::None && mLevels.shows(ahead.at);
+    TraversalCursor::Step step;
+    if (mDepth == 0 || !mCursor.nextBrick(step)) return false;
+    mAhead.push_back({step.node, step.at, step.at.id, mCursor.culler().pixelRect(step.box),
+                      mSource.isResident(step.at.id) ? kResident : kNotPushed});
+    return true;
 }
 
 int64_t BrickLookAhead::pixelsOf(const PixelRect& r) const {
-    const Camera& camera = mCuller.camera();
+    const Camera& camera = mCursor.culler().camera();
     const int64_t w = std::min(r.x1, camera.width - 1) - std::max(r.x0, 0) + 1;
     const int64_t h = std::min(r.y1, camera.height - 1) - std::max(r.y0, 0) + 1;
     return w > 0 && h > 0 ? w * h : int64_t(0);
@@ -55,7 +30,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         while (!mAhead.empty() && mAhead.front().brick != brick) mAhead.pop_front();
         if (!mAhead.empty() || !findNext()) break;
     }
-    const Camera& camera = mCuller.camera();
+    const Camera& camera = mCursor.culler().camera();
     PixelRect current{0, 0, camera.width - 1, camera.height - 1};
     if (!mAhead.empty()) {
         current = mAhead.front().rect;
@@ -64,7 +39,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     }
     std::erase_if(mAhead, [&](const AheadBrick& ahead) {
         if (ahead.item == kResident) return false;  // nothing to cancel: not tested again
-        if (stillShows(ahead)) return false;
+        if (mCursor.stillShows(ahead.node, ahead.at)) return false;
         if (pushed(ahead.item)) mPrefetcher.cancel(ahead.item);
         return true;
     });
@@ -78,7 +53,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     auto harmless = [&](const PixelRect& a, const PixelRect& b) {
         if (!a.overlaps(b)) return true;
         const PixelRect both = a.intersection(b);
-        return mCuller.occluded(both);
+        return mCursor.culler().occluded(both);
     };
     for (size_t k = 0; k < mAhead.size(); ++k) {
         AheadBrick& ahead = mAhead[k];

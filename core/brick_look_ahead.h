@@ -1,9 +1,8 @@
 // Prefetch scheduling for the view-dependent traversal: which bricks to read ahead of it, and
 // when (DESIGN.md, "Out of core").
 //
-// A second cursor runs over the same front-to-back order as the traversal, ahead of it, with
-// tests 1-3 against the pyramid as it is now, and the same choice of level per node (the same
-// ViewLevels and their cullers). Coverage only grows, so
+// A second cursor (core/traversal_cursor.h: the traversal's own walk) runs ahead of the
+// traversal, with tests 1-3 against the pyramid as it is now. Coverage only grows, so
 // every brick the traversal will acquire is found by the look-ahead first; a brick it finds may
 // still be hidden by the time the traversal gets there (then it was read for nothing, and
 // counted by readUnused).
@@ -30,6 +29,7 @@
 #include "core/brick_prefetcher.h"
 #include "core/brick_source.h"
 #include "core/minmax_tree.h"
+#include "core/traversal_cursor.h"
 #include "core/view_culler.h"
 #include "core/view_levels.h"
 
@@ -65,19 +65,14 @@ private:
     };
     // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
     bool findNext();
-    // Tests 1-3 now for a node found ahead, and its brick's sub-blocks.
-    bool stillShows(const AheadBrick& ahead) const;
     int64_t pixelsOf(const PixelRect& r) const;
 
     BrickSource& mSource;
-    const MinMaxTree& mTree;
-    const ViewLevels& mLevels;
-    const ViewCuller& mCuller;  // level 0's: the tree's
+    TraversalCursor mCursor;  // the traversal's walk, run ahead of it
     size_t mDepth;
     size_t mNear;
     BrickPrefetcher mPrefetcher;
-    std::vector<uint32_t> mStack;       // the cursor: nodes still to visit, nearest on top
-    std::deque<AheadBrick> mAhead;      // found, in the traversal's order
+    std::deque<AheadBrick> mAhead;  // found, in the traversal's order
 };
 
 }  // namespace vdiso

@@ -12,6 +12,7 @@
 #include "core/brick_kernel.h"
 #include "core/check.h"
 #include "core/brick_look_ahead.h"
+#include "core/traversal_cursor.h"
 #include "core/edge_function.h"
 #include "core/face_cap.h"
 #include "core/first_hit.h"
@@ -68,8 +69,6 @@ private:
     template <class T>
     friend struct BrickVisit;
 
-    // Tests 1-3 for a tree node, counted.
-    bool passes(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b);
     void count(Cull cull);
     // The pixel position of vertex v (a mesh vertex number), projected the first time it is
     // asked for: a vertex is shared by up to four cells' polygons. False when it cannot be
@@ -425,18 +424,6 @@ void ViewTraversal::count(Cull cull) {
     }
 }
 
-bool ViewTraversal::passes(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b) {
-    ++mStats.nodesVisited;
-    if (mLevels.outsideRegion(node)) {
-        ++mStats.view.culledByRegion;
-        return false;
-    }
-    ScreenBox box;
-    const Cull cull = mCuller.cull({node.minValue, node.maxValue}, a, b, box);
-    count(cull);
-    return cull == Cull::None;
-}
-
 bool ViewTraversal::screenPosition(uint32_t v, glm::dvec2& out) {
     const size_t i = v - mMesh.firstVertex;
     if (i >= mScreen.size())  // grown geometrically: vertices arrive one by one
@@ -454,29 +441,25 @@ bool ViewTraversal::screenPosition(uint32_t v, glm::dvec2& out) {
 
 std::vector<int64_t> ViewTraversal::run() {
     std::vector<int64_t> acquired;
-    const std::vector<MinMaxNode>& nodes = mTree.nodes();
     const BrickLayout& layout = mSource.layout();
-    std::vector<uint32_t> stack;
-    if (!nodes.empty()) stack.push_back(0);
-    while (!stack.empty()) {
+    TraversalCursor cursor(mTree, mLevels, mCuller);
+    TraversalCursor::Step step;
+    while (!cursor.ended()) {
         if (mOptions.coverage) mOptions.coverage->between(mPyramid, mStats.bricksActive);
-        const uint32_t index = stack.back();
-        stack.pop_back();
-        const MinMaxNode& node = nodes[index];
-        glm::dvec3 a, b;
-        mCuller.nodeBox(node, a, b);
-        if (!passes(node, a, b)) continue;
-        const int level = mLevels.levelOf(node, a, b);
-        if (level == 0 && !node.isLeaf()) {
-            mTree.pushChildrenFarFirst(stack, index, mCuller.eyeInBricks());
-            continue;
+        cursor.step(step);
+        ++mStats.nodesVisited;
+        switch (step.outcome) {
+            case TraversalCursor::Outcome::OutsideRegion: ++mStats.view.culledByRegion; continue;
+            case TraversalCursor::Outcome::Culled: count(step.cull); continue;
+            case TraversalCursor::Outcome::Descended: continue;
+            case TraversalCursor::Outcome::NotShown: ++mStats.view.bricksCulledBySubBlocks; continue;
+            case TraversalCursor::Outcome::Brick: break;
         }
-        const ViewLevels::Brick at = mLevels.brickOf(node, level);
+        const glm::dvec3& a = step.a;
+        const glm::dvec3& b = step.b;
+        const ViewLevels::Brick at = step.at;
+        const int level = at.level;
         const int64_t brick = at.id;
-        if (!mLevels.shows(at)) {
-            ++mStats.view.bricksCulledBySubBlocks;
-            continue;
-        }
         ViewStream::Use use = ViewStream::Use::Part;
         if (mOptions.stream) {
             const ScreenBox box = mCuller.screenBox(a, b);
@@ -500,7 +483,7 @@ std::vector<int64_t> ViewTraversal::run() {
         mParts[size_t(level)]->extractor.beginBrick(at.local, handle.samples());
         // Seams between levels are capped where this brick meets another level for this
         // camera: with the mesh, or apart from a stream's brick output (they are the camera's).
-        const unsigned capFaces = mOptions.capSeams ? mLevels.seamFaces(node, level) : 0u;
+        const unsigned capFaces = mOptions.capSeams ? mLevels.seamFaces(mTree.nodes()[step.node], level) : 0u;
         mStats.view.cappedFaces += std::popcount(capFaces);
         visitScalarType(mSource.volume().type, [&](auto zero) {
             BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole)
