@@ -67,14 +67,21 @@ public:
     }
     int levelCount() const { return int(mLevels.size()); }
 
+    // Where interior node `index` splits, in bricks along node.splitAxis: its first child holds
+    // the bricks below, its second those at and above.
+    int64_t splitOf(uint32_t index) const { return mNodes[index + 1].hi[mNodes[index].splitAxis]; }
+    // The child of interior node `index` that holds level-0 brick c.
+    uint32_t childHolding(uint32_t index, const int64_t c[3]) const {
+        return c[mNodes[index].splitAxis] < splitOf(index) ? index + 1 : mNodes[index].secondChild;
+    }
+
     // Pushes the children of interior node `index` on `stack`, the far one first, so that the
     // one on the eye's side of the split plane pops first: with the eye in brick coordinates
     // (grid coordinates / brickSize), the front-to-back order.
     template <class Stack>
     void pushChildrenFarFirst(Stack& stack, uint32_t index, const glm::dvec3& eyeInBricks) const {
         const MinMaxNode& node = mNodes[index];
-        const int axis = node.splitAxis;
-        const bool lowerIsNear = eyeInBricks[axis] < double(mNodes[index + 1].hi[axis]);
+        const bool lowerIsNear = eyeInBricks[node.splitAxis] < double(splitOf(index));
         stack.push_back(lowerIsNear ? node.secondChild : index + 1);
         stack.push_back(lowerIsNear ? index + 1 : node.secondChild);
     }

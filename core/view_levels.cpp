@@ -58,8 +58,7 @@ int ViewLevels::levelAt(const int64_t c[3]) const {
         const int level = levelOf(node, a, b);
         if (level > 0) return level;
         if (node.isLeaf()) return 0;
-        const int axis = node.splitAxis;
-        index = c[axis] < nodes[index + 1].hi[axis] ? index + 1 : node.secondChild;
+        index = mTree.childHolding(index, c);
     }
 }
 
