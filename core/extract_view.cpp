@@ -13,16 +13,15 @@
 #include "core/check.h"
 #include "core/brick_look_ahead.h"
 #include "core/traversal_cursor.h"
-#include "core/edge_function.h"
 #include "core/face_cap.h"
-#include "core/first_hit.h"
 #include "core/image_strips.h"
 #include "core/iso.h"
 #include "core/mc_tables.h"
 #include "core/minmax_tree.h"
 #include "core/occlusion_pyramid.h"
+#include "core/polygon_coverage.h"
 #include "core/scalar_type.h"
-#include "core/scan_convert.h"
+#include "core/sub_pixel_point.h"
 #include "core/screen_box.h"
 #include "core/view_culler.h"
 #include "core/view_levels.h"
@@ -51,6 +50,7 @@ public:
           mStats(stats), mPixels(camera), mPyramid(camera.width, camera.height),
           mLevels(source, tree, camera, mPyramid, options.iso, options.estimateBox, options.lodError),
           mCuller(mLevels.culler(0)),
+          mCoverage(mPyramid, options.bottomUp, options.scanPolygons),
           mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders,
                      size_t(std::max(options.prefetchNear, 0))) {
         mLevels.confineTo(options.region);
@@ -86,6 +86,7 @@ private:
     OcclusionPyramid mPyramid;
     ViewLevels mLevels;
     const ViewCuller& mCuller;  // level 0's: the tree's
+    PolygonCoverage mCoverage;
     // What extracting a level's bricks needs: its kernel's scratch, and its own seam map (edge
     // keys are the level's grid's; vertices are welded within a level only).
     struct LevelParts {
@@ -142,127 +143,16 @@ struct BrickVisit {
         return keep;
     }
 
-    // Scan-converts a polygon (SAGE §3.2) before its triangles are appended. Cells arrive
-    // front to back, so a cell can be hidden by the cells before it in its meta-cell. With
-    // cell tests, a polygon that covers no pixel centre left uncovered is not kept: whatever
-    // it would draw lies behind what is drawn already or between pixel centres, where the
-    // rasterizer makes no fragment either.
+    // Scan-converts a polygon (SAGE §3.2) before its triangles are appended; with cell tests,
+    // keeps it only when it draws something (core/polygon_coverage.h).
     bool keepPolygon(const uint32_t* vertices, int count) {
         if (!t.mOptions.occlusion) return true;
         glm::dvec2 v[kMcMaxPolygonVertices];
         for (int k = 0; k < count; ++k)
             if (!t.screenPosition(vertices[k], v[k])) return true;  // marks nothing
-        const ViewExtractOptions& options = t.mOptions;
-        OcclusionPyramid& pyramid = t.mPyramid;
-        bool coversNew = false;
-        if (!options.bottomUp) {
-            for (int k = 2; k < count; ++k) {
-                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                coversNew |= pyramid.insertTriangleTopDown(triangle);
-            }
-        } else if (PixelRect r; uncoveredCentresInBox(v, count, r)) {
-            if (r.x0 == r.x1 && r.y0 == r.y1) {
-                coversNew = coversSingleCentre(v, count, r.x0, r.y0);
-            } else if (options.scanPolygons) {
-                coversNew = scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), pyramid);
-                // Where a non-planar polygon's projection folds over itself its winding cancels,
-                // yet its fan triangles, which are what gets drawn, cover those centres: before
-                // dropping it, ask them (they mark only what they draw).
-                const bool askFans = cellTests && !coversNew && folds(v, count);
-                for (int k = 2; k < count && !coversNew && askFans; ++k) {
-                    const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                    coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), pyramid);
-                }
-            } else {
-                for (int k = 2; k < count; ++k) {
-                    const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                    coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), pyramid);
-                }
-            }
-        }
-        if (!cellTests) return true;
-        // The rasterizer works in float on snapped coordinates, so a centre within a hair of
-        // an edge may fall the other way there: such a polygon is kept as well (it marks
-        // nothing; only coverage this side of the rounding is ever marked).
-        for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
-        t.mStats.view.polygonsHidden += !coversNew;
-        return coversNew;
-    }
-
-    // The pixel centres of the polygon's box, when one of them is not covered yet. A polygon
-    // covers only centres in columns [first at or after xMin, first at or after xMax) and
-    // likewise rows (core/scan_convert.h's rules), so when this is false its scan conversion,
-    // and its fan triangles', would mark nothing: where cells are about a pixel, most polygons
-    // are answered here, and most of the rest hold a single centre.
-    bool uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const {
-        double xMin = v[0].x, xMax = v[0].x, yMin = v[0].y, yMax = v[0].y;
-        for (int k = 1; k < count; ++k) {
-            xMin = std::min(xMin, v[k].x);
-            xMax = std::max(xMax, v[k].x);
-            yMin = std::min(yMin, v[k].y);
-            yMax = std::max(yMax, v[k].y);
-        }
-        const OcclusionPyramid& pyramid = t.mPyramid;
-        r = {std::max(detail::firstCentreAtOrAfter(xMin, pyramid.width()), 0),
-             std::max(detail::firstCentreAtOrAfter(yMin, pyramid.height()), 0),
-             std::min(detail::firstCentreAtOrAfter(xMax, pyramid.width()) - 1, pyramid.width() - 1),
-             std::min(detail::firstCentreAtOrAfter(yMax, pyramid.height()) - 1, pyramid.height() - 1)};
-        return !r.empty() && !pyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
-    }
-
-    // Whether the projected polygon folds over itself: its fan triangles wind both ways. If
-    // not, its winding number is nonzero wherever one of them covers, and asking them after
-    // the polygon would find nothing more.
-    static bool folds(const glm::dvec2* v, int count) {
-        bool positive = false, negative = false;
-        for (int k = 2; k < count; ++k) {
-            const glm::dvec2 a = v[k - 1] - v[0], b = v[k] - v[0];
-            const double area2 = a.x * b.y - a.y * b.x;
-            positive |= area2 > 0.0;
-            negative |= area2 < 0.0;
-        }
-        return positive && negative;
-    }
-
-    // What the scan conversion of the polygon (or of its fan triangles, as in keepPolygon)
-    // marks when its box holds the one centre (x, y), not yet covered.
-    bool coversSingleCentre(const glm::dvec2* v, int count, int x, int y) {
-        const bool scanPolygons = t.mOptions.scanPolygons;
-        bool covered = scanPolygons && coversCentre(v, size_t(count), x, y);
-        const bool askFans = !scanPolygons || (cellTests && !covered && folds(v, count));
-        for (int k = 2; k < count && !covered && askFans; ++k) {
-            const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-            covered = coversCentre(triangle, 3, x, y);
-        }
-        return covered && t.mPyramid.coverSpan(y, x, x);
-    }
-
-    // Whether an uncovered pixel centre lies inside the triangle or within kRasterSlack pixels
-    // of each of its edges' lines. Degenerate triangles draw nothing.
-    bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const {
-        constexpr double kRasterSlack = 1.0 / 64;  // GL's sub-pixel snapping is 1/256 or finer
-        const double xMin = std::min({p0.x, p1.x, p2.x}) - kRasterSlack;
-        const double xMax = std::max({p0.x, p1.x, p2.x}) + kRasterSlack;
-        const double yMin = std::min({p0.y, p1.y, p2.y}) - kRasterSlack;
-        const double yMax = std::max({p0.y, p1.y, p2.y}) + kRasterSlack;
-        // Clamped to the image before the conversion (a vertex far off it holds no int).
-        const double w = t.mCamera.width, h = t.mCamera.height;
-        const int x0 = int(std::clamp(std::ceil(xMin - 0.5), 0.0, w));
-        const int x1 = int(std::clamp(std::floor(xMax - 0.5), -1.0, w - 1));
-        const int y0 = int(std::clamp(std::ceil(yMin - 0.5), 0.0, h));
-        const int y1 = int(std::clamp(std::floor(yMax - 0.5), -1.0, h - 1));
-        const OcclusionPyramid& pyramid = t.mPyramid;
-        if (x0 > x1 || y0 > y1 || pyramid.isOccluded(x0, y0, x1, y1)) return false;
-        const TriangleEdgeFunctions f = TriangleEdgeFunctions::of(p0, p1, p2);
-        if (f.degenerate) return false;
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) {
-                if (pyramid.isCovered(x, y)) continue;
-                bool inside = true;
-                for (int e = 0; e < 3 && inside; ++e) inside = f.distance(e, x + 0.5, y + 0.5) >= -kRasterSlack;
-                if (inside) return true;
-            }
-        return false;
+        const bool draws = t.mCoverage.cover(v, count, cellTests);
+        t.mStats.view.polygonsHidden += !draws;
+        return draws;
     }
 
     // Tests 1-4 of core/extract_view.h for a box of meta-cells [a, b] whose range is `range`.
@@ -274,49 +164,15 @@ struct BrickVisit {
             t.count(cull);
             return Verdict::Culled;
         }
-        // Fig. 4: a box under two pixels each way covering exactly one pixel centre is one
-        // point; one covering two centres is refined like any other box.
-        if (!t.mOptions.points || !isSubPixel(box)) return Verdict::Visible;
-        const std::optional<glm::ivec2> p = subPixelPoint(box);
-        if (!p) return Verdict::Visible;
-        // The point goes where the pixel centre's ray first meets the surface in the box, with
-        // the field's normal there: it draws on the pixel the pyramid marks, shaded as the
-        // triangles it stands for. No meeting: the surface covers no pixel centre, and the box
-        // is dropped.
-        glm::vec3 position, normal;
-        const Camera& camera = t.mCamera;
-        if (p->x < 0 || p->y < 0 || p->x >= camera.width || p->y >= camera.height ||
-            t.mPyramid.isCovered(p->x, p->y) || !rayHit(*p, a, b, position, normal)) {
-            ++t.mStats.view.droppedSubPixel;
-            return Verdict::Culled;
-        }
-        t.mPoints.positions.push_back(position);
-        t.mPoints.normals.push_back(normal);
-        if (t.mOptions.occlusion) {
-            t.mPyramid.coverSpan(p->y, p->x, p->x);
-            t.mPyramid.propagate();
+        // Fig. 4 (core/sub_pixel_point.h).
+        if (!t.mOptions.points) return Verdict::Visible;
+        switch (applyPointRule(box, a, b, kernel, t.mPixels, t.mPyramid, t.mOptions.occlusion, t.mPoints)) {
+            case PointRule::NotAPoint: return Verdict::Visible;
+            case PointRule::Dropped: ++t.mStats.view.droppedSubPixel; return Verdict::Culled;
+            case PointRule::Drawn: break;
         }
         ++t.mStats.view.points;
         return Verdict::Done;
-    }
-
-    bool rayHit(const glm::ivec2& pixel, const glm::dvec3& a, const glm::dvec3& b, glm::vec3& position,
-                glm::vec3& normal) const {
-        const glm::dvec3 nearPoint = t.mPixels.unproject({pixel.x + 0.5, pixel.y + 0.5, 0.0});
-        const glm::dvec3 farPoint = t.mPixels.unproject({pixel.x + 0.5, pixel.y + 0.5, 1.0});
-        const glm::dvec3 direction = farPoint - nearPoint;
-        double t0 = 0.0, t1 = 1.0;  // slab intersection with the box
-        for (int k = 0; k < 3; ++k) {
-            if (direction[k] == 0.0) {
-                if (nearPoint[k] < a[k] || nearPoint[k] > b[k]) return false;
-                continue;
-            }
-            double ta = (a[k] - nearPoint[k]) / direction[k], tb = (b[k] - nearPoint[k]) / direction[k];
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-        }
-        return t0 <= t1 && firstHit(kernel, nearPoint, direction, t0, t1, position, normal);
     }
 
     // The meta-cells [lo, hi) of the brick, front to back by halving the longest side.
