@@ -17,6 +17,7 @@
 #include "core/image_strips.h"
 #include "core/iso.h"
 #include "core/mc_tables.h"
+#include "core/meta_cell_walk.h"
 #include "core/minmax_tree.h"
 #include "core/occlusion_pyramid.h"
 #include "core/polygon_coverage.h"
@@ -101,9 +102,10 @@ private:
     std::vector<glm::dvec2> mScreen;
 };
 
-// One brick of sample type T in the traversal: its meta-cells front to back by halving (the
-// same exact order as the tree's), each tested and extracted when visible, and the cell
-// policy of core/brick_kernel.h that tests its cells and scan-converts its polygons.
+// One brick of sample type T in the traversal: the visitor of its meta-cell walk
+// (core/meta_cell_walk.h: each box tested, and extracted when visible), and the cell policy of
+// core/brick_kernel.h that tests its cells and scan-converts its polygons
+// (core/polygon_coverage.h), with the point rule for sub-pixel boxes (core/sub_pixel_point.h).
 template <class T>
 struct BrickVisit {
     static constexpr bool kTestsCells = true, kTestsPolygons = true;
@@ -175,9 +177,11 @@ struct BrickVisit {
         return Verdict::Done;
     }
 
-    // The meta-cells [lo, hi) of the brick, front to back by halving the longest side.
-    void visitMetaCells(const int lo[3], const int hi[3]) {
-        const int n = extractor.metaCellsPerAxis(), M = extractor.metaCellSize();
+    // core/meta_cell_walk.h: whether the box of meta-cells [lo, hi) is refined (or extracted,
+    // when it is one): its range and tests 1-4, or, for a whole brick, its range alone (the
+    // boxes that do not show are made without scan conversion).
+    bool enter(const int lo[3], const int hi[3]) {
+        const int M = extractor.metaCellSize();
         const BrickRange range = rangeOf(lo, hi);
         const Dims3 c = layout.brickCoord(brick);
         int64_t cellLo[3], cellHi[3];
@@ -186,7 +190,7 @@ struct BrickVisit {
             cellLo[k] = first + int64_t(lo[k]) * M;
             cellHi[k] = std::min<int64_t>(first + int64_t(hi[k]) * M, first + layout.cellsOnAxis(k, c[k]));
         }
-        if (cellLo[0] >= cellHi[0] || cellLo[1] >= cellHi[1] || cellLo[2] >= cellHi[2]) return;
+        if (cellLo[0] >= cellHi[0] || cellLo[1] >= cellHi[1] || cellLo[2] >= cellHi[2]) return false;
         glm::dvec3 a, b;
         culler.worldBox(cellLo, cellHi, a, b);
         if (whole) {
@@ -194,39 +198,27 @@ struct BrickVisit {
             ++t.mStats.nodesVisited;
             if (!rangeHoldsIso(range.minValue, range.maxValue, t.mOptions.iso)) {
                 ++t.mStats.view.culledByRange;
-                return;
+                return false;
             }
             if (culler.cullScreenBox(culler.screenBox(a, b)) != Cull::None) {
                 extractUnseen(lo, hi);
-                return;
+                return false;
             }
-        } else if (test(range, a, b) != Verdict::Visible) {
-            return;
+            return true;
         }
-        if (hi[0] - lo[0] == 1 && hi[1] - lo[1] == 1 && hi[2] - lo[2] == 1) {
-            // Timed per meta-cell (extraction and scan conversion are interleaved polygon by
-            // polygon; a clock read per polygon would cost more than it measures).
-            const auto start = Clock::now();
-            kernel.extractMetaCell((lo[2] * n + lo[1]) * n + lo[0], *this, &eyeCell);
-            ++t.mStats.metaCellsActive;
-            if (t.mOptions.bottomUp) t.mPyramid.propagate();
-            t.mStats.view.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
-            return;
-        }
-        int axis = 0;
-        for (int k = 1; k < 3; ++k)
-            if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-        const int mid = (lo[axis] + hi[axis]) / 2;
-        int firstHi[3] = {hi[0], hi[1], hi[2]}, secondLo[3] = {lo[0], lo[1], lo[2]};
-        firstHi[axis] = mid;
-        secondLo[axis] = mid;
-        if (eyeCell[axis] < double(mid * M)) {
-            visitMetaCells(lo, firstHi);
-            visitMetaCells(secondLo, hi);
-        } else {
-            visitMetaCells(secondLo, hi);
-            visitMetaCells(lo, firstHi);
-        }
+        return test(range, a, b) == Verdict::Visible;
+    }
+
+    // One meta-cell that shows, extracted and scan-converted. Timed per meta-cell (extraction
+    // and scan conversion are interleaved polygon by polygon; a clock read per polygon would
+    // cost more than it measures).
+    void extract(const int lo[3]) {
+        const int n = extractor.metaCellsPerAxis();
+        const auto start = Clock::now();
+        kernel.extractMetaCell((lo[2] * n + lo[1]) * n + lo[0], *this, &eyeCell);
+        ++t.mStats.metaCellsActive;
+        if (t.mOptions.bottomUp) t.mPyramid.propagate();
+        t.mStats.view.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
     }
 
     // The range of meta-cells [lo, hi). (Taking the sub-block ranges of the store's index for
@@ -264,7 +256,7 @@ struct BrickVisit {
     void run(unsigned capFaces, TriangleMesh& caps) {
         const int n = extractor.metaCellsPerAxis();
         const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
-        visitMetaCells(lo, hi);
+        walkMetaCells(lo, hi, extractor.metaCellSize(), eyeCell, *this);
         for (int face = 0; face < 6; ++face)
             if (capFaces & (1u << face)) appendFaceCap(kernel, face / 2, face % 2 == 1, caps);
     }
