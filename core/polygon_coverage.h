@@ -5,9 +5,13 @@
 // between pixel centres, where the rasterizer makes no fragment either.
 #pragma once
 
+#include <algorithm>
+#include <span>
+
 #include <glm/vec2.hpp>
 
 #include "core/occlusion_pyramid.h"
+#include "core/scan_convert.h"
 #include "core/view_culler.h"
 
 namespace vdiso {
@@ -35,5 +39,61 @@ private:
     OcclusionPyramid& mPyramid;
     bool mBottomUp, mScanPolygons;
 };
+
+// Inline: called for every polygon, and most are answered by the box test.
+inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnlyNew) {
+    bool coversNew = false;
+    if (!mBottomUp) {
+        for (int k = 2; k < count; ++k) {
+            const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+            coversNew |= mPyramid.insertTriangleTopDown(triangle);
+        }
+    } else if (PixelRect r; uncoveredCentresInBox(v, count, r)) {
+        if (r.x0 == r.x1 && r.y0 == r.y1) {
+            coversNew = coversSingleCentre(v, count, r.x0, r.y0, keepOnlyNew);
+        } else if (mScanPolygons) {
+            coversNew = scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), mPyramid);
+            // Where a non-planar polygon's projection folds over itself its winding cancels,
+            // yet its fan triangles, which are what gets drawn, cover those centres: before
+            // dropping it, ask them (they mark only what they draw).
+            const bool askFans = keepOnlyNew && !coversNew && folds(v, count);
+            for (int k = 2; k < count && !coversNew && askFans; ++k) {
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), mPyramid);
+            }
+        } else {
+            for (int k = 2; k < count; ++k) {
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), mPyramid);
+            }
+        }
+    }
+    if (!keepOnlyNew) return true;
+    // The rasterizer works in float on snapped coordinates, so a centre within a hair of an
+    // edge may fall the other way there: such a polygon is kept as well (it marks nothing; only
+    // coverage this side of the rounding is ever marked).
+    for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
+    return coversNew;
+}
+
+// The pixel centres of the polygon's box, when one of them is not covered yet. A polygon covers
+// only centres in columns [first at or after xMin, first at or after xMax) and likewise rows
+// (core/scan_convert.h's rules), so when this is false its scan conversion, and its fan
+// triangles', would mark nothing: where cells are about a pixel, most polygons are answered
+// here, and most of the rest hold a single centre.
+inline bool PolygonCoverage::uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const {
+    double xMin = v[0].x, xMax = v[0].x, yMin = v[0].y, yMax = v[0].y;
+    for (int k = 1; k < count; ++k) {
+        xMin = std::min(xMin, v[k].x);
+        xMax = std::max(xMax, v[k].x);
+        yMin = std::min(yMin, v[k].y);
+        yMax = std::max(yMax, v[k].y);
+    }
+    r = {std::max(detail::firstCentreAtOrAfter(xMin, mPyramid.width()), 0),
+         std::max(detail::firstCentreAtOrAfter(yMin, mPyramid.height()), 0),
+         std::min(detail::firstCentreAtOrAfter(xMax, mPyramid.width()) - 1, mPyramid.width() - 1),
+         std::min(detail::firstCentreAtOrAfter(yMax, mPyramid.height()) - 1, mPyramid.height() - 1)};
+    return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
+}
 
 }  // namespace vdiso
