@@ -1,3 +1,4 @@
+#include "core/clock.h"
 #include "cache/brick_cache.h"
 
 #include <algorithm>
@@ -12,13 +13,6 @@
 
 namespace vdiso {
 
-namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
 
 std::span<const SubBlockCode> BrickCache::subBlockCodes() const { return mStore.subBlockCodes(); }
 
@@ -117,11 +111,11 @@ BrickHandle BrickCache::acquire(int64_t id) {
     double readSeconds = 0, decodeSeconds = 0;
     size_t storedBytes = 0;
     try {
-        auto start = std::chrono::steady_clock::now();
+        auto start = Clock::now();
         const std::span<const unsigned char> stored = mStore.readStoredBrick(id);
         storedBytes = stored.size();
         readSeconds = secondsSince(start);
-        start = std::chrono::steady_clock::now();
+        start = Clock::now();
         mStore.decodeBrick(id, stored, s.samples);
         decodeSeconds = secondsSince(start);
     } catch (...) {

@@ -1,3 +1,4 @@
+#include "core/clock.h"
 #include "core/extract_full.h"
 
 #include <algorithm>
@@ -20,12 +21,6 @@
 namespace vdiso {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Progress every few dozen bricks: often enough for a bar, rare enough to cost nothing.
 constexpr int64_t kProgressEvery = 32;

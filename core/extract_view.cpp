@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/clock.h"
 #include "core/brick_kernel.h"
 #include "core/check.h"
 #include "core/brick_look_ahead.h"
@@ -31,7 +32,6 @@ namespace vdiso {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 enum class Verdict { Culled, Done, Visible };
 

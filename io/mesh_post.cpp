@@ -1,3 +1,4 @@
+#include "core/clock.h"
 #include "io/mesh_post.h"
 
 #include <algorithm>
@@ -13,12 +14,6 @@
 namespace vdiso {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 struct VertexRecord {
     glm::vec3 position, normal;

@@ -15,6 +15,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "core/clock.h"
 #include "core/brick_levels.h"
 #include "core/interrupt.h"
 #include "io/atomic_output.h"
@@ -28,7 +29,6 @@ namespace vdiso::mpi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 // Options that do not suit the volume (--levels beyond its count, say) are wrong usage, the
 // same on every rank.

@@ -1,3 +1,4 @@
+#include "core/clock.h"
 #include "mpi/extract_across_ranks.h"
 
 #include <chrono>
@@ -19,12 +20,6 @@
 namespace vdiso::mpi {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 }  // namespace
 

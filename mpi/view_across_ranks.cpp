@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "core/clock.h"
 #include "cache/cache_plan.h"
 #include "core/depth_slabs.h"
 #include "core/image_strips.h"
@@ -16,7 +17,6 @@ namespace vdiso::mpi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 // Thrown from a coverage round when another rank has failed: it ends this rank's traversal
 // without being a failure of its own (the failing rank is the one named).

@@ -6,6 +6,7 @@
 #include <boost/beast/websocket.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/clock.h"
 #include "io/error.h"
 
 namespace vdiso::serve {
@@ -14,7 +15,6 @@ namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 namespace net = boost::asio;
 using tcp = net::ip::tcp;
-using Clock = std::chrono::steady_clock;
 
 struct ViewerClient::Connection {
     net::io_context ioc;

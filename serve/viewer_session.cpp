@@ -3,12 +3,12 @@
 #include <cstring>
 #include <exception>
 
+#include "core/clock.h"
 #include "core/camera.h"
 #include "io/json.h"
 
 namespace vdiso::serve {
 
-using Clock = std::chrono::steady_clock;
 
 bool FrameGate::enter(const std::function<bool()>& giveUp) {
     std::unique_lock lock(mMutex);
