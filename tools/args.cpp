@@ -1,5 +1,7 @@
 #include "tools/args.h"
 
+#include "core/interrupt.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -8,6 +10,12 @@
 #include <thread>
 
 namespace vdiso::cli {
+
+int exitCodeOf(const std::exception& e) {
+    if (dynamic_cast<const UsageError*>(&e)) return 2;
+    if (dynamic_cast<const Interrupted*>(&e)) return 130;
+    return 1;
+}
 
 Args::Args(int argc, char** argv, int first) {
     for (int i = first; i < argc; ++i) mItems.emplace_back(argv[i]);

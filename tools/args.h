@@ -22,6 +22,10 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// The exit code of a command's exception, the same for vdiso and vdiso-mpi: 2 for wrong usage
+// (UsageError), 130 for an interrupt (core/interrupt.h: Ctrl-C or SIGTERM), 1 for any other.
+int exitCodeOf(const std::exception& e);
+
 class Args {
 public:
     Args(int argc, char** argv, int first);

@@ -45,16 +45,15 @@ int main(int argc, char** argv) {
         if (command == "serve") return runServe(argc - 1, argv + 1);
         std::fprintf(stderr, "vdiso: unknown command '%s'\n\n%s", command.c_str(), kUsage);
         return 2;
-    } catch (const UsageError& e) {
-        std::fprintf(stderr, "vdiso %s: %s (see 'vdiso %s --help')\n", command.c_str(), e.what(),
-                     command.c_str());
-        return 2;
-    } catch (const vdiso::Interrupted& e) {
-        // Ctrl-C or SIGTERM, seen by a library loop: its output was removed on the way out.
-        std::fprintf(stderr, "\nvdiso %s: %s; no output written\n", command.c_str(), e.what());
-        return 130;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "vdiso %s: error: %s\n", command.c_str(), e.what());
-        return 1;
+        const int code = exitCodeOf(e);
+        if (code == 2)
+            std::fprintf(stderr, "vdiso %s: %s (see 'vdiso %s --help')\n", command.c_str(), e.what(),
+                         command.c_str());
+        else if (code == 130)  // Ctrl-C or SIGTERM, seen by a library loop: its output was removed
+            std::fprintf(stderr, "\nvdiso %s: %s; no output written\n", command.c_str(), e.what());
+        else
+            std::fprintf(stderr, "vdiso %s: error: %s\n", command.c_str(), e.what());
+        return code;
     }
 }

@@ -45,7 +45,7 @@ ProgressFn progressBar(const std::string& label, double bytesTotal, bool quiet) 
     return [state](double fraction) {
         if (interruptRequested()) {
             if (state->draw) std::fputs("\n", stderr);
-            throw IoError(state->label + ": interrupted; no output written");
+            throw Interrupted(state->label + ": interrupted");
         }
         if (!state->draw) return;
         // The bar's width and percentage come from the fraction: keep it in [0, 1] whatever a

@@ -7,7 +7,7 @@
 
 namespace vdiso::mpi::cli {
 
-int exitCodeOf(const std::exception& e) { return dynamic_cast<const vdiso::cli::UsageError*>(&e) ? 2 : 1; }
+int exitCodeOf(const std::exception& e) { return vdiso::cli::exitCodeOf(e); }
 
 void writeStats(const std::string& path, const std::string& json, bool overwrite) {
     const std::string text = json + "\n";

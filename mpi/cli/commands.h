@@ -9,7 +9,7 @@
 
 namespace vdiso::mpi::cli {
 
-// The exit code of a phase's exception: 2 for wrong usage (tools/args.h UsageError), else 1.
+// The exit code of a phase's exception: vdiso's (tools/args.h exitCodeOf).
 int exitCodeOf(const std::exception& e);
 
 // Rank 0's statistics: `json` and a newline to stdout for "-", else to the file, whole or not at
