@@ -23,16 +23,9 @@ rate=${4:-0}
 if [[ "$size" == *.vdiso ]]; then name=$size; else name=head$size.vdiso; fi
 store=data/bench/bucket/$name
 [ -f "$store" ] || $vdiso synth "$store" --kind head --size "$size" --quiet
-work=$(mktemp -d)
-trap 'exec 3>&-; rm -rf "$work"' EXIT
-
-# The server dies with this script (its stdin is our pipe).
-exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public bucket \
-            --delay-ms "$delay" --rate-mbit "$rate" --lifetime 3600 > "$work/port" 2> "$work/server.log")
-for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
-port=$(awk '/PORT/{print $2}' "$work/port")
+source bench/bucket_server.sh
+start_bucket_server "$delay" "$rate"
 url=s3://bucket/$name
-remote=(--no-sign-request --s3-endpoint "http://127.0.0.1:$port")
 
 number() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 

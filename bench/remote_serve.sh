@@ -13,13 +13,8 @@ delay=${2:-20}
 iso=${3:-600.5}
 frames=${4:-4}
 rate=${5:-0}
-work=$(mktemp -d)
-trap 'exec 3>&-; rm -rf "$work"' EXIT
-exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public bucket \
-            --delay-ms "$delay" --rate-mbit "$rate" --lifetime 3600 > "$work/port" 2> "$work/server.log")
-for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
-port=$(awk '/PORT/{print $2}' "$work/port")
-remote=(--no-sign-request --s3-endpoint "http://127.0.0.1:$port")
+source bench/bucket_server.sh
+start_bucket_server "$delay" "$rate"
 # The test server hashes the object once for its ETag (an object store has it stored).
 build/bin/vdiso info "s3://bucket/$name" "${remote[@]}" --remote-timeout 900 > /dev/null
 build/bin/vdiso_serve_bench "s3://bucket/$name" --iso "$iso" --frames "$frames" --size 1024 --no-warmup \

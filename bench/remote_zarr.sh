@@ -21,13 +21,8 @@ if [ ! -d "$zarr" ]; then
   bench/make_ome_zarr.py "data/bench/head$size.raw" "$size" "$size" "$size" "$chunk" "$zarr"
   rm -f "data/bench/head$size.raw"
 fi
-work=$(mktemp -d)
-trap 'exec 3>&-; rm -rf "$work"' EXIT
-exec 3> >(/usr/bin/python3 tests/remote/s3_server.py --root data/bench --public bucket \
-            --delay-ms "$delay" --lifetime 3600 > "$work/port" 2> "$work/server.log")
-for _ in $(seq 50); do grep -q PORT "$work/port" 2>/dev/null && break; sleep 0.1; done
-port=$(awk '/PORT/{print $2}' "$work/port")
-remote=(--no-sign-request --s3-endpoint "http://127.0.0.1:$port")
+source bench/bucket_server.sh
+start_bucket_server "$delay" 0
 
 median() { sort -n | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 seconds() { local t0 t1; t0=$(date +%s.%N); "$@" > /dev/null; t1=$(date +%s.%N); python3 -c "print(round($t1 - $t0, 2))"; }
