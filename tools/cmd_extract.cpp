@@ -21,6 +21,7 @@
 #include "tools/args.h"
 #include "tools/commands.h"
 #include "tools/extract_options.h"
+#include "tools/extract_stats_json.h"
 #include "tools/progress_bar.h"
 
 namespace vdiso::cli {
@@ -155,17 +156,7 @@ JsonObject extractFrame(const ExtractOptions& o, const BrickStoreReader& store, 
     s.add("bricks_active", stats.bricksActive).add("bytes_read", io.bytesRead);
     s.add("nodes_visited", stats.nodesVisited).add("meta_cells_active", stats.metaCellsActive);
     s.add("cells_active", stats.cellsActive);
-    if (isViewDependent(o.method)) {
-        const ViewCounters& view = stats.view;
-        s.add("culled_range", view.culledByRange).add("culled_frustum", view.culledByFrustum);
-        s.add("culled_occlusion", view.culledByOcclusion);
-        s.add("dropped_subpixel", view.droppedSubPixel);
-        s.add("meta_cells_extracted", stats.metaCellsActive).add("scan_s", view.scanSeconds);
-        s.add("cells_culled", view.cellsCulled);
-        s.add("bricks_prefetched_unused", view.bricksPrefetchedUnused);
-        s.add("bricks_culled_by_sub_blocks", view.bricksCulledBySubBlocks);
-        s.add("polygons_hidden", view.polygonsHidden);
-    }
+    if (isViewDependent(o.method)) addViewCounters(s, stats);
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
     if (o.oracle && camera) {

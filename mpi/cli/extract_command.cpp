@@ -24,11 +24,13 @@
 #include "mpi/view_across_ranks.h"
 #include "tools/args.h"
 #include "tools/extract_options.h"
+#include "tools/extract_stats_json.h"
 
 namespace vdiso::mpi::cli {
 
 namespace {
 
+using vdiso::cli::addViewCounters;
 using vdiso::cli::ExtractOptions;
 using vdiso::cli::UsageError;
 
@@ -177,11 +179,7 @@ std::string viewStats(const MpiExtractOptions& m, const BrickStoreReader& store,
     s.add("bricks_loaded", r.bricksLoaded).add("bricks_active", stats.bricksActive);
     s.add("bytes_read", r.bytesRead).add("nodes_visited", stats.nodesVisited);
     s.add("meta_cells_active", stats.metaCellsActive).add("cells_active", stats.cellsActive);
-    const ViewCounters& v = stats.view;
-    s.add("culled_range", v.culledByRange).add("culled_frustum", v.culledByFrustum);
-    s.add("culled_occlusion", v.culledByOcclusion).add("culled_region", v.culledByRegion);
-    s.add("dropped_subpixel", v.droppedSubPixel).add("cells_culled", v.cellsCulled);
-    s.add("bricks_culled_by_sub_blocks", v.bricksCulledBySubBlocks).add("polygons_hidden", v.polygonsHidden);
+    addViewCounters(s, stats);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
     s.add("view", viewName);
     std::string perRank = "[";
