@@ -48,21 +48,19 @@ size_t BrickCache::takeFreeSlot() {
             try {
                 mChunks.push_back(std::make_unique<Chunk>(slots * mBrickBytes));
             } catch (const std::bad_alloc&) {  // said in words, with the store and the budget
-                throwIoError(mStore.path(), "the brick cache cannot get " +
-                                                std::to_string((slots * mBrickBytes) >> 20) +
-                                                " MB more memory, at " +
-                                                std::to_string((mSlotsAllocated * mBrickBytes) >> 20) +
-                                                " MB of its budget of " +
-                                                std::to_string((mSlotCount * mBrickBytes) >> 20) +
-                                                " MB: lower --cache-mb");
+                throw CacheBudgetError(mStore.path() + ": the brick cache cannot get " +
+                                       std::to_string((slots * mBrickBytes) >> 20) + " MB more memory, at " +
+                                       std::to_string((mSlotsAllocated * mBrickBytes) >> 20) +
+                                       " MB of its budget of " + std::to_string((mSlotCount * mBrickBytes) >> 20) +
+                                       " MB: lower the budget");
             }
         }
         mSlots[mSlotsAllocated].samples = mChunks.back()->bytes + within * mBrickBytes;
         return mSlotsAllocated++;
     }
     if (mLru.empty())
-        throw std::runtime_error("brick cache: all " + std::to_string(mSlotCount) +
-                                 " bricks of the budget are in use; raise --cache-mb");
+        throw CacheBudgetError(mStore.path() + ": all " + std::to_string(mSlotCount) +
+                               " bricks of the brick cache's budget are in use: raise the budget");
     const size_t slot = mLru.back();
     mLru.pop_back();
     mSlotOfBrick.erase(mSlots[slot].id);

@@ -31,6 +31,14 @@ struct CacheCounters {
     double decodeSeconds = 0;    // checksum, decompression, unshuffle
 };
 
+// The cache's budget does not fit what is asked of it (too little for the bricks pinned at
+// once, or more than the machine gives). Front ends name their own setting for the budget
+// (--cache-mb, a keyword).
+class CacheBudgetError : public IoError {
+public:
+    using IoError::IoError;
+};
+
 class BrickCache final : public BrickSource {
 public:
     // `budgetBytes` bounds the decoded bricks held; it must fit at least two bricks.

@@ -18,10 +18,9 @@ CachePlan planCacheUse(const BrickCache& cache, bool viewDependent, int prefetch
         plan.threads = viewDependent ? int(std::min<uint64_t>(uint64_t(defaultThreads), maxStrips)) : defaultThreads;
     } else {
         if (viewDependent && uint64_t(threads) > maxStrips)
-            throw std::invalid_argument("--threads " + std::to_string(threads) + " needs a brick cache of " +
-                                        std::to_string(4 * threads) + " bricks; it holds " +
-                                        std::to_string(slots) + " of " + std::to_string(brickBytes >> 10) +
-                                        " KB");
+            throw CacheBudgetError(std::to_string(threads) + " image strips need a brick cache of " +
+                                   std::to_string(4 * threads) + " bricks; it holds " + std::to_string(slots) +
+                                   " of " + std::to_string(brickBytes >> 10) + " KB");
         plan.threads = threads;
     }
     plan.threads = std::max(plan.threads, 1);

@@ -20,8 +20,8 @@ struct CachePlan {
 };
 
 // `threads`: what the user asked for, or 0 for the default (`defaultThreads`, lowered to what
-// the cache allows). Throws std::invalid_argument naming the cache size needed when an asked
-// thread count does not fit.
+// the cache allows). Throws CacheBudgetError naming the cache size needed when an asked thread
+// count does not fit.
 CachePlan planCacheUse(const BrickCache& cache, bool viewDependent, int prefetch, int threads,
                        int defaultThreads);
 

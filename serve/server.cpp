@@ -45,10 +45,11 @@ int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
         if (bricks >= uint64_t(stores[i].reader->index().size())) continue;
         const uint64_t perFrame = uint64_t(settings.prefetchBricks + 4 * settings.threads);
         if (bricks < 2 * perFrame)
-            throw IoError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
-                          " bricks cannot hold what one frame pins (" + std::to_string(2 * perFrame) +
-                          " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
-                          " KB with --threads " + std::to_string(settings.threads) + "): raise --cache-mb");
+            throw CacheBudgetError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
+                                   " bricks cannot hold what one frame pins (" + std::to_string(2 * perFrame) +
+                                   " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
+                                   " KB with " + std::to_string(settings.threads) +
+                                   " threads a frame): raise the budget");
         slots = std::min<int>(slots, int(bricks / (2 * perFrame)));
     }
     return slots;

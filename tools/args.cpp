@@ -1,5 +1,6 @@
 #include "tools/args.h"
 
+#include "cache/brick_cache.h"
 #include "core/interrupt.h"
 
 #include <algorithm>
@@ -10,6 +11,12 @@
 #include <thread>
 
 namespace vdiso::cli {
+
+std::string messageOf(const std::exception& e) {
+    std::string message = e.what();
+    if (dynamic_cast<const CacheBudgetError*>(&e)) message += " (--cache-mb)";
+    return message;
+}
 
 int exitCodeOf(const std::exception& e) {
     if (dynamic_cast<const UsageError*>(&e)) return 2;

@@ -26,6 +26,10 @@ public:
 // (UsageError), 130 for an interrupt (core/interrupt.h: Ctrl-C or SIGTERM), 1 for any other.
 int exitCodeOf(const std::exception& e);
 
+// What a front end says of an exception: its message, with the option that sets what it is
+// about where the library names a quantity (a CacheBudgetError: --cache-mb).
+std::string messageOf(const std::exception& e);
+
 class Args {
 public:
     Args(int argc, char** argv, int first);

@@ -303,8 +303,9 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
 CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaultThreads) {
     try {
         return planCacheUse(cache, isViewDependent(o.method), o.prefetch, o.threads, defaultThreads);
-    } catch (const std::invalid_argument& e) {
-        throw UsageError(e.what() + std::string(" (--cache-mb ") + std::to_string(o.cacheMb) + ")");
+    } catch (const CacheBudgetError& e) {
+        throw UsageError(e.what() + std::string(" (--threads ") + std::to_string(o.threads) + ", --cache-mb " +
+                         std::to_string(o.cacheMb) + ")");
     }
 }
 

@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
         else if (code == 130)  // Ctrl-C or SIGTERM, seen by a library loop: its output was removed
             std::fprintf(stderr, "\nvdiso %s: %s; no output written\n", command.c_str(), e.what());
         else
-            std::fprintf(stderr, "vdiso %s: error: %s\n", command.c_str(), e.what());
+            std::fprintf(stderr, "vdiso %s: error: %s\n", command.c_str(), messageOf(e).c_str());
         return code;
     }
 }
