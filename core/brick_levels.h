@@ -1,4 +1,4 @@
-// Levels of detail of a bricked volume (DESIGN.md, "Levels of detail").
+// Levels of detail of a bricked volume (docs/design.md, "Trees over the bricks"; core/view_levels.h).
 //
 // Level 0 is the volume. Level l has cells 2^l times larger: its sample s stands at level-0
 // position s 2^l (clamped to the volume's last sample), so it has ceil((dims-1) / 2^l) cells

@@ -1,5 +1,5 @@
 // Prefetch scheduling for the view-dependent traversal: which bricks to read ahead of it, and
-// when (DESIGN.md, "Out of core").
+// when (docs/design.md, "Memory and reads").
 //
 // A second cursor (core/traversal_cursor.h: the traversal's own walk) runs ahead of the
 // traversal, with tests 1-3 against the pyramid as it is now. Coverage only grows, so

@@ -1,5 +1,5 @@
 // Loads bricks into a BrickSource ahead of an extraction, on reader threads of its own, so
-// that reading and decoding overlap extraction (DESIGN.md, "Out of core"). Several readers
+// that reading and decoding overlap extraction (docs/design.md, "Memory and reads"). Several readers
 // keep several reads queued at the device: a brick is a small random read, and one at a time
 // a disk's latency, not its bandwidth, sets the pace (a read waits on the device, not on a
 // core, so readers beyond the cores cost nothing while they wait).

@@ -119,7 +119,7 @@ struct ViewExtractOptions {
     int threads = 1;
     // When set, output goes brick by brick to the stream instead of the mesh and points.
     ViewStream* stream = nullptr;
-    // Levels of detail (DESIGN.md): a node is extracted at the coarsest level of the source
+    // Levels of detail (docs/design.md): a node is extracted at the coarsest level of the source
     // whose cells span at most this many pixels on screen where the node is nearest the eye
     // (core/view_levels.h); 0: level 0 only. Points stay for what is under a pixel.
     double lodError = 0;

@@ -1,5 +1,5 @@
 // Closing a brick's surface on one of its faces: how the seams between levels of detail are
-// kept out of the picture (DESIGN.md, "Levels of detail"; core/view_levels.h).
+// kept out of the picture (docs/design.md, "One frame, view-dependent"; core/view_levels.h).
 //
 // Where a brick meets a neighbour extracted at another level, their surfaces meet the shared
 // face along two different curves (each level's marching squares on its own samples), and the

@@ -2,7 +2,7 @@
 // the brick (the store keeps them in its index), so that view-dependent extraction can test a
 // brick at a finer grain than its box before reading it. A brick's box is large against the
 // surface it shows, most of all at silhouettes; testing its active sub-blocks instead cuts the
-// bricks read towards those that hold visible surface (DESIGN.md, "Out of core").
+// bricks read towards those that hold visible surface (docs/design.md, "Memory and reads").
 //
 // Sub-block (a, b, c) owns the brick's cells [a C, (a + 1) C) x [b C, ...) x [c C, ...) with
 // C = ceil(B / 4), fewer or none at the volume's far faces. Its range is the min and max of

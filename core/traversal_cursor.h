@@ -1,4 +1,4 @@
-// The walk of the min/max tree that a view-dependent extraction takes (DESIGN.md, "SAGE"): one
+// The walk of the min/max tree that a view-dependent extraction takes (docs/design.md, "One frame, view-dependent"): one
 // step pops the nearest node still to visit and decides it: outside the extraction's region,
 // culled by tests 1-3 (range, frustum, sub-pixel, occlusion: core/view_culler.h, against the
 // pyramid as it is now), descended (its children pushed far first, so the nearest pops next),

@@ -1,4 +1,4 @@
-// The levels of detail one view-dependent extraction draws from (DESIGN.md, "Levels of detail").
+// The levels of detail one view-dependent extraction draws from (docs/design.md, "Trees over the bricks"; core/view_levels.h).
 //
 // Per level: the source seen at that level (core/level_source.h) and a culler over its grid
 // (tests 1-3 against the one occlusion pyramid: culling works unchanged across levels). Per

@@ -3,7 +3,7 @@
 // From the depth buffer of the full surface rendered from a camera, every covered pixel is
 // mapped back to the world point it shows and so to the cell and the brick holding it. Those
 // cells' triangles are the least any view-dependent method must extract for the picture to be
-// complete, and those bricks the least it must read (DESIGN.md, "Testing and benchmarks").
+// complete, and those bricks the least it must read (docs/design.md, "Testing and measuring").
 // Depth precision can move a point into a neighbouring cell, which only lowers the bound.
 #pragma once
 

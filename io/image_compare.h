@@ -1,5 +1,5 @@
 // Comparing two renderings of the same view: how much of the reference's surface the other
-// reproduces. This is the fidelity measure of view-dependent extraction (DESIGN.md: a
+// reproduces. This is the fidelity measure of view-dependent extraction (docs/design.md, "Correctness contract": a
 // view-dependent extraction rendered from its own camera must look like the full surface).
 #pragma once
 

@@ -22,7 +22,6 @@
 namespace vdiso {
 namespace {
 
-
 void requireField(const std::string& path, bool present, const char* field) {
     if (!present) throwIoError(path, std::string("header has no '") + field + "' field");
 }

@@ -1,5 +1,5 @@
 // `vdiso serve`: HTTP for the viewer's files and a WebSocket per browser that streams the
-// visible surface as the camera moves (DESIGN.md, "Remote viewing"; docs/protocol.md).
+// visible surface as the camera moves (docs/design.md, "The server"; docs/protocol.md).
 //
 // One process holds the stores and one brick cache per store, shared by every frame of every
 // client. Each WebSocket connection is a ViewerSession (serve/viewer_session.h) with its own

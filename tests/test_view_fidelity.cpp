@@ -1,6 +1,6 @@
 // View-dependent extraction against the full surface: rendered from the same camera, the SAGE
 // and WISE surfaces must reproduce at least 99.5% of the pixels the full surface covers
-// (DESIGN.md, correctness contract), while extracting fewer triangles and reading no more
+// (docs/design.md, "Correctness contract"), while extracting fewer triangles and reading no more
 // bricks.
 #include <gtest/gtest.h>
 
