@@ -17,6 +17,18 @@ void SeamTrimmer::maybeTrim(EdgeVertexMap& seams) {
     mTrimAt = std::max(mFirstTrim, 2 * seams.size());
 }
 
+int32_t edgeOwner(const Dims3& dims, const BrickLayout& layout, uint64_t key,
+                  std::span<const int32_t> partOfBrick, int32_t self) {
+    int64_t bricks[4];
+    const int n = bricksOnEdge(dims, layout, key, bricks);
+    int32_t owner = self;
+    for (int i = 0; i < n; ++i) {
+        const int32_t part = partOfBrick[size_t(bricks[i])];
+        if (part >= 0 && part < owner) owner = part;
+    }
+    return owner;
+}
+
 int bricksOnEdge(const Dims3& dims, const BrickLayout& layout, uint64_t key, int64_t bricks[4]) {
     const EdgeOfKey edge = decodeEdgeKey(dims, key);
     const int64_t* p = edge.corner;

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <span>
+#include <span>
 #include <vector>
 
 #include "core/brick_layout.h"
@@ -38,6 +39,13 @@ inline EdgeOfKey decodeEdgeKey(const Dims3& dims, uint64_t key) {
 // many. Each of them makes the edge's vertex when the surface crosses the edge (the cell's
 // range, its meta-cell's and its brick's all hold the isovalue then).
 int bricksOnEdge(const Dims3& dims, const BrickLayout& layout, uint64_t key, int64_t bricks[4]);
+
+// Who owns the vertex on edge `key` when bricks are split into parts (chunks of one process,
+// ranks of a job): the lowest part, in `partOfBrick` (negative: a brick in no part), of the
+// bricks on the edge, and `self` when none is lower. Every part that makes the vertex finds
+// the same owner, so welding takes the owner's vertex.
+int32_t edgeOwner(const Dims3& dims, const BrickLayout& layout, uint64_t key,
+                  std::span<const int32_t> partOfBrick, int32_t self);
 
 // Vertex numbers by edge key.
 // Open addressing with linear probing on a power-of-two table (keys are stored plus one, so

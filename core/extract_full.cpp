@@ -146,13 +146,7 @@ void mergeChunksParallel(std::vector<ChunkOutput>& chunks, const std::vector<int
     tbb::parallel_for(size_t(0), count, [&](size_t c) {
         final[c].assign(chunks[c].mesh.vertexCount(), 0);
         chunks[c].seams.forEach([&](uint64_t key, uint32_t v) {
-            int64_t bricks[4];
-            const int n = bricksOnEdge(volume.dims, layout, key, bricks);
-            int32_t owner = int32_t(c);
-            for (int i = 0; i < n; ++i) {
-                const int32_t o = chunkOfBrick[size_t(bricks[i])];
-                if (o >= 0 && o < owner) owner = o;
-            }
+            const int32_t owner = edgeOwner(volume.dims, layout, key, chunkOfBrick, int32_t(c));
             if (owner == int32_t(c)) return;
             const uint32_t w = chunks[size_t(owner)].seams.find(key);
             if (w == UINT32_MAX) return;  // cannot happen (see bricksOnEdge); then it stays unwelded

@@ -15,13 +15,7 @@ RankMeshNumbering weldAcrossRanks(const Communicator& comm, const BrickPartition
     std::vector<std::vector<uint64_t>> keys(ranks), vertices(ranks);
     std::vector<uint64_t> global(mesh.positions.size(), 0);
     border.forEach([&](uint64_t key, uint32_t v) {
-        int64_t bricks[4];
-        const int n = bricksOnEdge(volume.dims, layout, key, bricks);
-        int owner = me;
-        for (int i = 0; i < n; ++i) {
-            const int32_t r = partition.partOfBrick[size_t(bricks[i])];
-            if (r >= 0 && r < owner) owner = r;
-        }
+        const int32_t owner = edgeOwner(volume.dims, layout, key, partition.partOfBrick, me);
         if (owner == me) return;
         keys[size_t(owner)].push_back(key);
         vertices[size_t(owner)].push_back(v);
