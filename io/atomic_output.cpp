@@ -19,12 +19,12 @@ namespace vdiso {
 void checkOutputReplaceable(const std::string& path, bool overwrite, const std::vector<std::string>& inputs) {
     struct stat link;
     if (::lstat(path.c_str(), &link) != 0) return;  // nothing there (or a dangling path)
-    if (!overwrite) throwIoError(path, "already exists (pass --force to replace it)");
+    if (!overwrite) throw OutputExistsError(path + ": already exists");
     struct stat target;
     const bool resolved = ::stat(path.c_str(), &target) == 0;
     if (!S_ISREG(link.st_mode) && !(S_ISLNK(link.st_mode) && (!resolved || S_ISREG(target.st_mode))))
         throwIoError(path, "is not a regular file (a device, FIFO, socket or directory); vdiso "
-                           "replaces only regular files, even with --force");
+                           "replaces only regular files, even when asked to replace one");
     if (!resolved) return;
     for (const std::string& input : inputs) {
         struct stat in;

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "io/error.h"
+
 namespace vdiso {
 
 // Writes all of `n` bytes at `offset` of the file open as `fd`; throws IoError naming `path` on
@@ -30,6 +32,13 @@ void startWriteback(int fd, uint64_t offset, uint64_t n);
 // FIFO, a directory; through a symbolic link too) or is one of `inputs` under another name
 // (compared by device and inode). Nothing there passes.
 void checkOutputReplaceable(const std::string& path, bool overwrite, const std::vector<std::string>& inputs);
+
+// Something stands at an output path and replacing it was not asked for. Front ends name their
+// own way to ask (--force, a keyword).
+class OutputExistsError : public IoError {
+public:
+    using IoError::IoError;
+};
 
 class AtomicOutputFile {
 public:

@@ -2,6 +2,7 @@
 
 #include "cache/brick_cache.h"
 #include "core/interrupt.h"
+#include "io/atomic_output.h"
 
 #include <algorithm>
 #include <charconv>
@@ -15,6 +16,7 @@ namespace vdiso::cli {
 std::string messageOf(const std::exception& e) {
     std::string message = e.what();
     if (dynamic_cast<const CacheBudgetError*>(&e)) message += " (--cache-mb)";
+    if (dynamic_cast<const OutputExistsError*>(&e)) message += " (pass --force to replace it)";
     return message;
 }
 

@@ -27,7 +27,8 @@ public:
 int exitCodeOf(const std::exception& e);
 
 // What a front end says of an exception: its message, with the option that sets what it is
-// about where the library names a quantity (a CacheBudgetError: --cache-mb).
+// about where the library names a quantity (a CacheBudgetError: --cache-mb; an
+// OutputExistsError: --force).
 std::string messageOf(const std::exception& e);
 
 class Args {
