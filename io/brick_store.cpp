@@ -95,15 +95,15 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
                                 std::to_string(mHeader.indexOffset) + " but the file has " +
                                 std::to_string(mFileBytes));
     // In pieces, which a remote source fetches at once.
-    std::vector<unsigned char> indexBytes(mHeader.indexBytes);
+    const size_t indexBytes = size_t(mHeader.indexBytes);
+    auto stored = std::make_unique_for_overwrite<unsigned char[]>(indexBytes);
     std::vector<ByteRange> pieces;
     constexpr size_t kIndexPiece = size_t(1) << 20;
-    for (size_t at = 0; at < indexBytes.size(); at += kIndexPiece)
-        pieces.push_back({mHeader.indexOffset + at, std::min(kIndexPiece, indexBytes.size() - at),
-                          indexBytes.data() + at});
+    for (size_t at = 0; at < indexBytes; at += kIndexPiece)
+        pieces.push_back({mHeader.indexOffset + at, std::min(kIndexPiece, indexBytes - at), stored.get() + at});
     mSource->readMany(pieces, "index");
-    store_format::decodeIndex(indexBytes.data(), indexBytes.size(), mHeader, mLayout, mPath,
-                              mIndex, mHistogram, mSubBlocks);
+    mRawIndex = store_format::decodeIndex(std::move(stored), indexBytes, mHeader, mLayout, mPath, mIndex,
+                                          mHistogram, mSubBlocks);
 }
 
 BrickStoreReader::~BrickStoreReader() = default;

@@ -117,7 +117,7 @@ public:
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
     // kSubBlocksPerBrick codes per brick, in brick order (core/sub_blocks.h).
-    const std::vector<SubBlockCode>& subBlockCodes() const { return mSubBlocks; }
+    std::span<const SubBlockCode> subBlockCodes() const { return mSubBlocks; }
     uint64_t fileBytes() const { return mFileBytes; }
     ReadMode readMode() const { return mMode; }
     // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read); "http",
@@ -152,7 +152,8 @@ private:
     std::vector<BrickLevel> mLevels;
     std::vector<BrickEntry> mIndex;
     ValueHistogram mHistogram;
-    std::vector<SubBlockCode> mSubBlocks;
+    std::unique_ptr<unsigned char[]> mRawIndex;  // the index as read, which mSubBlocks points into
+    std::span<const SubBlockCode> mSubBlocks;
 };
 
 }  // namespace vdiso

@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -36,11 +38,14 @@ int64_t totalBricks(const StoreHeader& header);
 uint64_t indexBytes(uint64_t brickCount);
 
 // Validates (version 5: the parts; then magic, count, checksum, every entry's offset and size
-// against the file) and decodes; throws IoError naming the file and, for a bad entry, the brick.
-void decodeIndex(const unsigned char* bytes, size_t n, const StoreHeader& header,
-                 const BrickLayout& layout, const std::string& path,
-                 std::vector<BrickEntry>& entries, ValueHistogram& histogram,
-                 std::vector<SubBlockCode>& subBlocks);
+// against the file) and decodes the stored index (`n` bytes); throws IoError naming the file
+// and, for a bad entry, the brick. The sub-block codes are not copied: `subBlocks` points into
+// the raw index, whose storage is returned (keep it while subBlocks is used).
+std::unique_ptr<unsigned char[]> decodeIndex(std::unique_ptr<unsigned char[]> stored, size_t n,
+                                             const StoreHeader& header, const BrickLayout& layout,
+                                             const std::string& path, std::vector<BrickEntry>& entries,
+                                             ValueHistogram& histogram,
+                                             std::span<const SubBlockCode>& subBlocks);
 
 // CRC-32 (zlib) of a byte range: the store's checksum algorithm.
 uint32_t crc32Of(const void* data, size_t n);
