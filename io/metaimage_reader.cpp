@@ -13,6 +13,7 @@
 #include "core/orientation.h"
 #include "io/byte_stream.h"
 #include "io/error.h"
+#include "io/header_text.h"
 #include "io/raw_reader.h"
 #include "io/sample_decode.h"
 
@@ -36,34 +37,10 @@ struct MetaHeader {
     uint64_t headerBytes = 0;  // where LOCAL data starts
 };
 
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-    return s;
-}
-
-std::string lower(std::string_view s) {
-    std::string out(s);
-    for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return out;
-}
-
-std::vector<std::string_view> words(std::string_view s) {
-    std::vector<std::string_view> out;
-    size_t i = 0;
-    while (i < s.size()) {
-        while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-        const size_t start = i;
-        while (i < s.size() && !std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-        if (i > start) out.push_back(s.substr(start, i - start));
-    }
-    return out;
-}
-
 template <class T>
 std::vector<T> numbers(const std::string& path, const std::string& key, std::string_view value) {
     std::vector<T> out;
-    for (std::string_view w : words(value)) {
+    for (std::string_view w : splitWords(value)) {
         T v{};
         const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
         if (ec != std::errc() || end != w.data() + w.size())
@@ -81,7 +58,7 @@ T number(const std::string& path, const std::string& key, std::string_view value
 }
 
 bool boolean(const std::string& path, const std::string& key, std::string_view value) {
-    const std::string v = lower(trim(value));
+    const std::string v = toLowerAscii(trimSpace(value));
     if (v == "true" || v == "1") return true;
     if (v == "false" || v == "0") return false;
     throwIoError(path, "'" + key + "' should be True or False, not '" + std::string(value) + "'");
@@ -95,7 +72,7 @@ FileScalar elementType(const std::string& path, std::string_view value) {
         {"MET_LONG", FileScalar::I32},  {"MET_ULONG", FileScalar::U32},  // 4 bytes in MetaIO
         {"MET_FLOAT", FileScalar::F32}, {"MET_DOUBLE", FileScalar::F64},
     };
-    const std::string type(trim(value));
+    const std::string type(trimSpace(value));
     for (const auto& [name, scalar] : kTypes)
         if (type == name) return scalar;
     if (type.find("LONG_LONG") != std::string::npos)
@@ -131,18 +108,18 @@ MetaHeader parseHeader(const std::string& path) {
             if (c == '\0') throwIoError(path, "header holds a NUL byte: not a MetaImage header");
             line += char(c);
         }
-        const std::string_view text = trim(line);
+        const std::string_view text = trimSpace(line);
         if (!text.empty()) {
             const size_t eq = text.find('=');
             if (eq == std::string_view::npos)
                 throwIoError(path, "header line '" + std::string(text.substr(0, 80)) +
                                        "' is not 'Key = Value'");
-            const std::string key(trim(text.substr(0, eq)));
-            const std::string_view value = trim(text.substr(eq + 1));
-            const std::string k = lower(key);
+            const std::string key(trimSpace(text.substr(0, eq)));
+            const std::string_view value = trimSpace(text.substr(eq + 1));
+            const std::string k = toLowerAscii(key);
             if (k == "objecttype") {
                 sawObjectType = true;
-                if (lower(value) != "image")
+                if (toLowerAscii(value) != "image")
                     throwIoError(path, "ObjectType is '" + std::string(value) + "', not Image");
             } else if (k == "ndims") {
                 h.nDims = number<int>(path, key, value);
@@ -229,7 +206,7 @@ VolumeInfo volumeInfo(const std::string& path, const MetaHeader& h) {
 }
 
 std::string dataPath(const std::string& path, const MetaHeader& h) {
-    const std::vector<std::string_view> w = words(h.dataFile);
+    const std::vector<std::string_view> w = splitWords(h.dataFile);
     if (w.empty()) throwIoError(path, "ElementDataFile names no file");
     if (w[0] == "LOCAL") return path;
     if (w[0] == "LIST" || (w.size() >= 3 && w[0].find('%') != std::string_view::npos))

@@ -10,6 +10,7 @@
 
 #include "core/interrupt.h"
 #include "io/error.h"
+#include "io/header_text.h"
 
 namespace vdiso {
 namespace {
@@ -17,43 +18,19 @@ namespace {
 // Headers are a few kB; a longer line means we are reading sample bytes, not a header.
 constexpr size_t kMaxHeaderLine = 1 << 16;
 
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-    return s;
-}
-
-std::string toLower(std::string_view s) {
-    std::string out(s);
-    for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return out;
-}
-
-std::vector<std::string_view> splitWords(std::string_view s) {
-    std::vector<std::string_view> words;
-    size_t i = 0;
-    while (i < s.size()) {
-        while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-        size_t start = i;
-        while (i < s.size() && !std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-        if (i > start) words.push_back(s.substr(start, i - start));
-    }
-    return words;
-}
-
 // Collapses runs of whitespace so "unsigned   short" and "unsigned short" read alike.
 std::string normalizeWords(std::string_view s) {
     std::string out;
     for (std::string_view w : splitWords(s)) {
         if (!out.empty()) out += ' ';
-        out += toLower(w);
+        out += toLowerAscii(w);
     }
     return out;
 }
 
 template <class T>
 std::optional<T> parseNumber(std::string_view s) {
-    s = trim(s);
+    s = trimSpace(s);
     if (!s.empty() && s.front() == '+') s.remove_prefix(1);
     T value{};
     auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
@@ -114,7 +91,7 @@ std::vector<NrrdDirection> parseDirections(const std::string& path, std::string_
             end = i;
             while (end < text.size() && !std::isspace(static_cast<unsigned char>(text[end]))) ++end;
             std::string_view word = text.substr(i, end - i);
-            if (toLower(word) != "none")
+            if (toLowerAscii(word) != "none")
                 throwIoError(path, "'" + std::string(field) + "' holds '" + std::string(word) +
                                        "', which is neither a vector nor 'none'");
             out.emplace_back(std::nullopt);
@@ -236,7 +213,7 @@ void applyNrrdField(const std::string& path, const std::string& field, std::stri
     } else if (field == "space") {
         h.space = normalizeWords(value);
     } else if (field == "space origin") {
-        if (toLower(value) != "none") h.spaceOrigin = parseVector(path, field, value);
+        if (toLowerAscii(value) != "none") h.spaceOrigin = parseVector(path, field, value);
     } else if (field == "byte skip") {
         h.byteSkip = parseInteger(path, field, value);
     } else if (field == "line skip") {
@@ -283,11 +260,11 @@ NrrdHeader parseNrrdHeader(const std::string& path) {
     in.read(magic, 8);
     const bool hasMagic = std::string_view(magic, 7) == "NRRD000" &&
                           std::isdigit(static_cast<unsigned char>(magic[7])) && in.gcount() == 8 &&
-                          readHeaderLine(path, in, line, consumed) && trim(line).empty();
+                          readHeaderLine(path, in, line, consumed) && trimSpace(line).empty();
     if (!hasMagic) throwIoError(path, "not a NRRD file (the first line is not NRRD000X)");
     consumed += 8;
     while (readHeaderLine(path, in, line, consumed)) {
-        if (trim(line).empty()) {
+        if (trimSpace(line).empty()) {
             h.endsWithBlankLine = true;
             break;
         }
@@ -298,7 +275,7 @@ NrrdHeader parseNrrdHeader(const std::string& path) {
                          "header line '" + line + "' is neither 'field: value' nor a comment");
         if (colon + 1 < line.size() && line[colon + 1] == '=') continue;  // key:=value
         const std::string field = normalizeWords(std::string_view(line).substr(0, colon));
-        applyNrrdField(path, field, trim(std::string_view(line).substr(colon + 1)), h);
+        applyNrrdField(path, field, trimSpace(std::string_view(line).substr(colon + 1)), h);
     }
     h.headerBytes = consumed;
     return h;
