@@ -212,8 +212,8 @@ std::vector<DicomHeader> selectDicomSeries(std::vector<DicomHeader> headers,
     if (headers.empty()) throwIoError(where, "holds no DICOM image");
     if (seriesUid.empty()) {
         if (seriesCount(headers) == 1) return headers;
-        throwIoError(where, "holds " + std::to_string(seriesCount(headers)) +
-                                " series; choose one with --series UID:" + seriesList(headers));
+        throw DicomSeriesChoiceError(where + ": holds " + std::to_string(seriesCount(headers)) +
+                                     " series; choose one by its SeriesInstanceUID:" + seriesList(headers));
     }
     std::vector<DicomHeader> chosen;
     for (DicomHeader& h : headers)

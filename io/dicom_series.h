@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "core/volume.h"
+#include "io/error.h"
 #include "io/sample_decode.h"
 
 namespace vdiso {
@@ -63,8 +64,15 @@ struct DicomVolume {
 
 // The headers of the series to read: all of them when they are one series; those of
 // `seriesUid` when it is given. Throws IoError "<where>: ..." listing every series
-// (SeriesInstanceUID, description, modality, slice count, columns x rows) and how to choose one
-// with --series, when there are several and none is chosen or the chosen one is not there.
+// (SeriesInstanceUID, description, modality, slice count, columns x rows) when there are
+// several and none is chosen (a DicomSeriesChoiceError) or the chosen one is not there.
+// An input that holds several series, none of which was chosen: the message lists them, and
+// front ends say how to choose in their own terms (--series UID, a keyword).
+class DicomSeriesChoiceError : public IoError {
+public:
+    using IoError::IoError;
+};
+
 std::vector<DicomHeader> selectDicomSeries(std::vector<DicomHeader> headers,
                                            const std::string& seriesUid, const std::string& where);
 

@@ -148,9 +148,9 @@ std::unique_ptr<SliceReader> withOptions(std::unique_ptr<SliceReader> reader,
 void requireFormatOptions(const std::string& path, InputFormat format,
                                const InputOptions& options) {
     if (!options.series.empty() && format != InputFormat::Dicom)
-        throwIoError(path, "is not DICOM: --series applies to DICOM input only");
+        throwIoError(path, "is not DICOM: a series can be chosen in DICOM input only");
     if (options.scaleLevel != 0 && format != InputFormat::Zarr)
-        throwIoError(path, "is not Zarr: --scale-level applies to OME-Zarr input only");
+        throwIoError(path, "is not Zarr: a scale level can be chosen in OME-Zarr input only");
 }
 
 }  // namespace

@@ -318,7 +318,7 @@ TEST_F(DicomErrors, MixedSeriesWithoutSeriesOption) {
     writeSeries(path("study/a"), a, 5);
     writeSeries(path("study/b"), b, 3);
     expectIoError([&] { openVolume(path("study"), {}); },
-                  {path("study"), "holds 2 series", "--series UID", a.seriesUid,
+                  {path("study"), "holds 2 series", "choose one by its SeriesInstanceUID", a.seriesUid,
                    "\"HEAD 2.5mm\"  CT  5 slices  7 x 5", b.seriesUid, "\"SCOUT\"  MR  3 slices  9 x 4"});
     expectIoError([&] { openVolume(path("study"), seriesOption("1.2.3")); },
                   {"holds no series 1.2.3", a.seriesUid});

@@ -3,6 +3,7 @@
 #include "cache/brick_cache.h"
 #include "core/interrupt.h"
 #include "io/atomic_output.h"
+#include "io/dicom_series.h"
 
 #include <algorithm>
 #include <charconv>
@@ -17,6 +18,7 @@ std::string messageOf(const std::exception& e) {
     std::string message = e.what();
     if (dynamic_cast<const CacheBudgetError*>(&e)) message += " (--cache-mb)";
     if (dynamic_cast<const OutputExistsError*>(&e)) message += " (pass --force to replace it)";
+    if (dynamic_cast<const DicomSeriesChoiceError*>(&e)) message += "\n(choose one with --series UID)";
     return message;
 }
 
