@@ -419,7 +419,7 @@ Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(optio
     Impl& s = *mImpl;
     beast::error_code error;
     const net::ip::address address = net::ip::make_address(options.host, error);
-    if (error) throw IoError("--host " + options.host + ": not an IP address: " + error.message());
+    if (error) throw IoError("the host " + options.host + " to listen on is not an IP address: " + error.message());
     const tcp::endpoint endpoint(address, options.port);
     s.acceptor.open(endpoint.protocol(), error);
     if (!error) s.acceptor.set_option(net::socket_base::reuse_address(true), error);

@@ -82,7 +82,7 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
                           " bricks; the protocol numbers bricks in 32 bits");
         const StoreHeader& h = s.reader->header();
         if (iso && !(*iso >= h.valueMin && *iso <= h.valueMax))
-            throw IoError(path + ": --iso " + std::to_string(*iso) + " is outside the store's values [" +
+            throw IoError(path + ": the isovalue " + std::to_string(*iso) + " is outside the store's values [" +
                           std::to_string(h.valueMin) + ", " + std::to_string(h.valueMax) + "]");
         s.defaultIso = iso ? *iso : s.reader->histogram().otsuThreshold();
         s.cache = std::make_unique<BrickCache>(*s.reader, cacheBytes / paths.size());
