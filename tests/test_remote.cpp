@@ -274,14 +274,16 @@ TEST_F(RemoteStore, DiskCacheKeepsRangesAcrossRuns) {
         bytes[bytes.size() / 2] ^= 0x40;
         test::writeFile(entries[i].string(), bytes.data(), bytes.size());
     }
+    // Meshes only: two processes drawing with OSMesa at once made LeakSanitizer's exit-time
+    // thread stop crash ("Tracer caught signal 11"; scripts/sanitize.sh on llvmpipe's threads).
     const test::CommandResult both = test::runCommand(
-        "(" + env + VDISO_BINARY + " extract s3://bkt/head.vdiso --iso 600.5 --method sage --size 256x256 --png " +
-        file("p1.png") + " -o " + file("p1.ply") + " --disk-cache " + cache + " & " + env + VDISO_BINARY +
-        " extract s3://bkt/head.vdiso --iso 600.5 --method sage --size 256x256 --png " + file("p2.png") + " -o " +
-        file("p2.ply") + " --disk-cache " + cache + "; s=$?; wait $! && exit $s)");
+        "(" + env + VDISO_BINARY + " extract s3://bkt/head.vdiso --iso 600.5 --method sage --size 256x256 -o " +
+        file("p1.ply") + " --disk-cache " + cache + " & " + env + VDISO_BINARY +
+        " extract s3://bkt/head.vdiso --iso 600.5 --method sage --size 256x256 -o " + file("p2.ply") +
+        " --disk-cache " + cache + "; s=$?; wait $! && exit $s)");
     ASSERT_EQ(both.exitCode, 0) << both.output;
-    expectSameAsLocal("p1");
-    expectSameAsLocal("p2");
+    EXPECT_EQ(test::readFile(file("p1.ply")), test::readFile(file("local.ply")));
+    EXPECT_EQ(test::readFile(file("p2.ply")), test::readFile(file("local.ply")));
 
     // A new version of the object: the old one's entries go, and nothing of them is read.
     const test::CommandResult other = test::runVdiso("synth " + file("bkt/head.vdiso") +
