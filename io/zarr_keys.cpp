@@ -1,12 +1,8 @@
 #include "io/zarr_keys.h"
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
-#include <thread>
 
 #include "core/interrupt.h"
 #include "io/error.h"
@@ -84,26 +80,7 @@ ZarrKeys::Values ZarrKeys::getAll(const std::vector<std::string>& keys, uint64_t
         }
         return values;
     }
-    const size_t n = keys.size();
-    std::atomic<size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failureLock;
-    auto work = [&] {
-        for (size_t i; (i = next.fetch_add(1)) < n;) {
-            try {
-                values[i] = get(keys[i], maxBytes);
-            } catch (...) {
-                std::lock_guard lock(failureLock);
-                if (!failure) failure = std::current_exception();
-                next = n;
-            }
-        }
-    };
-    std::vector<std::thread> threads;
-    for (size_t w = 1; w < std::min(n, size_t(mSession->options().connections)); ++w) threads.emplace_back(work);
-    work();
-    for (std::thread& t : threads) t.join();
-    if (failure) std::rethrow_exception(failure);
+    mSession->forEach(keys.size(), [&](size_t i) { values[i] = get(keys[i], maxBytes); });
     return values;
 }
 

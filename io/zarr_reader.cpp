@@ -12,7 +12,6 @@
 
 #include "core/interrupt.h"
 #include "io/error.h"
-#include "io/text_file.h"
 #include "io/zarr_array.h"
 #include "io/zarr_keys.h"
 

@@ -305,8 +305,6 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, curlError);
         const CURLcode rc = curl_easy_perform(curl);
         curl_easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
-        curl_easy_setopt(curl, CURLOPT_HTTPHEADER, nullptr);
-        curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, nullptr);
         curl_slist_free_all(headers);
         d.session->give(curl);
         ++d.session->requests;
@@ -371,27 +369,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
 }
 
 void RemoteFile::readMany(std::span<const ByteRange> ranges) const {
-    if (ranges.empty()) return;
-    const size_t workers = std::min<size_t>(ranges.size(), size_t(mImpl->session->options().connections));
-    std::atomic<size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failureLock;
-    auto work = [&] {
-        for (size_t i; (i = next.fetch_add(1)) < ranges.size();) {
-            try {
-                read(ranges[i].offset, ranges[i].bytes, ranges[i].dst);
-            } catch (...) {
-                std::lock_guard lock(failureLock);
-                if (!failure) failure = std::current_exception();
-                next = ranges.size();
-            }
-        }
-    };
-    std::vector<std::thread> threads;
-    for (size_t w = 1; w < workers; ++w) threads.emplace_back(work);
-    work();
-    for (std::thread& t : threads) t.join();
-    if (failure) std::rethrow_exception(failure);
+    mImpl->session->forEach(ranges.size(), [&](size_t i) { read(ranges[i].offset, ranges[i].bytes, ranges[i].dst); });
 }
 
 }  // namespace vdiso

@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <atomic>
 #include <cstdlib>
+#include <exception>
+#include <thread>
+#include <vector>
 #include <mutex>
 #include <new>
 
@@ -82,6 +86,29 @@ void RemoteSession::give(CURL* c) {
         --d.inUse;
     }
     d.poolFree.notify_one();
+}
+
+void RemoteSession::forEach(size_t n, const std::function<void(size_t)>& work) const {
+    if (n == 0) return;
+    std::atomic<size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failureLock;
+    auto run = [&] {
+        for (size_t i; (i = next.fetch_add(1)) < n;) {
+            try {
+                work(i);
+            } catch (...) {
+                std::lock_guard lock(failureLock);
+                if (!failure) failure = std::current_exception();
+                next = n;
+            }
+        }
+    };
+    std::vector<std::thread> threads;
+    for (size_t t = 1; t < std::min(n, size_t(mImpl->options.connections)); ++t) threads.emplace_back(run);
+    run();
+    for (std::thread& t : threads) t.join();
+    if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace vdiso

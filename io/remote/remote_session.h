@@ -6,7 +6,9 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 
 #include "io/remote/remote_options.h"
@@ -30,6 +32,11 @@ public:
     // use; give it back (it is cleaned up) when its one transfer ends.
     CURL* take();
     void give(CURL* curl);
+
+    // Calls work(i) for i in [0, n), on up to `connections` threads at once (this one among
+    // them): each call waits on the network, not a core. The first exception ends the rest
+    // (those not started are not) and is thrown once all have returned.
+    void forEach(size_t n, const std::function<void(size_t)>& work) const;
 
     // Requests sent (tries included) and object bytes received by every object of the session.
     std::atomic<uint64_t> requests{0}, bytesFetched{0};
