@@ -40,9 +40,10 @@ void agreeAllSucceeded(const Communicator& comm, bool failed, const std::string&
                        int exitCode = 1);
 
 // Runs phase() on this rank, catching what it throws, then agreeAllSucceeded. `exitCodeOf(e)`
-// maps an exception to its exit code (to tell usage errors apart).
-template <class Phase, class ExitCodeOf>
-void runPhase(const Communicator& comm, Phase&& phase, ExitCodeOf&& exitCodeOf) {
+// maps an exception to its exit code (to tell usage errors apart), `messageOf(e)` to what is
+// said of it (a front end adds its flags to the library's words).
+template <class Phase, class ExitCodeOf, class MessageOf>
+void runPhase(const Communicator& comm, Phase&& phase, ExitCodeOf&& exitCodeOf, MessageOf&& messageOf) {
     bool failed = false;
     std::string message;
     int code = 1;
@@ -52,10 +53,16 @@ void runPhase(const Communicator& comm, Phase&& phase, ExitCodeOf&& exitCodeOf) 
         throw;  // already agreed on (a collective call inside the phase)
     } catch (const std::exception& e) {
         failed = true;
-        message = e.what();
+        message = messageOf(e);
         code = exitCodeOf(e);
     }
     agreeAllSucceeded(comm, failed, message, code);
+}
+
+template <class Phase, class ExitCodeOf>
+void runPhase(const Communicator& comm, Phase&& phase, ExitCodeOf&& exitCodeOf) {
+    runPhase(comm, std::forward<Phase>(phase), std::forward<ExitCodeOf>(exitCodeOf),
+             [](const std::exception& e) { return std::string(e.what()); });
 }
 
 // The same, every exception an error (exit code 1).

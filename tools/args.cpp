@@ -1,5 +1,6 @@
 #include "tools/args.h"
 
+#include "app/extract_settings.h"
 #include "cache/brick_cache.h"
 #include "core/interrupt.h"
 #include "io/atomic_output.h"
@@ -14,7 +15,30 @@
 
 namespace vdiso::cli {
 
+std::string flagsOf(const std::string& settings) {
+    std::string out, word;
+    auto flush = [&] {
+        if (word.empty()) return;
+        if (word == "and") out += word;
+        else {
+            std::replace(word.begin(), word.end(), '_', '-');
+            out += "--" + word;
+        }
+        word.clear();
+    };
+    for (char c : settings) {
+        if ((c >= 'a' && c <= 'z') || c == '_') word += c;
+        else {
+            flush();
+            out += c;
+        }
+    }
+    flush();
+    return out;
+}
+
 std::string messageOf(const std::exception& e) {
+    if (auto* s = dynamic_cast<const SettingsError*>(&e)) return flagsOf(s->setting()) + " " + s->what();
     std::string message = e.what();
     if (dynamic_cast<const CacheBudgetError*>(&e)) message += " (--cache-mb)";
     if (dynamic_cast<const OutputExistsError*>(&e)) message += " (pass --force to replace it)";
@@ -23,7 +47,9 @@ std::string messageOf(const std::exception& e) {
 }
 
 int exitCodeOf(const std::exception& e) {
-    if (dynamic_cast<const UsageError*>(&e)) return 2;
+    if (dynamic_cast<const UsageError*>(&e) || dynamic_cast<const SettingsError*>(&e) ||
+        dynamic_cast<const CacheBudgetError*>(&e))
+        return 2;
     if (dynamic_cast<const Interrupted*>(&e)) return 130;
     return 1;
 }
@@ -59,8 +85,6 @@ void refuseExistingOutputs(std::initializer_list<const std::string*> paths, bool
                 throw UsageError(*p + " already exists (pass --force to replace it)");
             }
 }
-
-int machineThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
 
 int64_t parseInt(const std::string& flag, const std::string& text, int64_t lo, int64_t hi) {
     int64_t v = 0;

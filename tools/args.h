@@ -23,13 +23,17 @@ public:
 };
 
 // The exit code of a command's exception, the same for vdiso and vdiso-mpi: 2 for wrong usage
-// (UsageError), 130 for an interrupt (core/interrupt.h: Ctrl-C or SIGTERM), 1 for any other.
+// (UsageError, a SettingsError of app/extract_settings.h, a CacheBudgetError), 130 for an interrupt (core/interrupt.h: Ctrl-C or SIGTERM), 1 for any other.
 int exitCodeOf(const std::exception& e);
 
 // What a front end says of an exception: its message, with the option that sets what it is
 // about where the library names a quantity (a CacheBudgetError: --cache-mb; an
-// OutputExistsError: --force).
+// OutputExistsError: --force; a SettingsError: the flags of the settings it names).
 std::string messageOf(const std::exception& e);
+
+// The flags of settings named in snake case: "lod_error" -> "--lod-error", "smooth and
+// min_piece" -> "--smooth and --min-piece".
+std::string flagsOf(const std::string& settings);
 
 class Args {
 public:
@@ -49,8 +53,6 @@ private:
 // naming it. Empty paths and "-" (stdout) are passed over.
 void refuseExistingOutputs(std::initializer_list<const std::string*> paths, bool overwrite);
 
-// The default for --threads: the machine's cores (at least 1).
-int machineThreads();
 
 int64_t parseInt(const std::string& flag, const std::string& text, int64_t lo, int64_t hi);
 double parseDouble(const std::string& flag, const std::string& text);

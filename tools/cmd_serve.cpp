@@ -2,6 +2,7 @@
 #include <string>
 
 #include "serve/server.h"
+#include "app/extract_settings.h"
 #include "tools/args.h"
 #include "tools/commands.h"
 
@@ -39,7 +40,7 @@ int runServe(int argc, char** argv) {
     serve::ServeOptions o;
     o.webRoot = VDISO_WEB_DIR;
     o.handleSignals = true;
-    o.threads = machineThreads();
+    o.threads = vdiso::machineThreads();
     while (!args.done()) {
         const std::string a = args.take();
         if (a == "--help" || a == "-h") {

@@ -144,8 +144,6 @@ bool parseSwitch(const std::string& flag, const std::string& value, const char* 
 
 }  // namespace
 
-bool isViewDependent(const std::string& method) { return method == "sage" || method == "wise"; }
-
 ExtractOptions parseExtractOptions(int argc, char** argv) {
     Args args(argc, argv, 1);
     ExtractOptions o;
@@ -158,12 +156,8 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
             o.iso = parseDouble(a, args.value(a));
         } else if (a == "--method") {
             o.method = args.value(a);
-            if (o.method != "octree" && o.method != "noise" && o.method != "sage" && o.method != "wise")
-                throw UsageError("--method expects octree, noise, sage or wise, not '" + o.method + "'");
         } else if (a == "--lod-error") {
             o.lodError = parseDouble(a, args.value(a));
-            if (!(o.lodError >= 0 && o.lodError <= 1e6))
-                throw UsageError("--lod-error expects pixels, 0 or more, not " + std::to_string(o.lodError));
             o.lodErrorGiven = true;
         } else if (a == "--level") {
             o.level = int(parseInt(a, args.value(a), 0, kMaxLevels - 1));
@@ -200,11 +194,7 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
         } else if (a == "--smooth") {
             o.post.smoothIterations = int(parseInt(a, args.value(a), 0, 1000));
         } else if (a == "--decimate") {
-            const std::string ratio = args.value(a);
-            o.post.decimateRatio = parseDouble(a, ratio);
-            if (!(o.post.decimateRatio > 0 && o.post.decimateRatio <= 1))
-                throw UsageError("--decimate expects the fraction of triangles to keep, above 0 and at "
-                                 "most 1, not " + ratio);
+            o.post.decimateRatio = parseDouble(a, args.value(a));
         } else if (a == "--largest") {
             o.post.largestPiece = true;
         } else if (a == "--min-piece") {
@@ -253,26 +243,13 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
         }
     }
     if (o.input.empty()) throw UsageError("expects FILE.vdiso");
-    if (!o.iso) throw UsageError("needs --iso V");
+    checkExtractSettings(o);  // SettingsError: the front end's message names the flag
     if (o.viewGiven && !o.cameraPath.empty()) throw UsageError("give --view or --camera, not both");
     const bool viewDependent = isViewDependent(o.method);
     if (o.pngPath.empty() && !viewDependent && o.orbitFrames == 0 && o.pathFile.empty() &&
         (o.viewGiven || !o.cameraPath.empty()))
         throw UsageError("--view and --camera frame the picture: they need --png (or a "
                          "view-dependent --method)");
-    if (!viewDependent && (o.scanPolygons || o.estimateBox || o.points || o.bottomUp || o.cellTests || o.occlusion ||
-                            o.capSeams))
-        throw UsageError("--scan, --box, --points, --update, --cell-test, --occlusion and --seams apply to "
-                         "--method sage or wise");
-    if (o.lodErrorGiven && !viewDependent)
-        throw UsageError("--lod-error applies to --method sage or wise; the full methods take one "
-                         "--level for the whole surface");
-    if (o.level != 0 && viewDependent)
-        throw UsageError("--level applies to --method octree or noise; sage and wise choose a "
-                         "level per part of the volume by --lod-error");
-    if (o.post.any() && viewDependent)
-        throw UsageError("--smooth, --decimate, --largest and --min-piece apply to the full surface: "
-                         "--method octree or noise");
     if (o.post.any() && o.meshPath.empty() && o.pngPath.empty())
         throw UsageError("--smooth, --decimate, --largest and --min-piece shape the mesh: give -o MESH "
                          "or --png");
@@ -298,39 +275,6 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
                              "frame: use --method sage or wise, or ask for --png pictures");
     }
     return o;
-}
-
-CachePlan planCache(const ExtractOptions& o, const BrickCache& cache, int defaultThreads) {
-    try {
-        return planCacheUse(cache, isViewDependent(o.method), o.prefetch, o.threads, defaultThreads);
-    } catch (const CacheBudgetError& e) {
-        throw UsageError(e.what() + std::string(" (--threads ") + std::to_string(o.threads) + ", --cache-mb " +
-                         std::to_string(o.cacheMb) + ")");
-    }
-}
-
-void adaptToRemoteStore(ExtractOptions& o) {
-    if (!o.readersGiven) o.readers = kRemoteReaders;
-    if (!o.prefetchGiven) o.prefetch = kRemotePrefetch;
-    o.prefetchNear = kRemoteNear;
-}
-
-ViewExtractOptions viewExtractOptions(const ExtractOptions& o, const CachePlan& plan) {
-    ViewExtractOptions v = o.method == "sage" ? ViewExtractOptions::sage(*o.iso) : ViewExtractOptions::wise(*o.iso);
-    v.metaCellSize = o.metaCellSize;
-    if (o.scanPolygons) v.scanPolygons = *o.scanPolygons;
-    if (o.estimateBox) v.estimateBox = *o.estimateBox;
-    if (o.points) v.points = *o.points;
-    if (o.bottomUp) v.bottomUp = *o.bottomUp;
-    if (o.cellTests) v.cellTests = *o.cellTests;
-    if (o.occlusion) v.occlusion = *o.occlusion;
-    if (o.capSeams) v.capSeams = *o.capSeams;
-    v.prefetchBricks = plan.prefetchBricks;
-    v.prefetchReaders = o.readers;
-    v.prefetchNear = o.prefetchNear;
-    v.threads = plan.threads;
-    v.lodError = o.lodError;
-    return v;
 }
 
 std::vector<Camera> extractCameras(const ExtractOptions& o, const VolumeInfo& volume, ViewChoice& view) {

@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
         const int code = exitCodeOf(e);
         if (code == 2)
-            std::fprintf(stderr, "vdiso %s: %s (see 'vdiso %s --help')\n", command.c_str(), e.what(),
+            std::fprintf(stderr, "vdiso %s: %s (see 'vdiso %s --help')\n", command.c_str(), messageOf(e).c_str(),
                          command.c_str());
         else if (code == 130)  // Ctrl-C or SIGTERM, seen by a library loop: its output was removed
             std::fprintf(stderr, "\nvdiso %s: %s; no output written\n", command.c_str(), e.what());

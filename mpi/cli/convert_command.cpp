@@ -124,7 +124,7 @@ int runConvertAcrossRanks(const Communicator& comm, int argc, char** argv) {
         o = parseConvert(argc, argv);
         if (o.help || comm.rank() != 0) return;
         refuseExistingOutputs({&o.convert.output, &o.statsPath}, o.convert.store.overwrite);
-    }, exitCodeOf);
+    }, exitCodeOf, vdiso::cli::messageOf);
     if (o.help) {
         if (comm.rank() == 0) {
             std::fputs(kHelp, stdout);
@@ -147,7 +147,7 @@ int runConvertAcrossRanks(const Communicator& comm, int argc, char** argv) {
         if (o.convert.quiet || o.statsPath == "-") return;
         printConvertSummary(o.convert.output, " on " + std::to_string(result.ranks) + " ranks", result.volume,
                             result.summary, o.convert.store.brickSize, result.sourceName);
-    }, exitCodeOf);
+    }, exitCodeOf, vdiso::cli::messageOf);
     return 0;
 }
 

@@ -24,13 +24,12 @@
 #include "mpi/view_across_ranks.h"
 #include "tools/args.h"
 #include "tools/extract_options.h"
-#include "tools/extract_stats_json.h"
+#include "app/extract_stats_json.h"
 
 namespace vdiso::mpi::cli {
 
 namespace {
 
-using vdiso::cli::addViewCounters;
 using vdiso::cli::ExtractOptions;
 using vdiso::cli::UsageError;
 
@@ -95,7 +94,7 @@ MpiExtractOptions parse(int argc, char** argv) {
     }
     ExtractOptions& o = m.extract = vdiso::cli::parseExtractOptions(int(rest.size()), rest.data());
     if (o.help) return m;
-    const bool view = vdiso::cli::isViewDependent(o.method);
+    const bool view = vdiso::isViewDependent(o.method);
     if (o.method == "noise") throw UsageError("--method noise is not under MPI (octree is): run it with vdiso");
     if (o.orbitFrames > 0 || !o.pathFile.empty()) throw UsageError("--path is not under MPI: run it with vdiso");
     if (o.oracle) throw UsageError("--oracle is not under MPI: run it with vdiso");
@@ -229,7 +228,7 @@ int runOctree(const Communicator& comm, const ExtractOptions& o) {
                       *o.iso, r.ranks, (unsigned long long)r.triangles, (unsigned long long)r.vertices, r.seconds,
                       (unsigned long long)r.bricksLoaded, double(r.bytesRead) / 1e6);
         report(o, octreeStats(o, r), line);
-    }, exitCodeOf);
+    }, exitCodeOf, vdiso::cli::messageOf);
     return 0;
 }
 
@@ -244,14 +243,14 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         store.emplace(o.input, StoreOpenOptions{o.cold ? ReadMode::Cold : ReadMode::Buffered, o.remote});
         cache.emplace(*store, o.cacheMb << 20);
         camera = vdiso::cli::extractCameras(o, store->volume(), view).front();
-        run.view = vdiso::cli::viewExtractOptions(o, vdiso::cli::planCache(o, *cache, o.threads));
+        run.view = vdiso::viewExtractOptions(o, vdiso::planCache(o, *cache, o.threads));
         run.partition = m.partition;
         run.exchangeBricks = m.exchangeBricks;
         run.gather = !o.meshPath.empty() || !o.pngPath.empty() || !o.pointsPath.empty();
         if (m.partition == ViewPartition::Image && comm.size() > camera.width)
             throw UsageError("--partition image: " + std::to_string(comm.size()) + " ranks for an image " +
                              std::to_string(camera.width) + " pixels wide (one column each at least)");
-    }, exitCodeOf);
+    }, exitCodeOf, vdiso::cli::messageOf);
     RanksViewResult r = extractViewAcrossRanks(comm, *cache, camera, run);
     runPhase(comm, [&] {
         if (comm.rank() != 0) return;
@@ -274,7 +273,7 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         report(o, viewStats(m, *store, r, o.cameraPath.empty() ? viewChoiceName(view) : o.cameraPath, run.view.threads,
                             drawSeconds),
                line);
-    }, exitCodeOf);
+    }, exitCodeOf, vdiso::cli::messageOf);
     return 0;
 }
 
@@ -288,7 +287,7 @@ int runExtractAcrossRanks(const Communicator& comm, int argc, char** argv) {
         const ExtractOptions& o = m.extract;
         if (o.help || comm.rank() != 0) return;
         vdiso::cli::refuseExistingOutputs({&o.meshPath, &o.pngPath, &o.statsPath, &o.pointsPath}, o.overwrite);
-    }, exitCodeOf);
+    }, exitCodeOf, vdiso::cli::messageOf);
     if (m.extract.help) {
         if (comm.rank() == 0) {
             std::fputs(kHelp, stdout);
@@ -296,7 +295,7 @@ int runExtractAcrossRanks(const Communicator& comm, int argc, char** argv) {
         }
         return 0;
     }
-    return vdiso::cli::isViewDependent(m.extract.method) ? runView(comm, m) : runOctree(comm, m.extract);
+    return vdiso::isViewDependent(m.extract.method) ? runView(comm, m) : runOctree(comm, m.extract);
 }
 
 }  // namespace vdiso::mpi::cli

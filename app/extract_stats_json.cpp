@@ -1,6 +1,6 @@
-#include "tools/extract_stats_json.h"
+#include "app/extract_stats_json.h"
 
-namespace vdiso::cli {
+namespace vdiso {
 
 void addViewCounters(JsonObject& s, const ExtractStats& stats) {
     const ViewCounters& view = stats.view;
@@ -14,4 +14,4 @@ void addViewCounters(JsonObject& s, const ExtractStats& stats) {
     s.add("polygons_hidden", view.polygonsHidden);
 }
 
-}  // namespace vdiso::cli
+}  // namespace vdiso

@@ -1,15 +1,15 @@
 // The statistics of a view-dependent extraction as fields of a --stats JSON object, written
-// the same by vdiso extract and vdiso-mpi extract.
+// the same by vdiso extract, vdiso-mpi extract and the Python module.
 #pragma once
 
 #include "core/extract_stats.h"
 #include "io/json.h"
 
-namespace vdiso::cli {
+namespace vdiso {
 
 // The culling counters of sage and wise (core/extract_stats.h ViewCounters): culled_range,
 // culled_frustum, culled_occlusion, culled_region, dropped_subpixel, meta_cells_extracted,
 // scan_s, cells_culled, bricks_prefetched_unused, bricks_culled_by_sub_blocks, polygons_hidden.
 void addViewCounters(JsonObject& s, const ExtractStats& stats);
 
-}  // namespace vdiso::cli
+}  // namespace vdiso

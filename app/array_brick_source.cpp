@@ -1,0 +1,143 @@
+#include "app/array_brick_source.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+namespace vdiso {
+
+namespace {
+
+template <class F>
+decltype(auto) visitFileScalar(FileScalar t, F&& f) {
+    switch (t) {
+        case FileScalar::I8: return f(int8_t{});
+        case FileScalar::U8: return f(uint8_t{});
+        case FileScalar::I16: return f(int16_t{});
+        case FileScalar::U16: return f(uint16_t{});
+        case FileScalar::I32: return f(int32_t{});
+        case FileScalar::U32: return f(uint32_t{});
+        case FileScalar::F32: return f(float{});
+        case FileScalar::F64: break;
+    }
+    return f(double{});
+}
+
+// Min and max of the samples at the corners of brick `c`'s cells, as the store type holds them.
+template <class S>
+BrickRange measure(const StridedSamples& s, const BrickLayout& layout, const Dims3& c) {
+    const auto* base = static_cast<const unsigned char*>(s.data);
+    S lo = std::numeric_limits<S>::max(), hi = std::numeric_limits<S>::lowest();
+    bool nan = false;
+    int64_t first[3], count[3];
+    for (int a = 0; a < 3; ++a) {
+        first[a] = c[a] * layout.brickSize;
+        count[a] = layout.cellsOnAxis(a, c[a]) + 1;
+    }
+    for (int64_t z = first[2]; z < first[2] + count[2]; ++z)
+        for (int64_t y = first[1]; y < first[1] + count[1]; ++y) {
+            const unsigned char* row = base + z * s.strides[2] + y * s.strides[1] + first[0] * s.strides[0];
+            for (int64_t x = 0; x < count[0]; ++x) {
+                S v;
+                std::memcpy(&v, row + x * s.strides[0], sizeof v);
+                if constexpr (std::is_floating_point_v<S>)
+                    if (v != v) {
+                        nan = true;
+                        continue;
+                    }
+                lo = std::min(lo, v);
+                hi = std::max(hi, v);
+            }
+        }
+    if (nan && lo > hi) return {NAN, NAN};
+    // The range of the converted samples: convert the two ends as the samples are converted.
+    float ends[2];
+    S raw[2] = {lo, hi};
+    decodeSamples(raw, s.type, false, 2, ends, ScalarType::F32);
+    return {ends[0], ends[1]};
+}
+
+}  // namespace
+
+ArrayBrickSource::ArrayBrickSource(const StridedSamples& samples, int brickSize, const glm::dvec3& spacing,
+                                   int threads)
+    : mSamples(samples) {
+    if (const std::string problem = volumeDimsProblem(samples.dims); !problem.empty())
+        throw std::invalid_argument(problem);
+    mInfo.dims = samples.dims;
+    mInfo.type = storeTypeFor(samples.type, false);
+    mInfo.spacing = spacing;
+    mLayout = BrickLayout(samples.dims, brickSize);
+    if (const std::string problem = brickLayoutProblem(mLayout); !problem.empty())
+        throw std::invalid_argument(problem);
+    mRanges.resize(size_t(mLayout.brickCount()));
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        tbb::parallel_for(int64_t(0), mLayout.brickCount(), [&](int64_t id) {
+            mRanges[size_t(id)] = visitFileScalar(samples.type, [&](auto zero) {
+                return measure<decltype(zero)>(mSamples, mLayout, mLayout.brickCoord(id));
+            });
+        });
+    });
+}
+
+void ArrayBrickSource::gather(int64_t id, unsigned char* brick) const {
+    const Dims3 c = mLayout.brickCoord(id);
+    const int side = mLayout.side();
+    const size_t inBytes = fileScalarSize(mSamples.type), outBytes = scalarSize(mInfo.type);
+    const auto* base = static_cast<const unsigned char*>(mSamples.data);
+    std::vector<unsigned char> gathered(size_t(side) * inBytes);
+    unsigned char* row = gathered.data();
+    const int64_t x0 = mLayout.firstSample(c[0]);
+    for (int lz = 0; lz < side; ++lz) {
+        const int64_t z = mLayout.clampSample(2, mLayout.firstSample(c[2]) + lz);
+        for (int ly = 0; ly < side; ++ly) {
+            const int64_t y = mLayout.clampSample(1, mLayout.firstSample(c[1]) + ly);
+            const unsigned char* line = base + z * mSamples.strides[2] + y * mSamples.strides[1];
+            for (int lx = 0; lx < side; ++lx)
+                std::memcpy(row + lx * inBytes, line + mLayout.clampSample(0, x0 + lx) * mSamples.strides[0], inBytes);
+            decodeSamples(row, mSamples.type, false, size_t(side),
+                          brick + (size_t(lz) * side + ly) * side * outBytes, mInfo.type);
+        }
+    }
+}
+
+BrickHandle ArrayBrickSource::acquire(int64_t id) {
+    std::vector<unsigned char> buffer;
+    {
+        std::lock_guard lock(mMutex);
+        if (auto it = mPinned.find(id); it != mPinned.end()) {
+            ++it->second.count;
+            return BrickHandle(this, id, it->second.samples.data());
+        }
+        if (!mFree.empty()) {
+            buffer = std::move(mFree.back());
+            mFree.pop_back();
+        }
+    }
+    buffer.resize(size_t(mLayout.samplesPerBrick()) * scalarSize(mInfo.type));
+    gather(id, buffer.data());
+    std::lock_guard lock(mMutex);
+    auto [it, inserted] = mPinned.try_emplace(id);
+    if (inserted) it->second.samples = std::move(buffer);
+    else mFree.push_back(std::move(buffer));  // another thread gathered it meanwhile
+    ++it->second.count;
+    return BrickHandle(this, id, it->second.samples.data());
+}
+
+bool ArrayBrickSource::isResident(int64_t) const { return true; }  // nothing to read ahead
+
+void ArrayBrickSource::release(int64_t id) {
+    std::lock_guard lock(mMutex);
+    auto it = mPinned.find(id);
+    if (it == mPinned.end() || --it->second.count > 0) return;
+    mFree.push_back(std::move(it->second.samples));
+    mPinned.erase(it);
+}
+
+}  // namespace vdiso

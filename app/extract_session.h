@@ -1,0 +1,77 @@
+// Extracting from one store, frame after frame: what vdiso extract and the Python module's
+// Store.extract both run. The session holds the brick cache and what is kept across the frames
+// of a path (the meta-cell ranges, the view-dependent methods' tree); extract() runs one frame
+// from one camera and frameStats() describes it as the --stats JSON object.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "app/extract_settings.h"
+#include "cache/brick_cache.h"
+#include "core/camera.h"
+#include "core/extract_stats.h"
+#include "core/mesh.h"
+#include "core/meta_cell_range_cache.h"
+#include "core/minmax_tree.h"
+#include "core/orientation.h"
+#include "core/progress.h"
+#include "io/brick_store.h"
+#include "io/json.h"
+#include "io/mesh_post.h"
+
+namespace vdiso {
+
+struct ExtractFrame {
+    TriangleMesh mesh;  // volume space; empty when it went to a sink
+    PointSet points;    // sage, wise: the sub-pixel points
+    ExtractStats stats;
+    CacheCounters io;  // this frame's reads, the cache kept across frames
+    CachePlan plan;
+    std::optional<MeshPostStats> post;
+    bool streamed = false;  // the mesh went to the sink as it was extracted
+};
+
+// Where a frame's mesh goes besides ExtractFrame::mesh.
+struct FrameOutput {
+    // A full method (octree, noise) hands its mesh here as it is extracted and keeps none:
+    // memory holds a bounded part of it. Null: the whole mesh is held.
+    MeshSink* sink = nullptr;
+    // Post-processing's side files go beside this path (io/mesh_post.h); needed when the
+    // settings post-process.
+    std::string postBeside;
+    ProgressFn postProgress;
+};
+
+class ExtractSession {
+public:
+    // Checks the settings (SettingsError) and against the store (a level it does not hold); adapts
+    // readers and look-ahead to a store at a URL (adaptToRemoteStore).
+    ExtractSession(const BrickStoreReader& store, ExtractSettings settings);
+
+    // One frame; `camera` is needed by sage and wise, ignored by octree and noise.
+    ExtractFrame extract(const std::optional<Camera>& camera, const FrameOutput& output = {},
+                         const ProgressFn& progress = {});
+
+    // The frame's statistics as vdiso extract --stats writes them (without the oracle's).
+    // `meshWritten`: a mesh or points file was written (mesh_space is then stated).
+    JsonObject frameStats(const ExtractFrame& frame, bool meshWritten) const;
+
+    const ExtractSettings& settings() const { return mSettings; }
+    const BrickStoreReader& store() const { return mStore; }
+    BrickCache& cache() { return mCache; }
+    // Building the view-dependent tree, before the first frame (0 for the full methods).
+    double treeSeconds() const { return mTreeSeconds; }
+    // Meshes go from volume space to this: physical space unless the settings say volume.
+    SpaceTransform meshTransform() const;
+
+private:
+    const BrickStoreReader& mStore;
+    ExtractSettings mSettings;
+    BrickCache mCache;
+    MetaCellRangeCache mRanges;
+    std::optional<MinMaxTree> mTree;
+    double mTreeSeconds = 0;
+};
+
+}  // namespace vdiso

@@ -1,0 +1,75 @@
+// The settings of one extraction, as every front end (vdiso, vdiso-mpi, the Python module)
+// fills them, with the checks they share and what they derive: the cache plan and the
+// view-dependent options. Messages name quantities, not flags: a SettingsError carries the
+// setting it is about, and each front end puts its own spelling of it in front
+// ("--lod-error", "lod_error=").
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "cache/brick_cache.h"
+#include "cache/cache_plan.h"
+#include "core/brick_prefetcher.h"
+#include "core/extract_view.h"
+#include "core/mesh_slabs.h"
+
+namespace vdiso {
+
+// A setting out of range or at odds with the others. setting(): its name in snake case
+// ("lod_error"); what(): the rest of the sentence ("applies to the view-dependent methods ...").
+class SettingsError : public std::invalid_argument {
+public:
+    SettingsError(std::string setting, const std::string& rest)
+        : std::invalid_argument(rest), mSetting(std::move(setting)) {}
+    const std::string& setting() const { return mSetting; }
+
+private:
+    std::string mSetting;
+};
+
+struct ExtractSettings {
+    std::string method = "octree";  // octree, noise (full); sage, wise (view-dependent)
+    std::optional<double> iso;
+    double lodError = 1.0;  // sage, wise: pixels of error a coarser level may make
+    bool lodErrorGiven = false;
+    int level = 0;          // octree, noise: the level of detail of the whole surface
+    // sage, wise: the paper's switches, each its default unless given.
+    std::optional<bool> scanPolygons, estimateBox, points, bottomUp, cellTests, occlusion, capSeams;
+    int metaCellSize = kDefaultMetaCellSize;
+    int threads = 0;  // 0: the machine's cores (as many as the cache allows strips for)
+    int prefetch = 32;
+    int readers = BrickPrefetcher::kDefaultReaders;
+    bool prefetchGiven = false, readersGiven = false;
+    int prefetchNear = 2;  // BrickLookAhead::kNearBricks; kRemoteNear for a store at a URL
+    uint64_t cacheMb = 1024;
+    std::optional<bool> physicalMeshes;  // meshes in physical space (default) or volume space
+    MeshPostOptions post;                // octree, noise: smooth, decimate, largest, min_piece
+};
+
+bool isViewDependent(const std::string& method);
+
+// The threads a default extraction runs: the machine's cores.
+int machineThreads();
+
+// Checks each setting's range and the settings against each other (not against a store: see
+// ExtractSession); throws SettingsError.
+void checkExtractSettings(const ExtractSettings& s);
+
+// How the brick cache is shared (threads, prefetch), `defaultThreads` when no thread count was
+// given; throws CacheBudgetError (cache/brick_cache.h) when the cache is too small for them.
+CachePlan planCache(const ExtractSettings& s, const BrickCache& cache, int defaultThreads);
+
+// Readers and look-ahead for a store read over the network, unless given: a request waits a
+// round trip where a disk read waits a seek, so more are kept in flight
+// (kRemoteReaders per strip, kRemotePrefetch bricks ahead, of which kRemoteNear are read
+// before they are known to show).
+constexpr int kRemoteReaders = 16, kRemotePrefetch = 128, kRemoteNear = 32;
+void adaptToRemoteStore(ExtractSettings& s);
+
+// The view-dependent options (sage or wise, with the switches given) for a plan.
+ViewExtractOptions viewExtractOptions(const ExtractSettings& s, const CachePlan& plan);
+
+}  // namespace vdiso
