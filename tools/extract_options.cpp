@@ -3,6 +3,7 @@
 #include <cctype>
 #include <stdexcept>
 
+#include "app/view_camera.h"
 #include "io/camera_json.h"
 #include "io/mesh_writer.h"
 #include "tools/args.h"
@@ -278,29 +279,20 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
 }
 
 std::vector<Camera> extractCameras(const ExtractOptions& o, const VolumeInfo& volume, ViewChoice& view) {
-    const glm::dvec3 boundsMin = volume.origin;
-    const glm::dvec3 boundsMax = volume.worldMax();
-    // Presets face the patient's front on a store with orientation (or the side asked for).
-    ViewFacing facing = defaultFacing();
-    try {
-        facing = viewFacing(o.view.side, volume);
-    } catch (const std::invalid_argument& e) {
-        throw UsageError("--view " + viewChoiceName(o.view) + ": " + o.input + ": " + e.what());
-    }
     view = o.view;
-    if (!view.side && volume.hasOrientation) view.side = PatientSide::Anterior;
+    const ViewFacing facing = chooseFacing(view, volume);
     // The cameras: one (or none for a full extraction without a picture), or a path.
     std::vector<Camera> cameras;
     if (o.orbitFrames > 0)
-        cameras = orbitCameras(view.distance, facing, boundsMin, boundsMax, o.width, o.height, o.orbitFrames);
+        cameras = orbitCameras(view.distance, facing, volume.origin, volume.worldMax(), o.width, o.height,
+                               o.orbitFrames);
     else if (!o.pathFile.empty())
         cameras = readCameraPath(o.pathFile, o.width, o.height);
     else if (!o.cameraPath.empty())
         cameras.push_back(readCameraJson(o.cameraPath, o.width, o.height));
     else if (!o.pngPath.empty() || isViewDependent(o.method))
-        cameras.push_back(presetCamera(view.distance, facing, boundsMin, boundsMax, o.width, o.height));
-    for (Camera& c : cameras)
-        if (!c.hasClipPlanes()) fitClipPlanes(c, boundsMin, boundsMax);
+        cameras.push_back(viewCamera(view, volume, o.width, o.height));
+    for (Camera& c : cameras) fitClipPlanes(c, volume);
     return cameras;
 }
 
