@@ -20,6 +20,9 @@ packages=(
   libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
   libcurl4-openssl-dev                    # remote stores over HTTP(S) and S3 (io/remote)
   nginx-light python3-botocore curl openssl   # their tests' servers (tests/remote/)
+  pybind11-dev python3-dev python3-numpy      # the Python module (python/)
+  python3-pytest python3-skimage python3-zarr python3-dask   # its tests
+  python3-vtk9                                # bench/python.sh: VTK's Flying Edges from Python
 )
 
 missing=()

@@ -1,0 +1,151 @@
+// vdiso.convert: a file (any format vdiso convert reads) or an array-like (NumPy, Zarr, Dask, or
+// anything with shape, dtype and slicing along axis 0) into a brick store, slab by slab.
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <optional>
+#include <stdexcept>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "io/error.h"
+#include "io/slice_reader.h"
+#include "io/store_writer.h"
+#include "io/volume_open.h"
+#include "released.h"
+
+namespace vdiso::py {
+
+namespace pyb = pybind11;
+using namespace pybind11::literals;
+
+namespace {
+
+// The slices of an array-like, z = NumPy's axis 0: each read takes the GIL, slices the object
+// and checks what comes back before converting it to the store type.
+class ArraySlices final : public SliceReader {
+public:
+    ArraySlices(pyb::object source, const VolumeInfo& info, FileScalar type, std::string name)
+        : mSource(std::move(source)), mInfo(info), mType(type), mName(std::move(name)) {}
+    ~ArraySlices() override {
+        pyb::gil_scoped_acquire acquire;
+        mSource = pyb::object();
+    }
+    const VolumeInfo& info() const override { return mInfo; }
+    std::string name() const override { return mName; }
+
+    void read(void* dst, int64_t count) override {
+        pyb::gil_scoped_acquire acquire;
+        const pyb::module_ np = pyb::module_::import("numpy");
+        const int64_t z = mNext;
+        pyb::object got = mSource[pyb::slice(pyb::int_(z), pyb::int_(z + count), pyb::none())];
+        const pyb::array slab = np.attr("ascontiguousarray")(np.attr("asarray")(got));
+        const auto shapeText = [&] {
+            return pyb::str(pyb::tuple(slab.attr("shape"))).cast<std::string>();
+        };
+        if (slab.ndim() != 3 || slab.shape(0) != count || slab.shape(1) != mInfo.dims[1] ||
+            slab.shape(2) != mInfo.dims[0])
+            throwIoError(mName, "slices " + std::to_string(z) + " to " + std::to_string(z + count) +
+                                    " came back with shape " + shapeText() + ", not (" + std::to_string(count) +
+                                    ", " + std::to_string(mInfo.dims[1]) + ", " + std::to_string(mInfo.dims[0]) +
+                                    ")");
+        if (fileScalarOfDtype(slab.dtype(), mName.c_str()) != mType)
+            throwIoError(mName, "slices " + std::to_string(z) + " to " + std::to_string(z + count) +
+                                    " came back as " + pyb::str(pyb::handle(slab.dtype())).cast<std::string>() +
+                                    ", not the array's dtype");
+        decodeSamples(slab.data(), mType, false, size_t(slab.size()), dst, mInfo.type);
+        mNext += count;
+    }
+
+private:
+    pyb::object mSource;
+    VolumeInfo mInfo;
+    FileScalar mType;
+    std::string mName;
+    int64_t mNext = 0;
+};
+
+StoreWriteOptions storeOptions(int brick, const std::string& levels, const std::string& compress, bool overwrite) {
+    StoreWriteOptions o;
+    o.brickSize = brick;
+    o.overwrite = overwrite;
+    if (compress == "lz4") o.compression = Compression::Lz4;
+    else if (compress == "zstd") o.compression = Compression::Zstd;
+    else if (compress == "none") o.compression = Compression::None;
+    else throw std::invalid_argument("compress: expects 'lz4', 'zstd' or 'none', not '" + compress + "'");
+    if (levels == "auto") o.coarseLevels = StoreWriteOptions::kLevelsUntilOneBrick;
+    else {
+        try {
+            size_t end = 0;
+            o.coarseLevels = std::stoi(levels, &end);
+            if (end != levels.size() || o.coarseLevels < 0) throw std::invalid_argument("");
+        } catch (const std::exception&) {
+            throw std::invalid_argument("levels: expects 'auto' or a count of coarser levels (0 or more), not '" +
+                                        levels + "'");
+        }
+    }
+    return o;
+}
+
+pyb::dict summaryOf(const StoreWriteSummary& s) {
+    return pyb::dict("bricks"_a = s.bricks, "levels"_a = s.levels, "level0_bytes"_a = s.level0Bytes,
+                     "coarse_bytes"_a = s.coarseBytes, "input_bytes"_a = s.inputBytes, "file_bytes"_a = s.fileBytes,
+                     "seconds"_a = s.seconds);
+}
+
+pyb::dict convertFiles(const std::vector<std::string>& inputs, const std::string& output,
+                       std::optional<std::array<double, 3>> spacing, int brick, const std::string& levels,
+                       const std::string& compress, bool overwrite, pyb::object progress) {
+    InputOptions input;
+    // NumPy's axis order (z, y, x), as marching_cubes takes it.
+    if (spacing) input.spacing = glm::dvec3((*spacing)[2], (*spacing)[1], (*spacing)[0]);
+    const StoreWriteOptions options = storeOptions(brick, levels, compress, overwrite);
+    StoreWriteSummary summary;
+    std::unique_ptr<SliceReader> source;
+    {
+        pyb::gil_scoped_release release;
+        source = openVolume(inputs, input);
+    }
+    runReleased([&](const ProgressFn& fraction) { summary = writeBrickStore(*source, output, options, fraction); },
+                progress, double(source->info().byteSize()));
+    return summaryOf(summary);
+}
+
+pyb::dict convertArray(pyb::object source, const std::string& name, const std::vector<int64_t>& shape,
+                       const pyb::dtype& dtype, const std::string& output, std::array<double, 3> spacing,
+                       std::array<double, 3> origin, int brick, const std::string& levels,
+                       const std::string& compress, bool overwrite, pyb::object progress) {
+    if (shape.size() != 3)
+        throw std::invalid_argument(name + ": expects a 3-D array, not one of " + std::to_string(shape.size()) +
+                                    " dimensions");
+    const FileScalar type = fileScalarOfDtype(dtype, name.c_str());
+    VolumeInfo info;
+    info.dims = {shape[2], shape[1], shape[0]};
+    if (const std::string problem = volumeDimsProblem(info.dims); !problem.empty())
+        throw std::invalid_argument(name + ": " + problem);
+    info.type = storeTypeFor(type, false);
+    for (int a = 0; a < 3; ++a) {
+        if (!(spacing[size_t(a)] > 0 && std::isfinite(spacing[size_t(a)])))
+            throw std::invalid_argument("spacing: expects three positive finite numbers");
+        if (!std::isfinite(origin[size_t(a)])) throw std::invalid_argument("origin: expects three finite numbers");
+    }
+    info.spacing = glm::dvec3(spacing[2], spacing[1], spacing[0]);
+    info.origin = glm::dvec3(origin[0], origin[1], origin[2]);  // world x, y, z
+    const StoreWriteOptions options = storeOptions(brick, levels, compress, overwrite);
+    ArraySlices slices(std::move(source), info, type, name);
+    StoreWriteSummary summary;
+    runReleased([&](const ProgressFn& fraction) { summary = writeBrickStore(slices, output, options, fraction); },
+                progress, double(info.byteSize()));
+    return summaryOf(summary);
+}
+
+}  // namespace
+
+void bindConvert(pyb::module_& m) {
+    m.def("_convert_files", &convertFiles, "inputs"_a, "output"_a, "spacing"_a, "brick"_a, "levels"_a, "compress"_a,
+          "overwrite"_a, "progress"_a);
+    m.def("_convert_array", &convertArray, "source"_a, "name"_a, "shape"_a, "dtype"_a, "output"_a, "spacing"_a,
+          "origin"_a, "brick"_a, "levels"_a, "compress"_a, "overwrite"_a, "progress"_a);
+}
+
+}  // namespace vdiso::py

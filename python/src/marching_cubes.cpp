@@ -1,0 +1,122 @@
+// vdiso.marching_cubes: scikit-image's signature and conventions over the octree method, on the
+// array in place (app/array_brick_source.h).
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
+#include "app/array_brick_source.h"
+#include "app/extract_settings.h"
+#include "arrays.h"
+#include "bindings.h"
+#include "core/extract_full.h"
+#include "released.h"
+
+namespace vdiso::py {
+
+namespace pyb = pybind11;
+
+namespace {
+
+template <class F>
+decltype(auto) visitFileScalar(FileScalar t, F&& f) {
+    switch (t) {
+        case FileScalar::I8: return f(int8_t{});
+        case FileScalar::U8: return f(uint8_t{});
+        case FileScalar::I16: return f(int16_t{});
+        case FileScalar::U16: return f(uint16_t{});
+        case FileScalar::I32: return f(int32_t{});
+        case FileScalar::U32: return f(uint32_t{});
+        case FileScalar::F32: return f(float{});
+        case FileScalar::F64: break;
+    }
+    return f(double{});
+}
+
+// scikit-image's `values`: a measure of the data near each vertex, for colour maps. Here the
+// largest sample at the corners of the cell the vertex lies in (its lower corner at the floor
+// of its sample coordinates).
+template <class S>
+void cellMaxima(const StridedSamples& s, const TriangleMesh& mesh, const glm::dvec3& spacing, float* values) {
+    const auto* base = static_cast<const unsigned char*>(s.data);
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+        int64_t corner[3];
+        for (int a = 0; a < 3; ++a)
+            corner[a] = std::clamp<int64_t>(int64_t(std::floor(mesh.positions[v][a] / spacing[a])), 0, s.dims[size_t(a)] - 2);
+        double best = -INFINITY;
+        for (int c = 0; c < 8; ++c) {
+            S sample;
+            std::memcpy(&sample,
+                        base + (corner[0] + (c & 1)) * s.strides[0] + (corner[1] + ((c >> 1) & 1)) * s.strides[1] +
+                            (corner[2] + (c >> 2)) * s.strides[2],
+                        sizeof sample);
+            best = std::max(best, double(sample));
+        }
+        values[v] = float(best);
+    }
+}
+
+pyb::tuple marchingCubes(const pyb::array& volume, double level, std::array<double, 3> spacing,
+                         std::optional<int> threads) {
+    const StridedSamples samples = stridedSamplesOf(volume, "volume");
+    if (!std::isfinite(level)) throw std::invalid_argument("level: expects a finite isovalue, not " + std::to_string(level));
+    for (double s : spacing)
+        if (!(s > 0 && std::isfinite(s)))
+            throw std::invalid_argument("spacing: expects three positive finite numbers, not " + std::to_string(s));
+    if (threads && (*threads < 1 || *threads > 256))
+        throw std::invalid_argument("threads: expects 1 to 256, not " + std::to_string(*threads));
+    const int threadCount = threads ? *threads : machineThreads();
+    // The kernel's x, y, z are NumPy's axes 2, 1, 0.
+    const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
+    TriangleMesh mesh;
+    runReleased([&](const ProgressFn& progress) {
+        ArrayBrickSource source(samples, 32, xyzSpacing, threadCount);
+        // As scikit-image: a level outside the values is a mistake, not an empty surface.
+        float lo = INFINITY, hi = -INFINITY;
+        for (const BrickRange& r : source.brickRanges()) {
+            lo = std::min(lo, r.minValue);
+            hi = std::max(hi, r.maxValue);
+        }
+        if (!(level >= lo && level <= hi))
+            throw std::invalid_argument("level: " + std::to_string(level) + " is outside the volume's values (" +
+                                        std::to_string(lo) + " to " + std::to_string(hi) + ")");
+        FullExtractOptions options{level, kDefaultMetaCellSize, threadCount};
+        extractOctree(source, options, mesh, progress);
+    });
+    const size_t n = mesh.positions.size(), m = mesh.triangleCount();
+    // scikit-image's vertices: float32, or float64 once scaled by a spacing other than 1.
+    const bool unit = spacing[0] == 1 && spacing[1] == 1 && spacing[2] == 1;
+    pyb::array verts = unit ? pyb::array(pyb::array_t<float>({n, size_t(3)})) : pyb::array(pyb::array_t<double>({n, size_t(3)}));
+    pyb::array_t<float> normals({n, size_t(3)});
+    pyb::array_t<int32_t> faces({m, size_t(3)});
+    pyb::array_t<float> values(n);
+    {
+        float* q = normals.mutable_data();
+        for (size_t v = 0; v < n; ++v)
+            for (int a = 0; a < 3; ++a) q[3 * v + size_t(a)] = mesh.normals[v][2 - a];
+        auto fill = [&](auto* p) {
+            for (size_t v = 0; v < n; ++v)
+                for (int a = 0; a < 3; ++a) p[3 * v + size_t(a)] = mesh.positions[v][2 - a];
+        };
+        if (unit) fill(static_cast<float*>(verts.mutable_data()));
+        else fill(static_cast<double*>(verts.mutable_data()));
+        int32_t* f = faces.mutable_data();
+        for (size_t i = 0; i < mesh.indices.size(); ++i) f[i] = int32_t(mesh.indices[i]);
+        visitFileScalar(samples.type, [&](auto zero) {
+            cellMaxima<decltype(zero)>(samples, mesh, xyzSpacing, values.mutable_data());
+        });
+    }
+    return pyb::make_tuple(verts, faces, normals, values);
+}
+
+}  // namespace
+
+void bindMarchingCubes(pyb::module_& m) {
+    m.def("marching_cubes", &marchingCubes, pyb::arg("volume"), pyb::arg("level"),
+          pyb::arg("spacing") = std::array<double, 3>{1.0, 1.0, 1.0}, pyb::kw_only(),
+          pyb::arg("threads") = pyb::none(),
+          "The isosurface of a 3-D array (see vdiso.marching_cubes).");
+}
+
+}  // namespace vdiso::py

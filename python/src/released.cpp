@@ -1,0 +1,65 @@
+#include "released.h"
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "core/interrupt.h"
+
+namespace vdiso::py {
+
+namespace pyb = pybind11;
+
+void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object progress, double total) {
+    std::mutex mutex;
+    std::condition_variable cv;
+    bool done = false;
+    std::exception_ptr failure;
+    std::atomic<double> fraction{-1.0};
+    std::optional<pyb::error_already_set> pythonError;  // Ctrl-C or the callable's exception
+    clearInterrupt();
+    {
+        pyb::gil_scoped_release release;
+        std::thread worker([&] {
+            try {
+                work([&](double f) { fraction.store(f, std::memory_order_relaxed); });
+            } catch (...) {
+                failure = std::current_exception();
+            }
+            std::lock_guard lock(mutex);
+            done = true;
+            cv.notify_all();
+        });
+        double shown = -1.0;
+        for (;;) {
+            {
+                std::unique_lock lock(mutex);
+                if (cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
+            }
+            if (pythonError) continue;  // already stopping
+            pyb::gil_scoped_acquire acquire;
+            try {
+                if (PyErr_CheckSignals() != 0) throw pyb::error_already_set();
+                const double f = fraction.load(std::memory_order_relaxed);
+                if (!progress.is_none() && f >= 0 && f != shown) {
+                    shown = f;
+                    progress(f * total, total);
+                }
+            } catch (pyb::error_already_set& e) {
+                pythonError.emplace(std::move(e));
+                requestInterrupt();
+            }
+        }
+        worker.join();
+    }
+    clearInterrupt();
+    if (pythonError) throw std::move(*pythonError);
+    if (failure) std::rethrow_exception(failure);
+    if (!progress.is_none()) progress(total, total);
+}
+
+}  // namespace vdiso::py

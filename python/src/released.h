@@ -1,0 +1,20 @@
+// Running library work from Python: on a worker thread, the GIL released, while the calling
+// thread waits and, every 50 ms, takes the GIL to hand progress to a Python callable and to let
+// Python see Ctrl-C. A KeyboardInterrupt (or an exception from the callable) asks the library
+// to stop (core/interrupt.h), waits for it to unwind (its outputs removed) and is raised.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+#include <functional>
+
+#include "core/progress.h"
+
+namespace vdiso::py {
+
+// Runs work(progress) as above; `progress`: None or callable(done, total), called with
+// done = fraction * total. Rethrows what work throws.
+void runReleased(const std::function<void(const ProgressFn&)>& work, pybind11::object progress = pybind11::none(),
+                 double total = 1.0);
+
+}  // namespace vdiso::py

@@ -1,0 +1,237 @@
+// Stores from Python: _Store (what a store is), _Session (app/extract_session.h: one brick cache
+// across the frames it extracts) and Mesh (NumPy arrays over the C++ mesh, without a copy).
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <unistd.h>
+
+#include "app/extract_session.h"
+#include "app/store_info.h"
+#include "app/view_camera.h"
+#include "arrays.h"
+#include "bindings.h"
+#include "io/camera_json.h"
+#include "io/mesh_writer.h"
+#include "io/renderer.h"
+#include "released.h"
+
+namespace vdiso::py {
+
+namespace pyb = pybind11;
+using namespace pybind11::literals;
+
+namespace {
+
+struct Mesh {
+    TriangleMesh mesh;
+    PointSet points;
+    pyb::dict stats;
+};
+
+// A pointer NumPy accepts for an array of no rows.
+template <class T>
+const T* rowsOrEmpty(const T* data) {
+    static const T kNone[3] = {};
+    return data ? data : kNone;
+}
+
+pyb::object meshArray(pyb::object self, int which) {
+    Mesh& m = self.cast<Mesh&>();
+    switch (which) {
+        case 0: return arrayOver(rowsOrEmpty(&m.mesh.positions.data()->x), m.mesh.positions.size(), 3, self);
+        case 1: return arrayOver(rowsOrEmpty(&m.mesh.normals.data()->x), m.mesh.normals.size(), 3, self);
+        case 2: return arrayOver(rowsOrEmpty(m.mesh.indices.data()), m.mesh.triangleCount(), 3, self);
+        case 3: return arrayOver(rowsOrEmpty(&m.points.positions.data()->x), m.points.size(), 3, self);
+    }
+    return arrayOver(rowsOrEmpty(&m.points.normals.data()->x), m.points.size(), 3, self);
+}
+
+struct Store {
+    std::shared_ptr<BrickStoreReader> reader;
+};
+
+RemoteOptions remoteOptions(const std::string& s3Endpoint, bool anonymous, const std::string& diskCache) {
+    RemoteOptions r;
+    r.s3Endpoint = s3Endpoint;
+    r.anonymous = anonymous;
+    r.diskCacheDir = diskCache;
+    return r;
+}
+
+class Session {
+public:
+    Session(const Store& store, ExtractSettings settings) : mStore(store.reader), mSession(*mStore, std::move(settings)) {}
+
+    // The camera of a frame: a camera JSON text, else a named view (the default "normal").
+    Camera camera(const std::optional<std::string>& cameraJson, const std::string& view, int width, int height) const {
+        Camera c;
+        if (cameraJson) {
+            c = parseCameraJson(*cameraJson, "camera", width, height);
+            fitClipPlanes(c, mStore->volume());
+        } else {
+            ViewChoice choice;
+            try {
+                choice = parseViewChoice(view);
+            } catch (const std::invalid_argument& e) {
+                throw SettingsError("view", e.what());
+            }
+            c = viewCamera(choice, mStore->volume(), width, height);
+        }
+        return c;
+    }
+
+    std::shared_ptr<Mesh> extract(const std::optional<std::string>& cameraJson, const std::string& view, int width,
+                                  int height, pyb::object progress) {
+        auto result = std::make_shared<Mesh>();
+        std::string statsText;
+        const Camera c = camera(cameraJson, view, width, height);
+        runReleased([&](const ProgressFn& fraction) {
+            FrameOutput output;
+            output.postBeside = (std::filesystem::temp_directory_path() /
+                                 ("vdiso-python-" + std::to_string(getpid()) + ".ply")).string();
+            ExtractFrame frame = mSession.extract(c, output, fraction);
+            statsText = mSession.frameStats(frame, false).str();
+            const SpaceTransform toWorld = mSession.meshTransform();
+            transformMesh(toWorld, frame.mesh);
+            transformPoints(toWorld, frame.points);
+            result->mesh = std::move(frame.mesh);
+            result->points = std::move(frame.points);
+        }, progress);
+        result->stats = pyb::module_::import("json").attr("loads")(statsText);
+        return result;
+    }
+
+    // The frame drawn as the command line draws it (OSMesa): an (height, width, 3) uint8 image.
+    pyb::array_t<uint8_t> render(const std::optional<std::string>& cameraJson, const std::string& view, int width,
+                                 int height) {
+        const Camera c = camera(cameraJson, view, width, height);
+        RenderResult drawn;
+        runReleased([&](const ProgressFn& fraction) {
+            const ExtractFrame frame = mSession.extract(c, {}, fraction);
+            drawn = renderSurface(frame.mesh, frame.points, c);
+        });
+        pyb::array_t<uint8_t> image({size_t(height), size_t(width), size_t(3)});
+        uint8_t* out = image.mutable_data();
+        for (size_t p = 0; p < size_t(width) * size_t(height); ++p)
+            for (int k = 0; k < 3; ++k) out[3 * p + size_t(k)] = drawn.image.rgba[4 * p + size_t(k)];
+        return image;
+    }
+
+private:
+    std::shared_ptr<BrickStoreReader> mStore;
+    ExtractSession mSession;
+};
+
+ExtractSettings settingsOf(const std::string& method, double iso, double lodError, int threads, uint64_t cacheMb,
+                           bool largest, uint64_t minPiece, int smooth, double decimate, bool volumeSpace) {
+    ExtractSettings s;
+    s.method = method;
+    s.iso = iso;
+    s.lodError = lodError;
+    s.lodErrorGiven = lodError != 1.0;
+    s.threads = threads;
+    s.cacheMb = cacheMb;
+    s.post.largestPiece = largest;
+    s.post.minPieceTriangles = minPiece;
+    s.post.smoothIterations = smooth;
+    s.post.decimateRatio = decimate;
+    if (volumeSpace) s.physicalMeshes = false;
+    return s;
+}
+
+pyb::tuple vec(const glm::dvec3& v) { return pyb::make_tuple(v.x, v.y, v.z); }
+
+}  // namespace
+
+void bindStore(pyb::module_& m) {
+    pyb::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh",
+        "A surface: vertices (N, 3) float32 in world space, faces (M, 3) uint32, normals (N, 3)\n"
+        "float32, SAGE's sub-pixel points and point_normals (P, 3) float32, and stats (what\n"
+        "`vdiso extract --stats` writes). The arrays are views of the mesh's own buffers: no copy.")
+        .def_property_readonly("vertices", [](pyb::object self) { return meshArray(self, 0); })
+        .def_property_readonly("normals", [](pyb::object self) { return meshArray(self, 1); })
+        .def_property_readonly("faces", [](pyb::object self) { return meshArray(self, 2); })
+        .def_property_readonly("points", [](pyb::object self) { return meshArray(self, 3); })
+        .def_property_readonly("point_normals", [](pyb::object self) { return meshArray(self, 4); })
+        .def_readonly("stats", &Mesh::stats)
+        .def("write",
+             [](const Mesh& mesh, const std::filesystem::path& path, bool overwrite, bool compress) {
+                 pyb::gil_scoped_release release;
+                 writeMesh(path.string(), mesh.mesh, overwrite, compress, SpaceTransform{});
+             },
+             "path"_a, pyb::kw_only(), "overwrite"_a = false, "compress"_a = false,
+             "Writes the triangles to `path`, the format by its extension (.ply, .stl, .obj, .vtp,\n"
+             ".glb); an existing file is refused unless overwrite=True. compress: meshoptimizer\n"
+             "compression (.glb only).")
+        .def("write_points",
+             [](const Mesh& mesh, const std::filesystem::path& path, bool overwrite) {
+                 pyb::gil_scoped_release release;
+                 writePointsPly(path.string(), mesh.points, overwrite, SpaceTransform{});
+             },
+             "path"_a, pyb::kw_only(), "overwrite"_a = false, "Writes the sub-pixel points as a .ply file.")
+        .def("__repr__", [](const Mesh& mesh) {
+            return "<vdiso.Mesh: " + std::to_string(mesh.mesh.triangleCount()) + " triangles, " +
+                   std::to_string(mesh.mesh.vertexCount()) + " vertices, " + std::to_string(mesh.points.size()) +
+                   " points>";
+        });
+
+    pyb::class_<Store>(m, "_Store")
+        .def(pyb::init([](const std::string& path, const std::string& s3Endpoint, bool anonymous,
+                          const std::string& diskCache) {
+                 pyb::gil_scoped_release release;
+                 return Store{std::make_shared<BrickStoreReader>(
+                     path, StoreOpenOptions{ReadMode::Buffered, remoteOptions(s3Endpoint, anonymous, diskCache)})};
+             }),
+             "path"_a, "s3_endpoint"_a = "", "anonymous"_a = false, "disk_cache"_a = "")
+        .def_property_readonly("path", [](const Store& s) { return s.reader->path(); })
+        .def_property_readonly("dims", [](const Store& s) {
+            const Dims3& d = s.reader->volume().dims;
+            return pyb::make_tuple(d[0], d[1], d[2]);
+        })
+        .def_property_readonly("dtype", [](const Store& s) { return dtypeOf(s.reader->volume().type); })
+        .def_property_readonly("spacing_xyz", [](const Store& s) { return vec(s.reader->volume().spacing); })
+        .def_property_readonly("origin_xyz", [](const Store& s) { return vec(s.reader->volume().origin); })
+        .def_property_readonly("direction", [](const Store& s) -> pyb::object {
+            const VolumeInfo& v = s.reader->volume();
+            if (!v.hasOrientation) return pyb::none();
+            pyb::array_t<double> d({3, 3});
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) d.mutable_at(r, c) = v.direction[c][r];
+            return d;
+        })
+        .def_property_readonly("levels", [](const Store& s) { return s.reader->header().levelCount; })
+        .def_property_readonly("value_range", [](const Store& s) {
+            return pyb::make_tuple(s.reader->header().valueMin, s.reader->header().valueMax);
+        })
+        .def("histogram", [](const Store& s) {
+            const ValueHistogram& h = s.reader->histogram();
+            pyb::array_t<uint64_t> counts(kHistogramBins);
+            pyb::array_t<double> edges(kHistogramBins + 1);
+            for (int b = 0; b < kHistogramBins; ++b) counts.mutable_at(b) = h.counts[size_t(b)];
+            for (int b = 0; b <= kHistogramBins; ++b) edges.mutable_at(b) = h.lo + (h.hi - h.lo) * b / kHistogramBins;
+            return pyb::make_tuple(counts, edges);
+        })
+        .def("info_json", [](const Store& s, std::optional<double> iso) { return storeInfoJson(*s.reader, iso).str(); },
+             "iso"_a = pyb::none());
+
+    pyb::class_<Session>(m, "_Session")
+        .def(pyb::init([](const Store& store, const std::string& method, double iso, double lodError, int threads,
+                          uint64_t cacheMb, bool largest, uint64_t minPiece, int smooth, double decimate,
+                          bool volumeSpace) {
+                 ExtractSettings s = settingsOf(method, iso, lodError, threads, cacheMb, largest, minPiece, smooth,
+                                                decimate, volumeSpace);
+                 pyb::gil_scoped_release release;
+                 return std::make_unique<Session>(store, std::move(s));
+             }),
+             "store"_a, "method"_a, "iso"_a, "lod_error"_a, "threads"_a, "cache_mb"_a, "largest"_a, "min_piece"_a,
+             "smooth"_a, "decimate"_a, "volume_space"_a)
+        .def("extract", &Session::extract, "camera_json"_a, "view"_a, "width"_a, "height"_a,
+             "progress"_a = pyb::none())
+        .def("render", &Session::render, "camera_json"_a, "view"_a, "width"_a, "height"_a);
+}
+
+}  // namespace vdiso::py

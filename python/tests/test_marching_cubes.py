@@ -1,0 +1,124 @@
+"""vdiso.marching_cubes against scikit-image: the same surface and the same conventions."""
+import numpy as np
+import pytest
+import skimage.measure
+
+import vdiso
+
+DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
+
+
+def blob(shape=(23, 27, 31), dtype=np.float32, scale=1.0):
+    """Two overlapping balls over a gentle ramp: a surface with curvature, off-centre in every axis."""
+    z, y, x = np.mgrid[: shape[0], : shape[1], : shape[2]].astype(np.float64)
+    d1 = np.sqrt((x - 12.3) ** 2 + (y - 11.1) ** 2 + (z - 9.7) ** 2)
+    d2 = np.sqrt((x - 19.0) ** 2 + (y - 15.5) ** 2 + (z - 12.2) ** 2)
+    v = 100.0 - 6.0 * np.minimum(d1, d2 * 1.3) + 0.5 * x
+    if np.issubdtype(dtype, np.integer):
+        info = np.iinfo(dtype)
+        v = np.clip(np.round(v * scale), info.min, info.max)
+    return v.astype(dtype)
+
+
+def area(verts, faces):
+    t = verts[faces]
+    return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1).sum()
+
+
+def nearest(a, b):
+    """Index into b of each row of a's nearest point, and the distance (brute force, small meshes)."""
+    index = np.empty(len(a), dtype=np.int64)
+    dist = np.empty(len(a))
+    for s in range(0, len(a), 512):
+        d = np.linalg.norm(a[s:s + 512, None, :] - b[None, :, :], axis=2)
+        index[s:s + 512] = d.argmin(1)
+        dist[s:s + 512] = d.min(1)
+    return index, dist
+
+
+def assert_same_surface(ours, theirs):
+    v, f, n, values = ours
+    sv, sf, sn, svalues = theirs
+    assert v.dtype == sv.dtype and f.dtype == sf.dtype and n.dtype == sn.dtype and values.dtype == svalues.dtype
+    assert v.shape[1] == 3 and f.shape[1] == 3 and n.shape == v.shape and values.shape == (len(v),)
+    assert len(f) > 100
+    assert abs(area(v, f) / area(sv, sf) - 1) < 0.005
+    index, dist = nearest(v, sv)
+    assert dist.max() < 1e-4
+    # Normals point the same way (outward from the values above the level).
+    assert (np.sum(n * sn[index], axis=1) > 0).mean() > 0.99
+    # Winding as scikit-image's, relative to the normals.
+    t = v[f]
+    face_normals = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    st = sv[sf]
+    their_faces = np.cross(st[:, 1] - st[:, 0], st[:, 2] - st[:, 0])
+    ours_agree = (np.sum(face_normals * n[f[:, 0]], axis=1) > 0).mean()
+    theirs_agree = (np.sum(their_faces * sn[sf[:, 0]], axis=1) > 0).mean()
+    assert abs(ours_agree - theirs_agree) < 0.02
+
+
+@pytest.mark.parametrize("dtype", DTYPES, ids=lambda d: np.dtype(d).name)
+def test_every_dtype_matches_scikit_image(dtype):
+    volume = blob(dtype=dtype)
+    level = 40.5
+    assert_same_surface(vdiso.marching_cubes(volume, level), skimage.measure.marching_cubes(volume, level))
+
+
+def test_spacing_and_axis_order_match_scikit_image():
+    volume = blob(shape=(19, 33, 26))
+    spacing = (0.5, 1.25, 2.0)
+    ours = vdiso.marching_cubes(volume, 30.0, spacing=spacing)
+    assert_same_surface(ours, skimage.measure.marching_cubes(volume, 30.0, spacing=spacing))
+    # Axis 0 spans its samples times its spacing.
+    assert ours[0][:, 0].max() <= (19 - 1) * 0.5 + 1e-6
+
+
+def test_c_f_and_strided_arrays_give_the_same_mesh():
+    volume = blob()
+    c = vdiso.marching_cubes(volume, 35.0)
+    f = vdiso.marching_cubes(np.asfortranarray(volume), 35.0)
+    for a, b in zip(c, f):
+        np.testing.assert_array_equal(a, b)
+    view = np.ascontiguousarray(blob(shape=(46, 27, 62)))[::2, :, ::-2]
+    assert not view.flags.c_contiguous
+    ours = vdiso.marching_cubes(view, 35.0)
+    copied = vdiso.marching_cubes(np.ascontiguousarray(view), 35.0)
+    for a, b in zip(ours, copied):
+        np.testing.assert_array_equal(a, b)
+    assert_same_surface(ours, skimage.measure.marching_cubes(view, 35.0))
+
+
+def test_threads_give_the_same_mesh():
+    volume = blob(shape=(70, 80, 90))
+    one = vdiso.marching_cubes(volume, 35.0, threads=1)
+    two = vdiso.marching_cubes(volume, 35.0, threads=2)
+    for a, b in zip(one, two):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("volume, level, message", [
+    (np.zeros((4, 4)), 1.0, "3-D"),
+    (np.zeros((4, 4, 4, 4)), 1.0, "3-D"),
+    (np.zeros((4, 0, 4), dtype=np.float32), 1.0, "at least 2"),
+    (np.zeros((4, 1, 4), dtype=np.float32), 1.0, "at least 2"),
+    (np.zeros((4, 4, 4), dtype=np.complex64), 1.0, "not supported"),
+    (np.zeros((4, 4, 4), dtype=bool), 1.0, "not supported"),
+    (np.zeros((4, 4, 4), dtype=">f4"), 1.0, "byte order"),
+    (np.zeros((4, 4, 4), dtype=np.float32), float("nan"), "level"),
+    (np.zeros((4, 4, 4), dtype=np.float32), float("inf"), "level"),
+])
+def test_bad_input_is_a_value_error(volume, level, message):
+    with pytest.raises(ValueError, match=message):
+        vdiso.marching_cubes(volume, level)
+
+
+def test_bad_spacing_and_threads_are_value_errors():
+    with pytest.raises(ValueError, match="spacing"):
+        vdiso.marching_cubes(blob(), 30.0, spacing=(1.0, 0.0, 1.0))
+    with pytest.raises(ValueError, match="threads"):
+        vdiso.marching_cubes(blob(), 30.0, threads=0)
+
+
+def test_help_reads_well():
+    assert "marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)" in vdiso.marching_cubes.__doc__
+    assert "extract(iso, *, method=" in vdiso.Store.extract.__doc__

@@ -1,0 +1,184 @@
+"""vdiso.convert, vdiso.open and Store against the command line, with real NumPy, Zarr and Dask."""
+import json
+import os
+import signal
+import time
+
+import dask.array as da
+import numpy as np
+import pytest
+import zarr
+
+import vdiso
+from conftest import python_child, run
+
+
+def head(shape=(40, 50, 60), dtype=np.uint16):
+    z, y, x = np.mgrid[: shape[0], : shape[1], : shape[2]].astype(np.float64)
+    r = np.sqrt(((x - 31) / 1.2) ** 2 + (y - 24) ** 2 + ((z - 19) * 1.1) ** 2)
+    v = 1000 - 40 * r + 30 * np.sin(x / 3) * np.cos(y / 4)
+    return np.clip(v, 0, 1000).astype(dtype)
+
+
+@pytest.fixture
+def volume_and_cli_store(tmp_path, vdiso_bin):
+    v = head()
+    raw = tmp_path / "v.raw"
+    v.tofile(raw)
+    cli = tmp_path / "cli.vdiso"
+    r = run([vdiso_bin, "convert", str(raw), str(cli), "--dims", "60,50,40", "--type", "u16", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    return v, cli
+
+
+@pytest.mark.parametrize("kind", ["numpy", "fortran", "zarr", "dask"])
+def test_convert_equals_the_command_line_byte_for_byte(tmp_path, volume_and_cli_store, kind):
+    v, cli = volume_and_cli_store
+    source = {"numpy": lambda: v, "fortran": lambda: np.asfortranarray(v),
+              "zarr": lambda: zarr.array(v, chunks=(7, 50, 60)),
+              "dask": lambda: da.from_array(v, chunks=(9, 25, 60))}[kind]()
+    out = tmp_path / "py.vdiso"
+    seen = []
+    summary = vdiso.convert(source, out, progress=lambda done, total: seen.append((done, total)))
+    assert summary["bricks"] > 0
+    assert out.read_bytes() == cli.read_bytes()
+    assert seen and seen[-1][0] == seen[-1][1]
+
+
+def test_convert_a_file_and_open_it(tmp_path, volume_and_cli_store):
+    v, cli = volume_and_cli_store
+    store = vdiso.open(cli)
+    assert store.shape == v.shape and store.dtype == np.uint16 and store.spacing == (1.0, 1.0, 1.0)
+    assert store.value_range == (float(v.min()), float(v.max()))
+    counts, edges = store.histogram()
+    assert counts.sum() == v.size and len(edges) == len(counts) + 1
+    assert store.info()["dims"] == [60, 50, 40] and store.levels == store.info()["levels"][-1]["level"] + 1
+    nrrd = tmp_path / "v.nhdr"
+    nrrd.write_text("NRRD0004\ntype: uint16\ndimension: 3\nsizes: 60 50 40\nspacings: 0.5 0.5 2\n"
+                    "encoding: raw\nendian: little\ndata file: v.raw\n")
+    vdiso.convert(str(nrrd), tmp_path / "n.vdiso")
+    assert vdiso.open(tmp_path / "n.vdiso").spacing == (2.0, 0.5, 0.5)
+
+
+@pytest.mark.parametrize("method", ["octree", "sage"])
+def test_extract_equals_the_command_line(tmp_path, vdiso_bin, volume_and_cli_store, method):
+    _, cli = volume_and_cli_store
+    r = run([vdiso_bin, "extract", str(cli), "--iso", "500.5", "--method", method, "--stats", "-", "--quiet",
+             "--size", "320x240"])
+    assert r.returncode == 0, r.stderr
+    theirs = json.loads(r.stdout.splitlines()[-1])
+    mesh = vdiso.open(cli).extract(500.5, method=method, size=(320, 240))
+    assert mesh.stats["triangles"] == theirs["triangles"] == len(mesh.faces)
+    assert len(mesh.vertices) == mesh.stats["vertices"]
+    # The arrays are the mesh's own buffers.
+    for name in ("vertices", "normals", "faces", "points", "point_normals"):
+        array = getattr(mesh, name)
+        assert array.base is mesh and not array.flags.owndata
+    assert mesh.vertices.dtype == np.float32 and mesh.faces.dtype == np.uint32
+    if method == "octree":
+        same = vdiso.marching_cubes(head(), 500.5)
+        assert len(same[1]) == len(mesh.faces)
+    out = tmp_path / "m.glb"
+    mesh.write(out)
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        mesh.write(out)
+    mesh.write(out, overwrite=True)
+
+
+def test_frames_and_render(volume_and_cli_store):
+    _, cli = volume_and_cli_store
+    store = vdiso.open(cli)
+    frames = list(store.frames(500.5, ["normal", "distant", {"eye": [30, -150, 20], "target": [30, 25, 20],
+                                                               "up": [0, 0, 1], "fov": 30}], size=(200, 200)))
+    assert len(frames) == 3 and all(len(f.faces) > 0 for f in frames)
+    image = store.render(500.5, size=(96, 64))
+    assert image.shape == (64, 96, 3) and image.dtype == np.uint8 and image.std() > 5
+
+
+def test_refusals(tmp_path, volume_and_cli_store):
+    v, cli = volume_and_cli_store
+    store = vdiso.open(cli)
+    with pytest.raises(ValueError, match="method expects"):
+        store.extract(500, method="marching")
+    with pytest.raises(ValueError, match="iso"):
+        store.extract(float("nan"))
+    with pytest.raises(ValueError, match="lod_error applies"):
+        store.extract(500, lod_error=2)
+    with pytest.raises(ValueError, match="view"):
+        store.extract(500, method="sage", view="sideways")
+    with pytest.raises(ValueError, match="camera"):
+        store.extract(500, method="sage", camera=[1, 2, 3])
+    with pytest.raises(FileNotFoundError):
+        vdiso.open(tmp_path / "missing.vdiso")
+    (tmp_path / "junk.vdiso").write_bytes(b"not a store at all" * 10)
+    with pytest.raises(OSError, match="junk.vdiso"):
+        vdiso.open(tmp_path / "junk.vdiso")
+    with pytest.raises(FileExistsError):
+        vdiso.convert(v, cli)
+    with pytest.raises(ValueError, match="3-D"):
+        vdiso.convert(np.zeros((4, 4)), tmp_path / "a.vdiso")
+    with pytest.raises(ValueError, match="not supported"):
+        vdiso.convert(np.zeros((4, 4, 4), dtype=np.complex64), tmp_path / "a.vdiso")
+    with pytest.raises(ValueError, match="at least 2"):
+        vdiso.convert(np.zeros((4, 0, 4), dtype=np.uint8), tmp_path / "a.vdiso")
+    with pytest.raises(ValueError, match="compress"):
+        vdiso.convert(v, tmp_path / "a.vdiso", compress="gzip")
+    with pytest.raises(ValueError, match="source"):
+        vdiso.convert(42, tmp_path / "a.vdiso")
+
+    class Liar:
+        """Says one shape and slices into another."""
+        shape, dtype = (10, 8, 8), np.dtype(np.uint8)
+
+        def __getitem__(self, key):
+            return np.zeros((3, 8, 7), dtype=np.uint8)
+
+    with pytest.raises(OSError, match="came back with shape"):
+        vdiso.convert(Liar(), tmp_path / "liar.vdiso")
+    assert not (tmp_path / "liar.vdiso").exists() and not (tmp_path / "a.vdiso").exists()
+
+
+LAZY = """
+import resource, sys
+import dask.array as da, numpy as np
+import vdiso
+limit = {limit}
+resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
+n = {n}
+def block(block_info=None):
+    (z0, z1), (y0, y1), (x0, x1) = block_info[None]["array-location"]
+    out = np.empty((z1 - z0, y1 - y0, x1 - x0), np.uint8)
+    out[:] = (np.arange(y0, y1)[:, None] + np.arange(x0, x1)[None, :]) % 251
+    out += (np.arange(z0, z1) % 5).astype(np.uint8)[:, None, None]
+    return out
+volume = da.map_blocks(block, dtype=np.uint8, chunks=((16,) * (n // 16), (n,), (n,)))
+print("ready", flush=True)
+vdiso.convert(volume, {out!r}, brick=32)
+print("done", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss >> 10, flush=True)
+"""
+
+
+def test_a_dask_array_larger_than_the_memory_limit_converts(tmp_path):
+    n = 1024  # 1 GiB of samples, generated chunk by chunk, under a 600 MB data limit
+    out = tmp_path / "lazy.vdiso"
+    child = python_child(LAZY.format(limit=600 << 20, n=n, out=str(out)))
+    stdout, stderr = child.communicate(timeout=600)
+    assert child.returncode == 0, stderr
+    assert "done" in stdout
+    store = vdiso.open(out)
+    assert store.shape == (n, n, n) and store.value_range == (0.0, 254.0)
+
+
+def test_ctrl_c_stops_within_a_second_and_writes_nothing(tmp_path):
+    out = tmp_path / "never.vdiso"
+    child = python_child(LAZY.format(limit=-1, n=2048, out=str(out)))
+    assert child.stdout.readline().strip() == "ready"
+    time.sleep(1.5)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    stdout, stderr = child.communicate(timeout=60)
+    waited = time.monotonic() - sent
+    assert child.returncode != 0 and "KeyboardInterrupt" in stderr, stderr
+    assert "done" not in stdout
+    assert not out.exists() and not any(p.name.startswith("never") for p in tmp_path.iterdir())
+    assert waited < 5, f"stopped {waited:.1f} s after Ctrl-C"

@@ -1,0 +1,205 @@
+"""vdiso from Python: isosurfaces of volumes larger than memory, and of what a camera sees.
+
+    import vdiso
+    verts, faces, normals, values = vdiso.marching_cubes(volume, level)   # as scikit-image
+    vdiso.convert(array_or_path, "head.vdiso")                            # NumPy, Zarr, Dask, files
+    store = vdiso.open("head.vdiso")                                      # or an http(s):// or s3:// URL
+    mesh = store.extract(600, method="sage", view="normal")               # the visible surface
+    image = store.render(600)                                             # (H, W, 3) uint8
+
+Long calls release the GIL, stop on Ctrl-C (KeyboardInterrupt, nothing written) and take
+progress=callable(done, total). Errors: ValueError for a bad argument (naming it), OSError for
+I/O (naming the file or URL), FileExistsError for an output that exists, vdiso.Error for the rest.
+"""
+
+import json as _json
+import os as _os
+import errno as _errno
+
+from . import _vdiso
+from ._vdiso import Error, Mesh
+
+__all__ = ["marching_cubes", "convert", "open", "Store", "Mesh", "Camera", "Error"]
+
+
+def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None):
+    """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)
+    -> (verts, faces, normals, values)
+
+    The isosurface `level` of a 3-D array, as skimage.measure.marching_cubes returns it: verts
+    (V, 3) in the array's axis order scaled by `spacing` (float32; float64 when a spacing is not
+    1, as scikit-image's), faces (F, 3) int32, normals
+    (V, 3) float32 pointing away from the values above `level` (outward for a bright object),
+    values (V,) float32 (the largest sample of the cell each vertex lies in). `volume`: any 3-D
+    array of uint8, int8, uint16, int16, uint32, int32, float32 or float64, C- or F-ordered or
+    strided, read in place (never copied to float). `level` None: the middle of the array's
+    range; a level outside the values is a ValueError (as scikit-image), a level with no
+    surface gives empty arrays (scikit-image raises RuntimeError). The triangles of
+    `vdiso extract --method octree`, on `threads` threads (None: all cores).
+    """
+    import numpy as np
+    if not isinstance(volume, np.ndarray):
+        volume = np.asarray(volume)
+    if level is None:
+        if volume.size == 0:
+            raise ValueError("volume: an empty array has no isosurface")
+        level = 0.5 * (float(np.nanmin(volume)) + float(np.nanmax(volume)))
+    return _vdiso.marching_cubes(volume, float(level), tuple(float(s) for s in spacing), threads=threads)
+
+
+class Camera:
+    """A camera in world space: eye, target, up (x, y, z) and a vertical field of view in degrees,
+    as `vdiso extract --camera` reads it."""
+
+    def __init__(self, eye, target, up=(0.0, 0.0, 1.0), fov=30.0):
+        self.eye, self.target, self.up, self.fov = tuple(eye), tuple(target), tuple(up), float(fov)
+
+    def to_dict(self):
+        return {"eye": list(self.eye), "target": list(self.target), "up": list(self.up), "fov": self.fov}
+
+    def __repr__(self):
+        return f"vdiso.Camera(eye={self.eye}, target={self.target}, up={self.up}, fov={self.fov})"
+
+
+def _camera_json(camera):
+    if camera is None:
+        return None
+    if isinstance(camera, Camera):
+        camera = camera.to_dict()
+    if not isinstance(camera, dict):
+        raise ValueError(f"camera: expects a dict with eye, target, up, fov or a vdiso.Camera, not {type(camera).__name__}")
+    return _json.dumps(camera)
+
+
+def _size(size):
+    try:
+        width, height = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ValueError(f"size: expects (width, height), not {size!r}") from None
+    if not (16 <= width <= 8192 and 16 <= height <= 8192):
+        raise ValueError(f"size: expects 16 to 8192 pixels each way, not {width} x {height}")
+    return width, height
+
+
+def _local_input(path, what):
+    """Raises FileNotFoundError / PermissionError for a local path that is not there or not
+    readable, before the library is asked."""
+    path = _os.fspath(path)
+    if "://" in path:
+        return path
+    probe = path.split(":/", 1)[0] if ".h5:/" in path or ".hdf5:/" in path else path
+    if not any(c in probe for c in "*?[") and not _os.path.exists(probe):
+        raise FileNotFoundError(_errno.ENOENT, f"{what}: no such file or folder", probe)
+    if _os.path.exists(probe) and not _os.access(probe, _os.R_OK):
+        raise PermissionError(_errno.EACCES, f"{what}: not readable", probe)
+    return path
+
+
+class Store:
+    """A brick store opened for extraction (vdiso.open). shape, spacing: NumPy's axis order (z, y, x),
+    as convert() and marching_cubes take them; origin and mesh vertices: world (x, y, z)."""
+
+    def __init__(self, path, *, s3_endpoint="", anonymous=False, disk_cache=""):
+        self._store = _vdiso._Store(_local_input(path, "store"), s3_endpoint, anonymous, _os.fspath(disk_cache))
+
+    path = property(lambda self: self._store.path)
+    shape = property(lambda self: tuple(reversed(self._store.dims)), doc="(z, y, x) samples")
+    dtype = property(lambda self: self._store.dtype)
+    spacing = property(lambda self: tuple(reversed(self._store.spacing_xyz)), doc="(z, y, x) sample spacing")
+    origin = property(lambda self: self._store.origin_xyz, doc="world (x, y, z) of sample 0")
+    orientation = property(lambda self: self._store.direction,
+                           doc="3x3 LPS directions of the x, y, z axes (columns), or None")
+    levels = property(lambda self: self._store.levels, doc="levels of detail, the full resolution included")
+    value_range = property(lambda self: self._store.value_range)
+
+    def histogram(self):
+        """(counts, edges): the store's 256-bin histogram of sample values."""
+        return self._store.histogram()
+
+    def info(self, iso=None):
+        """What `vdiso info --json` prints, as a dict."""
+        return _json.loads(self._store.info_json(iso))
+
+    def _session(self, iso, method="octree", lod_error=1.0, threads=None, cache_mb=None, largest=False,
+                 min_piece=0, smooth=0, decimate=None, volume_space=False):
+        return _vdiso._Session(self._store, method, float(iso), float(lod_error), int(threads or 0),
+                               int(cache_mb or 1024), bool(largest), int(min_piece), int(smooth),
+                               1.0 if decimate is None else float(decimate), bool(volume_space))
+
+    def extract(self, iso, *, method="octree", camera=None, view=None, size=(1024, 1024), lod_error=1.0,
+                threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None):
+        """extract(iso, *, method="octree", camera=None, view=None, size=(1024, 1024), lod_error=1.0,
+        threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None)
+        -> Mesh
+
+        The isosurface `iso` as `vdiso extract` makes it. method: "octree" or "noise" (the whole
+        surface), "sage" or "wise" (what `camera` sees, at the levels of detail `lod_error`
+        pixels allow). camera: a dict with eye, target, up, fov or a vdiso.Camera; view: the
+        --view words ("normal", "distant", "closeup", with a side: "normal:left"); neither: the
+        normal view. largest, min_piece, smooth, decimate: post-processing of the full surface.
+        """
+        width, height = _size(size)
+        session = self._session(iso, method, lod_error, threads, cache_mb, largest, min_piece, smooth, decimate)
+        return session.extract(_camera_json(camera), view or "normal", width, height, progress)
+
+    def frames(self, iso, cameras, *, size=(1024, 1024), **settings):
+        """A generator of Meshes, one per camera (dicts, vdiso.Camera or view words), over one
+        brick cache, as `vdiso extract --path`. Takes extract()'s settings."""
+        width, height = _size(size)
+        settings.setdefault("method", "sage")
+        session = self._session(iso, **settings)
+        for camera in cameras:
+            if isinstance(camera, str):
+                yield session.extract(None, camera, width, height)
+            else:
+                yield session.extract(_camera_json(camera), "normal", width, height)
+
+    def render(self, iso, camera=None, view="normal", size=(800, 800), method="sage", **settings):
+        """render(iso, camera=None, view="normal", size=(800, 800), method="sage") -> (H, W, 3) uint8
+
+        The surface drawn as `vdiso extract --png` draws it (OSMesa), for a notebook."""
+        width, height = _size(size)
+        session = self._session(iso, method, **settings)
+        return session.render(_camera_json(camera), view or "normal", width, height)
+
+    def __repr__(self):
+        return f"<vdiso.Store {self.path}: {self.shape} {self.dtype}, {self.levels} levels>"
+
+
+def open(path, *, s3_endpoint="", anonymous=False, disk_cache=""):  # noqa: A001 (as vdiso.open)
+    """open(path) -> Store: a .vdiso store on disk, or at an http(s):// or s3:// URL."""
+    return Store(path, s3_endpoint=s3_endpoint, anonymous=anonymous, disk_cache=disk_cache)
+
+
+def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto", compress="lz4",
+            overwrite=False, progress=None):
+    """convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto", compress="lz4",
+    overwrite=False, progress=None) -> dict
+
+    Writes a brick store at `path` from `source`: a file or folder in any format `vdiso convert`
+    reads (a list of slice files too), or a NumPy, Zarr or Dask array, or any object with shape,
+    dtype and slicing along axis 0. An array is read slab by slab along axis 0, so one larger
+    than memory converts in the converter's bounded memory. spacing: (z, y, x) as
+    marching_cubes takes it; origin: world (x, y, z) (arrays only). The store appears only when
+    complete. Returns what was written (bricks, levels, bytes, seconds)."""
+    path = _os.fspath(path)
+    levels = str(levels)
+    if isinstance(source, (str, bytes, _os.PathLike)) or (
+            isinstance(source, (list, tuple)) and source and isinstance(source[0], (str, _os.PathLike))):
+        if origin is not None:
+            raise ValueError("origin: applies to array sources (a file states its own)")
+        inputs = [source] if not isinstance(source, (list, tuple)) else list(source)
+        inputs = [_local_input(p, "source") for p in inputs]
+        spacing = None if spacing is None else tuple(float(s) for s in spacing)
+        return _vdiso._convert_files(inputs, path, spacing, int(brick), levels, compress, bool(overwrite), progress)
+    import numpy as np
+    for attr in ("shape", "dtype", "__getitem__"):
+        if not hasattr(source, attr):
+            raise ValueError(f"source: expects a path or an array-like with shape, dtype and slicing, "
+                             f"not {type(source).__name__}")
+    name = f"{type(source).__module__}.{type(source).__name__}"
+    shape = [int(n) for n in source.shape]
+    spacing = (1.0, 1.0, 1.0) if spacing is None else tuple(float(s) for s in spacing)
+    origin = (0.0, 0.0, 0.0) if origin is None else tuple(float(s) for s in origin)
+    return _vdiso._convert_array(source, name, shape, np.dtype(source.dtype), path, spacing, origin, int(brick),
+                                 levels, compress, bool(overwrite), progress)
