@@ -9,5 +9,6 @@ void bindErrors(pybind11::module_& m);
 void bindMarchingCubes(pybind11::module_& m);
 void bindStore(pybind11::module_& m);
 void bindConvert(pybind11::module_& m);
+void bindServe(pybind11::module_& m);
 
 }  // namespace vdiso::py

@@ -46,4 +46,6 @@ PYBIND11_MODULE(_vdiso, m) {
     vdiso::py::bindMarchingCubes(m);
     vdiso::py::bindStore(m);
     vdiso::py::bindConvert(m);
+    vdiso::py::bindServe(m);
+    m.attr("_web_root") = VDISO_WEB_DIR;
 }

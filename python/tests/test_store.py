@@ -182,3 +182,21 @@ def test_ctrl_c_stops_within_a_second_and_writes_nothing(tmp_path):
     assert "done" not in stdout
     assert not out.exists() and not any(p.name.startswith("never") for p in tmp_path.iterdir())
     assert waited < 5, f"stopped {waited:.1f} s after Ctrl-C"
+
+
+def test_serve_shows_the_viewer_and_stops(volume_and_cli_store):
+    import urllib.error
+    import urllib.request
+    _, cli = volume_and_cli_store
+    with vdiso.serve(str(cli), iso=500.5) as server:
+        assert server.running and server.url.startswith("http://127.0.0.1:")
+        page = urllib.request.urlopen(server.url, timeout=30).read().decode()
+        assert "<html" in page.lower()
+        assert server.url in server._repr_html_()
+        with pytest.raises(urllib.error.HTTPError):
+            urllib.request.urlopen(server.url.split("?")[0] + "?token=wrong", timeout=30)
+    assert not server.running
+    with pytest.raises(OSError):
+        urllib.request.urlopen(server.url, timeout=5)
+    with pytest.raises(FileNotFoundError):
+        vdiso.serve("missing.vdiso")

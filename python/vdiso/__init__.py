@@ -19,7 +19,7 @@ import errno as _errno
 from . import _vdiso
 from ._vdiso import Error, Mesh
 
-__all__ = ["marching_cubes", "convert", "open", "Store", "Mesh", "Camera", "Error"]
+__all__ = ["marching_cubes", "convert", "open", "serve", "Store", "Server", "Mesh", "Camera", "Error"]
 
 
 def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None):
@@ -203,3 +203,46 @@ def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto",
     origin = (0.0, 0.0, 0.0) if origin is None else tuple(float(s) for s in origin)
     return _vdiso._convert_array(source, name, shape, np.dtype(source.dtype), path, spacing, origin, int(brick),
                                  levels, compress, bool(overwrite), progress)
+
+
+class Server:
+    """A running `vdiso serve` (vdiso.serve): url, stop(), a context manager; in Jupyter it shows the
+    viewer in an iframe."""
+
+    def __init__(self, stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None,
+                 lod_error=1.0, web_root=None):
+        if isinstance(stores, (str, bytes, _os.PathLike)):
+            stores = [stores]
+        stores = [_local_input(s, "store") for s in stores]
+        self._server = _vdiso._Server(stores, None if iso is None else float(iso), int(port), str(host),
+                                      int(cache_mb), int(threads or _os.cpu_count() or 1), float(lod_error),
+                                      web_root or _vdiso._web_root)
+
+    url = property(lambda self: self._server.url, doc="http://HOST:PORT/?token=... (the token is the key)")
+    port = property(lambda self: self._server.port)
+    running = property(lambda self: self._server.running)
+
+    def stop(self):
+        """Closes every connection and stops the server; returns when it has stopped."""
+        self._server.stop()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stop()
+
+    def _repr_html_(self):
+        return f'<iframe src="{self.url}" width="100%" height="600" style="border:0"></iframe>'
+
+    def __repr__(self):
+        return f"<vdiso.Server {self.url} ({'running' if self.running else 'stopped'})>"
+
+
+def serve(stores, iso=None, port=0, host="127.0.0.1", **options):
+    """serve(stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None, lod_error=1.0)
+    -> Server
+
+    `vdiso serve` in this process, on its own thread: the browser viewer of one or more stores
+    (paths or URLs) at server.url. port 0: any free port. Use as a context manager, or stop()."""
+    return Server(stores, iso, port, host, **options)

@@ -1,0 +1,71 @@
+// vdiso.serve: `vdiso serve` inside the Python process, on its own thread, for a notebook.
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include "bindings.h"
+#include "serve/server.h"
+
+namespace vdiso::py {
+
+namespace pyb = pybind11;
+using namespace pybind11::literals;
+
+namespace {
+
+class Server {
+public:
+    explicit Server(const serve::ServeOptions& options) {
+        pyb::gil_scoped_release release;
+        mServer = std::make_unique<serve::Server>(options);
+        mThread = std::thread([server = mServer.get()] { server->run(); });
+    }
+    ~Server() { stop(); }
+    std::string url() const { return mServer->url(); }
+    uint16_t port() const { return mServer->port(); }
+    bool running() const { return mThread.joinable(); }
+    void stop() {
+        if (!mThread.joinable()) return;
+        std::optional<pyb::gil_scoped_release> release;
+        if (PyGILState_Check()) release.emplace();
+        mServer->stop();
+        mThread.join();
+    }
+
+private:
+    std::unique_ptr<serve::Server> mServer;
+    std::thread mThread;
+};
+
+}  // namespace
+
+void bindServe(pyb::module_& m) {
+    pyb::class_<Server>(m, "_Server")
+        .def(pyb::init([](const std::vector<std::string>& stores, std::optional<double> iso, int port,
+                          const std::string& host, uint64_t cacheMb, int threads, double lodError,
+                          const std::string& webRoot) {
+                 if (stores.empty()) throw std::invalid_argument("stores: expects at least one store");
+                 if (port < 0 || port > 65535) throw std::invalid_argument("port: expects 0 to 65535");
+                 if (!(lodError >= 0 && lodError <= 1e6)) throw std::invalid_argument("lod_error: expects pixels, 0 or more");
+                 if (threads < 1 || threads > 64) throw std::invalid_argument("threads: expects 1 to 64");
+                 serve::ServeOptions o;
+                 o.stores = stores;
+                 o.iso = iso;
+                 o.port = uint16_t(port);
+                 o.host = host;
+                 o.cacheBytes = cacheMb << 20;
+                 o.threads = threads;
+                 o.lodError = lodError;
+                 o.webRoot = webRoot;
+                 return std::make_unique<Server>(o);
+             }),
+             "stores"_a, "iso"_a, "port"_a, "host"_a, "cache_mb"_a, "threads"_a, "lod_error"_a, "web_root"_a)
+        .def_property_readonly("url", &Server::url)
+        .def_property_readonly("port", &Server::port)
+        .def_property_readonly("running", &Server::running)
+        .def("stop", &Server::stop);
+}
+
+}  // namespace vdiso::py
