@@ -19,6 +19,13 @@ pybind11::dtype dtypeOf(ScalarType type);
 // Throws std::invalid_argument for another ndim, an axis under 2 samples or a bad dtype.
 StridedSamples stridedSamplesOf(const pybind11::array& volume, const char* what);
 
+// A pointer NumPy accepts for an array of no rows (a vector without storage gives null).
+template <class T>
+const T* rowsOrEmpty(const T* data) {
+    static const T kNone[3] = {};
+    return data ? data : kNone;
+}
+
 // An (rows, columns) array of T over `data`, kept alive by `owner`.
 template <class T>
 pybind11::array_t<T> arrayOver(const T* data, size_t rows, size_t columns, pybind11::handle owner) {

@@ -84,29 +84,37 @@ pyb::tuple marchingCubes(const pyb::array& volume, double level, std::array<doub
         FullExtractOptions options{level, kDefaultMetaCellSize, threadCount};
         extractOctree(source, options, mesh, progress);
     });
-    const size_t n = mesh.positions.size(), m = mesh.triangleCount();
+    // The mesh's own buffers become the arrays (owned by a capsule): peak memory is the output
+    // once, not twice. NumPy's axis order is z, y, x: each row is reversed in place.
+    auto* owned = new TriangleMesh(std::move(mesh));
+    const pyb::capsule owner(owned, [](void* p) { delete static_cast<TriangleMesh*>(p); });
+    const size_t n = owned->positions.size(), m = owned->triangleCount();
+    if (n > size_t(INT32_MAX))
+        throw std::runtime_error("the surface has " + std::to_string(n) + " vertices, more than scikit-image's int32 "
+                                 "faces can number: use vdiso.convert and Store.extract (uint32 faces)");
+    pyb::array_t<float> values(n);
+    visitFileScalar(samples.type, [&](auto zero) {
+        cellMaxima<decltype(zero)>(samples, *owned, xyzSpacing, values.mutable_data());
+    });
+    for (size_t v = 0; v < n; ++v) {
+        std::swap(owned->positions[v].x, owned->positions[v].z);
+        std::swap(owned->normals[v].x, owned->normals[v].z);
+    }
     // scikit-image's vertices: float32, or float64 once scaled by a spacing other than 1.
     const bool unit = spacing[0] == 1 && spacing[1] == 1 && spacing[2] == 1;
-    pyb::array verts = unit ? pyb::array(pyb::array_t<float>({n, size_t(3)})) : pyb::array(pyb::array_t<double>({n, size_t(3)}));
-    pyb::array_t<float> normals({n, size_t(3)});
-    pyb::array_t<int32_t> faces({m, size_t(3)});
-    pyb::array_t<float> values(n);
-    {
-        float* q = normals.mutable_data();
-        for (size_t v = 0; v < n; ++v)
-            for (int a = 0; a < 3; ++a) q[3 * v + size_t(a)] = mesh.normals[v][2 - a];
-        auto fill = [&](auto* p) {
-            for (size_t v = 0; v < n; ++v)
-                for (int a = 0; a < 3; ++a) p[3 * v + size_t(a)] = mesh.positions[v][2 - a];
-        };
-        if (unit) fill(static_cast<float*>(verts.mutable_data()));
-        else fill(static_cast<double*>(verts.mutable_data()));
-        int32_t* f = faces.mutable_data();
-        for (size_t i = 0; i < mesh.indices.size(); ++i) f[i] = int32_t(mesh.indices[i]);
-        visitFileScalar(samples.type, [&](auto zero) {
-            cellMaxima<decltype(zero)>(samples, mesh, xyzSpacing, values.mutable_data());
-        });
+    pyb::array verts;
+    if (unit) {
+        verts = arrayOver(rowsOrEmpty(&owned->positions.data()->x), n, 3, owner);
+    } else {
+        pyb::array_t<double> wide({n, size_t(3)});
+        std::copy_n(&owned->positions.data()->x, 3 * n, wide.mutable_data());
+        MeshArray<glm::vec3>().swap(owned->positions);
+        verts = wide;
     }
+    // Vertex numbers fit 31 bits (the library numbers them in 32): the same bytes as int32.
+    static_assert(sizeof(int32_t) == sizeof(uint32_t));
+    const pyb::array faces = arrayOver(rowsOrEmpty(reinterpret_cast<const int32_t*>(owned->indices.data())), m, 3, owner);
+    const pyb::array normals = arrayOver(rowsOrEmpty(&owned->normals.data()->x), n, 3, owner);
     return pyb::make_tuple(verts, faces, normals, values);
 }
 

@@ -32,13 +32,6 @@ struct Mesh {
     pyb::dict stats;
 };
 
-// A pointer NumPy accepts for an array of no rows.
-template <class T>
-const T* rowsOrEmpty(const T* data) {
-    static const T kNone[3] = {};
-    return data ? data : kNone;
-}
-
 pyb::object meshArray(pyb::object self, int which) {
     Mesh& m = self.cast<Mesh&>();
     switch (which) {
