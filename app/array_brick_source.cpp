@@ -39,21 +39,35 @@ BrickRange measure(const StridedSamples& s, const BrickLayout& layout, const Dim
         first[a] = c[a] * layout.brickSize;
         count[a] = layout.cellsOnAxis(a, c[a]) + 1;
     }
-    for (int64_t z = first[2]; z < first[2] + count[2]; ++z)
-        for (int64_t y = first[1]; y < first[1] + count[1]; ++y) {
-            const unsigned char* row = base + z * s.strides[2] + y * s.strides[1] + first[0] * s.strides[0];
-            for (int64_t x = 0; x < count[0]; ++x) {
-                S v;
-                std::memcpy(&v, row + x * s.strides[0], sizeof v);
-                if constexpr (std::is_floating_point_v<S>)
-                    if (v != v) {
-                        nan = true;
-                        continue;
-                    }
-                lo = std::min(lo, v);
-                hi = std::max(hi, v);
+    // One row at a time: a typed loop the compiler vectorises when samples along x are adjacent.
+    auto scan = [&](auto at) {
+        for (int64_t z = first[2]; z < first[2] + count[2]; ++z)
+            for (int64_t y = first[1]; y < first[1] + count[1]; ++y) {
+                const unsigned char* row = base + z * s.strides[2] + y * s.strides[1] + first[0] * s.strides[0];
+                S rowLo = lo, rowHi = hi;
+                for (int64_t x = 0; x < count[0]; ++x) {
+                    const S v = at(row, x);
+                    if constexpr (std::is_floating_point_v<S>)
+                        if (v != v) {
+                            nan = true;
+                            continue;
+                        }
+                    rowLo = v < rowLo ? v : rowLo;
+                    rowHi = v > rowHi ? v : rowHi;
+                }
+                lo = rowLo;
+                hi = rowHi;
             }
-        }
+    };
+    if (s.strides[0] == int64_t(sizeof(S)) && reinterpret_cast<uintptr_t>(base) % alignof(S) == 0 &&
+        s.strides[1] % int64_t(alignof(S)) == 0 && s.strides[2] % int64_t(alignof(S)) == 0)
+        scan([](const unsigned char* row, int64_t x) { return reinterpret_cast<const S*>(row)[x]; });
+    else
+        scan([&](const unsigned char* row, int64_t x) {
+            S v;
+            std::memcpy(&v, row + x * s.strides[0], sizeof v);
+            return v;
+        });
     if (nan && lo > hi) return {NAN, NAN};
     // The range of the converted samples: convert the two ends as the samples are converted.
     float ends[2];
@@ -94,15 +108,24 @@ void ArrayBrickSource::gather(int64_t id, unsigned char* brick) const {
     std::vector<unsigned char> gathered(size_t(side) * inBytes);
     unsigned char* row = gathered.data();
     const int64_t x0 = mLayout.firstSample(c[0]);
+    const bool contiguous = mSamples.strides[0] == int64_t(inBytes);
+    const bool sameType = fileScalarOf(mInfo.type) == mSamples.type;
     for (int lz = 0; lz < side; ++lz) {
         const int64_t z = mLayout.clampSample(2, mLayout.firstSample(c[2]) + lz);
         for (int ly = 0; ly < side; ++ly) {
             const int64_t y = mLayout.clampSample(1, mLayout.firstSample(c[1]) + ly);
             const unsigned char* line = base + z * mSamples.strides[2] + y * mSamples.strides[1];
+            unsigned char* out = brick + (size_t(lz) * side + ly) * side * outBytes;
+            // Inside the volume on x with adjacent samples: the row as it lies (the common case).
+            if (contiguous && x0 >= 0 && x0 + side <= mLayout.dims[0]) {
+                const unsigned char* in = line + x0 * int64_t(inBytes);
+                if (sameType) std::memcpy(out, in, size_t(side) * inBytes);
+                else decodeSamples(in, mSamples.type, false, size_t(side), out, mInfo.type);
+                continue;
+            }
             for (int lx = 0; lx < side; ++lx)
                 std::memcpy(row + lx * inBytes, line + mLayout.clampSample(0, x0 + lx) * mSamples.strides[0], inBytes);
-            decodeSamples(row, mSamples.type, false, size_t(side),
-                          brick + (size_t(lz) * side + ly) * side * outBytes, mInfo.type);
+            decodeSamples(row, mSamples.type, false, size_t(side), out, mInfo.type);
         }
     }
 }

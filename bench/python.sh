@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# vdiso.marching_cubes against scikit-image and VTK's Flying Edges, all from Python, in one run:
+# seconds (median of 3; scikit-image once) and peak memory above the loaded input, 1 thread and
+# all cores, on the real MRI and a generated 512^3 head. Prints a Markdown table.
+#   bench/python.sh            (after scripts/build.sh; the data comes from scripts/fetch_data.sh)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${BUILD_DIR:-build}
+py="env PYTHONPATH=$build/python /usr/bin/python3"
+mkdir -p data/bench
+[ -f data/ch2better.nii.gz ] || scripts/fetch_data.sh
+[ -f data/bench/head512.raw ] || $build/bin/vdiso synth data/bench/head512.raw --kind head --size 512 --quiet
+cores=$(nproc)
+echo "| volume | iso | method | threads | seconds | Mvoxels/s | triangles | peak above input (MB) | input (MB) |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for case in "data/ch2better.nii.gz 40.5" "512x512x512xu16:data/bench/head512.raw 600.5"; do
+  set -- $case
+  for run in "vdiso 1 3" "vdiso $cores 3" "vtk 1 3" "vtk $cores 3" "skimage 1 1"; do
+    set -- $case $run
+    $py bench/python_mc.py "$1" "$2" "$3" "$4" "$5" | $py -c "
+import json, sys
+r = json.loads(sys.stdin.read())
+name = r['volume'].split('/')[-1]
+print(f\"| {name} | $2 | {r['method']} | {r['threads']} | {r['seconds']:.3f} | {r['mvoxels_per_s']:.0f} | {r['triangles']} | {r['peak_over_input_mb']:.0f} | {r['input_mb']:.0f} |\")"
+  done
+done
