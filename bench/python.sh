@@ -3,11 +3,19 @@
 # seconds (median of 3; scikit-image once) and peak memory above the loaded input, 1 thread and
 # all cores, on the real MRI and a generated 512^3 head. Prints a Markdown table.
 #   bench/python.sh            (after scripts/build.sh; the data comes from scripts/fetch_data.sh)
+#   bench/python.sh lazy [N]   instead: an N^3 (default 2048) Dask array generated lazily, converted
+#                              and its SAGE normal view extracted from Python: seconds, peak RSS
+#                              (bench/python_lazy.py; the store goes to data/bench/lazyN.vdiso)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${BUILD_DIR:-build}
 py="env PYTHONPATH=$build/python /usr/bin/python3"
 mkdir -p data/bench
+if [ "${1:-}" = lazy ]; then
+  n=${2:-2048}
+  $py bench/python_lazy.py "$n" "data/bench/lazy$n.vdiso"
+  exit 0
+fi
 [ -f data/ch2better.nii.gz ] || scripts/fetch_data.sh
 [ -f data/bench/head512.raw ] || $build/bin/vdiso synth data/bench/head512.raw --kind head --size 512 --quiet
 cores=$(nproc)

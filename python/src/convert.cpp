@@ -39,25 +39,35 @@ public:
         const pyb::module_ np = pyb::module_::import("numpy");
         const int64_t z = mNext;
         pyb::object got = mSource[pyb::slice(pyb::int_(z), pyb::int_(z + count), pyb::none())];
+        const std::string range = "slices " + std::to_string(z) + " to " + std::to_string(z + count);
+        // A Dask slab of the store's own type is computed chunk by chunk into the destination
+        // (Dask's store()): the slab is never concatenated in memory first.
+        if (fileScalarOf(mInfo.type) == mType && pyb::hasattr(got, "store") && pyb::hasattr(got, "dask")) {
+            checkShape(pyb::tuple(got.attr("shape")), count, range);
+            const pyb::array target(dtypeOf(mInfo.type), std::vector<pyb::ssize_t>{count, mInfo.dims[1], mInfo.dims[0]},
+                                    dst, pyb::capsule(dst, [](void*) {}));
+            got.attr("store")(target, "lock"_a = false);
+            mNext += count;
+            return;
+        }
         const pyb::array slab = np.attr("ascontiguousarray")(np.attr("asarray")(got));
-        const auto shapeText = [&] {
-            return pyb::str(pyb::tuple(slab.attr("shape"))).cast<std::string>();
-        };
-        if (slab.ndim() != 3 || slab.shape(0) != count || slab.shape(1) != mInfo.dims[1] ||
-            slab.shape(2) != mInfo.dims[0])
-            throwIoError(mName, "slices " + std::to_string(z) + " to " + std::to_string(z + count) +
-                                    " came back with shape " + shapeText() + ", not (" + std::to_string(count) +
-                                    ", " + std::to_string(mInfo.dims[1]) + ", " + std::to_string(mInfo.dims[0]) +
-                                    ")");
+        checkShape(pyb::tuple(slab.attr("shape")), count, range);
         if (fileScalarOfDtype(slab.dtype(), mName.c_str()) != mType)
-            throwIoError(mName, "slices " + std::to_string(z) + " to " + std::to_string(z + count) +
-                                    " came back as " + pyb::str(pyb::handle(slab.dtype())).cast<std::string>() +
+            throwIoError(mName, range + " came back as " + pyb::str(pyb::handle(slab.dtype())).cast<std::string>() +
                                     ", not the array's dtype");
         decodeSamples(slab.data(), mType, false, size_t(slab.size()), dst, mInfo.type);
         mNext += count;
     }
 
 private:
+    void checkShape(const pyb::tuple& shape, int64_t count, const std::string& range) const {
+        if (shape.size() != 3 || shape[0].cast<int64_t>() != count || shape[1].cast<int64_t>() != mInfo.dims[1] ||
+            shape[2].cast<int64_t>() != mInfo.dims[0])
+            throwIoError(mName, range + " came back with shape " + pyb::str(pyb::handle(shape)).cast<std::string>() + ", not (" +
+                                    std::to_string(count) + ", " + std::to_string(mInfo.dims[1]) + ", " +
+                                    std::to_string(mInfo.dims[0]) + ")");
+    }
+
     pyb::object mSource;
     VolumeInfo mInfo;
     FileScalar mType;
