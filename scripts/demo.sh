@@ -32,5 +32,14 @@ $vdiso extract data/ch2.vdiso --iso 40.5 --method octree --view distant --png da
 $vdiso extract data/ch2.vdiso --iso 40.5 --method sage --view distant --png data/ch2_distant_sage.png --stats - --force
 $vdiso compare data/ch2_distant_octree.png data/ch2_distant_sage.png
 echo
+echo "== from Python (PYTHONPATH=build/python /usr/bin/python3): the same MRI's store, the visible surface"
+PYTHONPATH="$PWD/build/python" /usr/bin/python3 - <<'PY'
+import vdiso
+store = vdiso.open("data/ch2better.vdiso")
+mesh = store.extract(40.5, method="sage", view="normal")
+print(store, "->", mesh, f"in {mesh.stats['extract_s']:.3f} s")
+PY
+PYTHONPATH="$PWD/build/python" /usr/bin/python3 examples/quickstart.py data
+echo
 echo "pictures: data/ch2better_octree.png data/ch2better_sage.png data/ch2_skin.png"
 echo "          data/ch2_distant_octree.png data/ch2_distant_sage.png   mesh: data/ch2better.ply"
