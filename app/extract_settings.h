@@ -1,8 +1,8 @@
 // The settings of one extraction, as every front end (vdiso, vdiso-mpi, the Python module)
 // fills them, with the checks they share and what they derive: the cache plan and the
-// view-dependent options. Messages name quantities, not flags: a SettingsError carries the
-// setting it is about, and each front end puts its own spelling of it in front
-// ("--lod-error", "lod_error=").
+// view-dependent options. Messages name quantities, not flags: a SettingsError
+// (core/settings_error.h) carries the setting it is about, and each front end puts its own
+// spelling of it in front ("--lod-error", "lod_error=").
 #pragma once
 
 #include <cstdint>
@@ -14,21 +14,10 @@
 #include "cache/cache_plan.h"
 #include "core/brick_prefetcher.h"
 #include "core/extract_view.h"
+#include "core/settings_error.h"
 #include "core/mesh_slabs.h"
 
 namespace vdiso {
-
-// A setting out of range or at odds with the others. setting(): its name in snake case
-// ("lod_error"); what(): the rest of the sentence ("applies to the view-dependent methods ...").
-class SettingsError : public std::invalid_argument {
-public:
-    SettingsError(std::string setting, const std::string& rest)
-        : std::invalid_argument(rest), mSetting(std::move(setting)) {}
-    const std::string& setting() const { return mSetting; }
-
-private:
-    std::string mSetting;
-};
 
 struct ExtractSettings {
     std::string method = "octree";  // octree, noise (full); sage, wise (view-dependent)

@@ -19,6 +19,12 @@ struct CachePlan {
     int threads = 1;         // extraction threads
 };
 
+// The bricks a cache must hold for one frame: its pins (at most `prefetch` read ahead and
+// waiting, and per image strip its brick and one being read) never fill it when at most half
+// the cache is read ahead and at most a quarter of its bricks are strips. k frames extracting at
+// once need k times this (a cache holding every brick of its store never evicts: any number).
+uint64_t frameCacheBricks(int prefetch, int strips);
+
 // `threads`: what the user asked for, or 0 for the default (`defaultThreads`, lowered to what
 // the cache allows). Throws CacheBudgetError naming the cache size needed when an asked thread
 // count does not fit.

@@ -1,5 +1,9 @@
 #include "serve/server.h"
 
+#include "cache/cache_plan.h"
+#include "core/brick_extractor.h"
+#include "core/settings_error.h"
+
 #include <algorithm>
 #include <atomic>
 #include <fstream>
@@ -35,22 +39,21 @@ constexpr const char* kServerName = "vdiso";
 constexpr auto kHttpTimeout = std::chrono::seconds(30);
 constexpr size_t kReadPiece = 64 * 1024;  // WebSocket reads in pieces, so size is checked as it comes
 
-// Frames that may extract at once: each pins its strips' bricks and prefetches, which must
-// never fill a cache (a cache holding its whole volume never evicts, so then any number).
+// Frames that may extract at once: each needs frameCacheBricks of every store's cache
+// (cache/cache_plan.h, the rule vdiso extract plans by), so that pins never fill a cache.
 int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
     int slots = 64;
     for (size_t i = 0; i < stores.size(); ++i) {
         const BrickCache& cache = *stores[i].cache;
         const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
         if (bricks >= uint64_t(stores[i].reader->index().size())) continue;
-        const uint64_t perFrame = uint64_t(settings.prefetchBricks + 4 * settings.threads);
-        if (bricks < 2 * perFrame)
+        const uint64_t perFrame = frameCacheBricks(settings.prefetchBricks, settings.threads);
+        if (bricks < perFrame)
             throw CacheBudgetError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
-                                   " bricks cannot hold what one frame pins (" + std::to_string(2 * perFrame) +
+                                   " bricks cannot hold what one frame pins (" + std::to_string(perFrame) +
                                    " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
-                                   " KB with " + std::to_string(settings.threads) +
-                                   " threads a frame): raise the budget");
-        slots = std::min<int>(slots, int(bricks / (2 * perFrame)));
+                                   " KB with " + std::to_string(settings.threads) + " threads a frame)");
+        slots = std::min<int>(slots, int(bricks / perFrame));
     }
     return slots;
 }
@@ -94,7 +97,7 @@ struct Server::Impl {
     net::signal_set signals{ioc};
 
     explicit Impl(const ServeOptions& o)
-        : options(o), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
+        : options((checkServeOptions(o), o)), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
           settings(sessionSettings(o, stores)), gate(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 
@@ -413,6 +416,21 @@ void Server::Impl::shutdown() {
     }
     // Idle HTTP connections hold no work worth waiting for; sockets close with the context.
     ioc.stop();
+}
+
+void checkServeOptions(const ServeOptions& o) {
+    if (o.stores.empty()) throw SettingsError("stores", "expects at least one store");
+    if (o.threads < 1 || o.threads > 64)
+        throw SettingsError("threads", "expects 1 to 64 image strips a frame, not " + std::to_string(o.threads));
+    if (o.metaCellSize < 1 || o.metaCellSize > kMaxMetaCellSize)
+        throw SettingsError("metacell", "expects 1 to " + std::to_string(kMaxMetaCellSize) + " cells, not " +
+                                            std::to_string(o.metaCellSize));
+    if (!(o.lodError >= 0 && o.lodError <= 1e6))
+        throw SettingsError("lod_error", "expects pixels, 0 or more, not " + std::to_string(o.lodError));
+    if (!o.token.empty() &&
+        (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos))
+        throw SettingsError("token", "expects at least 16 characters of hex digits, '-' or '_'");
+    if (o.cacheBytes == 0) throw SettingsError("cache_mb", "expects a brick cache of 1 MB or more");
 }
 
 Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(options)) {

@@ -39,10 +39,14 @@ struct ServerCounters {
     uint64_t httpRequests = 0, httpRefused = 0;
 };
 
+// Checks each option's range (threads, meta-cell size, level-of-detail error, token, at least
+// one store); throws SettingsError (core/settings_error.h) naming it. Server's constructor calls it.
+void checkServeOptions(const ServeOptions& options);
+
 class Server {
 public:
-    // Opens the stores and the viewer's files and binds the port. Throws IoError naming what
-    // fails (a store, the web folder, the address).
+    // Checks the options, opens the stores and the viewer's files and binds the port. Throws
+    // SettingsError for an option, IoError naming what fails (a store, the web folder, the address).
     explicit Server(const ServeOptions& options);
     ~Server();
     Server(const Server&) = delete;

@@ -59,14 +59,10 @@ int runServe(int argc, char** argv) {
             o.threads = int(parseInt(a, args.value(a), 1, 64));
         } else if (a == "--lod-error") {
             o.lodError = parseDouble(a, args.value(a));
-            if (!(o.lodError >= 0 && o.lodError <= 1e6))
-                throw UsageError("--lod-error expects pixels, 0 or more, not " + std::to_string(o.lodError));
         } else if (a == "--metacell") {
             o.metaCellSize = int(parseInt(a, args.value(a), 1, 32));
         } else if (a == "--token") {
             o.token = args.value(a);
-            if (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos)
-                throw UsageError("--token expects at least 16 characters of hex digits, '-' or '_'");
         } else if (a == "--web") {
             o.webRoot = args.value(a);
         } else if (takeRemoteOption(a, args, o.remote)) {
@@ -77,6 +73,7 @@ int runServe(int argc, char** argv) {
         }
     }
     if (o.stores.empty()) throw UsageError("expects at least one STORE.vdiso");
+    serve::checkServeOptions(o);  // before the stores are opened
     serve::Server server(o);
     std::printf("vdiso serve: open %s\n", server.url().c_str());
     std::fflush(stdout);

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "bindings.h"
+#include "core/settings_error.h"
 #include "serve/server.h"
 
 namespace vdiso::py {
@@ -46,10 +47,7 @@ void bindServe(pyb::module_& m) {
         .def(pyb::init([](const std::vector<std::string>& stores, std::optional<double> iso, int port,
                           const std::string& host, uint64_t cacheMb, int threads, double lodError,
                           const std::string& webRoot) {
-                 if (stores.empty()) throw std::invalid_argument("stores: expects at least one store");
-                 if (port < 0 || port > 65535) throw std::invalid_argument("port: expects 0 to 65535");
-                 if (!(lodError >= 0 && lodError <= 1e6)) throw std::invalid_argument("lod_error: expects pixels, 0 or more");
-                 if (threads < 1 || threads > 64) throw std::invalid_argument("threads: expects 1 to 64");
+                 if (port < 0 || port > 65535) throw SettingsError("port", "expects 0 to 65535, not " + std::to_string(port));
                  serve::ServeOptions o;
                  o.stores = stores;
                  o.iso = iso;

@@ -200,6 +200,10 @@ def test_serve_shows_the_viewer_and_stops(volume_and_cli_store):
         urllib.request.urlopen(server.url, timeout=5)
     with pytest.raises(FileNotFoundError):
         vdiso.serve("missing.vdiso")
+    with pytest.raises(ValueError, match="lod_error expects"):
+        vdiso.serve(str(cli), lod_error=-1)
+    with pytest.raises(ValueError, match="port expects"):
+        vdiso.serve(str(cli), port=70000)
 
 
 @pytest.fixture
