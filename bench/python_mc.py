@@ -71,4 +71,5 @@ def main():
                       "input_mb": volume.nbytes / 1e6, "peak_over_input_mb": rss_mb() - base}))
 
 
-main()
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Speed on real scans beside the generated head, in one run, 1 thread against VTK's Flying Edges
+# on 1 thread (from Python over the same samples: bench/fe_python.py):
+#   one-shot   a fresh `vdiso extract` process per run, the store in the page cache (median)
+#   per frame  the median warm frame of a 36-step orbit (--path orbit:36, frames 1..35)
+# SAGE at the distant, normal and closeup views and vdiso's own octree (full surface), 1024^2.
+# Data: the Debian CT (data/cranium.nhdr: invesalius-examples' Cranium.inv3; skin -423.5, bone
+# 200.5), the MRI (data/ch2better.nii.gz 40.5, data/ch2.nii.gz 40.5 with skin: mricron-data)
+# and the generated head (vdiso synth --kind head --size 512: skin 600.5, bone 1224.5).
+#
+#   bench/real_scans.sh [REPEAT]       default 5
+set -euo pipefail
+cd "$(dirname "$0")/.."
+repeat=${1:-5}
+build=${BUILD_DIR:-build}
+vdiso=$build/bin/vdiso
+py=/usr/bin/python3
+scripts/fetch_data.sh
+mkdir -p data/bench
+[ -f data/bench/head512.raw ] || $vdiso synth data/bench/head512.raw --kind head --size 512 --quiet
+for s in cranium:data/cranium.nhdr ch2better:data/ch2better.nii.gz ch2:data/ch2.nii.gz head512:data/bench/head512.raw; do
+  name=${s%%:*} src=${s#*:}
+  [ -f data/bench/$name.vdiso ] && continue
+  if [ "$name" = head512 ]; then
+    $vdiso convert "$src" data/bench/$name.vdiso --dims 512,512,512 --type u16 --quiet
+  else
+    $vdiso convert "$src" data/bench/$name.vdiso --quiet
+  fi
+done
+rows=$(mktemp)
+trap 'rm -f "$rows"' EXIT
+# extract_s of `vdiso extract` with the given options, one JSON line per run.
+oneshot() {
+  local store=$1 iso=$2; shift 2
+  for _ in $(seq "$repeat"); do
+    $vdiso extract "data/bench/$store.vdiso" --iso "$iso" --threads 1 --size 1024x1024 --stats - --quiet "$@"
+  done
+}
+for spec in "cranium -423.5 data/cranium.nhdr" "cranium 200.5 data/cranium.nhdr" \
+            "ch2better 40.5 data/ch2better.nii.gz" "ch2 40.5 data/ch2.nii.gz" \
+            "head512 600.5 512x512x512xu16:data/bench/head512.raw" "head512 1224.5 512x512x512xu16:data/bench/head512.raw"; do
+  set -- $spec
+  store=$1 iso=$2 src=$3
+  fe=$($py bench/fe_python.py "$src" "$iso" 1 "$repeat")
+  octree=$(oneshot "$store" "$iso" --method octree | $py -c "import json,sys,statistics; print(statistics.median(json.loads(l)['extract_s'] for l in sys.stdin))")
+  for view in distant normal closeup; do
+    sage=$(oneshot "$store" "$iso" --method sage --view $view)
+    frames=$($vdiso extract "data/bench/$store.vdiso" --iso "$iso" --threads 1 --size 1024x1024 --method sage \
+             --view $view --path orbit:36 --stats - --quiet)
+    $py - "$store" "$iso" "$view" "$fe" "$octree" <<PY >> "$rows"
+import json, statistics, sys
+store, iso, view, fe, octree = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4]), float(sys.argv[5])
+runs = [json.loads(l) for l in """$sage""".splitlines()]
+frames = [json.loads(l) for l in """$frames""".splitlines()][1:]
+one = statistics.median(r["extract_s"] for r in runs)
+frame = statistics.median(f["extract_s"] for f in frames)
+print(json.dumps({"store": store, "iso": iso, "view": view, "fe_s": fe["seconds"], "fe_triangles": fe["triangles"],
+                  "octree_s": octree, "sage_s": one, "frame_s": frame, "triangles": runs[0]["triangles"],
+                  "points": runs[0]["points"], "decode_s": statistics.median(r["decode_s"] for r in runs),
+                  "io_s": statistics.median(r["io_s"] for r in runs),
+                  "bytes_decoded": runs[0]["bricks_loaded"]}))
+PY
+  done
+done
+$py - "$rows" <<'PY'
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+print("| scan | iso | view | FE s | octree s | SAGE one-shot s | FE / SAGE one-shot | SAGE / octree | SAGE frame s | FE / frame | triangles + points (FE) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
+for r in rows:
+    print(f"| {r['store']} | {r['iso']} | {r['view']} | {r['fe_s']:.3f} | {r['octree_s']:.3f} | {r['sage_s']:.3f} | "
+          f"{r['fe_s'] / r['sage_s']:.1f}x | {r['sage_s'] / r['octree_s']:.2f} | {r['frame_s']:.4f} | "
+          f"{r['fe_s'] / r['frame_s']:.1f}x | {r['triangles']} + {r['points']} ({r['fe_triangles']}) |")
+PY
