@@ -13,6 +13,8 @@
 
 #include "io/brick_store.h"
 #include "io/error.h"
+#include "io/remote/remote_session.h"
+#include "io/remote/s3_location.h"
 #include "tests/loopback_servers.h"
 #include "tests/test_util.h"
 
@@ -334,4 +336,40 @@ TEST_F(RemoteStore, HttpsNeedsTheRightAuthority) {
 }
 
 }  // namespace
+}  // namespace vdiso
+
+namespace vdiso {
+
+// A session resolves a bucket's endpoint, region and credentials once: every Zarr chunk of a
+// bucket reuses them (the environment and AWS's files are read for its first object only), and
+// the URL of each key is the one a fresh resolution gives.
+TEST(RemoteSessionS3, ResolvesABucketOnceAndEachKeyAsAlone) {
+    setenv("AWS_ACCESS_KEY_ID", "AKIDFIRST", 1);
+    setenv("AWS_SECRET_ACCESS_KEY", "first-secret", 1);
+    setenv("AWS_REGION", "eu-west-3", 1);
+    setenv("AWS_SHARED_CREDENTIALS_FILE", "/nonexistent", 1);
+    setenv("AWS_CONFIG_FILE", "/nonexistent", 1);
+    for (const S3Addressing addressing : {S3Addressing::Path, S3Addressing::VirtualHost}) {
+        RemoteOptions options;
+        options.s3Endpoint = "http://127.0.0.1:9";
+        options.s3Addressing = addressing;
+        RemoteSession session(options);
+        const S3Location first = session.s3Location("s3://bucket/a/0.0.0");
+        EXPECT_EQ(first.url, resolveS3Location("s3://bucket/a/0.0.0", options).url);
+        setenv("AWS_ACCESS_KEY_ID", "AKIDSECOND", 1);
+        const S3Location second = session.s3Location("s3://bucket/a/b c+1");
+        EXPECT_EQ(second.accessKey, "AKIDFIRST");
+        EXPECT_EQ(second.region, "eu-west-3");
+        EXPECT_EQ(second.key, "a/b c+1");
+        EXPECT_EQ(second.url, resolveS3Location("s3://bucket/a/b c+1", options).url);
+        EXPECT_EQ(resolveS3Location("s3://bucket/a/b c+1", options).accessKey, "AKIDSECOND");
+        EXPECT_EQ(session.s3Location("s3://other/k").accessKey, "AKIDSECOND");  // a new bucket: resolved
+        EXPECT_THROW(session.s3Location("s3://bucket"), IoError);
+        setenv("AWS_ACCESS_KEY_ID", "AKIDFIRST", 1);
+    }
+    for (const char* name : {"AWS_ACCESS_KEY_ID", "AWS_SECRET_ACCESS_KEY", "AWS_REGION",
+                             "AWS_SHARED_CREDENTIALS_FILE", "AWS_CONFIG_FILE"})
+        unsetenv(name);
+}
+
 }  // namespace vdiso

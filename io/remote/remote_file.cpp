@@ -181,7 +181,7 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
     Impl& d = *mImpl;
     d.session = std::move(session);
     if (location.rfind("s3://", 0) == 0) {
-        d.s3 = resolveS3Location(location, d.session->options());
+        d.s3 = d.session->s3Location(location);
         d.url = d.s3->url;
         mScheme = "s3";
         if (!d.s3->accessKey.empty()) {

@@ -9,6 +9,7 @@
 #include <exception>
 #include <thread>
 #include <vector>
+#include <map>
 #include <mutex>
 #include <new>
 
@@ -23,6 +24,8 @@ struct RemoteSession::Impl {
     std::mutex poolLock;
     std::condition_variable poolFree;
     int inUse = 0;
+    mutable std::mutex bucketsLock;
+    std::map<std::string, S3Location> buckets;  // resolved once per bucket
 };
 
 RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_unique<Impl>()) {
@@ -56,6 +59,20 @@ RemoteSession::~RemoteSession() {
 }
 
 const RemoteOptions& RemoteSession::options() const { return mImpl->options; }
+
+S3Location RemoteSession::s3Location(const std::string& s3Url) const {
+    std::string bucket, key;
+    splitS3Url(s3Url, bucket, key);
+    Impl& d = *mImpl;
+    {
+        std::lock_guard lock(d.bucketsLock);
+        if (auto it = d.buckets.find(bucket); it != d.buckets.end()) return withKey(it->second, key);
+    }
+    S3Location s = resolveS3Location(s3Url, d.options);
+    std::lock_guard lock(d.bucketsLock);
+    d.buckets.emplace(bucket, s);
+    return s;
+}
 
 // A fresh easy handle for every transfer, never one used before: libcurl 7.88 (Debian 12) frees
 // a transfer's stored headers when the next one starts but keeps a pointer to the last, so a

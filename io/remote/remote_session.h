@@ -12,6 +12,7 @@
 #include <memory>
 
 #include "io/remote/remote_options.h"
+#include "io/remote/s3_location.h"
 
 typedef void CURL;
 
@@ -37,6 +38,10 @@ public:
     // them): each call waits on the network, not a core. The first exception ends the rest
     // (those not started are not) and is thrown once all have returned.
     void forEach(size_t n, const std::function<void(size_t)>& work) const;
+
+    // An s3:// location resolved (io/remote/s3_location.h): the first object of a bucket reads
+    // the environment and AWS's files, the others reuse what it found. Thread-safe.
+    S3Location s3Location(const std::string& s3Url) const;
 
     // Requests sent (tries included) and object bytes received by every object of the session.
     std::atomic<uint64_t> requests{0}, bytesFetched{0};

@@ -69,17 +69,28 @@ std::string s3EncodeKey(const std::string& key) {
     return out;
 }
 
-S3Location resolveS3Location(const std::string& s3Url, const RemoteOptions& options) {
+void splitS3Url(const std::string& s3Url, std::string& bucket, std::string& key) {
     constexpr std::string_view kScheme = "s3://";
     if (s3Url.compare(0, kScheme.size(), kScheme) != 0)
         throwIoError(s3Url, "is not an s3://BUCKET/KEY location");
     const std::string rest = s3Url.substr(kScheme.size());
     const size_t slash = rest.find('/');
-    S3Location s;
-    s.bucket = rest.substr(0, slash);
-    s.key = slash == std::string::npos ? std::string() : rest.substr(slash + 1);
-    if (s.bucket.empty() || s.key.empty() || s.bucket.find_first_of("?#@: ") != std::string::npos)
+    bucket = rest.substr(0, slash);
+    key = slash == std::string::npos ? std::string() : rest.substr(slash + 1);
+    if (bucket.empty() || key.empty() || bucket.find_first_of("?#@: ") != std::string::npos)
         throwIoError(s3Url, "is not an s3://BUCKET/KEY location (a bucket and a key are needed)");
+}
+
+S3Location withKey(const S3Location& bucket, const std::string& key) {
+    S3Location s = bucket;
+    s.key = key;
+    s.url = s.base + s3EncodeKey(key);
+    return s;
+}
+
+S3Location resolveS3Location(const std::string& s3Url, const RemoteOptions& options) {
+    S3Location s;
+    splitS3Url(s3Url, s.bucket, s.key);
 
     const std::string profile = env("AWS_PROFILE").empty() ? "default" : env("AWS_PROFILE");
     bool credentialsNamed = false, configNamed = false;
@@ -121,11 +132,11 @@ S3Location resolveS3Location(const std::string& s3Url, const RemoteOptions& opti
     // Dotted bucket names do not match AWS's wildcard certificate: path style for those.
     if (options.s3Addressing == S3Addressing::Auto)
         virtualHost = aws && s.bucket.find('.') == std::string::npos;
-    const std::string key = s3EncodeKey(s.key);
     if (virtualHost)
-        s.url = endpoint.substr(0, schemeEnd + 3) + s.bucket + "." + endpoint.substr(schemeEnd + 3) + "/" + key;
+        s.base = endpoint.substr(0, schemeEnd + 3) + s.bucket + "." + endpoint.substr(schemeEnd + 3) + "/";
     else
-        s.url = endpoint + "/" + s.bucket + "/" + key;
+        s.base = endpoint + "/" + s.bucket + "/";
+    s.url = s.base + s3EncodeKey(s.key);
     return s;
 }
 
