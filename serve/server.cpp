@@ -3,6 +3,7 @@
 #include "cache/cache_plan.h"
 #include "core/brick_extractor.h"
 #include "core/settings_error.h"
+#include "io/json.h"
 
 #include <algorithm>
 #include <atomic>
@@ -15,6 +16,7 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -89,12 +91,15 @@ struct Server::Impl {
     // (when the next connection comes, and at the end of run()), not where the socket closed.
     std::vector<std::unique_ptr<ViewerSession>> retired;
     std::atomic<uint64_t> sessionsOpened{0}, httpRequests{0}, httpRefused{0};
+    std::atomic<uint64_t> acceptsBackedOff{0}, viewersRefused{0};
+    std::chrono::milliseconds acceptPause{0};  // the back-off after a failed accept (I/O thread only)
     std::atomic<bool> stopping{false};
     // Last, so destroyed first: its pending handlers hold connections, whose destructors
     // retire sessions into the members above.
     net::io_context ioc{1};
     tcp::acceptor acceptor{ioc};
     net::signal_set signals{ioc};
+    net::steady_timer acceptTimer{ioc};
 
     explicit Impl(const ServeOptions& o)
         : options((checkServeOptions(o), o)), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
@@ -150,9 +155,30 @@ public:
 private:
     void onAccept(beast::error_code error) {
         if (error) return;
+        try {
+            mViewer->start();
+        } catch (const std::system_error& e) {
+            // No thread for this viewer (a process or container thread limit): this viewer is
+            // told and closed; the others and the server go on.
+            ++mServer.viewersRefused;
+            refuse("the server cannot start work for another viewer now (" + std::string(e.what()) +
+                   "); try again later");
+            return;
+        }
         ++mServer.sessionsOpened;
-        mViewer->start();
         readPiece();
+    }
+
+    // Sends one error message and closes the WebSocket (policy error), on this connection's strand.
+    void refuse(const std::string& message) {
+        JsonObject o;
+        o.add("type", "error").add("message", message);
+        auto text = std::make_shared<std::string>(o.str());
+        mWs.text(true);
+        mWs.async_write(net::buffer(*text), [self = shared_from_this(), text](beast::error_code e, size_t) {
+            if (e) return;
+            self->mWs.async_close(websocket::close_code::policy_error, [self](beast::error_code) {});
+        });
     }
 
     void readPiece() {
@@ -372,15 +398,40 @@ bool Server::Impl::authorized(const http::request<http::string_body>& request, b
     return false;
 }
 
+// Out of descriptors or memory, an accept fails at once for as long as the shortage lasts:
+// retrying at once would spin a core. The server waits (10 ms, doubling to 1 s while it lasts),
+// says so once per shortage, and serves the viewers it has meanwhile.
+static bool isShortage(const beast::error_code& error) {
+    return error == net::error::no_descriptors || error == net::error::no_memory ||
+           error == net::error::no_buffer_space || error.value() == ENFILE;
+}
+
 void Server::Impl::accept() {
     acceptor.async_accept(net::make_strand(ioc), [this](beast::error_code error, tcp::socket socket) {
         if (stopping || error == net::error::operation_aborted) return;
-        if (!error) {
-            joinRetired(false);
-            std::make_shared<HttpSession>(std::move(socket), *this)->run();
+        if (isShortage(error)) {
+            if (acceptPause.count() == 0)
+                std::fprintf(stderr, "vdiso serve: cannot accept a connection (%s): waiting for one to close\n",
+                             error.message().c_str());
+            ++acceptsBackedOff;
+            acceptPause = std::clamp(acceptPause * 2, std::chrono::milliseconds(10), std::chrono::milliseconds(1000));
+            acceptTimer.expires_after(acceptPause);
+            acceptTimer.async_wait([this](beast::error_code e) {
+                if (!e && !stopping) accept();
+            });
+            return;
         }
-        // Other errors (out of file descriptors, a connection reset before it was accepted)
-        // pass: the server keeps accepting.
+        acceptPause = std::chrono::milliseconds(0);
+        if (!error) {
+            // A connection that cannot be set up (memory) is dropped; the server goes on.
+            try {
+                joinRetired(false);
+                std::make_shared<HttpSession>(std::move(socket), *this)->run();
+            } catch (const std::exception&) {
+            }
+        }
+        // Other errors (a connection reset before it was accepted) pass: the server keeps
+        // accepting.
         accept();
     });
 }
@@ -408,6 +459,7 @@ void Server::Impl::shutdown() {
     if (stopping.exchange(true)) return;
     beast::error_code ignored;
     acceptor.close(ignored);
+    acceptTimer.cancel();
     signals.cancel(ignored);
     {
         std::lock_guard lock(mutex);
@@ -501,6 +553,8 @@ ServerCounters Server::counters() const {
     }
     c.httpRequests = mImpl->httpRequests;
     c.httpRefused = mImpl->httpRefused;
+    c.acceptsBackedOff = mImpl->acceptsBackedOff;
+    c.viewersRefused = mImpl->viewersRefused;
     return c;
 }
 

@@ -37,6 +37,9 @@ struct ServeOptions {
 struct ServerCounters {
     uint64_t sessionsOpened = 0, sessionsOpen = 0;
     uint64_t httpRequests = 0, httpRefused = 0;
+    // Accepts that failed for want of a resource (descriptors, memory): each backs off before
+    // the next accept. Viewers refused because a thread for them could not be started.
+    uint64_t acceptsBackedOff = 0, viewersRefused = 0;
 };
 
 // Checks each option's range (threads, meta-cell size, level-of-detail error, token, at least

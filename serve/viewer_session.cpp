@@ -44,11 +44,12 @@ void ViewerSession::join() {
 }
 
 void ViewerSession::start() {
-    mOutbox.push(OutMessage::control(mStores.hello()));
+    // The worker first: when no thread can be started (std::system_error), nothing was sent.
     mWorker = std::thread([this] {
         work();
         mWorkerDone = true;
     });
+    mOutbox.push(OutMessage::control(mStores.hello()));
 }
 
 void ViewerSession::close() {

@@ -62,7 +62,8 @@ public:
     ViewerSession(const ViewerSession&) = delete;
     ViewerSession& operator=(const ViewerSession&) = delete;
 
-    // Queues the hello message and starts the worker.
+    // Starts the worker and queues the hello message; throws std::system_error, having queued
+    // nothing, when no thread can be started for it.
     void start();
     void onMessage(std::span<const uint8_t> bytes, bool text);
     // A message above kMaxClientMessageBytes was skipped unread.

@@ -8,6 +8,11 @@
 #include <future>
 #include <thread>
 
+#include <netinet/in.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
@@ -896,3 +901,57 @@ TEST(ServeServer, RefusesWhatItCannotServe) {
 
 }  // namespace
 }  // namespace vdiso
+
+namespace vdiso::serve {
+namespace {
+
+double processCpuSeconds() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1e6;
+}
+
+}  // namespace
+
+// Out of file descriptors, accepting fails at once for as long as the shortage lasts: the
+// server backs off instead of spinning, and accepts again when descriptors are free.
+TEST(ServeServer, OutOfDescriptorsBacksOffAndRecovers) {
+    ServerFixture fixture;
+    const uint16_t port = fixture.server->port();
+    rlimit saved{};
+    ASSERT_EQ(getrlimit(RLIMIT_NOFILE, &saved), 0);
+    // Clients' sockets take every descriptor left but a few, then connect: the kernel completes
+    // the connections, and the server's accept finds no descriptor for them.
+    rlimit low = saved;
+    low.rlim_cur = 256;
+    ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &low), 0);
+    std::vector<int> clients;
+    for (;;) {
+        const int fd = socket(AF_INET, SOCK_STREAM, 0);
+        if (fd < 0) break;
+        clients.push_back(fd);
+    }
+    ASSERT_GT(clients.size(), 8u);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    for (int fd : clients) ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    const double before = processCpuSeconds();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    const double spent = processCpuSeconds() - before;
+    EXPECT_LT(spent, 0.5) << "the accept loop spun while descriptors were out";
+    EXPECT_GT(fixture.server->counters().acceptsBackedOff, 0u);
+    for (int fd : clients) close(fd);
+    ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &saved), 0);
+    // Descriptors free again: the server answers within its back-off (at most a second).
+    int status = 0;
+    for (int attempt = 0; attempt < 40 && status != 200; ++attempt) {
+        status = httpGet(port, "/?token=" + fixture.server->token(), "");
+        if (status != 200) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    EXPECT_EQ(status, 200);
+}
+
+}  // namespace vdiso::serve
