@@ -1,7 +1,7 @@
 // A BrickSource over samples already in memory, in any strided layout and any file scalar type:
 // what meshing an array in place runs on (the Python module's marching_cubes), without a copy
 // of the volume. The samples are converted to the store type that holds them
-// (io/sample_decode.h storeTypeFor: i8 -> i16, i32/u32/f64 -> f32) brick by brick as bricks are
+// (io/readers/sample_decode.h storeTypeFor: i8 -> i16, i32/u32/f64 -> f32) brick by brick as bricks are
 // acquired; the brick ranges come from one pass over the samples at construction. The memory
 // must stay valid and unchanged while the source lives.
 #pragma once
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/brick_source.h"
-#include "io/sample_decode.h"
+#include "io/readers/sample_decode.h"
 
 namespace vdiso {
 

@@ -16,9 +16,9 @@
 #include "core/minmax_tree.h"
 #include "core/orientation.h"
 #include "core/progress.h"
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/json.h"
-#include "io/mesh_post.h"
+#include "io/mesh/mesh_post.h"
 
 namespace vdiso {
 
@@ -37,7 +37,7 @@ struct FrameOutput {
     // A full method (octree, noise) hands its mesh here as it is extracted and keeps none:
     // memory holds a bounded part of it. Null: the whole mesh is held.
     MeshSink* sink = nullptr;
-    // Post-processing's side files go beside this path (io/mesh_post.h); needed when the
+    // Post-processing's side files go beside this path (io/mesh/mesh_post.h); needed when the
     // settings post-process.
     std::string postBeside;
     ProgressFn postProgress;

@@ -6,7 +6,7 @@
 #include <optional>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/json.h"
 
 namespace vdiso {

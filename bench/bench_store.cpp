@@ -7,9 +7,9 @@
 
 #include <unistd.h>
 
-#include "io/brick_store.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/brick_store.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 
 namespace {
 

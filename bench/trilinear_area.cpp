@@ -13,9 +13,9 @@
 #include <glm/geometric.hpp>
 #include "cache/brick_cache.h"
 #include "core/extract_full.h"
-#include "io/brick_store.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/brick_store.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 using namespace vdiso;
 struct Upsampled final : SliceReader {
     VolumeInfo in, out; const std::vector<float>& v; int k; int64_t z = 0;

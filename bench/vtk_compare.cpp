@@ -64,7 +64,7 @@
 #include "core/extract_view.h"
 #include "core/mesh.h"
 #include "core/scalar_type.h"
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 
 namespace {
 

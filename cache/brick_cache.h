@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "core/brick_source.h"
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 
 namespace vdiso {
 

@@ -3,7 +3,7 @@
 // Series assembly (order, gaps, type) is covered by tests on headers alone (test_dicom.cpp).
 #include "fuzz/fuzz_input.h"
 #include "fuzz/read_volume.h"
-#include "io/dicom_reader.h"
+#include "io/readers/dicom_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vdiso::fuzz::MemoryFile file(data, size);

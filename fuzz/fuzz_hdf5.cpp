@@ -3,7 +3,7 @@
 // dataset, filters, hyperslab reads of every slice.
 #include "fuzz/fuzz_input.h"
 #include "fuzz/read_volume.h"
-#include "io/hdf5_reader.h"
+#include "io/readers/hdf5_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vdiso::fuzz::MemoryFile file(data, size);

@@ -1,4 +1,4 @@
-// The fuzz gate's self-test (scripts/fuzz.sh selftest): a helper process (io/helper_process.h)
+// The fuzz gate's self-test (scripts/fuzz.sh selftest): a helper process (io/readers/helper_process.h)
 // that ends as the input's first byte says, so the gate can be shown to fail on every way a
 // helper can die in a campaign, and to accept the one answer it accepts on purpose:
 //   'H' a heap-buffer-overflow (an AddressSanitizer report in the helper)
@@ -16,8 +16,8 @@
 #include <string>
 
 #include "fuzz/fuzz_input.h"
-#include "io/helper_process.h"
-#include "io/helper_wire.h"
+#include "io/readers/helper_process.h"
+#include "io/readers/helper_wire.h"
 
 namespace {
 

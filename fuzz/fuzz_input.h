@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "io/helper_process.h"
+#include "io/readers/helper_process.h"
 
 namespace vdiso::fuzz {
 
@@ -29,7 +29,7 @@ private:
 // calls f and lets those through as a normal outcome. std::bad_alloc is a finding (memory sized
 // from untrusted numbers), as is every crash, sanitizer report, hang and abort.
 //
-// A helper process's death (io/helper_process.h) is judged by how it died. An abort (SIGABRT)
+// A helper process's death (io/readers/helper_process.h) is judged by how it died. An abort (SIGABRT)
 // is a third-party library's assertion (GDCM's, on damage only GDCM can see), contained by the
 // helper and answered with an error naming the file: accepted here, on purpose. Any other end
 // (a crash by another signal, a sanitizer report, libFuzzer's out-of-memory exit, an exit

@@ -2,7 +2,7 @@
 // sizes, HeaderSize, decompression, every slice.
 #include "fuzz/fuzz_input.h"
 #include "fuzz/read_volume.h"
-#include "io/metaimage_reader.h"
+#include "io/readers/metaimage_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vdiso::fuzz::MemoryFile file(data, size);

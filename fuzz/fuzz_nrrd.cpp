@@ -1,7 +1,7 @@
 // NRRD headers and their data (attached, raw or gzip) through openNrrdVolume.
 #include "fuzz/fuzz_input.h"
 #include "fuzz/read_volume.h"
-#include "io/nrrd_reader.h"
+#include "io/readers/nrrd_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vdiso::fuzz::MemoryFile file(data, size);

@@ -11,8 +11,8 @@
 
 #include "core/synth.h"
 #include "fuzz/fuzz_input.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "serve/chunk_codec.h"
 #include "serve/protocol.h"
 #include "serve/store_catalog.h"

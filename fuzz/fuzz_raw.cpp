@@ -4,7 +4,7 @@
 
 #include "fuzz/fuzz_input.h"
 #include "fuzz/read_volume.h"
-#include "io/raw_reader.h"
+#include "io/readers/raw_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     constexpr size_t kArgs = 32;

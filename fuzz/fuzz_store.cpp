@@ -12,8 +12,8 @@
 #include "core/level_source.h"
 #include "core/orientation.h"
 #include "fuzz/fuzz_input.h"
-#include "io/brick_store.h"
-#include "io/store_format.h"
+#include "io/store/brick_store.h"
+#include "io/store/store_format.h"
 
 namespace {
 

@@ -2,7 +2,7 @@
 // page checks, strips and tiles, every codec libtiff was built with.
 #include "fuzz/fuzz_input.h"
 #include "fuzz/read_volume.h"
-#include "io/tiff_reader.h"
+#include "io/readers/tiff_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vdiso::fuzz::MemoryFile file(data, size);

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/scalar_type.h"
-#include "io/slice_reader.h"
+#include "io/readers/slice_reader.h"
 
 namespace vdiso::fuzz {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/progress.h"
-#include "io/slice_reader.h"
+#include "io/readers/slice_reader.h"
 
 namespace vdiso {
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "io/error.h"
-#include "io/mesh_writer.h"
-#include "io/stl_writer.h"
+#include "io/mesh/mesh_writer.h"
+#include "io/mesh/stl_writer.h"
 #include "mpi/rank_status.h"
 #include "mpi/shared_output.h"
 

@@ -1,5 +1,5 @@
-// One mesh file written by all ranks at once (MPI-IO), in the layouts of io/mesh_writer.h (PLY)
-// and io/stl_writer.h (STL), so the file is the one `vdiso extract -o MESH` writes, byte for
+// One mesh file written by all ranks at once (MPI-IO), in the layouts of io/mesh/mesh_writer.h (PLY)
+// and io/mesh/stl_writer.h (STL), so the file is the one `vdiso extract -o MESH` writes, byte for
 // byte.
 //
 // The file is shared by the ranks (mpi/shared_output.h): written under a temporary name beside

@@ -19,7 +19,7 @@
 #include "core/brick_levels.h"
 #include "core/interrupt.h"
 #include "io/atomic_output.h"
-#include "io/brick_encoder.h"
+#include "io/store/brick_encoder.h"
 #include "io/error.h"
 #include "mpi/rank_status.h"
 #include "mpi/shared_output.h"

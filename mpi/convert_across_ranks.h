@@ -1,5 +1,5 @@
 // Conversion into one brick store shared by the ranks of an mpirun job: the library side of
-// `vdiso-mpi convert`. The store equals the one writeBrickStore (io/store_writer.h) makes from
+// `vdiso-mpi convert`. The store equals the one writeBrickStore (io/store/store_writer.h) makes from
 // the same input, in every header field, brick, entry, sub-block code and histogram count; only
 // where each brick lies in the file differs.
 //
@@ -11,7 +11,7 @@
 // level, the ranks exchange the few slices at their borders that each other's layers and
 // filters need (point to point), encode the layers whose first cell slice they own, and filter
 // their own slices of the next level. Bricks are encoded by the functions writeBrickStore uses
-// (io/brick_encoder.h).
+// (io/store/brick_encoder.h).
 //
 // Writing: rank 0 refuses an existing output and creates a temporary file beside it
 // (shared_output.h); every rank writes its compressed bricks into it, at offsets agreed in
@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "core/volume.h"
-#include "io/slice_reader.h"
-#include "io/store_writer.h"
+#include "io/readers/slice_reader.h"
+#include "io/store/store_writer.h"
 #include "mpi/communicator.h"
 
 namespace vdiso::mpi {

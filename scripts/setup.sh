@@ -13,10 +13,10 @@ packages=(
   chromium                                # the viewer's end-to-end test (headless)
   libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
   clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
-  libtiff-dev                             # TIFF stacks (io/tiff_reader.h)
-  libgdcm-dev                             # DICOM series (io/dicom_reader.h)
-  libhdf5-dev                             # HDF5 datasets (io/hdf5_reader.h)
-  libblosc-dev                            # Zarr chunks (io/zarr_array.h)
+  libtiff-dev                             # TIFF stacks (io/readers/tiff_reader.h)
+  libgdcm-dev                             # DICOM series (io/readers/dicom_reader.h)
+  libhdf5-dev                             # HDF5 datasets (io/readers/hdf5_reader.h)
+  libblosc-dev                            # Zarr chunks (io/readers/zarr_array.h)
   libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
   libcurl4-openssl-dev                    # remote stores over HTTP(S) and S3 (io/remote)
   nginx-light python3-botocore curl openssl   # their tests' servers (tests/remote/)

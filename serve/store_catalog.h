@@ -12,7 +12,7 @@
 #include "cache/brick_cache.h"
 #include "core/meta_cell_range_cache.h"
 #include "core/minmax_tree.h"
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 
 namespace vdiso::serve {
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
 #include "tests/test_util.h"
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "io/sample_decode.h"
-#include "io/slice_reader.h"
+#include "io/readers/sample_decode.h"
+#include "io/readers/slice_reader.h"
 #include "tests/test_util.h"
 
 namespace vdiso::test {

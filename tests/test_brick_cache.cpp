@@ -9,8 +9,8 @@
 
 #include "cache/brick_cache.h"
 #include "io/error.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tests/test_util.h"
 
 namespace vdiso {

@@ -10,7 +10,7 @@
 
 #include <zlib.h>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "tests/mesh_test_readers.h"
 #include "tests/test_util.h"
 

@@ -22,11 +22,11 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
-#include "io/dicom_reader.h"
-#include "io/dicom_series.h"
+#include "io/store/brick_store.h"
+#include "io/readers/dicom_reader.h"
+#include "io/readers/dicom_series.h"
 #include "io/error.h"
-#include "io/volume_open.h"
+#include "io/readers/volume_open.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 
@@ -294,7 +294,7 @@ TEST_F(DicomReader, ConvertsFromTheCommandLine) {
               "");
 }
 
-// GDCM is a module loaded at the first DICOM file (io/gdcm_module/gdcm_module.h): without it,
+// GDCM is a module loaded at the first DICOM file (io/readers/gdcm_module/gdcm_module.h): without it,
 // the command refuses the input naming it and the module, and writes nothing.
 TEST_F(DicomErrors, MissingModuleIsNamed) {
     SliceSpec s;

@@ -18,9 +18,9 @@
 #include "core/extract_view.h"
 #include "core/iso.h"
 #include "core/synth.h"
-#include "io/brick_store.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/brick_store.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tests/extract_test_util.h"
 #include "tests/test_util.h"
 

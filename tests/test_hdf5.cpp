@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
-#include "io/hdf5_reader.h"
-#include "io/sample_decode.h"
-#include "io/volume_open.h"
+#include "io/readers/hdf5_reader.h"
+#include "io/readers/sample_decode.h"
+#include "io/readers/volume_open.h"
 #include "tests/reader_test_util.h"
 
 namespace vdiso {
@@ -164,7 +164,7 @@ TEST_F(Hdf5Reader, ConvertsFromTheCommandLineChunkedAcrossSlabs) {
               "");
 }
 
-// libhdf5 is a module loaded at the first HDF5 file (io/hdf5_module/hdf5_module.h): without
+// libhdf5 is a module loaded at the first HDF5 file (io/readers/hdf5_module/hdf5_module.h): without
 // it, the command refuses the input naming it and the module, and writes nothing.
 TEST_F(Hdf5Errors, MissingModuleIsNamed) {
     hid_t f = create("ct.h5");

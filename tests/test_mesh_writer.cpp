@@ -11,7 +11,7 @@
 
 #include "core/extract_full.h"
 #include "io/error.h"
-#include "io/mesh_writer.h"
+#include "io/mesh/mesh_writer.h"
 #include "tests/extract_test_util.h"
 #include "tests/mesh_test_readers.h"
 #include "tests/test_util.h"

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
-#include "io/metaimage_reader.h"
-#include "io/sample_decode.h"
-#include "io/volume_open.h"
+#include "io/readers/metaimage_reader.h"
+#include "io/readers/sample_decode.h"
+#include "io/readers/volume_open.h"
 #include "tests/reader_test_util.h"
 
 namespace vdiso {

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "core/synth.h"
-#include "io/brick_store.h"
-#include "io/image_compare.h"
-#include "io/png_image.h"
+#include "io/store/brick_store.h"
+#include "io/render/image_compare.h"
+#include "io/render/png_image.h"
 #include "tests/mpi_test_util.h"
 #include "tests/test_util.h"
 

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "tests/mpi_test_util.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"

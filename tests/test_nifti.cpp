@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "io/nifti_reader.h"
-#include "io/sample_decode.h"
+#include "io/readers/nifti_reader.h"
+#include "io/readers/sample_decode.h"
 #include "tests/reader_test_util.h"
 
 namespace vdiso {

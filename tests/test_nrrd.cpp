@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "io/nrrd_reader.h"
-#include "io/sample_decode.h"
+#include "io/readers/nrrd_reader.h"
+#include "io/readers/sample_decode.h"
 #include "tests/reader_test_util.h"
 
 namespace vdiso {

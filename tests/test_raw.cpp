@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "io/error.h"
-#include "io/raw_reader.h"
+#include "io/readers/raw_reader.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 

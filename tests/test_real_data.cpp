@@ -4,9 +4,9 @@
 
 #include <cstdlib>
 
-#include "io/brick_store.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/brick_store.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tests/test_util.h"
 
 namespace vdiso {

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
 #include "io/remote/remote_session.h"
 #include "io/remote/s3_location.h"

@@ -15,8 +15,8 @@
 
 #include "core/camera.h"
 #include "io/error.h"
-#include "io/png_image.h"
-#include "io/renderer.h"
+#include "io/render/png_image.h"
+#include "io/render/renderer.h"
 #include "tests/test_util.h"
 
 namespace vdiso {

@@ -9,12 +9,12 @@
 
 #include "core/brick_layout.h"
 #include "core/synth.h"
-#include "io/brick_store.h"
-#include "io/byte_shuffle.h"
+#include "io/store/brick_store.h"
+#include "io/store/byte_shuffle.h"
 #include "io/error.h"
-#include "io/store_format.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/store_format.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 

@@ -13,10 +13,10 @@
 #include "core/iso.h"
 #include "core/sub_blocks.h"
 #include "core/synth.h"
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tests/extract_test_util.h"
 #include "tests/test_util.h"
 

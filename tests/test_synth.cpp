@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "io/volume_open.h"
+#include "io/readers/volume_open.h"
 #include "tests/reader_test_util.h"
 
 namespace vdiso {

@@ -11,12 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
-#include "io/file_list.h"
-#include "io/sample_decode.h"
-#include "io/tiff_reader.h"
-#include "io/volume_open.h"
+#include "io/readers/file_list.h"
+#include "io/readers/sample_decode.h"
+#include "io/readers/tiff_reader.h"
+#include "io/readers/volume_open.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
 

@@ -12,8 +12,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "io/index_parts.h"
-#include "io/store_format.h"
+#include "io/store/index_parts.h"
+#include "io/store/store_format.h"
 
 namespace vdiso::test {
 

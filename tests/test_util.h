@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
-#include "io/slice_reader.h"
+#include "io/store/brick_store.h"
+#include "io/readers/slice_reader.h"
 
 // Built with AddressSanitizer: its shadow memory takes terabytes of address space, so tests that
 // run under an address-space limit (ulimit -v) cannot run.

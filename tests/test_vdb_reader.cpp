@@ -1,4 +1,4 @@
-#include "io/vdb_reader.h"
+#include "io/readers/vdb_reader.h"
 
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>

@@ -12,8 +12,8 @@
 #include "core/depth_slabs.h"
 #include "core/extract_view.h"
 #include "core/image_strips.h"
-#include "io/image_compare.h"
-#include "io/renderer.h"
+#include "io/render/image_compare.h"
+#include "io/render/renderer.h"
 #include "tests/extract_test_util.h"
 
 namespace vdiso {

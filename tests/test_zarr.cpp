@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/error.h"
-#include "io/sample_decode.h"
-#include "io/volume_open.h"
-#include "io/zarr_array.h"
-#include "io/zarr_reader.h"
+#include "io/readers/sample_decode.h"
+#include "io/readers/volume_open.h"
+#include "io/readers/zarr_array.h"
+#include "io/readers/zarr_reader.h"
 #include "tests/loopback_servers.h"
 #include "tests/reader_test_util.h"
 

@@ -4,7 +4,7 @@
 #include "cache/brick_cache.h"
 #include "core/interrupt.h"
 #include "io/atomic_output.h"
-#include "io/dicom_series.h"
+#include "io/readers/dicom_series.h"
 
 #include <algorithm>
 #include <charconv>

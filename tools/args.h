@@ -12,7 +12,7 @@
 
 #include "core/volume.h"
 #include "io/remote/remote_options.h"
-#include "io/store_writer.h"
+#include "io/store/store_writer.h"
 
 namespace vdiso::cli {
 

@@ -1,7 +1,7 @@
 #include <cstdio>
 
-#include "io/image_compare.h"
-#include "io/png_image.h"
+#include "io/render/image_compare.h"
+#include "io/render/png_image.h"
 #include "tools/args.h"
 #include "tools/commands.h"
 

@@ -1,7 +1,7 @@
 #include <cstdio>
 
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tools/args.h"
 #include "tools/convert_args.h"
 #include "tools/commands.h"

@@ -8,7 +8,7 @@
 
 #include "app/store_info.h"
 #include "core/orientation.h"
-#include "io/brick_store.h"
+#include "io/store/brick_store.h"
 #include "io/json.h"
 #include "tools/args.h"
 #include "tools/commands.h"

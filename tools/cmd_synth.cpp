@@ -1,8 +1,8 @@
 #include <cstdio>
 
 #include "io/raw_writer.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tools/args.h"
 #include "tools/commands.h"
 #include "tools/progress_bar.h"

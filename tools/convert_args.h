@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "io/raw_reader.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/readers/raw_reader.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "tools/args.h"
 
 namespace vdiso::cli {

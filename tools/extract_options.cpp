@@ -5,7 +5,7 @@
 
 #include "app/view_camera.h"
 #include "io/camera_json.h"
-#include "io/mesh_writer.h"
+#include "io/mesh/mesh_writer.h"
 #include "tools/args.h"
 
 namespace vdiso::cli {

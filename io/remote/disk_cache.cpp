@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "io/error.h"
-#include "io/store_format.h"
+#include "io/store/store_format.h"
 
 namespace vdiso {
 

@@ -1,5 +1,5 @@
 // One object over HTTP(S) or S3, read by byte ranges with libcurl: the store reader's source
-// when it is given a URL (io/byte_source.h).
+// when it is given a URL (io/store/byte_source.h).
 //
 // Opening sends one ranged GET for the object's first bytes (the store's header), which pins
 // its size and version: the ETag, or Last-Modified when the server gives no strong ETag. Every

@@ -2,7 +2,7 @@
 // (so a second object reuses the first one's connection), the bound of RemoteOptions::connections
 // requests in flight, and the counts of requests and bytes.
 // A store's one object (io/remote/remote_file.h) has a session of its own; the chunks of a Zarr
-// array over HTTP or S3 (io/zarr_keys.h) share one.
+// array over HTTP or S3 (io/readers/zarr_keys.h) share one.
 #pragma once
 
 #include <atomic>

@@ -8,7 +8,7 @@
 #include "io/atomic_output.h"
 #include "io/json.h"
 #include "io/process_stats.h"
-#include "io/volume_open.h"
+#include "io/readers/volume_open.h"
 #include "mpi/cli/commands.h"
 #include "mpi/convert_across_ranks.h"
 #include "mpi/rank_status.h"

@@ -6,7 +6,7 @@
 #include <pybind11/pybind11.h>
 
 #include "app/array_brick_source.h"
-#include "io/sample_decode.h"
+#include "io/readers/sample_decode.h"
 
 namespace vdiso::py {
 

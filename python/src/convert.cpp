@@ -9,9 +9,9 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "io/error.h"
-#include "io/slice_reader.h"
-#include "io/store_writer.h"
-#include "io/volume_open.h"
+#include "io/readers/slice_reader.h"
+#include "io/store/store_writer.h"
+#include "io/readers/volume_open.h"
 #include "released.h"
 
 namespace vdiso::py {

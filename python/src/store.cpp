@@ -15,8 +15,8 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "io/camera_json.h"
-#include "io/mesh_writer.h"
-#include "io/renderer.h"
+#include "io/mesh/mesh_writer.h"
+#include "io/render/renderer.h"
 #include "released.h"
 
 namespace vdiso::py {

@@ -1,6 +1,6 @@
 // What the page draws: a three.js renderer, one camera, the triangles of every chunk in one
 // BatchedMesh and the points of each chunk in a THREE.Points, with shading that matches vdiso's
-// own renderer (io/renderer.h): a headlight at the eye, a little ambient, two-sided.
+// own renderer (io/render/renderer.h): a headlight at the eye, a little ambient, two-sided.
 //
 // Why one BatchedMesh. A frame is thousands of chunks (one per brick, a few hundred triangles
 // each on a 1024^3 volume). As one THREE.Mesh each, every frame pays a draw call per chunk
@@ -28,7 +28,7 @@ const SHININESS = 40.0;
 // In device pixels, like the server's viewport: points stand for sub-pixel meta-cells.
 const POINT_SIZE = 1.0;
 
-// Lighting as vdiso's renderer gets it from OpenGL's fixed-function pipeline (io/renderer.cpp),
+// Lighting as vdiso's renderer gets it from OpenGL's fixed-function pipeline (io/render/renderer.cpp),
 // so that the page's picture can be compared with it pixel for pixel: computed per vertex and
 // clamped, a point light at the eye (local viewer), and GL's two-sided model, where a triangle
 // seen from behind is lit with its normals turned round. Points have no side: their normals

@@ -1,0 +1,50 @@
+// Where a brick store's bytes come from: a local file, or an object over HTTP(S) or S3
+// (io/remote/remote_file.h). The store reader (io/store/brick_store.h) reads its header, index and
+// bricks through this and nothing else.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "io/remote/remote_file.h"
+#include "io/remote/remote_options.h"
+
+namespace vdiso {
+
+// How a local store is read. Buffered: through the page cache (repeated runs hit memory).
+// Cold: the file's pages are dropped at open and every brick is read from the disk, so I/O
+// times mean what they say. Cold reads use O_DIRECT (aligned reads of whole 4 KiB blocks; the
+// format aligns every brick for it); where the file system refuses O_DIRECT (tmpfs), each
+// brick's pages are dropped after it is read instead (posix_fadvise DONTNEED).
+enum class ReadMode { Buffered, Cold };
+
+// A read's destination must be aligned to this and have room for the read rounded up to it
+// (O_DIRECT reads whole blocks).
+constexpr size_t kByteSourceAlignment = 4096;
+
+class ByteSource {
+public:
+    virtual ~ByteSource() = default;
+    // The path, or the URL without its query.
+    virtual const std::string& name() const = 0;
+    virtual uint64_t size() const = 0;
+    // Exactly n bytes at `offset` into dst (see kByteSourceAlignment). Throws IoError naming the
+    // source, `what` was being read and where.
+    virtual void read(uint64_t offset, size_t n, void* dst, const char* what) const = 0;
+    // The ranges at once where the source can (remote: concurrently), else in turn.
+    virtual void readMany(std::span<const ByteRange> ranges, const char* what) const;
+    // "buffered", "direct", "fadvise" (local), "http", "https", "s3" (remote).
+    virtual const char* method() const = 0;
+    // The remote object behind it, or null for a local file.
+    virtual const RemoteFile* remote() const { return nullptr; }
+};
+
+// Opens a path or a URL (io/remote/remote_file.h: isRemoteLocation). `headBytes`: what a
+// remote source fetches with its open and keeps (the store's header). `mode` is for local files
+// (a remote store is always read from the network). Throws IoError naming the location.
+std::unique_ptr<ByteSource> openByteSource(const std::string& location, ReadMode mode,
+                                           const RemoteOptions& remote, size_t headBytes);
+
+}  // namespace vdiso

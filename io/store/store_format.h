@@ -1,0 +1,53 @@
+// Byte layout of the brick store's header and index (docs/store-format.md), shared by the
+// writer and the reader so the format is spelled out once. Internal to io/.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "io/store/brick_store.h"
+
+namespace vdiso::store_format {
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the store is little-endian on disk");
+
+constexpr char kHeaderMagic[8] = {'V', 'D', 'I', 'S', 'O', 'B', 'S', 'T'};
+constexpr char kIndexMagic[8] = {'V', 'D', 'I', 'S', 'O', 'I', 'D', 'X'};
+constexpr size_t kEntryBytes = 32;
+
+std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& header);
+
+// Validates and decodes; throws IoError("<path>: ...") on anything wrong.
+StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string& path);
+
+// `subBlocks`: kSubBlocksPerBrick codes per entry. The index as the current version stores it
+// (packed).
+std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
+                                       const ValueHistogram& histogram,
+                                       const std::vector<SubBlockCode>& subBlocks);
+
+// Bricks of every level of detail the header describes.
+int64_t totalBricks(const StoreHeader& header);
+
+// Size in bytes of the raw index of a store with `brickCount` bricks (stored as such before
+// version 5; packed in compressed parts from 5: io/store/index_parts.h).
+uint64_t indexBytes(uint64_t brickCount);
+
+// Validates (version 5: the parts; then magic, count, checksum, every entry's offset and size
+// against the file) and decodes the stored index (`n` bytes); throws IoError naming the file
+// and, for a bad entry, the brick. The sub-block codes are not copied: `subBlocks` points into
+// the raw index, whose storage is returned (keep it while subBlocks is used).
+std::unique_ptr<unsigned char[]> decodeIndex(std::unique_ptr<unsigned char[]> stored, size_t n,
+                                             const StoreHeader& header, const BrickLayout& layout,
+                                             const std::string& path, std::vector<BrickEntry>& entries,
+                                             ValueHistogram& histogram,
+                                             std::span<const SubBlockCode>& subBlocks);
+
+// CRC-32 (zlib) of a byte range: the store's checksum algorithm.
+uint32_t crc32Of(const void* data, size_t n);
+
+}  // namespace vdiso::store_format

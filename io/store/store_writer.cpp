@@ -1,0 +1,147 @@
+#include "io/store/store_writer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <functional>
+#include <future>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "core/brick_levels.h"
+#include "core/interrupt.h"
+#include "io/atomic_output.h"
+#include "io/store/brick_encoder.h"
+
+namespace vdiso {
+
+namespace {
+
+// A coarser level being made: its slices as they are filtered from the level below, and the
+// next of its layers of bricks to encode.
+struct LevelInProgress {
+    BrickLevel level;
+    std::unique_ptr<MappedSlices> ring;
+    int64_t nextSlice = 0;
+    int64_t nextLayer = 0;
+};
+
+}  // namespace
+
+StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPath,
+                                  const StoreWriteOptions& options, const ProgressFn& progress) {
+    const auto start = std::chrono::steady_clock::now();
+    const VolumeInfo info = storeVolumeFor(source.info(), options, source.name());
+    const BrickLayout layout(info.dims, options.brickSize);
+    const size_t sampleBytes = scalarSize(info.type);
+    const int B = options.brickSize;
+    const int levelCount = storeLevelCount(layout, options);
+    const std::vector<BrickLevel> levels = brickLevels(info, B, levelCount);
+
+    AtomicOutputFile out(outPath, options.overwrite, source.files());
+    uint64_t fileEnd = kStoreHeaderBytes;  // the header is written last, at offset 0
+
+    // Level 0 holds 2B+3 slices: a layer's B+3 and B more that the reader fills meanwhile; each
+    // coarser level the B+3 of its layer.
+    const MappedSlices ring(info.dims, sampleBytes, 2 * int64_t(B) + kGhostBefore + kGhostAfter, source.name());
+    std::vector<LevelInProgress> coarse(size_t(levelCount - 1));
+    for (size_t l = 0; l < coarse.size(); ++l) {
+        coarse[l].level = levels[l + 1];
+        coarse[l].ring = std::make_unique<MappedSlices>(coarse[l].level.volume.dims, sampleBytes,
+                                                        int64_t(B) + kGhostBefore + kGhostAfter, source.name());
+    }
+
+    const int64_t totalBricks = levels.back().firstBrick + levels.back().layout.brickCount();
+    std::vector<BrickEntry> entries(static_cast<size_t>(totalBricks));
+    std::vector<SubBlockCode> subBlocks(entries.size() * kSubBlocksPerBrick);
+    BrickEncoder encoder(info.type, options);
+    BrickGroupWriter writer(out.fd(), out.path());
+
+    // Encodes and writes layer `bk` of a level, its slices in `window`, a group of rows at a
+    // time, each written in the order made while the next is encoded.
+    auto emitLayer = [&](const SliceWindow& window, const BrickLevel& level, int64_t bk) {
+        const BrickLayout& lay = level.layout;
+        const int64_t rowBricks = lay.brickCounts[0];
+        const int64_t groupRows = brickRowsPerGroup(lay);
+        for (int64_t bj = 0; bj < lay.brickCounts[1]; bj += groupRows) {
+            std::vector<EncodedBrick>& group = writer.group();
+            const int64_t firstId = lay.brickId(0, bj, bk);
+            const int64_t count = std::min(groupRows, lay.brickCounts[1] - bj) * rowBricks;
+            encoder.encode(window, lay, firstId, count, level.firstBrick == 0, group);
+            const uint64_t groupStart = fileEnd;
+            fileEnd = placeBricks(group, count, groupStart);
+            for (int64_t b = 0; b < count; ++b) {
+                const EncodedBrick& eb = group[size_t(b)];
+                const int64_t id = level.firstBrick + firstId + b;
+                entries[size_t(id)] = eb.entry;
+                std::copy(std::begin(eb.subBlocks), std::end(eb.subBlocks),
+                          subBlocks.begin() + id * kSubBlocksPerBrick);
+            }
+            writer.write(count, groupStart, fileEnd);
+        }
+    };
+
+    // Level `l` (>= 1) makes every slice it can now that the level below holds slices up to
+    // `below`; each new slice goes on to the next level, and each layer it completes is encoded.
+    std::function<void(size_t, int64_t)> feed = [&](size_t l, int64_t below) {
+        LevelInProgress& level = coarse[l - 1];
+        const SliceWindow fineWindow = l == 1 ? ring.window() : coarse[l - 2].ring->window();
+        const Dims3& fine = levels[l - 1].volume.dims;
+        const Dims3& dims = level.level.volume.dims;
+        const SliceWindow window = level.ring->window();
+        while (level.nextSlice < dims[2] &&
+               (2 * level.nextSlice + 1 <= below || below == fine[2] - 1)) {
+            const int64_t z = level.nextSlice;
+            downsampleSlice(info.type, fineWindow, fine, dims, z, window.slice(z));
+            ++level.nextSlice;
+            if (l < coarse.size()) feed(l + 1, z);
+            const BrickLayout& lay = level.level.layout;
+            // (Two layers can end on the volume's last slice.)
+            while (level.nextLayer < lay.brickCounts[2] && lastSliceOfLayer(lay, level.nextLayer) == z)
+                emitLayer(window, level.level, level.nextLayer++);
+        }
+    };
+
+    const SliceWindow window = ring.window();
+    readSlices(source, window, 0, lastSliceOfLayer(layout, 0) + 1);
+    int64_t fedSlices = 0;  // level-0 slices handed to level 1
+    for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
+        throwIfInterrupted(source.name());  // also without a progress callback
+        std::future<void> prefetch;
+        if (bk + 1 < layout.brickCounts[2])
+            prefetch = std::async(std::launch::async, readSlices, std::ref(source), window,
+                                  lastSliceOfLayer(layout, bk) + 1, lastSliceOfLayer(layout, bk + 1) + 1);
+        emitLayer(window, levels[0], bk);
+        // The slices the next layer does not read again are final for level 1 now; the reader
+        // fills other slots meanwhile.
+        if (!coarse.empty()) {
+            const int64_t last = lastSliceOfLayer(layout, bk);
+            for (; fedSlices <= last; ++fedSlices) feed(1, fedSlices);
+        }
+        if (prefetch.valid()) prefetch.get();
+        if (progress) progress(double(bk + 1) / double(layout.brickCounts[2]));
+    }
+    writer.finish();
+    for (const LevelInProgress& level : coarse)
+        if (level.nextLayer != level.level.layout.brickCounts[2])
+            throw std::logic_error("store writer: a level of detail was not completed");
+    source.finish();
+
+    const StoreTail tail = finishStore(info, options, levelCount, layout.brickCount(), entries, subBlocks,
+                                       encoder.fineHistogram(), fileEnd);
+    out.writeAt(tail.index.data(), tail.index.size(), fileEnd);
+    out.writeAt(tail.headerBytes.data(), tail.headerBytes.size(), 0);
+    out.commit();
+
+    StoreWriteSummary summary;
+    summary.bricks = totalBricks;
+    summary.levels = levelCount;
+    summary.level0Bytes = tail.level0Bytes;
+    summary.coarseBytes = tail.header.storedBrickBytes - tail.level0Bytes;
+    summary.inputBytes = info.byteSize();
+    summary.fileBytes = fileEnd + tail.index.size();
+    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
+}
+
+}  // namespace vdiso
