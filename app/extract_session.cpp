@@ -5,9 +5,9 @@
 
 #include "cache/cache_plan.h"
 #include "core/clock.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
-#include "core/level_source.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/lod/level_source.h"
 #include "core/orientation.h"
 #include "app/extract_stats_json.h"
 #include "io/process_stats.h"

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "core/brick_extractor.h"
+#include "core/kernel/brick_extractor.h"
 #include "core/brick_levels.h"
 
 namespace vdiso {

@@ -12,10 +12,10 @@
 
 #include "cache/brick_cache.h"
 #include "cache/cache_plan.h"
-#include "core/brick_prefetcher.h"
-#include "core/extract_view.h"
+#include "core/extract/brick_prefetcher.h"
+#include "core/extract/extract_view.h"
 #include "core/settings_error.h"
-#include "core/mesh_slabs.h"
+#include "core/mesh_post/mesh_slabs.h"
 
 namespace vdiso {
 

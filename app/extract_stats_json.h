@@ -2,12 +2,12 @@
 // the same by vdiso extract, vdiso-mpi extract and the Python module.
 #pragma once
 
-#include "core/extract_stats.h"
+#include "core/extract/extract_stats.h"
 #include "io/json.h"
 
 namespace vdiso {
 
-// The culling counters of sage and wise (core/extract_stats.h ViewCounters): culled_range,
+// The culling counters of sage and wise (core/extract/extract_stats.h ViewCounters): culled_range,
 // culled_frustum, culled_occlusion, culled_region, dropped_subpixel, meta_cells_extracted,
 // scan_s, cells_culled, bricks_prefetched_unused, bricks_culled_by_sub_blocks, polygons_hidden.
 void addViewCounters(JsonObject& s, const ExtractStats& stats);

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/orientation.h"
-#include "core/span_space.h"
+#include "core/trees/span_space.h"
 
 namespace vdiso {
 

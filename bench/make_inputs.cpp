@@ -36,7 +36,7 @@ const char* const kUsage =
     "usage: vdiso_bench_inputs OUT_DIR [--raw FILE | --synth N] [--only NAME,...]\n"
     "                          [--dicom-slices S] [--chunk C]\n"
     "  --raw FILE        the head as raw u16, N^3 samples, x fastest (data/head1024.raw)\n"
-    "  --synth N         generate the head at N^3 instead (core/synth.h; default 1024)\n"
+    "  --synth N         generate the head at N^3 instead (core/synth/synth.h; default 1024)\n"
     "  --only NAMES      dicom, dicom-jpeg, tiff, tiff-deflate, zarr, hdf5, hdf5-contig\n"
     "                    (default: all but hdf5-contig)\n"
     "  --dicom-slices S  slices of the DICOM series (default 1000)\n"

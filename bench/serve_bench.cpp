@@ -27,8 +27,8 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
 #include "io/store/brick_store.h"
 #include "io/json.h"
 #include "io/render/png_image.h"

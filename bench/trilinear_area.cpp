@@ -12,7 +12,7 @@
 #include <vector>
 #include <glm/geometric.hpp>
 #include "cache/brick_cache.h"
-#include "core/extract_full.h"
+#include "core/extract/extract_full.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_writer.h"
 #include "io/readers/volume_open.h"

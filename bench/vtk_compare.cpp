@@ -27,7 +27,7 @@
 // VTK 9.1's case table splits every case into the same surface pieces as vdiso's (ambiguous
 // faces separate the above corners; 358 pieces, 820 triangles over the 256 cases in both), so
 // vertex and triangle counts match. Only the diagonals chosen inside each polygon differ
-// (vdiso fans each polygon, core/mc_tables.h), which changes the area of non-planar polygons:
+// (vdiso fans each polygon, core/kernel/mc_tables.h), which changes the area of non-planar polygons:
 // by about 0.01% on smooth data, more on a surface that is rough at the scale of a voxel.
 //
 // VTK types appear in this file only.
@@ -60,8 +60,8 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
 #include "core/mesh.h"
 #include "core/scalar_type.h"
 #include "io/store/brick_store.h"

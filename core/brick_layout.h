@@ -18,7 +18,7 @@ namespace vdiso {
 constexpr int kGhostBefore = 1;
 constexpr int kGhostAfter = 2;
 
-// What the min/max tree (core/minmax_tree.h: 16-bit brick coordinates, 32-bit node numbers)
+// What the min/max tree (core/trees/minmax_tree.h: 16-bit brick coordinates, 32-bit node numbers)
 // can index: at most 65,535 bricks along an axis and 2^31 in all.
 constexpr int64_t kMaxBricksPerAxis = 65535;
 constexpr int64_t kMaxBricks = int64_t(1) << 31;

@@ -1,11 +1,11 @@
-// Levels of detail of a bricked volume (docs/design.md, "Trees over the bricks"; core/view_levels.h).
+// Levels of detail of a bricked volume (docs/design.md, "Trees over the bricks"; core/lod/view_levels.h).
 //
 // Level 0 is the volume. Level l has cells 2^l times larger: its sample s stands at level-0
 // position s 2^l (clamped to the volume's last sample), so it has ceil((dims-1) / 2^l) cells
 // per axis, and its bricks of the same B cells cover 2^l level-0 bricks per axis: level-l brick
 // (i, j, k) covers level-0 bricks [2^l i, 2^l (i+1)) on each axis, clipped to the volume.
 // Its samples are the level-(l-1) samples filtered by the separable tent [1/4, 1/2, 1/4]
-// around 2s (core/downsample.h). The bricks of every level share one numbering, level after
+// around 2s (core/lod/downsample.h). The bricks of every level share one numbering, level after
 // level: level l's brick i is source brick firstBrick(l) + i.
 #pragma once
 

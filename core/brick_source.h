@@ -20,7 +20,7 @@ struct BrickRange {
     float minValue, maxValue;
 };
 
-// The range of one sub-block of a brick, coded in two bytes (core/sub_blocks.h).
+// The range of one sub-block of a brick, coded in two bytes (core/trees/sub_blocks.h).
 struct SubBlockCode {
     uint8_t lo = 255, hi = 0;
 };
@@ -63,7 +63,7 @@ public:
     std::vector<BrickLevel> levels() const { return brickLevels(volume(), layout().brickSize, levelCount()); }
     // Min and max of each brick's cell samples, indexed by brick id.
     virtual std::span<const BrickRange> brickRanges() const = 0;
-    // The ranges of each brick's sub-blocks (core/sub_blocks.h), kSubBlocksPerBrick per brick
+    // The ranges of each brick's sub-blocks (core/trees/sub_blocks.h), kSubBlocksPerBrick per brick
     // in brick order, also known without reading the bricks; empty when the source has none.
     virtual std::span<const SubBlockCode> subBlockCodes() const { return {}; }
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.

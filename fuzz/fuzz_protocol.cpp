@@ -9,7 +9,7 @@
 
 #include <unistd.h>
 
-#include "core/synth.h"
+#include "core/synth/synth.h"
 #include "fuzz/fuzz_input.h"
 #include "io/store/store_writer.h"
 #include "io/readers/volume_open.h"

@@ -7,9 +7,9 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
-#include "core/level_source.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/lod/level_source.h"
 #include "core/orientation.h"
 #include "fuzz/fuzz_input.h"
 #include "io/store/brick_store.h"

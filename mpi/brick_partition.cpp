@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "core/iso.h"
-#include "core/sub_blocks.h"
+#include "core/kernel/iso.h"
+#include "core/trees/sub_blocks.h"
 
 namespace vdiso::mpi {
 

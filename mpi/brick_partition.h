@@ -3,7 +3,7 @@
 //
 // The active bricks, in increasing id order as extractOctree visits them, are cut into
 // contiguous runs, one per rank, balanced by a weight per brick: its sub-blocks whose range
-// holds the isovalue (core/sub_blocks.h; at least 1, and 1 for a store without sub-block
+// holds the isovalue (core/trees/sub_blocks.h; at least 1, and 1 for a store without sub-block
 // ranges), which follows the surface's area in the brick better than a count of bricks.
 // A contiguous run of ids (x fastest, then y, then z) is a slab of brick layers with ragged
 // ends, so parts are spatially compact and meet at few brick faces. Contiguous runs in id order also keep the

@@ -6,8 +6,8 @@
 
 #include "cache/brick_cache.h"
 #include "cache/cache_plan.h"
-#include "core/extract_full.h"
-#include "core/level_source.h"
+#include "core/extract/extract_full.h"
+#include "core/lod/level_source.h"
 #include "core/orientation.h"
 #include "io/store/brick_store.h"
 #include "io/mesh/mesh_writer.h"

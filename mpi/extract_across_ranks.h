@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/brick_extractor.h"
+#include "core/kernel/brick_extractor.h"
 #include "io/remote/remote_options.h"
 #include "mpi/communicator.h"
 

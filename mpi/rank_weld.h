@@ -3,7 +3,7 @@
 // Each rank extracts its part of the bricks (mpi/brick_partition.h) with vertices numbered from
 // 0, including those on edges it shares with other ranks' bricks (FullExtractOptions::
 // borderVertices lists these by edge key). Such a vertex belongs to the rank of the earliest
-// active brick with a cell on its edge (core/edge_vertex_map.h bricksOnEdge), as in one process
+// active brick with a cell on its edge (core/kernel/edge_vertex_map.h bricksOnEdge), as in one process
 // it belongs to the first brick making it; the other ranks borrow its number. An exclusive
 // scan of the counts of owned vertices gives each rank its first global number; borrowers send
 // the edge keys to the owners and get the numbers back (two all-to-all exchanges). As parts are
@@ -14,7 +14,7 @@
 #include <cstdint>
 
 #include "core/brick_layout.h"
-#include "core/edge_vertex_map.h"
+#include "core/kernel/edge_vertex_map.h"
 #include "core/mesh.h"
 #include "core/volume.h"
 #include "mpi/brick_partition.h"

@@ -9,8 +9,8 @@
 
 #include "core/clock.h"
 #include "cache/cache_plan.h"
-#include "core/depth_slabs.h"
-#include "core/image_strips.h"
+#include "core/extract/depth_slabs.h"
+#include "core/extract/image_strips.h"
 #include "mpi/rank_status.h"
 
 namespace vdiso::mpi {

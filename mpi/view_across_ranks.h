@@ -2,12 +2,12 @@
 // of `vdiso-mpi extract --method sage|wise`. Every rank opens the store with its own cache and
 // takes one part:
 //
-//   Image:  columns of the image (core/image_strips.h's cut, so about as many active bricks
+//   Image:  columns of the image (core/extract/image_strips.h's cut, so about as many active bricks
 //           project into each): each rank extracts what shows in its columns, as the threads
 //           of one process take strips, and reads only the bricks visible there. A cell
 //           showing on both sides of a cut is made by both ranks.
 //   Object: depth slabs of the volume along the axis nearest the view direction
-//           (core/depth_slabs.h). Each rank extracts its slab, and every `exchangeBricks`
+//           (core/extract/depth_slabs.h). Each rank extracts its slab, and every `exchangeBricks`
 //           bricks it acquires all ranks trade coverage: an exclusive OR-scan of their
 //           occlusion pyramids' bottom level (width * height / 8 bytes) in depth order, one
 //           scan toward each side of the eye's slab, which each rank merges into its pyramid.
@@ -27,7 +27,7 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_view.h"
+#include "core/extract/extract_view.h"
 #include "mpi/communicator.h"
 
 namespace vdiso::mpi {

@@ -1,4 +1,4 @@
-// One frame of one client, streamed as the SAGE traversal makes it (core/extract_view.h's
+// One frame of one client, streamed as the SAGE traversal makes it (core/extract/extract_view.h's
 // ViewStream), and what that client holds across frames.
 //
 // Chunk policy (docs/protocol.md, "Chunks"): a visible brick the client holds already becomes
@@ -18,7 +18,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "core/extract_view.h"
+#include "core/extract/extract_view.h"
 #include "serve/outbox.h"
 
 namespace vdiso::serve {

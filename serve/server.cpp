@@ -1,7 +1,7 @@
 #include "serve/server.h"
 
 #include "cache/cache_plan.h"
-#include "core/brick_extractor.h"
+#include "core/kernel/brick_extractor.h"
 #include "core/settings_error.h"
 #include "io/json.h"
 

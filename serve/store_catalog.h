@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "cache/brick_cache.h"
-#include "core/meta_cell_range_cache.h"
-#include "core/minmax_tree.h"
+#include "core/trees/meta_cell_range_cache.h"
+#include "core/trees/minmax_tree.h"
 #include "io/store/brick_store.h"
 
 namespace vdiso::serve {

@@ -27,13 +27,13 @@
 namespace vdiso::serve {
 
 struct SessionSettings {
-    int threads = 1;        // image strips per frame (core/extract_view.h)
+    int threads = 1;        // image strips per frame (core/extract/extract_view.h)
     int metaCellSize = 4;
     int prefetchBricks = 8;  // per frame
     int prefetchReaders = 2;  // threads loading them, per strip (more for stores at URLs)
     int prefetchNear = 2;     // of them read before they are known to show (BrickLookAhead)
     size_t outboxBytes = size_t(32) << 20;
-    // Levels of detail (core/view_levels.h): a VIEW's final frame is extracted at this error in
+    // Levels of detail (core/lod/view_levels.h): a VIEW's final frame is extracted at this error in
     // pixels (0: level 0 only); on a store with levels, a first frame at kCoarsePassFactor times
     // it comes before, so the viewer shows a coarse surface at once and refines it.
     double lodError = 1.0;

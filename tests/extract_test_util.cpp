@@ -7,7 +7,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "core/sub_blocks.h"
+#include "core/trees/sub_blocks.h"
 
 namespace vdiso::test {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/brick_source.h"
-#include "core/synth.h"
+#include "core/synth/synth.h"
 #include "core/mesh.h"
 
 namespace vdiso::test {
@@ -44,7 +44,7 @@ private:
     std::atomic<int> mPinned{0};
 };
 
-// A generated volume (core/synth.h) served from memory in bricks of `brickSize` cells.
+// A generated volume (core/synth/synth.h) served from memory in bricks of `brickSize` cells.
 std::unique_ptr<MemoryBrickSource> synthBrickSource(const SynthParams& params, int brickSize);
 
 // Distance from the centre of a dims^3 grid, for spheres: the isosurface r is a sphere.

@@ -1,4 +1,4 @@
-// The look-ahead that schedules reads for the view-dependent traversal (core/brick_look_ahead.h),
+// The look-ahead that schedules reads for the view-dependent traversal (core/extract/brick_look_ahead.h),
 // driven by hand: which bricks it hands to the readers, in which order, and that it drops
 // what becomes hidden.
 #include <gtest/gtest.h>
@@ -9,13 +9,13 @@
 #include <thread>
 #include <vector>
 
-#include "core/brick_look_ahead.h"
+#include "core/extract/brick_look_ahead.h"
 #include "core/camera.h"
-#include "core/minmax_tree.h"
-#include "core/occlusion_pyramid.h"
-#include "core/synth.h"
-#include "core/traversal_cursor.h"
-#include "core/view_culler.h"
+#include "core/trees/minmax_tree.h"
+#include "core/view/occlusion_pyramid.h"
+#include "core/synth/synth.h"
+#include "core/extract/traversal_cursor.h"
+#include "core/view/view_culler.h"
 #include "tests/extract_test_util.h"
 
 namespace vdiso {
@@ -84,7 +84,7 @@ struct Scene {
     Scene() { fitClipPlanes(camera, source.volume().origin, source.volume().worldMax()); }
 };
 
-// The cursor (core/traversal_cursor.h) walks as the hand-written walk above: the same bricks in
+// The cursor (core/extract/traversal_cursor.h) walks as the hand-written walk above: the same bricks in
 // the same order, every node it pops decided once. The look-ahead and the traversal both walk
 // with it, so their orders agree by construction.
 TEST(TraversalCursor, WalksTheTreeFrontToBackDecidingEachNodeOnce) {

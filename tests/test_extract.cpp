@@ -12,12 +12,12 @@
 #include <glm/geometric.hpp>
 
 #include "cache/brick_cache.h"
-#include "core/brick_extractor.h"
+#include "core/kernel/brick_extractor.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
-#include "core/iso.h"
-#include "core/synth.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/kernel/iso.h"
+#include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_writer.h"
 #include "io/readers/volume_open.h"

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "cache/brick_cache.h"
-#include "core/extract_full.h"
-#include "core/iso.h"
-#include "core/mc_tables.h"
+#include "core/extract/extract_full.h"
+#include "core/kernel/iso.h"
+#include "core/kernel/mc_tables.h"
 #include "io/store/brick_store.h"
 #include "io/camera_json.h"
 #include "io/error.h"

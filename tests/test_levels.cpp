@@ -11,11 +11,11 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
-#include "core/level_source.h"
-#include "core/minmax_tree.h"
-#include "core/synth.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/lod/level_source.h"
+#include "core/trees/minmax_tree.h"
+#include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"
 #include "io/render/renderer.h"
@@ -197,7 +197,7 @@ TEST(Levels, RealMriLooksTheSameAtEveryDistance) {
 }
 
 // Where neighbouring bricks are extracted at different levels, their surfaces meet the shared
-// face along different curves; the caps (core/face_cap.h) close the slivers between them. At
+// face along different curves; the caps (core/lod/face_cap.h) close the slivers between them. At
 // a large error, so that levels change within the view, caps are made where levels meet, the
 // capped picture misses no more of the full surface's pixels than the open one, and agrees
 // with the full surface. (On the 2560^3 head's normal view at 1 px, the open seams let the

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/mc_tables.h"
+#include "core/kernel/mc_tables.h"
 
 namespace vdiso {
 namespace {

@@ -1,4 +1,4 @@
-// Post-processing out of core (core/mesh_slabs.h, core/mesh_pieces.h, io/mesh/mesh_post.h): a full
+// Post-processing out of core (core/mesh_post/mesh_slabs.h, core/mesh_post/mesh_pieces.h, io/mesh/mesh_post.h): a full
 // extraction handed over brick by brick, spooled and finished slab by slab, against the same
 // operations on the whole mesh held in memory.
 #include <gtest/gtest.h>
@@ -10,9 +10,9 @@
 
 #include <glm/geometric.hpp>
 
-#include "core/extract_full.h"
-#include "core/mesh_pieces.h"
-#include "core/mesh_smooth.h"
+#include "core/extract/extract_full.h"
+#include "core/mesh_post/mesh_pieces.h"
+#include "core/mesh_post/mesh_smooth.h"
 #include "io/mesh/mesh_post.h"
 #include "tests/extract_test_util.h"
 #include "tests/test_util.h"

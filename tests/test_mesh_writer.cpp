@@ -9,7 +9,7 @@
 #include <functional>
 #include <sstream>
 
-#include "core/extract_full.h"
+#include "core/extract/extract_full.h"
 #include "io/error.h"
 #include "io/mesh/mesh_writer.h"
 #include "tests/extract_test_util.h"

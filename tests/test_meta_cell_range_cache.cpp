@@ -1,10 +1,10 @@
-// Meta-cell ranges kept across view-dependent extractions (core/meta_cell_range_cache.h).
+// Meta-cell ranges kept across view-dependent extractions (core/trees/meta_cell_range_cache.h).
 #include <gtest/gtest.h>
 
 #include "core/camera.h"
-#include "core/extract_view.h"
-#include "core/meta_cell_range_cache.h"
-#include "core/synth.h"
+#include "core/extract/extract_view.h"
+#include "core/trees/meta_cell_range_cache.h"
+#include "core/synth/synth.h"
 #include "tests/extract_test_util.h"
 
 namespace vdiso {

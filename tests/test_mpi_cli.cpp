@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "core/synth.h"
+#include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"
 #include "io/render/png_image.h"

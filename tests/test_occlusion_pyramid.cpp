@@ -10,8 +10,8 @@
 
 #include <glm/common.hpp>
 
-#include "core/occlusion_pyramid.h"
-#include "core/scan_convert.h"
+#include "core/view/occlusion_pyramid.h"
+#include "core/view/scan_convert.h"
 
 namespace vdiso {
 namespace {

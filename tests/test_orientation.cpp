@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
-#include "core/extract_full.h"
+#include "core/extract/extract_full.h"
 #include "core/orientation.h"
 #include "io/store/brick_store.h"
 #include "io/mesh/mesh_writer.h"

@@ -81,7 +81,7 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     EXPECT_NE(stats.find("\"read_method\": \"http\""), std::string::npos) << stats;
     EXPECT_NE(stats.find("\"file\": \"" + url + "\""), std::string::npos) << stats;
     // Only what the view needs crossed: the header, the index, and the local run's brick bytes
-    // with at most 30% more read ahead on speculation (core/brick_look_ahead.h: a store at a
+    // with at most 30% more read ahead on speculation (core/extract/brick_look_ahead.h: a store at a
     // URL has bricks read before they are known to show, where a disk has only 2).
     const BrickStoreReader local(file("bkt/head.vdiso"));
     const auto number = [](const std::string& json, const std::string& key) {

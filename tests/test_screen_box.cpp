@@ -11,7 +11,7 @@
 #include <glm/geometric.hpp>
 
 #include "core/camera.h"
-#include "core/screen_box.h"
+#include "core/view/screen_box.h"
 #include "core/volume.h"
 
 namespace vdiso {

@@ -22,9 +22,9 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
-#include "core/synth.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/error.h"
 #include "io/render/image_compare.h"

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <random>
 
-#include "core/iso.h"
-#include "core/span_space.h"
+#include "core/kernel/iso.h"
+#include "core/trees/span_space.h"
 
 namespace vdiso {
 namespace {

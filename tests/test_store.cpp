@@ -8,7 +8,7 @@
 #include <cstring>
 
 #include "core/brick_layout.h"
-#include "core/synth.h"
+#include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/store/byte_shuffle.h"
 #include "io/error.h"

@@ -1,4 +1,4 @@
-// Sub-block ranges (core/sub_blocks.h): the codes always contain the true range, the store
+// Sub-block ranges (core/trees/sub_blocks.h): the codes always contain the true range, the store
 // keeps them, and view-dependent extraction uses them to read fewer bricks for the same
 // surface.
 #include <gtest/gtest.h>
@@ -9,10 +9,10 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_view.h"
-#include "core/iso.h"
-#include "core/sub_blocks.h"
-#include "core/synth.h"
+#include "core/extract/extract_view.h"
+#include "core/kernel/iso.h"
+#include "core/trees/sub_blocks.h"
+#include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/error.h"
 #include "io/store/store_writer.h"

@@ -1,4 +1,4 @@
-#include "core/synth.h"
+#include "core/synth/synth.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

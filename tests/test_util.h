@@ -108,7 +108,7 @@ std::string compareStoreWithSamples(const BrickStoreReader& store,
                                     const std::vector<unsigned char>& samples, int level = 0);
 
 // The next level of detail of `samples` (`dims` of `type`, x fastest), by brute force: every
-// coarse sample from its 27 fine neighbours (core/downsample.h's tent, indices clamped), summed
+// coarse sample from its 27 fine neighbours (core/lod/downsample.h's tent, indices clamped), summed
 // in the same order so that floats agree to the bit. `dims` becomes the coarse level's.
 std::vector<unsigned char> bruteForceLevel(const std::vector<unsigned char>& samples, Dims3& dims,
                                            ScalarType type);

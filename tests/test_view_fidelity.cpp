@@ -9,9 +9,9 @@
 
 #include "cache/brick_cache.h"
 #include "core/camera.h"
-#include "core/extract_full.h"
-#include "core/extract_view.h"
-#include "core/visible_oracle.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/extract/visible_oracle.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"
 #include "io/render/renderer.h"

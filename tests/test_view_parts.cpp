@@ -9,9 +9,9 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "core/depth_slabs.h"
-#include "core/extract_view.h"
-#include "core/image_strips.h"
+#include "core/extract/depth_slabs.h"
+#include "core/extract/extract_view.h"
+#include "core/extract/image_strips.h"
 #include "io/render/image_compare.h"
 #include "io/render/renderer.h"
 #include "tests/extract_test_util.h"

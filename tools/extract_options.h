@@ -8,7 +8,7 @@
 
 #include "app/extract_settings.h"
 #include "core/camera.h"
-#include "core/extract_view.h"
+#include "core/extract/extract_view.h"
 #include "core/volume.h"
 #include "io/remote/remote_options.h"
 

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "core/synth.h"
+#include "core/synth/synth.h"
 
 namespace vdiso::bench {
 

@@ -8,7 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "core/mesh_pieces.h"
+#include "core/mesh_post/mesh_pieces.h"
 #include "io/error.h"
 
 namespace vdiso {

@@ -3,8 +3,8 @@
 //
 // PostProcessedMesh takes the surface brick by brick (a BrickMeshSink) and spools it, slab by
 // slab of bricks, to side files beside the output. finish() then reads the slabs back: once to
-// find the connected pieces when pieces are to be removed (core/mesh_pieces.h), once to smooth,
-// decimate and hand them (core/mesh_slabs.h) to a MeshSink, a MeshFileWriter as a rule.
+// find the connected pieces when pieces are to be removed (core/mesh_post/mesh_pieces.h), once to smooth,
+// decimate and hand them (core/mesh_post/mesh_slabs.h) to a MeshSink, a MeshFileWriter as a rule.
 // Memory holds a batch of slabs shaped at once (two per thread) with the slabs around them that
 // smoothing reaches, and the pieces' table, never the whole surface. The side
 // files go with the object, whatever happens.
@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "core/brick_layout.h"
-#include "core/extract_full.h"
-#include "core/mesh_slabs.h"
+#include "core/extract/extract_full.h"
+#include "core/mesh_post/mesh_slabs.h"
 #include "core/progress.h"
 #include "io/mesh/mesh_output.h"
 

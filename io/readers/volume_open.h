@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "core/synth.h"
+#include "core/synth/synth.h"
 #include "io/readers/raw_reader.h"
 #include "io/remote/remote_options.h"
 #include "io/readers/slice_reader.h"
@@ -44,7 +44,7 @@ std::unique_ptr<SliceReader> openVolume(const std::string& path, const InputOpti
 std::unique_ptr<SliceReader> openVolume(const std::vector<std::string>& paths,
                                         const InputOptions& options);
 
-// The synthetic generators of core/synth.h as a source ("synth:head").
+// The synthetic generators of core/synth/synth.h as a source ("synth:head").
 std::unique_ptr<SliceReader> openSynthVolume(const SynthParams& params);
 
 }  // namespace vdiso

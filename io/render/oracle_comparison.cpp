@@ -1,6 +1,6 @@
 #include "io/render/oracle_comparison.h"
 
-#include "core/extract_full.h"
+#include "core/extract/extract_full.h"
 #include "io/render/renderer.h"
 
 namespace vdiso {

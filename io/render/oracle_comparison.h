@@ -1,4 +1,4 @@
-// A view-dependent extraction against the visible-surface oracle (core/visible_oracle.h): the
+// A view-dependent extraction against the visible-surface oracle (core/extract/visible_oracle.h): the
 // full surface is extracted (octree) and rendered from the same camera, its depth buffer
 // mapped back to the cells and bricks it shows. What `vdiso extract --oracle` reports and
 // bench/views.sh tabulates.
@@ -8,7 +8,7 @@
 
 #include "core/brick_source.h"
 #include "core/camera.h"
-#include "core/visible_oracle.h"
+#include "core/extract/visible_oracle.h"
 
 namespace vdiso {
 

@@ -17,8 +17,8 @@
 
 #include "core/brick_levels.h"
 #include "core/checked_math.h"
-#include "core/downsample.h"
-#include "core/iso.h"
+#include "core/lod/downsample.h"
+#include "core/kernel/iso.h"
 #include "core/orientation.h"
 #include "io/atomic_output.h"
 #include "io/store/byte_shuffle.h"
@@ -113,7 +113,7 @@ void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord,
         cells[a] = layout.cellsOnAxis(a, coord[a]);
         owned[a] = layout.ownedSamplesOnAxis(a, coord[a]);
     }
-    // NaN samples count as -inf in the range (core/iso.h), so a range is never NaN.
+    // NaN samples count as -inf in the range (core/kernel/iso.h), so a range is never NaN.
     T lo = rangeValue(brick[(size_t(kGhostBefore) * side + kGhostBefore) * side + kGhostBefore]);
     T hi = lo;
     for (int lz = kGhostBefore; lz <= kGhostBefore + cells[2]; ++lz) {

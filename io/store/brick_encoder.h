@@ -24,7 +24,7 @@
 
 #include "core/brick_layout.h"
 #include "core/brick_source.h"
-#include "core/sub_blocks.h"
+#include "core/trees/sub_blocks.h"
 #include "core/volume.h"
 #include "io/store/brick_store.h"
 #include "io/readers/slice_reader.h"
@@ -86,7 +86,7 @@ private:
 // in runs that do not wrap. Throws what the source throws.
 void readSlices(SliceReader& source, const SliceWindow& window, int64_t z0, int64_t z1);
 
-// Slice z of the level made from `fine` (core/downsample.h): the tent filter of fine slices
+// Slice z of the level made from `fine` (core/lod/downsample.h): the tent filter of fine slices
 // 2z-1, 2z, 2z+1 (clamped to fineDims[2]), which `fine` must hold, written to dst
 // (coarseDims[0] x coarseDims[1] samples of `type`). Rows in parallel (TBB).
 void downsampleSlice(ScalarType type, const SliceWindow& fine, const Dims3& fineDims,

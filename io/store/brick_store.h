@@ -116,7 +116,7 @@ public:
     // Every level's bricks, by brick id.
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
-    // kSubBlocksPerBrick codes per brick, in brick order (core/sub_blocks.h).
+    // kSubBlocksPerBrick codes per brick, in brick order (core/trees/sub_blocks.h).
     std::span<const SubBlockCode> subBlockCodes() const { return mSubBlocks; }
     uint64_t fileBytes() const { return mFileBytes; }
     ReadMode readMode() const { return mMode; }

@@ -10,7 +10,7 @@
 #include <zstd.h>
 
 #include "core/orientation.h"
-#include "core/sub_blocks.h"
+#include "core/trees/sub_blocks.h"
 #include "io/error.h"
 #include "io/store/index_parts.h"
 

@@ -1,7 +1,7 @@
 // Conversion into the brick store, streaming.
 //
 // Levels of detail (core/brick_levels.h) are made in the same pass: each level-0 slice, once
-// its layer is encoded, is filtered into level 1 (core/downsample.h), level 1's into level 2,
+// its layer is encoded, is filtered into level 1 (core/lod/downsample.h), level 1's into level 2,
 // and so on; each level holds B+3 slices of its own, and its layers of bricks are encoded and
 // written as they complete, between level 0's. The input is read once.
 //

@@ -10,7 +10,7 @@
 #include "app/extract_settings.h"
 #include "arrays.h"
 #include "bindings.h"
-#include "core/extract_full.h"
+#include "core/extract/extract_full.h"
 #include "released.h"
 
 namespace vdiso::py {

@@ -1,0 +1,68 @@
+#include "core/extract/brick_look_ahead.h"
+
+#include <algorithm>
+
+namespace vdiso {
+
+BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
+                               size_t depth, int readers, size_t near)
+    : mSource(source), mCursor(tree, levels, levels.culler(0)), mDepth(depth), mNear(near),
+      mPrefetcher(source, depth, readers) {}
+
+bool BrickLookAhead::findNext() {
+    TraversalCursor::Step step;
+    if (mDepth == 0 || !mCursor.nextBrick(step)) return false;
+    mAhead.push_back({step.node, step.at, step.at.id, mCursor.culler().pixelRect(step.box),
+                      mSource.isResident(step.at.id) ? kResident : kNotPushed});
+    return true;
+}
+
+int64_t BrickLookAhead::pixelsOf(const PixelRect& r) const {
+    const Camera& camera = mCursor.culler().camera();
+    const int64_t w = std::min(r.x1, camera.width - 1) - std::max(r.x0, 0) + 1;
+    const int64_t h = std::min(r.y1, camera.height - 1) - std::max(r.y0, 0) + 1;
+    return w > 0 && h > 0 ? w * h : int64_t(0);
+}
+
+void BrickLookAhead::beforeAcquire(int64_t brick) {
+    if (mDepth == 0) return;
+    while (true) {
+        while (!mAhead.empty() && mAhead.front().brick != brick) mAhead.pop_front();
+        if (!mAhead.empty() || !findNext()) break;
+    }
+    const Camera& camera = mCursor.culler().camera();
+    PixelRect current{0, 0, camera.width - 1, camera.height - 1};
+    if (!mAhead.empty()) {
+        current = mAhead.front().rect;
+        if (pushed(mAhead.front().item)) mPrefetcher.consumed(mAhead.front().item);
+        mAhead.pop_front();
+    }
+    std::erase_if(mAhead, [&](const AheadBrick& ahead) {
+        if (ahead.item == kResident) return false;  // nothing to cancel: not tested again
+        if (mCursor.stillShows(ahead.node, ahead.at)) return false;
+        if (pushed(ahead.item)) mPrefetcher.cancel(ahead.item);
+        return true;
+    });
+    while (mAhead.size() < mDepth && findNext()) {
+    }
+    // Most of a brick's box lies in the current brick's: it is likely behind, and hidden once
+    // the current one is drawn (closeups), so it is not read on speculation.
+    auto mostlyBehind = [&](const PixelRect& a, const PixelRect& b) {
+        return a.overlaps(b) && 2 * pixelsOf(a.intersection(b)) > pixelsOf(a);
+    };
+    auto harmless = [&](const PixelRect& a, const PixelRect& b) {
+        if (!a.overlaps(b)) return true;
+        const PixelRect both = a.intersection(b);
+        return mCursor.culler().occluded(both);
+    };
+    for (size_t k = 0; k < mAhead.size(); ++k) {
+        AheadBrick& ahead = mAhead[k];
+        if (ahead.item != kNotPushed) continue;
+        bool settled = harmless(ahead.rect, current);
+        for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, mAhead[j].rect);
+        if (!settled && (k >= mNear || mostlyBehind(ahead.rect, current))) break;
+        ahead.item = mPrefetcher.push(ahead.brick);
+    }
+}
+
+}  // namespace vdiso

@@ -1,0 +1,78 @@
+// Prefetch scheduling for the view-dependent traversal: which bricks to read ahead of it, and
+// when (docs/design.md, "Memory and reads").
+//
+// A second cursor (core/extract/traversal_cursor.h: the traversal's own walk) runs ahead of the
+// traversal, with tests 1-3 against the pyramid as it is now. Coverage only grows, so
+// every brick the traversal will acquire is found by the look-ahead first; a brick it finds may
+// still be hidden by the time the traversal gets there (then it was read for nothing, and
+// counted by readUnused).
+//
+// Each time the traversal is about to acquire a brick (beforeAcquire), bricks found ahead that
+// it skipped are hidden by now and their pins go; those still ahead are tested again and
+// dropped once hidden (cancelled if not read yet); the cursor moves on to keep `depth` bricks
+// found; and bricks are handed to the reader threads, in order, while each is settled: where
+// its screen box meets this brick's or any earlier one's, every pixel is covered already, so
+// nothing drawn before its turn can hide it and reading it now cannot be wasted. The next
+// `near` (kNearBricks) go regardless, so reads keep ahead where boxes overlap, unless most of one's box
+// lies in this brick's (closeups: it is likely behind this one and hidden by it). A brick the
+// source holds in memory already when it is found is neither handed over nor tested again (a
+// warm cache would otherwise wake a reader per brick, and re-test the bricks ahead at every
+// brick, for nothing); if it is evicted before its turn, the traversal reads it itself.
+// One look-ahead per traversal thread.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "core/extract/brick_prefetcher.h"
+#include "core/brick_source.h"
+#include "core/trees/minmax_tree.h"
+#include "core/extract/traversal_cursor.h"
+#include "core/view/view_culler.h"
+#include "core/lod/view_levels.h"
+
+namespace vdiso {
+
+class BrickLookAhead {
+public:
+    static constexpr size_t kNearBricks = 2;
+
+    // depth 0: nothing is read ahead (every call does nothing). `near`: the bricks next in
+    // turn handed over unsettled (kNearBricks for a disk; more where a read waits a round trip).
+    BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
+                   size_t depth, int readers = BrickPrefetcher::kDefaultReaders,
+                   size_t near = kNearBricks);
+
+    // The traversal is about to acquire `brick` (it acquires it itself).
+    void beforeAcquire(int64_t brick);
+    // The traversal has ended: reading stops and every pin goes.
+    void stop() { mPrefetcher.stop(); }
+    // Bricks read ahead and then not used: hidden before the traversal came.
+    size_t readUnused() const { return mPrefetcher.skippedLoaded(); }
+
+private:
+    static constexpr size_t kNotPushed = SIZE_MAX;
+    static constexpr size_t kResident = SIZE_MAX - 1;  // in memory when its turn came: not read
+    static bool pushed(size_t item) { return item < kResident; }
+    struct AheadBrick {
+        uint32_t node;
+        ViewLevels::Brick at;
+        int64_t brick;  // at.id
+        PixelRect rect;
+        size_t item = kNotPushed;  // in the prefetcher's list, once handed to it (or kResident)
+    };
+    // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
+    bool findNext();
+    int64_t pixelsOf(const PixelRect& r) const;
+
+    BrickSource& mSource;
+    TraversalCursor mCursor;  // the traversal's walk, run ahead of it
+    size_t mDepth;
+    size_t mNear;
+    BrickPrefetcher mPrefetcher;
+    std::deque<AheadBrick> mAhead;  // found, in the traversal's order
+};
+
+}  // namespace vdiso

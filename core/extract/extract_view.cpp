@@ -1,0 +1,426 @@
+#include "core/extract/extract_view.h"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "core/clock.h"
+#include "core/kernel/brick_kernel.h"
+#include "core/check.h"
+#include "core/extract/brick_look_ahead.h"
+#include "core/extract/traversal_cursor.h"
+#include "core/lod/face_cap.h"
+#include "core/extract/image_strips.h"
+#include "core/kernel/iso.h"
+#include "core/kernel/mc_tables.h"
+#include "core/kernel/meta_cell_walk.h"
+#include "core/trees/minmax_tree.h"
+#include "core/view/occlusion_pyramid.h"
+#include "core/view/polygon_coverage.h"
+#include "core/scalar_type.h"
+#include "core/view/sub_pixel_point.h"
+#include "core/view/screen_box.h"
+#include "core/view/view_culler.h"
+#include "core/lod/view_levels.h"
+
+namespace vdiso {
+
+namespace {
+
+
+enum class Verdict { Culled, Done, Visible };
+
+template <class T>
+struct BrickVisit;
+
+// One walk of the tree, front to back, for one camera over the pixel columns
+// [column0, column1) of the image (the whole image, or a strip of it: core/extract/image_strips.h).
+// It owns the pyramid; its culler and look-ahead read it. Bricks are visited by BrickVisit,
+// typed by the samples once per brick.
+class ViewTraversal {
+public:
+    ViewTraversal(BrickSource& source, const MinMaxTree& tree, const Camera& camera,
+                  const ViewExtractOptions& options, TriangleMesh& mesh, PointSet& points,
+                  ExtractStats& stats, int column0, int column1)
+        : mSource(source), mTree(tree), mCamera(camera), mOptions(options), mMesh(mesh), mPoints(points),
+          mStats(stats), mPixels(camera), mPyramid(camera.width, camera.height),
+          mLevels(source, tree, camera, mPyramid, options.iso, options.estimateBox, options.lodError),
+          mCuller(mLevels.culler(0)),
+          mCoverage(mPyramid, options.bottomUp, options.scanPolygons),
+          mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders,
+                     size_t(std::max(options.prefetchNear, 0))) {
+        mLevels.confineTo(options.region);
+        coverOutsideStrip(mPyramid, column0, column1);
+        for (int l = 0; l < mLevels.count(); ++l) {
+            const LevelSource& level = mLevels.source(l);
+            mParts.push_back(std::make_unique<LevelParts>(
+                LevelParts{BrickExtractor(level.volume(), level.layout(), options.metaCellSize), {}}));
+        }
+    }
+
+    // Extracts; returns the bricks acquired, in order.
+    std::vector<int64_t> run();
+
+private:
+    template <class T>
+    friend struct BrickVisit;
+
+    void count(Cull cull);
+    // The pixel position of vertex v (a mesh vertex number), projected the first time it is
+    // asked for: a vertex is shared by up to four cells' polygons. False when it cannot be
+    // placed on the image plane (behind the eye, clipped, or beyond what a double holds).
+    bool screenPosition(uint32_t v, glm::dvec2& out);
+
+    BrickSource& mSource;
+    const MinMaxTree& mTree;
+    const Camera& mCamera;
+    const ViewExtractOptions& mOptions;
+    TriangleMesh& mMesh;
+    PointSet& mPoints;
+    ExtractStats& mStats;
+    PixelProjector mPixels;
+    OcclusionPyramid mPyramid;
+    ViewLevels mLevels;
+    const ViewCuller& mCuller;  // level 0's: the tree's
+    PolygonCoverage mCoverage;
+    // What extracting a level's bricks needs: its kernel's scratch, and its own seam map (edge
+    // keys are the level's grid's; vertices are welded within a level only).
+    struct LevelParts {
+        BrickExtractor extractor;
+        EdgeVertexMap seams;
+    };
+    std::vector<std::unique_ptr<LevelParts>> mParts;
+    TriangleMesh mCaps;  // streaming: the current brick's seam caps
+    BrickLookAhead mLookAhead;
+    // Screen positions by vertex number - mMesh.firstVertex; x NaN: not projected yet, x inf:
+    // not on the image plane. Grows with the mesh; cleared with it in streaming.
+    std::vector<glm::dvec2> mScreen;
+};
+
+// One brick of sample type T in the traversal: the visitor of its meta-cell walk
+// (core/kernel/meta_cell_walk.h: each box tested, and extracted when visible), and the cell policy of
+// core/kernel/brick_kernel.h that tests its cells and scan-converts its polygons
+// (core/view/polygon_coverage.h), with the point rule for sub-pixel boxes (core/view/sub_pixel_point.h).
+template <class T>
+struct BrickVisit {
+    static constexpr bool kTestsCells = true, kTestsPolygons = true;
+
+    ViewTraversal& t;
+    const ViewCuller& culler;     // the brick's level's
+    BrickExtractor& extractor;    //   "
+    const BrickLayout& layout;    //   "
+    int64_t brick;                // in the level's numbering
+    BrickKernel<T> kernel;
+    // The brick is extracted whole (ViewStream::Use::Whole): hidden meta-cells too, without
+    // points or per-cell tests.
+    bool whole;
+    bool cellTests;  // per-cell tests on and not whole
+    glm::dvec3 eyeCell;
+    MetaCellRangeCache::Ranges kept;         // from the options' range cache, if any
+    const std::vector<BrickRange>& ranges;  // of the brick's meta-cells
+
+    BrickVisit(ViewTraversal& traversal, const ViewLevels::Brick& at, const void* samples, bool wholeBrick)
+        : t(traversal), culler(traversal.mLevels.culler(at.level)),
+          extractor(traversal.mParts[size_t(at.level)]->extractor),
+          layout(traversal.mLevels.source(at.level).layout()), brick(at.local),
+          kernel(extractor, at.local, samples, traversal.mOptions.iso, traversal.mMesh,
+                 traversal.mParts[size_t(at.level)]->seams),
+          whole(wholeBrick),
+          cellTests(traversal.mOptions.cellTests && traversal.mOptions.occlusion && !wholeBrick),
+          eyeCell(kernel.eyeInCells(traversal.mCamera.eye)),
+          kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(at.id, at.local, extractor, samples)
+                                             : nullptr),
+          ranges(kept ? *kept : extractor.currentRanges()) {}
+
+    // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
+    bool keepCell(int64_t x, int64_t y, int64_t z) {
+        if (!cellTests) return true;
+        const bool keep = culler.cullScreenBox(culler.cellBox(x, y, z)) == Cull::None;
+        t.mStats.view.cellsCulled += !keep;
+        return keep;
+    }
+
+    // Scan-converts a polygon (SAGE §3.2) before its triangles are appended; with cell tests,
+    // keeps it only when it draws something (core/view/polygon_coverage.h).
+    bool keepPolygon(const uint32_t* vertices, int count) {
+        if (!t.mOptions.occlusion) return true;
+        glm::dvec2 v[kMcMaxPolygonVertices];
+        for (int k = 0; k < count; ++k)
+            if (!t.screenPosition(vertices[k], v[k])) return true;  // marks nothing
+        const bool draws = t.mCoverage.cover(v, count, cellTests);
+        t.mStats.view.polygonsHidden += !draws;
+        return draws;
+    }
+
+    // Tests 1-4 of core/extract/extract_view.h for a box of meta-cells [a, b] whose range is `range`.
+    Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b) {
+        ++t.mStats.nodesVisited;
+        ScreenBox box;
+        const Cull cull = culler.cull(range, a, b, box);
+        if (cull != Cull::None) {
+            t.count(cull);
+            return Verdict::Culled;
+        }
+        // Fig. 4 (core/view/sub_pixel_point.h).
+        if (!t.mOptions.points) return Verdict::Visible;
+        switch (applyPointRule(box, a, b, kernel, t.mPixels, t.mPyramid, t.mOptions.occlusion, t.mPoints)) {
+            case PointRule::NotAPoint: return Verdict::Visible;
+            case PointRule::Dropped: ++t.mStats.view.droppedSubPixel; return Verdict::Culled;
+            case PointRule::Drawn: break;
+        }
+        ++t.mStats.view.points;
+        return Verdict::Done;
+    }
+
+    // core/kernel/meta_cell_walk.h: whether the box of meta-cells [lo, hi) is refined (or extracted,
+    // when it is one): its range and tests 1-4, or, for a whole brick, its range alone (the
+    // boxes that do not show are made without scan conversion).
+    bool enter(const int lo[3], const int hi[3]) {
+        const int M = extractor.metaCellSize();
+        const BrickRange range = rangeOf(lo, hi);
+        const Dims3 c = layout.brickCoord(brick);
+        int64_t cellLo[3], cellHi[3];
+        for (int k = 0; k < 3; ++k) {
+            const int64_t first = c[k] * layout.brickSize;
+            cellLo[k] = first + int64_t(lo[k]) * M;
+            cellHi[k] = std::min<int64_t>(first + int64_t(hi[k]) * M, first + layout.cellsOnAxis(k, c[k]));
+        }
+        if (cellLo[0] >= cellHi[0] || cellLo[1] >= cellHi[1] || cellLo[2] >= cellHi[2]) return false;
+        glm::dvec3 a, b;
+        culler.worldBox(cellLo, cellHi, a, b);
+        if (whole) {
+            // Every active meta-cell is made; only those that show are scan-converted.
+            ++t.mStats.nodesVisited;
+            if (!rangeHoldsIso(range.minValue, range.maxValue, t.mOptions.iso)) {
+                ++t.mStats.view.culledByRange;
+                return false;
+            }
+            if (culler.cullScreenBox(culler.screenBox(a, b)) != Cull::None) {
+                extractUnseen(lo, hi);
+                return false;
+            }
+            return true;
+        }
+        return test(range, a, b) == Verdict::Visible;
+    }
+
+    // One meta-cell that shows, extracted and scan-converted. Timed per meta-cell (extraction
+    // and scan conversion are interleaved polygon by polygon; a clock read per polygon would
+    // cost more than it measures).
+    void extract(const int lo[3]) {
+        const int n = extractor.metaCellsPerAxis();
+        const auto start = Clock::now();
+        kernel.extractMetaCell((lo[2] * n + lo[1]) * n + lo[0], *this, &eyeCell);
+        ++t.mStats.metaCellsActive;
+        if (t.mOptions.bottomUp) t.mPyramid.propagate();
+        t.mStats.view.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
+    }
+
+    // The range of meta-cells [lo, hi). (Taking the sub-block ranges of the store's index for
+    // boxes of several meta-cells instead, and computing a brick's meta-cell ranges only for
+    // those visited, was slower: the coarser ranges let more boxes through to the screen tests.)
+    BrickRange rangeOf(const int lo[3], const int hi[3]) {
+        const int n = extractor.metaCellsPerAxis();
+        BrickRange range{std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
+        for (int z = lo[2]; z < hi[2]; ++z)
+            for (int y = lo[1]; y < hi[1]; ++y)
+                for (int x = lo[0]; x < hi[0]; ++x) {
+                    const BrickRange& r = ranges[size_t((z * n + y) * n + x)];
+                    range = {std::min(range.minValue, r.minValue), std::max(range.maxValue, r.maxValue)};
+                }
+        return range;
+    }
+
+    // The surface of the active meta-cells [lo, hi), which do not show: made for a whole
+    // brick's chunk, not scan-converted.
+    void extractUnseen(const int lo[3], const int hi[3]) {
+        const int n = extractor.metaCellsPerAxis();
+        AllCells all;
+        for (int z = lo[2]; z < hi[2]; ++z)
+            for (int y = lo[1]; y < hi[1]; ++y)
+                for (int x = lo[0]; x < hi[0]; ++x) {
+                    const int metaCell = (z * n + y) * n + x;
+                    const BrickRange& r = ranges[size_t(metaCell)];
+                    if (!rangeHoldsIso(r.minValue, r.maxValue, t.mOptions.iso)) continue;
+                    kernel.extractMetaCell(metaCell, all);
+                }
+    }
+
+    // `capFaces`: the faces to close (core/lod/face_cap.h), bits as ViewLevels::seamFaces; their
+    // caps go to `caps`.
+    void run(unsigned capFaces, TriangleMesh& caps) {
+        const int n = extractor.metaCellsPerAxis();
+        const int lo[3] = {0, 0, 0}, hi[3] = {n, n, n};
+        walkMetaCells(lo, hi, extractor.metaCellSize(), eyeCell, *this);
+        for (int face = 0; face < 6; ++face)
+            if (capFaces & (1u << face)) appendFaceCap(kernel, face / 2, face % 2 == 1, caps);
+    }
+};
+
+void ViewTraversal::count(Cull cull) {
+    switch (cull) {
+        case Cull::Range: ++mStats.view.culledByRange; break;
+        case Cull::Frustum: ++mStats.view.culledByFrustum; break;
+        case Cull::SubPixel: ++mStats.view.droppedSubPixel; break;
+        case Cull::Occlusion: ++mStats.view.culledByOcclusion; break;
+        case Cull::None: break;
+    }
+}
+
+bool ViewTraversal::screenPosition(uint32_t v, glm::dvec2& out) {
+    const size_t i = v - mMesh.firstVertex;
+    if (i >= mScreen.size())  // grown geometrically: vertices arrive one by one
+        mScreen.resize(std::max(mMesh.positions.size(), 2 * mScreen.size()),
+                       glm::dvec2(std::numeric_limits<double>::quiet_NaN()));
+    glm::dvec2& s = mScreen[i];
+    if (std::isnan(s.x)) {
+        const glm::dvec3 p = mPixels.project(glm::dvec3(mMesh.positions[i]));
+        const bool placed = p.z >= 0.0 && p.z <= 1.0 && std::isfinite(p.x) && std::isfinite(p.y);
+        s = placed ? glm::dvec2(p.x, p.y) : glm::dvec2(std::numeric_limits<double>::infinity());
+    }
+    out = s;
+    return !std::isinf(s.x);
+}
+
+std::vector<int64_t> ViewTraversal::run() {
+    std::vector<int64_t> acquired;
+    const BrickLayout& layout = mSource.layout();
+    TraversalCursor cursor(mTree, mLevels, mCuller);
+    TraversalCursor::Step step;
+    while (!cursor.ended()) {
+        if (mOptions.coverage) mOptions.coverage->between(mPyramid, mStats.bricksActive);
+        cursor.step(step);
+        ++mStats.nodesVisited;
+        switch (step.outcome) {
+            case TraversalCursor::Outcome::OutsideRegion: ++mStats.view.culledByRegion; continue;
+            case TraversalCursor::Outcome::Culled: count(step.cull); continue;
+            case TraversalCursor::Outcome::Descended: continue;
+            case TraversalCursor::Outcome::NotShown: ++mStats.view.bricksCulledBySubBlocks; continue;
+            case TraversalCursor::Outcome::Brick: break;
+        }
+        const glm::dvec3& a = step.a;
+        const glm::dvec3& b = step.b;
+        const ViewLevels::Brick at = step.at;
+        const int level = at.level;
+        const int64_t brick = at.id;
+        ViewStream::Use use = ViewStream::Use::Part;
+        if (mOptions.stream) {
+            const ScreenBox box = mCuller.screenBox(a, b);
+            const double cellPixels =
+                box.crossesNearPlane ? INFINITY
+                                     : std::max(box.right - box.left, box.bottom - box.top) / double(layout.brickSize);
+            if (!mOptions.stream->beginBrick(brick, cellPixels, use)) {
+                mStats.view.abandoned = true;
+                break;
+            }
+            // A chunk stands alone: no vertex is welded to another brick's.
+            mParts[size_t(level)]->seams.clear();
+        }
+        mLookAhead.beforeAcquire(brick);
+        const auto start = Clock::now();
+        const BrickHandle handle = mSource.acquire(brick);  // only now: it passed 1-3
+        mStats.brickWaitSeconds += std::chrono::duration<double>(Clock::now() - start).count();
+        ++mStats.bricksActive;
+        mStats.view.coarseBricks += level > 0;
+        acquired.push_back(brick);
+        mParts[size_t(level)]->extractor.beginBrick(at.local, handle.samples());
+        // Seams between levels are capped where this brick meets another level for this
+        // camera: with the mesh, or apart from a stream's brick output (they are the camera's).
+        const unsigned capFaces = mOptions.capSeams ? mLevels.seamFaces(mTree.nodes()[step.node], level) : 0u;
+        mStats.view.cappedFaces += std::popcount(capFaces);
+        visitScalarType(mSource.volume().type, [&](auto zero) {
+            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole)
+                .run(capFaces, mOptions.stream ? mCaps : mMesh);
+        });
+        if (mOptions.stream) {
+            mStats.triangles += mMesh.triangleCount();
+            mStats.vertices += mMesh.vertexCount();
+            mStats.triangles += mCaps.triangleCount();
+            mStats.vertices += mCaps.vertexCount();
+            mOptions.stream->endBrick(brick, use, mMesh, mPoints, mCaps);
+            mMesh.firstVertex = mMesh.nextVertex();
+            mMesh.clear();
+            mCaps.clear();
+            mPoints.clear();
+            mScreen.clear();
+        }
+    }
+    mLookAhead.stop();
+    if (mOptions.coverage) mOptions.coverage->ended(mPyramid);
+    for (const auto& parts : mParts) mStats.cellsActive += parts->extractor.counters().cellsActive;
+    mStats.view.bricksPrefetchedUnused = int64_t(mLookAhead.readUnused());
+    return acquired;
+}
+
+}  // namespace
+
+ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
+                                      const ViewExtractOptions& options, TriangleMesh& mesh,
+                                      PointSet& points, const ProgressFn& progress) {
+    requireFiniteIso(options.iso);
+    const auto start = Clock::now();
+    ExtractStats stats;
+    const uint64_t trianglesBefore = mesh.triangleCount();
+    const uint32_t verticesBefore = mesh.nextVertex();
+    const int column0 = options.columnBegin, column1 = options.columnEnd < 0 ? camera.width : options.columnEnd;
+    if (column0 < 0 || column1 <= column0 || column1 > camera.width)
+        throw std::invalid_argument("view-dependent extraction: columns [" + std::to_string(column0) + ", " +
+                                    std::to_string(column1) + ") are not a part of an image " +
+                                    std::to_string(camera.width) + " pixels wide");
+    const int strips = std::clamp(options.threads, 1, column1 - column0);
+    if (options.coverage && strips > 1)
+        throw std::invalid_argument("view-dependent extraction: merging coverage from elsewhere needs one thread");
+    // With levels of detail, the tree knows every level's bricks and ranges (core/trees/minmax_tree.h).
+    std::optional<MinMaxTree> built;
+    if (options.tree)
+        VDISO_CHECK_EQ(options.tree->levelCount(), source.levelCount());
+    else
+        built.emplace(source.levels(), source.brickRanges());
+    const MinMaxTree& tree = options.tree ? *options.tree : *built;
+    // What is visible scales with the image, not the volume: room for a couple of triangles
+    // per pixel saves regrowth copies (untouched reserved pages cost nothing).
+    const size_t pixels = size_t(camera.width) * size_t(camera.height);
+    if (strips == 1) {
+        if (!options.stream) {
+            mesh.indices.reserve(mesh.indices.size() + 6 * pixels);
+            mesh.positions.reserve(mesh.positions.size() + pixels);
+            mesh.normals.reserve(mesh.positions.capacity());
+        }
+        const uint32_t firstNewVertex = mesh.nextVertex();
+        ViewTraversal(source, tree, camera, options, mesh, points, stats, column0, column1).run();
+        // Vertices made for polygons that were then hidden belong to no triangle.
+        if (options.cellTests && !options.stream) dropUnreferencedVertices(mesh, firstNewVertex);
+    } else {
+        const std::vector<int> columns = stripColumns(source, camera, options.iso, strips, column0, column1);
+        std::vector<StripOutput> outputs(static_cast<size_t>(strips));
+        ViewExtractOptions each = options;
+        each.prefetchBricks = options.prefetchBricks / strips;
+        runStrips(outputs, [&](int k, StripOutput& out) {
+            if (!options.stream) {
+                const size_t share = pixels / size_t(strips);
+                out.triangles.indices.reserve(6 * share);
+                out.triangles.positions.reserve(share);
+                out.triangles.normals.reserve(share);
+            }
+            out.acquired = ViewTraversal(source, tree, camera, each, out.triangles, out.points, out.stats,
+                                         columns[size_t(k)], columns[size_t(k) + 1])
+                               .run();
+            if (options.cellTests && !options.stream) dropUnreferencedVertices(out.triangles, 0);
+        });
+        stats = mergeStrips(outputs, mesh, points, source.layout().brickCount());
+    }
+    if (!options.stream) {
+        stats.triangles = mesh.triangleCount() - trianglesBefore;
+        stats.vertices = mesh.nextVertex() - verticesBefore;
+    }
+    stats.extractSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (progress) progress(1.0);
+    return stats;
+}
+
+}  // namespace vdiso

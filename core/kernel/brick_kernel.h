@@ -1,0 +1,275 @@
+// The marching-cubes cell loop over one brick of sample type T (core/kernel/brick_extractor.h tells
+// what it computes). A kernel is made once per brick, after BrickExtractor::beginBrick or by
+// the extractor's own loops; it borrows the extractor's scratch, so one kernel per extractor
+// at a time.
+//
+// What a traversal decides per cell is a policy type, so that its tests inline into the loop
+// (a call through a pointer per cell and per polygon cost 10% of a view):
+//   static constexpr bool kTestsCells, kTestsPolygons;
+//   bool keepCell(int64_t x, int64_t y, int64_t z);   // global cell coordinates; false skips it
+//   bool keepPolygon(const uint32_t* vertices, int count);
+// keepPolygon gets each polygon's outline (global vertex numbers into the mesh, in order) before
+// its fan triangles are appended; a cell's triangles are appended when any of its polygons is
+// wanted (the polygons of one cell come in no front-to-back order, so one may hide another).
+// With kTestsPolygons, vertex normals are computed only for cells that are kept: the
+// view-dependent traversal drops about half the vertices it makes, and the normal is most of a
+// vertex's cost.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include "core/kernel/brick_extractor.h"
+#include "core/kernel/edge_vertex_map.h"
+#include "core/kernel/iso.h"
+#include "core/kernel/mc_tables.h"
+
+namespace vdiso {
+
+// Every active cell and polygon: the full extractions.
+struct AllCells {
+    static constexpr bool kTestsCells = false, kTestsPolygons = false;
+    bool keepCell(int64_t, int64_t, int64_t) { return true; }
+    bool keepPolygon(const uint32_t*, int) { return true; }
+};
+
+// Comparisons against the isovalue in the samples' own type: for integers, s > iso exactly
+// when s > floor(iso), so the cell loop compares integers.
+template <class T>
+struct IsoThreshold {
+    using Compare = std::conditional_t<std::is_integral_v<T>, int64_t, double>;
+    Compare value;
+    explicit IsoThreshold(double iso) {
+        if constexpr (std::is_integral_v<T>)
+            value = int64_t(std::clamp(std::floor(iso), -1e18, 1e18));
+        else
+            value = iso;
+    }
+    bool above(T s) const { return Compare(s) > value; }
+};
+
+// The cell loop for one brick of sample type T.
+template <class T>
+struct BrickKernel {
+    BrickExtractor& x;
+    const T* s;          // the brick's (B+3)^3 samples
+    int side;            // B + 3
+    int cells[3];        // cells of this brick per axis
+    int64_t corner0[3];  // global coordinates of the brick's first cell corner
+    double iso;
+    IsoThreshold<T> threshold;
+    TriangleMesh& mesh;
+    EdgeVertexMap& seams;
+
+    BrickKernel(BrickExtractor& extractor, int64_t id, const void* samples, double isovalue,
+                TriangleMesh& out, EdgeVertexMap& seamMap)
+        : x(extractor), s(static_cast<const T*>(samples)), side(extractor.mLayout.side()),
+          iso(isovalue), threshold(isovalue), mesh(out), seams(seamMap) {
+        if (x.mBrickFirstVertex == BrickExtractor::kNoFirstVertex) {
+            x.mBrickFirstVertex = out.nextVertex();
+            if (x.mBrickFirstVertex < x.mVerticesMade) {  // another mesh: its numbers restart
+                std::fill(x.mEdgeVertex.begin(), x.mEdgeVertex.end(), 0u);
+                x.mVerticesMade = 0;
+            }
+        }
+        const Dims3 c = x.mLayout.brickCoord(id);
+        for (int a = 0; a < 3; ++a) {
+            cells[a] = x.mLayout.cellsOnAxis(a, c[a]);
+            corner0[a] = c[a] * x.mLayout.brickSize;
+        }
+    }
+
+    const VolumeInfo& volume() const { return x.mVolume; }
+
+    // The eye (world) in this brick's cell coordinates, for extractMetaCell's cell order.
+    glm::dvec3 eyeInCells(const glm::dvec3& eyeWorld) const {
+        glm::dvec3 e;
+        for (int a = 0; a < 3; ++a)
+            e[a] = (eyeWorld[a] - x.mVolume.origin[a]) / x.mVolume.spacing[a] - double(corner0[a]);
+        return e;
+    }
+
+    // Index of local cell corner (cx, cy, cz) in the sample array (ghost offset included).
+    size_t sampleIndex(int cx, int cy, int cz) const {
+        return BrickLayout::cornerIndex(side, cx, cy, cz);
+    }
+
+    void metaCellBox(int m, int lo[3], int hi[3]) const {
+        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
+        const int mc[3] = {m % n, (m / n) % n, m / (n * n)};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(mc[a] * M, cells[a]);
+            hi[a] = std::min(lo[a] + M, cells[a]);
+        }
+    }
+
+    glm::dvec3 gradientAt(size_t i) const {
+        const glm::dvec3& h = x.mVolume.spacing;
+        const size_t sy = size_t(side), sz = size_t(side) * side;
+        return {(double(s[i + 1]) - double(s[i - 1])) / (2 * h.x),
+                (double(s[i + sy]) - double(s[i - sy])) / (2 * h.y),
+                (double(s[i + sz]) - double(s[i - sz])) / (2 * h.z)};
+    }
+
+    // The vertex on edge `e` of cell (cx, cy, cz), computed the first time it is asked for.
+    // Without `withNormal` its normal is left zero, for ensureNormal() to fill once the cell
+    // is known to be kept: the view-dependent traversal drops about half the vertices it
+    // makes, and the normal is most of a vertex's cost.
+    uint32_t edgeVertex(int cx, int cy, int cz, int e, bool withNormal) {
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        const int px = cx + o[0], py = cy + o[1], pz = cz + o[2], axis = mcEdgeAxis(e);
+        const int n = x.mLayout.brickSize + 1;
+        const size_t local = ((size_t(pz) * n + py) * n + px) * 3 + axis;
+        uint32_t& slot = x.mEdgeVertex[local];
+        if (slot > x.mBrickFirstVertex) return slot - 1;
+
+        // Edges on the brick's faces are shared with a neighbour brick: weld through the map.
+        const int p[3] = {px, py, pz};
+        bool onFace = false;
+        for (int a = 0; a < 3; ++a)
+            if (a != axis && (p[a] == 0 || p[a] == cells[a])) onFace = true;
+        uint64_t key = 0;
+        if (onFace) {
+            const Dims3& d = x.mVolume.dims;
+            key = edgeKey(d, corner0[0] + px, corner0[1] + py, corner0[2] + pz, axis);
+            const uint32_t v = seams.find(key);
+            if (v != UINT32_MAX) return v;
+        }
+
+        const size_t i0 = sampleIndex(px, py, pz);
+        const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
+        const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
+        const double t = crossingFraction(s0, s1, iso);
+        glm::dvec3 local3(px, py, pz);
+        local3[axis] += t;
+        const glm::dvec3 position =
+            x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
+                                   x.mVolume.spacing;
+        const uint32_t v = mesh.nextVertex();
+        mesh.positions.push_back(glm::vec3(position));
+        mesh.normals.push_back(withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
+        slot = v + 1;
+        x.mVerticesMade = v + 1;
+        if (onFace) seams.insert(key, v);
+        return v;
+    }
+
+    // Minus the gradient at the crossing of the edge from sample i0 to i0 + step (along
+    // `axis`), interpolated between central differences at its ends, normalized. Never zero:
+    // a flat gradient (clamped border, plateau) takes the edge's own direction, so a zero
+    // normal means "not computed yet". Any brick holding the edge gives the same normal (the
+    // ghost samples cover the differences), so a welded vertex may get it from either.
+    glm::vec3 edgeNormal(size_t i0, size_t step, int axis) const {
+        const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
+        const double t = crossingFraction(s0, s1, iso);
+        const glm::dvec3 gradient = glm::mix(gradientAt(i0), gradientAt(i0 + step), t);
+        const double length = glm::length(gradient);
+        glm::dvec3 normal(0.0);
+        // A gradient through a non-finite sample is inf or NaN: the edge's direction then.
+        if (length > 0 && std::isfinite(length))
+            normal = -gradient / length;
+        else
+            normal[axis] = s1 > s0 ? -1.0 : 1.0;
+        return glm::vec3(normal);
+    }
+
+    void ensureNormal(uint32_t v, int cx, int cy, int cz, int e) {
+        glm::vec3& normal = mesh.normals[v - mesh.firstVertex];
+        if (normal != glm::vec3(0.0f)) return;
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        const int axis = mcEdgeAxis(e);
+        const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
+        normal = edgeNormal(sampleIndex(cx + o[0], cy + o[1], cz + o[2]), step, axis);
+    }
+
+    // Appends the surface of meta-cell m, asking `cells` about each active cell and polygon;
+    // cells go front to back from `eyeCell` (this brick's cell coordinates: eyeInCells) when
+    // given, else in memory order.
+    template <class Cells>
+    void extractMetaCell(int m, Cells& cellPolicy, const glm::dvec3* eyeCell = nullptr) {
+        int lo[3], hi[3];
+        metaCellBox(m, lo, hi);
+        // Cell order per axis: ascending, or with an eye (in this brick's cell coordinates)
+        // nearest the eye first. Nested z, y, x, each ordered so, is a front-to-back order
+        // for a grid: a cell hiding another is no farther from the eye on any axis.
+        int order[3][kMaxMetaCellSize];
+        for (int a = 0; a < 3; ++a) {
+            const int n = hi[a] - lo[a];
+            for (int k = 0; k < n; ++k) order[a][k] = lo[a] + k;
+            if (eyeCell)
+                std::sort(order[a], order[a] + n, [&](int i, int j) {
+                    return std::abs(i + 0.5 - (*eyeCell)[a]) < std::abs(j + 0.5 - (*eyeCell)[a]);
+                });
+        }
+        // Above bits of the meta-cell's corner samples, one word per corner row (bit i: corner
+        // lo[0] + i). A cell's case is then four 2-bit fields, and a row of cells that the
+        // surface misses is passed over with a few word operations instead of 8 comparisons
+        // per cell: most cells of an active meta-cell are empty.
+        const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
+        uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
+        const int edgeRow = x.mLayout.brickSize + 1;
+        for (int z = 0; z <= nz; ++z)
+            for (int y = 0; y <= ny; ++y) {
+                // The vertex slots of this corner row's edges, asked for below: requested now,
+                // all rows at once, their misses overlap instead of stalling one by one (a
+                // view visits a brick's meta-cells scattered, so the slots are rarely cached).
+                const uint32_t* slots =
+                    x.mEdgeVertex.data() + ((size_t(lo[2] + z) * edgeRow + size_t(lo[1] + y)) * edgeRow + size_t(lo[0])) * 3;
+                __builtin_prefetch(slots);
+                __builtin_prefetch(slots + 3 * nx + 2);
+                const T* row = s + sampleIndex(lo[0], lo[1] + y, lo[2] + z);
+                uint64_t bits = 0;
+                for (int i = 0; i <= nx; ++i) bits |= uint64_t(threshold.above(row[i])) << i;
+                above[z][y] = bits;
+            }
+        const uint64_t cellBits = (uint64_t(1) << nx) - 1;
+        KernelCounters& counters = x.mCounters;
+        ++counters.metaCellsActive;
+        counters.cellsVisited += int64_t(nx) * ny * nz;
+        for (int iz = 0; iz < nz; ++iz)
+            for (int iy = 0; iy < ny; ++iy) {
+                const int cz = order[2][iz], cy = order[1][iy];
+                const int rz = cz - lo[2], ry = cy - lo[1];
+                const uint64_t r00 = above[rz][ry], r10 = above[rz][ry + 1];
+                const uint64_t r01 = above[rz + 1][ry], r11 = above[rz + 1][ry + 1];
+                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
+                const uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits;
+                if (mixed == 0) continue;
+                for (int ix = 0; ix < nx; ++ix) {
+                    const int cx = order[0][ix], rx = cx - lo[0];
+                    if (!(mixed >> rx & 1)) continue;
+                    // Corner k is (k & 1, k >> 1 & 1, k >> 2): rows (y, z) = 00, 10, 01, 11.
+                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
+                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
+                    if constexpr (Cells::kTestsCells)
+                        if (!cellPolicy.keepCell(corner0[0] + cx, corner0[1] + cy, corner0[2] + cz)) continue;
+                    ++counters.cellsActive;
+                    const McPolygonCase& pc = mcPolygonCase(caseIndex);
+                    uint32_t outline[kMcEdgeCount];  // every polygon's, one after another
+                    bool wanted = !Cells::kTestsPolygons;
+                    int outlineLength = 0;
+                    for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
+                        for (int k = 0; k < pc.vertexCount[p]; ++k)
+                            outline[at + k] = edgeVertex(cx, cy, cz, pc.edges[at + k], !Cells::kTestsPolygons);
+                        if constexpr (Cells::kTestsPolygons)
+                            wanted |= cellPolicy.keepPolygon(outline + at, pc.vertexCount[p]);
+                        outlineLength = at + pc.vertexCount[p];
+                    }
+                    if (!wanted) continue;
+                    if constexpr (Cells::kTestsPolygons)
+                        for (int k = 0; k < outlineLength; ++k) ensureNormal(outline[k], cx, cy, cz, pc.edges[k]);
+                    for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++])
+                        for (int k = 2; k < pc.vertexCount[p]; ++k)
+                            mesh.indices.insert(mesh.indices.end(),
+                                                {outline[at], outline[at + k - 1], outline[at + k]});
+                }
+            }
+    }
+};
+
+}  // namespace vdiso

@@ -1,0 +1,124 @@
+// The occlusion pyramid: which pixels of the image are already covered by extracted surface
+// (SAGE §3.1, Fig. 1; after Greene's hierarchical coverage masks as used by WISE).
+//
+// Coverage only, no depth: the traversal delivers geometry front to back, so anything drawn
+// later lies behind what is already covered. Pixels follow core/camera.h (x right, y down).
+//
+// Layout: level 0 holds one bit per pixel in 8x8 tiles, one uint64_t per tile
+// (bit = row * 8 + column). Level k + 1 holds one "full" bit per word of level k, again grouped
+// 8x8 into words, up to a single word at the top (levels() of them; a bit of level k stands for
+// 8^k x 8^k pixels). Bits outside the image (the ragged right and bottom tiles, and bits of
+// level k + 1 for words that level k does not have) are kept set, so that "full" is simply
+// word == ~0 and a tile on the image border can become full.
+//
+// Update bottom-up (SAGE): coverSpan() sets pixel bits with word masks and remembers the tiles
+// that became full; propagate() carries just those up. Queries (isOccluded) go top-down with
+// early exit and are valid after propagate(). The WISE alternative, insertTriangleTopDown(),
+// descends from the top classifying nodes against the triangle's edges and keeps the full bits
+// consistent itself; it covers exactly the pixels scanConvertPolygon() (core/view/scan_convert.h)
+// covers for the same triangle.
+//
+// Memory: about width * height / 8 * (1 + 1/64 + ...) bytes. Not thread-safe, not even for
+// concurrent queries (they count the words they touch): one pyramid per extraction.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/vec2.hpp>
+
+namespace vdiso {
+
+class OcclusionPyramid {
+public:
+    static constexpr int kTileSize = 8;
+
+    struct Stats {
+        uint64_t spans = 0;          // coverSpan calls that touched the image
+        uint64_t tileUpdates = 0;    // bottom words changed by spans (a word may count often)
+        uint64_t tilesFilled = 0;    // bottom words that became full through spans
+        uint64_t propagatedWords = 0;  // words above the bottom written by propagate()
+        uint64_t queries = 0;        // isOccluded calls
+        uint64_t queryWords = 0;     // words read by isOccluded
+        uint64_t topDownTriangles = 0;
+        uint64_t topDownWords = 0;   // words visited by insertTriangleTopDown
+    };
+
+    OcclusionPyramid(int width, int height);  // width, height >= 1
+
+    // Uncovers every pixel (keeps the sizes and the statistics).
+    void clear();
+
+    int width() const { return mWidth; }
+    int height() const { return mHeight; }
+    int levels() const { return int(mWordsX.size()); }
+
+    // (x, y) must lie in the image.
+    bool isCovered(int x, int y) const {
+        const uint64_t w = mWords[size_t(y >> 3) * mWordsX[0] + (x >> 3)];
+        return (w >> ((y & 7) * 8 + (x & 7))) & 1;
+    }
+
+    // True when every pixel of the inclusive rectangle [x0, x1] x [y0, y1], clamped to the
+    // image, is covered; true as well when nothing of it is left after clamping (no pixel of
+    // it can be seen). Needs propagate() after the last coverSpan().
+    bool isOccluded(int x0, int y0, int x1, int y1) const;
+
+    // Covers pixels x0..x1 (inclusive, clamped to the image) of row y; returns whether any of
+    // them was not covered before.
+    bool coverSpan(int y, int x0, int x1);
+    // Carries the tiles filled since the last call up the hierarchy.
+    void propagate();
+    bool hasPendingChanges() const { return !mFilledTiles.empty(); }
+
+    // The bottom level as it stands: one word per 8x8 tile, rows of wordsX(0) tiles, bits outside
+    // the image set. One process's coverage as exchanged with others (mpi/): width * height / 8
+    // bytes, 128 KB for 1024 x 1024.
+    std::span<const uint64_t> tiles() const { return {mWords.data(), tileCount(mWidth, mHeight)}; }
+    static size_t tileCount(int width, int height) {
+        return size_t((width + kTileSize - 1) / kTileSize) * size_t((height + kTileSize - 1) / kTileSize);
+    }
+    // Covers the pixels set in `tiles` (laid out as tiles() of a pyramid of the same size); then
+    // propagate(). Returns whether any was not covered before.
+    bool coverTiles(std::span<const uint64_t> tiles);
+
+    // WISE (Greene): covers the pixel centres inside the triangle (the fill and tie rules of
+    // core/view/scan_convert.h) by descending from the top word; whole nodes inside the triangle are
+    // filled at once. Keeps every level consistent; unrelated pending coverSpan() changes still
+    // need propagate(). Returns whether any pixel was not covered before.
+    bool insertTriangleTopDown(const glm::dvec2 (&v)[3]);
+
+    // Inspection (tests, debugging): word (wx, wy) of a level, and the size of its word grid.
+    int wordsX(int level) const { return mWordsX[size_t(level)]; }
+    int wordsY(int level) const { return mWordsY[size_t(level)]; }
+    uint64_t word(int level, int wx, int wy) const {
+        return mWords[mLevelOffset[size_t(level)] + size_t(wy) * mWordsX[size_t(level)] +
+                      size_t(wx)];
+    }
+
+    const Stats& stats() const { return mStats; }
+    void resetStats() { mStats = Stats{}; }
+
+private:
+    struct TopDownTriangle;
+
+    uint64_t& wordRef(int level, int wx, int wy) {
+        return mWords[mLevelOffset[size_t(level)] + size_t(wy) * mWordsX[size_t(level)] +
+                      size_t(wx)];
+    }
+    bool queryWord(int level, int wx, int wy, int x0, int y0, int x1, int y1) const;
+    bool insertWord(const TopDownTriangle& t, int level, int wx, int wy);
+    void fillSubtree(int level, int wx, int wy);
+    bool mTopDownChanged = false;  // set by insertWord/fillSubtree during one insertion
+
+    int mWidth, mHeight;
+    std::vector<int> mWordsX, mWordsY;   // word grid per level
+    std::vector<size_t> mLevelOffset;    // first word of each level in mWords
+    std::vector<uint64_t> mWords;        // all levels, bottom first, rows of words
+    std::vector<uint64_t> mClearWords;   // mWords after clear(): only the padding bits set
+    std::vector<uint32_t> mFilledTiles;  // bottom words filled since the last propagate()
+    mutable Stats mStats;
+};
+
+}  // namespace vdiso

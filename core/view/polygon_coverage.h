@@ -1,0 +1,99 @@
+// SAGE's scan conversion of a polygon into the occlusion pyramid (paper §3.2), and the rule
+// that keeps a polygon only when it draws something: the per-polygon half of the traversal's
+// cell policy (core/extract/extract_view.cpp). Cells arrive front to back, so a polygon whose scan
+// conversion covers no pixel centre left uncovered lies behind what is drawn already or
+// between pixel centres, where the rasterizer makes no fragment either.
+#pragma once
+
+#include <algorithm>
+#include <span>
+
+#include <glm/vec2.hpp>
+
+#include "core/view/occlusion_pyramid.h"
+#include "core/view/scan_convert.h"
+#include "core/view/view_culler.h"
+
+namespace vdiso {
+
+class PolygonCoverage {
+public:
+    // bottomUp: mark pixel centres bottom-up (false: insert each fan triangle top-down, WISE);
+    // scanPolygons: scan-convert the polygon whole (false: each fan triangle on its own).
+    PolygonCoverage(OcclusionPyramid& pyramid, bool bottomUp, bool scanPolygons)
+        : mPyramid(pyramid), mBottomUp(bottomUp), mScanPolygons(scanPolygons) {}
+
+    // Marks the pixel centres the polygon (count vertices in pixel coordinates, a fan from v[0])
+    // covers. With keepOnlyNew, returns whether it covered a centre not covered before, or one
+    // lies within a rasterizer's rounding of it (then it is drawn); otherwise true.
+    bool cover(const glm::dvec2* v, int count, bool keepOnlyNew);
+
+    // Whether the projected polygon folds over itself: its fan triangles wind both ways.
+    static bool folds(const glm::dvec2* v, int count);
+
+private:
+    bool uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const;
+    bool coversSingleCentre(const glm::dvec2* v, int count, int x, int y, bool keepOnlyNew);
+    bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const;
+
+    OcclusionPyramid& mPyramid;
+    bool mBottomUp, mScanPolygons;
+};
+
+// Inline: called for every polygon, and most are answered by the box test.
+inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnlyNew) {
+    bool coversNew = false;
+    if (!mBottomUp) {
+        for (int k = 2; k < count; ++k) {
+            const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+            coversNew |= mPyramid.insertTriangleTopDown(triangle);
+        }
+    } else if (PixelRect r; uncoveredCentresInBox(v, count, r)) {
+        if (r.x0 == r.x1 && r.y0 == r.y1) {
+            coversNew = coversSingleCentre(v, count, r.x0, r.y0, keepOnlyNew);
+        } else if (mScanPolygons) {
+            coversNew = scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), mPyramid);
+            // Where a non-planar polygon's projection folds over itself its winding cancels,
+            // yet its fan triangles, which are what gets drawn, cover those centres: before
+            // dropping it, ask them (they mark only what they draw).
+            const bool askFans = keepOnlyNew && !coversNew && folds(v, count);
+            for (int k = 2; k < count && !coversNew && askFans; ++k) {
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), mPyramid);
+            }
+        } else {
+            for (int k = 2; k < count; ++k) {
+                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), mPyramid);
+            }
+        }
+    }
+    if (!keepOnlyNew) return true;
+    // The rasterizer works in float on snapped coordinates, so a centre within a hair of an
+    // edge may fall the other way there: such a polygon is kept as well (it marks nothing; only
+    // coverage this side of the rounding is ever marked).
+    for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
+    return coversNew;
+}
+
+// The pixel centres of the polygon's box, when one of them is not covered yet. A polygon covers
+// only centres in columns [first at or after xMin, first at or after xMax) and likewise rows
+// (core/view/scan_convert.h's rules), so when this is false its scan conversion, and its fan
+// triangles', would mark nothing: where cells are about a pixel, most polygons are answered
+// here, and most of the rest hold a single centre.
+inline bool PolygonCoverage::uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const {
+    double xMin = v[0].x, xMax = v[0].x, yMin = v[0].y, yMax = v[0].y;
+    for (int k = 1; k < count; ++k) {
+        xMin = std::min(xMin, v[k].x);
+        xMax = std::max(xMax, v[k].x);
+        yMin = std::min(yMin, v[k].y);
+        yMax = std::max(yMax, v[k].y);
+    }
+    r = {std::max(detail::firstCentreAtOrAfter(xMin, mPyramid.width()), 0),
+         std::max(detail::firstCentreAtOrAfter(yMin, mPyramid.height()), 0),
+         std::min(detail::firstCentreAtOrAfter(xMax, mPyramid.width()) - 1, mPyramid.width() - 1),
+         std::min(detail::firstCentreAtOrAfter(yMax, mPyramid.height()) - 1, mPyramid.height() - 1)};
+    return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
+}
+
+}  // namespace vdiso
