@@ -13,21 +13,6 @@ namespace vdiso {
 
 namespace {
 
-template <class F>
-decltype(auto) visitFileScalar(FileScalar t, F&& f) {
-    switch (t) {
-        case FileScalar::I8: return f(int8_t{});
-        case FileScalar::U8: return f(uint8_t{});
-        case FileScalar::I16: return f(int16_t{});
-        case FileScalar::U16: return f(uint16_t{});
-        case FileScalar::I32: return f(int32_t{});
-        case FileScalar::U32: return f(uint32_t{});
-        case FileScalar::F32: return f(float{});
-        case FileScalar::F64: break;
-    }
-    return f(double{});
-}
-
 // Min and max of the samples at the corners of brick `c`'s cells, as the store type holds them.
 template <class S>
 BrickRange measure(const StridedSamples& s, const BrickLayout& layout, const Dims3& c) {

@@ -43,16 +43,24 @@ double storeQuantile(const BrickStoreReader& store, double fraction) {
     return store.volume().type == ScalarType::F32 ? q : std::round(q);
 }
 
+StoreFacts storeFacts(const BrickStoreReader& store, std::optional<double> iso) {
+    StoreFacts f;
+    f.levelBytes = levelBytes(store);
+    f.compressionRatio = double(store.volume().byteSize()) / double(store.fileBytes());
+    if (iso) f.active = activeBricks(store, *iso);
+    return f;
+}
+
 JsonObject storeInfoJson(const BrickStoreReader& store, std::optional<double> iso) {
     const StoreHeader& h = store.header();
     const VolumeInfo& v = h.volume;
     const BrickLayout& l = store.layout();
     const ValueHistogram& hist = store.histogram();
-    const double ratio = double(v.byteSize()) / double(store.fileBytes());
-    const std::vector<uint64_t> bytesOfLevel = levelBytes(store);
+    const StoreFacts facts = storeFacts(store, iso);
+    const double ratio = facts.compressionRatio;
+    const std::vector<uint64_t>& bytesOfLevel = facts.levelBytes;
+    const std::optional<ActiveBricks>& active = facts.active;
     auto quantile = [&](double f) { return storeQuantile(store, f); };
-    std::optional<ActiveBricks> active;
-    if (iso) active = activeBricks(store, *iso);
     auto triple = [](const auto& t) {
         return "[" + std::to_string(t[0]) + ", " + std::to_string(t[1]) + ", " +
                std::to_string(t[2]) + "]";

@@ -22,6 +22,15 @@ ActiveBricks activeBricks(const BrickStoreReader& store, double iso);
 // Stored bytes of each level's bricks, level 0 first.
 std::vector<uint64_t> levelBytes(const BrickStoreReader& store);
 
+// What `vdiso info` derives beyond the header: each level's stored bytes, the compression
+// ratio (samples' bytes over the file's), and with `iso` the active bricks.
+struct StoreFacts {
+    std::vector<uint64_t> levelBytes;
+    double compressionRatio = 0;
+    std::optional<ActiveBricks> active;
+};
+StoreFacts storeFacts(const BrickStoreReader& store, std::optional<double> iso);
+
 // A quantile of the store's histogram; integer samples get integer quantiles.
 double storeQuantile(const BrickStoreReader& store, double fraction);
 

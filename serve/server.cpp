@@ -1,8 +1,6 @@
 #include "serve/server.h"
+#include "serve/serve_settings.h"
 
-#include "cache/cache_plan.h"
-#include "core/kernel/brick_extractor.h"
-#include "core/settings_error.h"
 #include "io/json.h"
 
 #include <algorithm>
@@ -41,41 +39,9 @@ constexpr const char* kServerName = "vdiso";
 constexpr auto kHttpTimeout = std::chrono::seconds(30);
 constexpr size_t kReadPiece = 64 * 1024;  // WebSocket reads in pieces, so size is checked as it comes
 
-// Frames that may extract at once: each needs frameCacheBricks of every store's cache
-// (cache/cache_plan.h, the rule vdiso extract plans by), so that pins never fill a cache.
-int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
-    int slots = 64;
-    for (size_t i = 0; i < stores.size(); ++i) {
-        const BrickCache& cache = *stores[i].cache;
-        const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
-        if (bricks >= uint64_t(stores[i].reader->index().size())) continue;
-        const uint64_t perFrame = frameCacheBricks(settings.prefetchBricks, settings.threads);
-        if (bricks < perFrame)
-            throw CacheBudgetError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
-                                   " bricks cannot hold what one frame pins (" + std::to_string(perFrame) +
-                                   " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
-                                   " KB with " + std::to_string(settings.threads) + " threads a frame)");
-        slots = std::min<int>(slots, int(bricks / perFrame));
-    }
-    return slots;
-}
-
 class WsSession;
 
 }  // namespace
-
-// A frame looks 8 bricks ahead with 2 readers a strip; over a network, where each read waits a
-// round trip, 32 with 8, of which 16 are read before they are known to show.
-SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
-    SessionSettings s{o.threads, o.metaCellSize, 8, 2, 2, size_t(32) << 20, o.lodError};
-    for (size_t i = 0; i < stores.size(); ++i)
-        if (stores[i].reader->remote()) {
-            s.prefetchBricks = 32;
-            s.prefetchReaders = 8;
-            s.prefetchNear = 16;
-        }
-    return s;
-}
 
 struct Server::Impl {
     ServeOptions options;
@@ -468,21 +434,6 @@ void Server::Impl::shutdown() {
     }
     // Idle HTTP connections hold no work worth waiting for; sockets close with the context.
     ioc.stop();
-}
-
-void checkServeOptions(const ServeOptions& o) {
-    if (o.stores.empty()) throw SettingsError("stores", "expects at least one store");
-    if (o.threads < 1 || o.threads > 64)
-        throw SettingsError("threads", "expects 1 to 64 image strips a frame, not " + std::to_string(o.threads));
-    if (o.metaCellSize < 1 || o.metaCellSize > kMaxMetaCellSize)
-        throw SettingsError("metacell", "expects 1 to " + std::to_string(kMaxMetaCellSize) + " cells, not " +
-                                            std::to_string(o.metaCellSize));
-    if (!(o.lodError >= 0 && o.lodError <= 1e6))
-        throw SettingsError("lod_error", "expects pixels, 0 or more, not " + std::to_string(o.lodError));
-    if (!o.token.empty() &&
-        (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos))
-        throw SettingsError("token", "expects at least 16 characters of hex digits, '-' or '_'");
-    if (o.cacheBytes == 0) throw SettingsError("cache_mb", "expects a brick cache of 1 MB or more");
 }
 
 Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(options)) {

@@ -78,17 +78,16 @@ int runInfo(int argc, char** argv) {
     const VolumeInfo& v = h.volume;
     const BrickLayout& l = store.layout();
     const ValueHistogram& hist = store.histogram();
-    const double ratio = double(v.byteSize()) / double(store.fileBytes());
-    const std::vector<uint64_t> bytesOfLevel = levelBytes(store);
-    // Integer samples have integer quantiles; the histogram's interpolation would suggest more.
-    auto quantile = [&](double f) { return storeQuantile(store, f); };
-    std::optional<ActiveBricks> active;
-    if (iso) active = activeBricks(store, *iso);
-
     if (json) {
         std::printf("%s\n", storeInfoJson(store, iso).str().c_str());
         return 0;
     }
+    const StoreFacts facts = storeFacts(store, iso);
+    const double ratio = facts.compressionRatio;
+    const std::vector<uint64_t>& bytesOfLevel = facts.levelBytes;
+    const std::optional<ActiveBricks>& active = facts.active;
+    // Integer samples have integer quantiles; the histogram's interpolation would suggest more.
+    auto quantile = [&](double f) { return storeQuantile(store, f); };
     std::printf("%s\n", path.c_str());
     std::printf("  dimensions   %lld x %lld x %lld  %s\n", (long long)v.dims[0], (long long)v.dims[1],
                 (long long)v.dims[2], scalarTypeName(v.type));

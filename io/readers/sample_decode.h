@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string_view>
 
@@ -49,6 +50,22 @@ constexpr FileScalar fileScalarOf(ScalarType t) {
         case ScalarType::F32: break;
     }
     return FileScalar::F32;
+}
+
+// Calls f(T{}) with T the C++ type of file scalar `t`; returns what f returns.
+template <class F>
+decltype(auto) visitFileScalar(FileScalar t, F&& f) {
+    switch (t) {
+        case FileScalar::I8: return f(int8_t{});
+        case FileScalar::U8: return f(uint8_t{});
+        case FileScalar::I16: return f(int16_t{});
+        case FileScalar::U16: return f(uint16_t{});
+        case FileScalar::I32: return f(int32_t{});
+        case FileScalar::U32: return f(uint32_t{});
+        case FileScalar::F32: return f(float{});
+        case FileScalar::F64: break;
+    }
+    return f(double{});
 }
 
 // True on a big-endian host (never on the machines we build for, but readers ask).

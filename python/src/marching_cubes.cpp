@@ -19,21 +19,6 @@ namespace pyb = pybind11;
 
 namespace {
 
-template <class F>
-decltype(auto) visitFileScalar(FileScalar t, F&& f) {
-    switch (t) {
-        case FileScalar::I8: return f(int8_t{});
-        case FileScalar::U8: return f(uint8_t{});
-        case FileScalar::I16: return f(int16_t{});
-        case FileScalar::U16: return f(uint16_t{});
-        case FileScalar::I32: return f(int32_t{});
-        case FileScalar::U32: return f(uint32_t{});
-        case FileScalar::F32: return f(float{});
-        case FileScalar::F64: break;
-    }
-    return f(double{});
-}
-
 // scikit-image's `values`: a measure of the data near each vertex, for colour maps. Here the
 // largest sample at the corners of the cell the vertex lies in (its lower corner at the floor
 // of its sample coordinates).

@@ -1,0 +1,55 @@
+#include "serve/serve_settings.h"
+
+#include <algorithm>
+#include <string>
+
+#include "cache/cache_plan.h"
+#include "core/kernel/brick_extractor.h"
+#include "core/settings_error.h"
+
+namespace vdiso::serve {
+
+void checkServeOptions(const ServeOptions& o) {
+    if (o.stores.empty()) throw SettingsError("stores", "expects at least one store");
+    if (o.threads < 1 || o.threads > 64)
+        throw SettingsError("threads", "expects 1 to 64 image strips a frame, not " + std::to_string(o.threads));
+    if (o.metaCellSize < 1 || o.metaCellSize > kMaxMetaCellSize)
+        throw SettingsError("metacell", "expects 1 to " + std::to_string(kMaxMetaCellSize) + " cells, not " +
+                                            std::to_string(o.metaCellSize));
+    if (!(o.lodError >= 0 && o.lodError <= 1e6))
+        throw SettingsError("lod_error", "expects pixels, 0 or more, not " + std::to_string(o.lodError));
+    if (!o.token.empty() &&
+        (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos))
+        throw SettingsError("token", "expects at least 16 characters of hex digits, '-' or '_'");
+    if (o.cacheBytes == 0) throw SettingsError("cache_mb", "expects a brick cache of 1 MB or more");
+}
+
+SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
+    SessionSettings s{o.threads, o.metaCellSize, 8, 2, 2, size_t(32) << 20, o.lodError};
+    for (size_t i = 0; i < stores.size(); ++i)
+        if (stores[i].reader->remote()) {
+            s.prefetchBricks = 32;
+            s.prefetchReaders = 8;
+            s.prefetchNear = 16;
+        }
+    return s;
+}
+
+int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
+    int slots = 64;
+    for (size_t i = 0; i < stores.size(); ++i) {
+        const BrickCache& cache = *stores[i].cache;
+        const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
+        if (bricks >= uint64_t(stores[i].reader->index().size())) continue;
+        const uint64_t perFrame = frameCacheBricks(settings.prefetchBricks, settings.threads);
+        if (bricks < perFrame)
+            throw CacheBudgetError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
+                                   " bricks cannot hold what one frame pins (" + std::to_string(perFrame) +
+                                   " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
+                                   " KB with " + std::to_string(settings.threads) + " threads a frame)");
+        slots = std::min<int>(slots, int(bricks / perFrame));
+    }
+    return slots;
+}
+
+}  // namespace vdiso::serve

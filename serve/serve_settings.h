@@ -1,0 +1,20 @@
+// What a server's options make, before any connection: the options checked, the settings every
+// viewer's frames run with, and how many frames may extract at once.
+#pragma once
+
+#include "serve/server.h"
+#include "serve/store_catalog.h"
+#include "serve/viewer_session.h"
+
+namespace vdiso::serve {
+
+// A frame looks 8 bricks ahead with 2 readers a strip; over a network, where each read waits a
+// round trip, 32 with 8, of which 16 are read before they are known to show.
+SessionSettings sessionSettings(const ServeOptions& options, StoreCatalog& stores);
+
+// Frames that may extract at once: each needs frameCacheBricks (cache/cache_plan.h, the rule
+// vdiso extract plans by) of every store's cache, so that pins never fill a cache; at most 64.
+// Throws CacheBudgetError naming the store whose cache cannot hold one frame.
+int frameSlots(StoreCatalog& stores, const SessionSettings& settings);
+
+}  // namespace vdiso::serve
