@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <string>
 
+#include <unistd.h>
+
 #include "cache/cache_plan.h"
 #include "core/kernel/brick_extractor.h"
 #include "core/settings_error.h"
@@ -22,6 +24,20 @@ void checkServeOptions(const ServeOptions& o) {
         (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos))
         throw SettingsError("token", "expects at least 16 characters of hex digits, '-' or '_'");
     if (o.cacheBytes == 0) throw SettingsError("cache_mb", "expects a brick cache of 1 MB or more");
+    if (o.maxViewers < 0 || o.maxViewers > 100000)
+        throw SettingsError("max_viewers", "expects 1 to 100000 viewers (0: from the memory), not " +
+                                               std::to_string(o.maxViewers));
+}
+
+int defaultMaxViewers(uint64_t cacheBytes) {
+    const uint64_t memory = uint64_t(sysconf(_SC_PHYS_PAGES)) * uint64_t(sysconf(_SC_PAGE_SIZE));
+    const uint64_t left = memory > cacheBytes ? memory - cacheBytes : 0;
+    return int(std::clamp<uint64_t>(left / kViewerBytes, 4, 256));
+}
+
+ServeOptions withDefaults(ServeOptions o) {
+    if (o.maxViewers == 0) o.maxViewers = defaultMaxViewers(o.cacheBytes);
+    return o;
 }
 
 SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {

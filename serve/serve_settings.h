@@ -8,6 +8,9 @@
 
 namespace vdiso::serve {
 
+// The options with their defaults filled in (maxViewers).
+ServeOptions withDefaults(ServeOptions options);
+
 // A frame looks 8 bricks ahead with 2 readers a strip; over a network, where each read waits a
 // round trip, 32 with 8, of which 16 are read before they are known to show.
 SessionSettings sessionSettings(const ServeOptions& options, StoreCatalog& stores);

@@ -25,6 +25,19 @@
 #include "serve/viewer_session.h"
 #include "serve/web_files.h"
 
+// The WebSocket's stream reads first what came with the upgrade request
+// (beast::buffered_read_stream); closing it closes the TCP stream below, which Beast knows how
+// to tear down.
+namespace boost::beast {
+template <class TeardownHandler>
+void async_teardown(role_type role, buffered_read_stream<tcp_stream, flat_buffer>& stream, TeardownHandler&& handler) {
+    async_teardown(role, stream.next_layer(), std::forward<TeardownHandler>(handler));
+}
+inline void teardown(role_type role, buffered_read_stream<tcp_stream, flat_buffer>& stream, error_code& error) {
+    teardown(role, stream.next_layer(), error);
+}
+}  // namespace boost::beast
+
 namespace vdiso::serve {
 
 namespace beast = boost::beast;
@@ -68,12 +81,17 @@ struct Server::Impl {
     net::steady_timer acceptTimer{ioc};
 
     explicit Impl(const ServeOptions& o)
-        : options((checkServeOptions(o), o)), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
+        : options(withDefaults((checkServeOptions(o), o))), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
           settings(sessionSettings(o, stores)), gate(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 
     void accept();
     void shutdown();
+    size_t openSessions() {
+        std::lock_guard lock(mutex);
+        return size_t(std::count_if(sessions.begin(), sessions.end(),
+                                    [](const std::weak_ptr<WsSession>& w) { return !w.expired(); }));
+    }
     void retire(std::unique_ptr<ViewerSession> session);
     void joinRetired(bool all);
     std::string cookieName() const { return "vdiso_token_" + std::to_string(port); }
@@ -85,7 +103,13 @@ namespace {
 // One WebSocket connection: reads messages into the session, writes what it queues.
 class WsSession : public std::enable_shared_from_this<WsSession> {
 public:
-    WsSession(tcp::socket&& socket, Server::Impl& server) : mWs(std::move(socket)), mServer(server) {}
+    // `early`: bytes the client sent after its upgrade request, read with it (a VIEW pipelined
+    // behind the handshake): the WebSocket reads them first.
+    WsSession(tcp::socket&& socket, beast::flat_buffer&& early, Server::Impl& server)
+        : mWs(std::move(socket)), mServer(server) {
+        auto& buffered = mWs.next_layer().buffer();
+        buffered.commit(net::buffer_copy(buffered.prepare(early.size()), early.data()));
+    }
 
     ~WsSession() {
         if (mViewer) mServer.retire(std::move(mViewer));
@@ -202,7 +226,7 @@ private:
         pump();
     }
 
-    websocket::stream<beast::tcp_stream> mWs;
+    websocket::stream<beast::buffered_read_stream<beast::tcp_stream, beast::flat_buffer>> mWs;
     Server::Impl& mServer;
     beast::flat_buffer mBuffer;
     uint64_t mMessageBytes = 0;
@@ -254,9 +278,10 @@ private:
             const auto host = request.find(http::field::host);
             const bool sameOrigin = origin == request.end() ||
                                     (host != request.end() && origin->value() == "http://" + std::string(host->value()));
-            if (allowed && sameOrigin && target.substr(0, target.find('?')) == "/ws" && !mServer.stopping) {
+            const bool full = mServer.openSessions() >= size_t(mServer.options.maxViewers);
+            if (allowed && sameOrigin && target.substr(0, target.find('?')) == "/ws" && !mServer.stopping && !full) {
                 mStream.expires_never();
-                auto session = std::make_shared<WsSession>(mStream.release_socket(), mServer);
+                auto session = std::make_shared<WsSession>(mStream.release_socket(), std::move(mBuffer), mServer);
                 {
                     std::lock_guard lock(mServer.mutex);
                     std::erase_if(mServer.sessions, [](const std::weak_ptr<WsSession>& w) { return w.expired(); });
@@ -266,6 +291,14 @@ private:
                 return;
             }
             ++mServer.httpRefused;
+            if (allowed && sameOrigin && full) {
+                ++mServer.viewersRefused;
+                send(reply(http::status::service_unavailable,
+                           "the server has its most viewers (" + std::to_string(mServer.options.maxViewers) +
+                               "); try again later\n",
+                           request.version(), false));
+                return;
+            }
             send(reply(!allowed ? http::status::forbidden
                        : !sameOrigin ? http::status::forbidden
                                      : http::status::not_found,

@@ -32,6 +32,8 @@ struct ServeOptions {
     std::string webRoot;  // the viewer's folder (web/)
     std::string token;    // empty: a random one
     bool handleSignals = false;  // SIGINT and SIGTERM stop run()
+    // Viewers at once; one more is answered 503. 0: defaultMaxViewers().
+    int maxViewers = 0;
 };
 
 struct ServerCounters {
@@ -41,6 +43,12 @@ struct ServerCounters {
     // the next accept. Viewers refused because a thread for them could not be started.
     uint64_t acceptsBackedOff = 0, viewersRefused = 0;
 };
+
+// Viewers a server takes at once by default: what the machine's memory holds beside the brick
+// cache at kViewerBytes each (a session's outgoing bound, its frame's mesh and chunk buffers),
+// between 4 and 256.
+constexpr uint64_t kViewerBytes = uint64_t(96) << 20;
+int defaultMaxViewers(uint64_t cacheBytes);
 
 // Checks each option's range (threads, meta-cell size, level-of-detail error, token, at least
 // one store); throws SettingsError (core/settings_error.h) naming it. Server's constructor calls it.

@@ -311,7 +311,7 @@ struct ServerFixture {
     std::thread thread;
 
     explicit ServerFixture(uint64_t cacheBytes = uint64_t(256) << 20, int threads = 1,
-                           const Dims3& dims = {72, 72, 72}) {
+                           const Dims3& dims = {72, 72, 72}, int maxViewers = 0) {
         SynthParams p;
         p.kind = SynthKind::Head;
         p.dims = dims;
@@ -327,6 +327,7 @@ struct ServerFixture {
         s.threads = threads;
         s.webRoot = dir.file("web");
         s.iso = kHeadSkinIso;
+        s.maxViewers = maxViewers;
         server = std::make_unique<Server>(s);
         thread = std::thread([this] { server->run(); });
     }
@@ -955,6 +956,103 @@ TEST(ServeServer, OutOfDescriptorsBacksOffAndRecovers) {
         if (status != 200) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     EXPECT_EQ(status, 200);
+}
+
+namespace {
+
+// A client frame as RFC 6455 wants it: FIN, the opcode, the masked length and payload.
+std::string maskedFrame(uint8_t opcode, const std::vector<uint8_t>& payload) {
+    std::string f;
+    f += char(0x80 | opcode);
+    const size_t n = payload.size();
+    if (n < 126) {
+        f += char(0x80 | n);
+    } else {
+        f += char(0x80 | 126);
+        f += char(n >> 8);
+        f += char(n & 255);
+    }
+    const uint8_t mask[4] = {0x12, 0x34, 0x56, 0x78};
+    for (uint8_t m : mask) f += char(m);
+    for (size_t i = 0; i < n; ++i) f += char(payload[i] ^ mask[i % 4]);
+    return f;
+}
+
+// Writes a WebSocket upgrade request for /ws and `after` in one send, and returns what the
+// server answers, until *ended (a frameEnd came) or the connection closes or stays silent 30 s.
+std::string rawUpgrade(uint16_t port, const std::string& token, const std::string& after, bool* ended) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0) return "";
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    std::string in;
+    if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0) {
+        timeval patience{30, 0};
+        setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &patience, sizeof patience);
+        const std::string host = "127.0.0.1:" + std::to_string(port);
+        const std::string out = "GET /ws?token=" + token + " HTTP/1.1\r\nHost: " + host +
+                                "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                                "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+                                "Origin: http://" + host + "\r\n\r\n" + after;
+        if (send(fd, out.data(), out.size(), 0) == ssize_t(out.size())) {
+            char buffer[65536];
+            for (;;) {
+                const ssize_t got = recv(fd, buffer, sizeof buffer, 0);
+                if (got <= 0) break;
+                in.append(buffer, size_t(got));
+                if (in.find("\"type\":\"frameEnd\"") != std::string::npos ||
+                    in.find("\"type\": \"frameEnd\"") != std::string::npos) {
+                    *ended = true;
+                    break;
+                }
+            }
+        }
+    }
+    close(fd);
+    return in;
+}
+
+}  // namespace
+
+// A VIEW written in the same packet as the upgrade request (browsers never do; other clients
+// may) is read after the handshake, not lost: its frame comes back.
+TEST(ServeServer, AViewPipelinedBehindTheUpgradeIsServed) {
+    ServerFixture fixture;
+    const uint16_t port = fixture.server->port();
+    bool ended = false;
+    const std::string in = rawUpgrade(port, fixture.server->token(),
+                                      maskedFrame(0x2, encodeView(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160), 1))),
+                                      &ended);
+    EXPECT_EQ(in.rfind("HTTP/1.1 101", 0), 0u) << in.substr(0, 200);
+    EXPECT_TRUE(ended) << "no frameEnd for the pipelined VIEW";
+    EXPECT_NE(in.find("complete"), std::string::npos);
+}
+
+// Beyond --max-viewers, one more viewer is answered 503 and the others go on.
+TEST(ServeServer, OneViewerMoreThanTheMostIsRefused) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {72, 72, 72}, 2);
+    auto a = fixture.client();
+    auto b = fixture.client();
+    bool ended = false;
+    const std::string third = rawUpgrade(fixture.server->port(), fixture.server->token(), "", &ended);
+    EXPECT_EQ(third.rfind("HTTP/1.1 503", 0), 0u) << third;
+    EXPECT_NE(third.find("the server has its most viewers (2)"), std::string::npos) << third;
+    EXPECT_EQ(fixture.server->counters().viewersRefused, 1u);
+    const Camera camera = presetFor(fixture.storePath, ViewPreset::Normal, 160);
+    EXPECT_EQ(a->requestFrame(viewOf(camera, 1)).status, "complete");
+    b.reset();  // a place is free again
+    std::unique_ptr<ViewerClient> d;
+    for (int attempt = 0; attempt < 50 && !d; ++attempt) {
+        try {
+            d = fixture.client();
+        } catch (const IoError&) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        }
+    }
+    ASSERT_TRUE(d);
+    EXPECT_EQ(d->requestFrame(viewOf(camera, 1)).status, "complete");
 }
 
 }  // namespace vdiso::serve

@@ -30,6 +30,8 @@ constexpr const char* kHelp =
     "                      nearest at the coarsest level whose cells span at most P pixels\n"
     "                      (default 1; 0: full resolution only); on stores with levels a\n"
     "                      frame 8x coarser comes first, and the viewer refines from it\n"
+    "  --max-viewers N     viewers at once; one more is answered 503 (default: what the\n"
+    "                      memory beside the cache holds at 96 MB a viewer, 4 to 256)\n"
     "  --token T           the access token (default: random at each start)\n"
     "  --web DIR           the viewer's folder (default: the source tree's web/)\n";
 
@@ -55,6 +57,8 @@ int runServe(int argc, char** argv) {
             o.port = uint16_t(parseInt(a, args.value(a), 0, 65535));
         } else if (a == "--cache-mb") {
             o.cacheBytes = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30)) << 20;
+        } else if (a == "--max-viewers") {
+            o.maxViewers = int(parseInt(a, args.value(a), 1, 100000));
         } else if (a == "--threads") {
             o.threads = int(parseInt(a, args.value(a), 1, 64));
         } else if (a == "--lod-error") {

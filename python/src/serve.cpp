@@ -46,7 +46,7 @@ void bindServe(pyb::module_& m) {
     pyb::class_<Server>(m, "_Server")
         .def(pyb::init([](const std::vector<std::string>& stores, std::optional<double> iso, int port,
                           const std::string& host, uint64_t cacheMb, int threads, double lodError,
-                          const std::string& webRoot) {
+                          const std::string& webRoot, int maxViewers) {
                  if (port < 0 || port > 65535) throw SettingsError("port", "expects 0 to 65535, not " + std::to_string(port));
                  serve::ServeOptions o;
                  o.stores = stores;
@@ -57,9 +57,10 @@ void bindServe(pyb::module_& m) {
                  o.threads = threads;
                  o.lodError = lodError;
                  o.webRoot = webRoot;
+                 o.maxViewers = maxViewers;
                  return std::make_unique<Server>(o);
              }),
-             "stores"_a, "iso"_a, "port"_a, "host"_a, "cache_mb"_a, "threads"_a, "lod_error"_a, "web_root"_a)
+             "stores"_a, "iso"_a, "port"_a, "host"_a, "cache_mb"_a, "threads"_a, "lod_error"_a, "web_root"_a, "max_viewers"_a = 0)
         .def_property_readonly("url", &Server::url)
         .def_property_readonly("port", &Server::port)
         .def_property_readonly("running", &Server::running)

@@ -210,13 +210,13 @@ class Server:
     viewer in an iframe."""
 
     def __init__(self, stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None,
-                 lod_error=1.0, web_root=None):
+                 lod_error=1.0, web_root=None, max_viewers=None):
         if isinstance(stores, (str, bytes, _os.PathLike)):
             stores = [stores]
         stores = [_local_input(s, "store") for s in stores]
         self._server = _vdiso._Server(stores, None if iso is None else float(iso), int(port), str(host),
                                       int(cache_mb), int(threads or _os.cpu_count() or 1), float(lod_error),
-                                      web_root or _vdiso._web_root)
+                                      web_root or _vdiso._web_root, int(max_viewers or 0))
 
     url = property(lambda self: self._server.url, doc="http://HOST:PORT/?token=... (the token is the key)")
     port = property(lambda self: self._server.port)
@@ -240,7 +240,8 @@ class Server:
 
 
 def serve(stores, iso=None, port=0, host="127.0.0.1", **options):
-    """serve(stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None, lod_error=1.0)
+    """serve(stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None, lod_error=1.0,
+    max_viewers=None)
     -> Server
 
     `vdiso serve` in this process, on its own thread: the browser viewer of one or more stores
