@@ -24,6 +24,9 @@ void checkServeOptions(const ServeOptions& o) {
         (o.token.size() < 16 || o.token.find_first_not_of("0123456789abcdefABCDEF-_") != std::string::npos))
         throw SettingsError("token", "expects at least 16 characters of hex digits, '-' or '_'");
     if (o.cacheBytes == 0) throw SettingsError("cache_mb", "expects a brick cache of 1 MB or more");
+    if (!(o.writeTimeoutSeconds > 0 && o.writeTimeoutSeconds <= 3600))
+        throw SettingsError("write_timeout", "expects seconds above 0 and at most 3600, not " +
+                                                 std::to_string(o.writeTimeoutSeconds));
     if (o.maxViewers < 0 || o.maxViewers > 100000)
         throw SettingsError("max_viewers", "expects 1 to 100000 viewers (0: from the memory), not " +
                                                std::to_string(o.maxViewers));

@@ -70,7 +70,7 @@ struct Server::Impl {
     // (when the next connection comes, and at the end of run()), not where the socket closed.
     std::vector<std::unique_ptr<ViewerSession>> retired;
     std::atomic<uint64_t> sessionsOpened{0}, httpRequests{0}, httpRefused{0};
-    std::atomic<uint64_t> acceptsBackedOff{0}, viewersRefused{0};
+    std::atomic<uint64_t> acceptsBackedOff{0}, viewersRefused{0}, viewersDropped{0};
     std::chrono::milliseconds acceptPause{0};  // the back-off after a failed accept (I/O thread only)
     std::atomic<bool> stopping{false};
     // Last, so destroyed first: its pending handlers hold connections, whose destructors
@@ -210,10 +210,21 @@ private:
         mWs.text(mCurrent->text);
         mWs.async_write(net::buffer(*mCurrent->bytes),
                         beast::bind_front_handler(&WsSession::onWrite, shared_from_this()));
+        // A client that stopped reading leaves the write pending: after the timeout the
+        // connection is closed, which ends the write with an error and the session with it.
+        mWriteTimer.expires_after(std::chrono::milliseconds(int64_t(mServer.options.writeTimeoutSeconds * 1000)));
+        mWriteTimer.async_wait([self = shared_from_this()](beast::error_code e) {
+            if (e || !self->mWriting) return;
+            ++self->mServer.viewersDropped;
+            beast::error_code ignored;
+            beast::get_lowest_layer(self->mWs).socket().shutdown(tcp::socket::shutdown_both, ignored);
+            beast::get_lowest_layer(self->mWs).close();
+        });
     }
 
     void onWrite(beast::error_code error, size_t) {
         mWriting = false;
+        mWriteTimer.cancel();
         mCurrent.reset();
         if (error) {
             mViewer->close();
@@ -234,6 +245,7 @@ private:
     std::optional<OutMessage> mCurrent;
     bool mWriting = false;
     bool mReadPaused = false;
+    net::steady_timer mWriteTimer{mWs.get_executor()};
 };
 
 // One HTTP connection: the viewer's files, or the upgrade to a WebSocket.
@@ -539,6 +551,7 @@ ServerCounters Server::counters() const {
     c.httpRefused = mImpl->httpRefused;
     c.acceptsBackedOff = mImpl->acceptsBackedOff;
     c.viewersRefused = mImpl->viewersRefused;
+    c.viewersDropped = mImpl->viewersDropped;
     return c;
 }
 

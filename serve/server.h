@@ -34,6 +34,9 @@ struct ServeOptions {
     bool handleSignals = false;  // SIGINT and SIGTERM stop run()
     // Viewers at once; one more is answered 503. 0: defaultMaxViewers().
     int maxViewers = 0;
+    // A write to a viewer that has not completed in this long (a client that stopped reading)
+    // drops the viewer: its memory is freed, its frame slot and pins released.
+    double writeTimeoutSeconds = 30;
 };
 
 struct ServerCounters {
@@ -42,6 +45,7 @@ struct ServerCounters {
     // Accepts that failed for want of a resource (descriptors, memory): each backs off before
     // the next accept. Viewers refused because a thread for them could not be started.
     uint64_t acceptsBackedOff = 0, viewersRefused = 0;
+    uint64_t viewersDropped = 0;  // their writes timed out
 };
 
 // Viewers a server takes at once by default: what the machine's memory holds beside the brick

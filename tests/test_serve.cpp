@@ -311,7 +311,7 @@ struct ServerFixture {
     std::thread thread;
 
     explicit ServerFixture(uint64_t cacheBytes = uint64_t(256) << 20, int threads = 1,
-                           const Dims3& dims = {72, 72, 72}, int maxViewers = 0) {
+                           const Dims3& dims = {72, 72, 72}, int maxViewers = 0, double writeTimeout = 30) {
         SynthParams p;
         p.kind = SynthKind::Head;
         p.dims = dims;
@@ -328,6 +328,7 @@ struct ServerFixture {
         s.webRoot = dir.file("web");
         s.iso = kHeadSkinIso;
         s.maxViewers = maxViewers;
+        s.writeTimeoutSeconds = writeTimeout;
         server = std::make_unique<Server>(s);
         thread = std::thread([this] { server->run(); });
     }
@@ -1053,6 +1054,48 @@ TEST(ServeServer, OneViewerMoreThanTheMostIsRefused) {
     }
     ASSERT_TRUE(d);
     EXPECT_EQ(d->requestFrame(viewOf(camera, 1)).status, "complete");
+}
+
+// A client that sends VIEWs and never reads: once a write to it has waited the write timeout,
+// it is dropped (its queue and frame freed), and the other viewers are served meanwhile.
+TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {256, 256, 256}, 0, 1.0);
+    const uint16_t port = fixture.server->port();
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(fd, 0);
+    const int small = 4096;
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    const std::string host = "127.0.0.1:" + std::to_string(port);
+    std::string out = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
+                      "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                      "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
+    ASSERT_EQ(send(fd, out.data(), out.size(), 0), ssize_t(out.size()));
+    // An orbit, a VIEW every 50 ms: new bricks come into view at each step, more than the
+    // sockets' buffers hold once the client reads nothing.
+    for (uint32_t seq = 1; seq <= 72 && fixture.server->counters().viewersDropped == 0; ++seq) {
+        const std::string view = maskedFrame(
+            0x2, encodeView(viewOf(presetFor(fixture.storePath, seq % 2 ? ViewPreset::Closeup : ViewPreset::Normal,
+                                             2048, 10.0 * seq),
+                                   seq)));
+        if (send(fd, view.data(), view.size(), MSG_NOSIGNAL) != ssize_t(view.size())) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    // Meanwhile another viewer is served.
+    auto other = fixture.client();
+    EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160), 1)).status, "complete");
+    for (int wait = 0; wait < 100 && fixture.server->counters().viewersDropped == 0; ++wait)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(fixture.server->counters().viewersDropped, 1u);
+    for (int wait = 0; wait < 50 && fixture.server->counters().sessionsOpen > 1; ++wait)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(fixture.server->counters().sessionsOpen, 1u);  // the dropped one is gone
+    close(fd);
+    EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160, 30), 2)).status, "complete");
 }
 
 }  // namespace vdiso::serve
