@@ -1059,7 +1059,7 @@ TEST(ServeServer, OneViewerMoreThanTheMostIsRefused) {
 // A client that sends VIEWs and never reads: once a write to it has waited the write timeout,
 // it is dropped (its queue and frame freed), and the other viewers are served meanwhile.
 TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
-    ServerFixture fixture(uint64_t(256) << 20, 1, {256, 256, 256}, 0, 1.0);
+    ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160}, 0, 1.0);
     const uint16_t port = fixture.server->port();
     const int fd = socket(AF_INET, SOCK_STREAM, 0);
     ASSERT_GE(fd, 0);
@@ -1075,15 +1075,14 @@ TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
                       "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
                       "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
     ASSERT_EQ(send(fd, out.data(), out.size(), 0), ssize_t(out.size()));
-    // An orbit, a VIEW every 50 ms: new bricks come into view at each step, more than the
-    // sockets' buffers hold once the client reads nothing.
-    for (uint32_t seq = 1; seq <= 72 && fixture.server->counters().viewersDropped == 0; ++seq) {
+    // A VIEW every 100 ms, each at another isovalue, so that every frame's chunks are new: more
+    // than the sockets' buffers hold once the client reads nothing.
+    for (uint32_t seq = 1; seq <= 300 && fixture.server->counters().viewersDropped == 0; ++seq) {
         const std::string view = maskedFrame(
-            0x2, encodeView(viewOf(presetFor(fixture.storePath, seq % 2 ? ViewPreset::Closeup : ViewPreset::Normal,
-                                             2048, 10.0 * seq),
-                                   seq)));
+            0x2, encodeView(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 1024, 10.0 * seq), seq,
+                                   kHeadSkinIso + 0.25 * seq)));
         if (send(fd, view.data(), view.size(), MSG_NOSIGNAL) != ssize_t(view.size())) break;
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     // Meanwhile another viewer is served.
     auto other = fixture.client();
