@@ -247,3 +247,21 @@ def test_a_store_in_a_bucket_extracts_as_on_disk(s3_bucket, volume_and_cli_store
         np.testing.assert_array_equal(a.vertices, b.vertices)
     with pytest.raises(OSError, match="missing.vdiso"):
         vdiso.open("s3://bucket/missing.vdiso")
+
+
+def test_post_processing_and_progress_match_the_command_line(vdiso_bin, volume_and_cli_store):
+    _, cli = volume_and_cli_store
+    flags = ["--largest", "--smooth", "3", "--decimate", "0.5"]
+    r = run([vdiso_bin, "extract", str(cli), "--iso", "500.5", "--method", "octree", "--stats", "-", "--quiet",
+             "-o", str(cli.parent / "post.ply")] + flags)
+    assert r.returncode == 0, r.stderr
+    theirs = json.loads(r.stdout.splitlines()[-1])
+    seen = []
+    mesh = vdiso.open(cli).extract(500.5, largest=True, smooth=3, decimate=0.5,
+                                   progress=lambda done, total: seen.append(done / total))
+    assert mesh.stats["triangles"] == theirs["triangles"] == len(mesh.faces)
+    assert mesh.stats["pieces_kept"] == 1 and seen and seen[-1] == 1.0
+    with pytest.raises(ValueError, match="decimate expects"):
+        vdiso.open(cli).extract(500.5, decimate=1.5)
+    with pytest.raises(ValueError, match="smooth, decimate, largest and min_piece apply"):
+        vdiso.open(cli).extract(500.5, method="sage", largest=True)
