@@ -8,6 +8,7 @@
 #                              (bench/python_lazy.py; the store goes to data/bench/lazyN.vdiso)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/setup.sh bench
 build=${BUILD_DIR:-build}
 py="env PYTHONPATH=$build/python /usr/bin/python3"
 mkdir -p data/bench

@@ -11,6 +11,7 @@
 #   bench/real_scans.sh [REPEAT]       default 5
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/setup.sh bench
 repeat=${1:-5}
 build=${BUILD_DIR:-build}
 vdiso=$build/bin/vdiso

@@ -22,8 +22,12 @@ packages=(
   nginx-light python3-botocore curl openssl   # their tests' servers (tests/remote/)
   pybind11-dev python3-dev python3-numpy      # the Python module (python/)
   python3-pytest python3-skimage python3-zarr python3-dask   # its tests
-  python3-vtk9                                # bench/python.sh: VTK's Flying Edges from Python
 )
+# `scripts/setup.sh bench`: also what the benchmarks compare against (VTK's Flying Edges from
+# Python, for bench/python.sh and bench/real_scans.sh), which the build and tests do not need.
+if [ "${1:-}" = bench ]; then
+  packages+=(python3-vtk9)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
