@@ -6,8 +6,8 @@
 
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
-#include <unistd.h>
 
 #include "app/extract_session.h"
 #include "app/store_info.h"
@@ -15,6 +15,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "io/camera_json.h"
+#include "io/error.h"
 #include "io/mesh/mesh_writer.h"
 #include "io/render/renderer.h"
 #include "released.h"
@@ -63,7 +64,11 @@ public:
     Camera camera(const std::optional<std::string>& cameraJson, const std::string& view, int width, int height) const {
         Camera c;
         if (cameraJson) {
-            c = parseCameraJson(*cameraJson, "camera", width, height);
+            try {
+                c = parseCameraJson(*cameraJson, "camera", width, height);
+            } catch (const IoError& e) {  // a bad dict is a bad argument, not a file's fault
+                throw SettingsError("camera", e.what());
+            }
             fitClipPlanes(c, mStore->volume());
         } else {
             ViewChoice choice;
@@ -83,9 +88,11 @@ public:
         std::string statsText;
         const Camera c = camera(cameraJson, view, width, height);
         runReleased([&](const ProgressFn& fraction) {
+            // One frame at a time per session: Python threads may share one (frames()).
+            std::lock_guard lock(mFrameLock);
             FrameOutput output;
-            output.postBeside = (std::filesystem::temp_directory_path() /
-                                 ("vdiso-python-" + std::to_string(getpid()) + ".ply")).string();
+            // Post-processing's side files are unnamed (io/mesh/mesh_output.h) in this folder.
+            output.postBeside = (std::filesystem::temp_directory_path() / "vdiso-python.ply").string();
             ExtractFrame frame = mSession.extract(c, output, fraction);
             statsText = mSession.frameStats(frame, false).str();
             const SpaceTransform toWorld = mSession.meshTransform();
@@ -104,6 +111,7 @@ public:
         const Camera c = camera(cameraJson, view, width, height);
         RenderResult drawn;
         runReleased([&](const ProgressFn& fraction) {
+            std::lock_guard lock(mFrameLock);
             const ExtractFrame frame = mSession.extract(c, {}, fraction);
             drawn = renderSurface(frame.mesh, frame.points, c);
         });
@@ -117,6 +125,7 @@ public:
 private:
     std::shared_ptr<BrickStoreReader> mStore;
     ExtractSession mSession;
+    std::mutex mFrameLock;
 };
 
 ExtractSettings settingsOf(const std::string& method, double iso, double lodError, int threads, uint64_t cacheMb,

@@ -108,6 +108,8 @@ def test_refusals(tmp_path, volume_and_cli_store):
         store.extract(500, method="sage", view="sideways")
     with pytest.raises(ValueError, match="camera"):
         store.extract(500, method="sage", camera=[1, 2, 3])
+    with pytest.raises(ValueError, match="camera"):
+        store.extract(500, method="sage", camera={"eye": [1, 2, 3]})
     with pytest.raises(FileNotFoundError):
         vdiso.open(tmp_path / "missing.vdiso")
     (tmp_path / "junk.vdiso").write_bytes(b"not a store at all" * 10)
@@ -265,3 +267,26 @@ def test_post_processing_and_progress_match_the_command_line(vdiso_bin, volume_a
         vdiso.open(cli).extract(500.5, decimate=1.5)
     with pytest.raises(ValueError, match="smooth, decimate, largest and min_piece apply"):
         vdiso.open(cli).extract(500.5, method="sage", largest=True)
+
+
+def test_threads_extract_and_post_process_at_once(volume_and_cli_store):
+    """The GIL is released: Python threads extract side by side, post-processing included, and
+    each gets what one alone gets."""
+    import threading
+    _, cli = volume_and_cli_store
+    store = vdiso.open(cli)
+    alone = store.extract(500.5, largest=True, smooth=2)
+    results, errors = [], []
+
+    def work():
+        try:
+            results.append(len(store.extract(500.5, largest=True, smooth=2).faces))
+        except Exception as e:  # noqa: BLE001
+            errors.append(e)
+
+    threads = [threading.Thread(target=work) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors and results == [len(alone.faces)] * 4
