@@ -1,7 +1,6 @@
 #include "app/extract_session.h"
 
 #include <algorithm>
-#include <thread>
 
 #include "cache/cache_plan.h"
 #include "core/clock.h"
@@ -14,8 +13,6 @@
 #include "io/remote/remote_file.h"
 
 namespace vdiso {
-
-int machineThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
 
 namespace {
 

@@ -1,6 +1,8 @@
 #include "app/extract_settings.h"
 
+#include <algorithm>
 #include <cmath>
+#include <thread>
 
 #include "core/kernel/brick_extractor.h"
 #include "core/brick_levels.h"
@@ -8,6 +10,8 @@
 namespace vdiso {
 
 bool isViewDependent(const std::string& method) { return method == "sage" || method == "wise"; }
+
+int machineThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
 
 void checkExtractSettings(const ExtractSettings& s) {
     if (s.method != "octree" && s.method != "noise" && s.method != "sage" && s.method != "wise")

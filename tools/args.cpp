@@ -143,14 +143,9 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
         options.brickSize = int(parseInt(flag, args.value(flag), 2, 512));
     } else if (flag == "--compress") {
         const std::string c = args.value(flag);
-        if (c == "zstd")
-            options.compression = Compression::Zstd;
-        else if (c == "lz4")
-            options.compression = Compression::Lz4;
-        else if (c == "none")
-            options.compression = Compression::None;
-        else
-            throw UsageError("--compress expects zstd, lz4 or none, not '" + c + "'");
+        const std::optional<Compression> codec = parseCompression(c);
+        if (!codec) throw UsageError("--compress expects zstd, lz4 or none, not '" + c + "'");
+        options.compression = *codec;
     } else if (flag == "--level") {
         options.compressionLevel = int(parseInt(flag, args.value(flag), -7, 19));
     } else if (flag == "--levels") {

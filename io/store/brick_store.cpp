@@ -21,6 +21,12 @@ const char* compressionName(Compression c) {
     return c == Compression::Zstd ? "zstd" : c == Compression::Lz4 ? "lz4" : "none";
 }
 
+std::optional<Compression> parseCompression(std::string_view name) {
+    for (Compression c : {Compression::Zstd, Compression::Lz4, Compression::None})
+        if (name == compressionName(c)) return c;
+    return std::nullopt;
+}
+
 const char* brickFilterName(BrickFilter f) {
     return f == BrickFilter::ByteShuffle ? "byte shuffle" : "none";
 }

@@ -15,8 +15,10 @@
 #include <array>
 #include <memory>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/brick_layout.h"
@@ -42,6 +44,8 @@ constexpr int kHistogramBins = 256;
 // 5.6 GB/s), which matters when one core decodes for a view that another extracts.
 enum class Compression : uint8_t { None = 0, Zstd = 1, Lz4 = 2 };
 const char* compressionName(Compression c);
+// The codec compressionName names ("zstd", "lz4", "none"); nullopt for anything else.
+std::optional<Compression> parseCompression(std::string_view name);
 
 enum class ChecksumAlgorithm : uint8_t { Crc32 = 1 };  // zlib's CRC-32 of the stored bytes
 

@@ -8,6 +8,7 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "core/settings_error.h"
 #include "io/error.h"
 #include "io/readers/slice_reader.h"
 #include "io/store/store_writer.h"
@@ -79,10 +80,9 @@ StoreWriteOptions storeOptions(int brick, const std::string& levels, const std::
     StoreWriteOptions o;
     o.brickSize = brick;
     o.overwrite = overwrite;
-    if (compress == "lz4") o.compression = Compression::Lz4;
-    else if (compress == "zstd") o.compression = Compression::Zstd;
-    else if (compress == "none") o.compression = Compression::None;
-    else throw std::invalid_argument("compress: expects 'lz4', 'zstd' or 'none', not '" + compress + "'");
+    const std::optional<Compression> codec = parseCompression(compress);
+    if (!codec) throw SettingsError("compress", "expects 'lz4', 'zstd' or 'none', not '" + compress + "'");
+    o.compression = *codec;
     if (levels == "auto") o.coarseLevels = StoreWriteOptions::kLevelsUntilOneBrick;
     else {
         try {
@@ -90,8 +90,7 @@ StoreWriteOptions storeOptions(int brick, const std::string& levels, const std::
             o.coarseLevels = std::stoi(levels, &end);
             if (end != levels.size() || o.coarseLevels < 0) throw std::invalid_argument("");
         } catch (const std::exception&) {
-            throw std::invalid_argument("levels: expects 'auto' or a count of coarser levels (0 or more), not '" +
-                                        levels + "'");
+            throw SettingsError("levels", "expects 'auto' or a count of coarser levels (0 or more), not '" + levels + "'");
         }
     }
     return o;
