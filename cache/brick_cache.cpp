@@ -14,7 +14,7 @@
 namespace vdiso {
 
 
-std::span<const SubBlockCode> BrickCache::subBlockCodes() const { return mStore.subBlockCodes(); }
+std::span<const SubBlockCode> BrickCache::subBlockCodesOf(int64_t id) const { return mStore.subBlockCodesOf(id); }
 
 BrickCache::Chunk::Chunk(size_t n) : size(n) {
     void* p = ::mmap(nullptr, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);

@@ -48,7 +48,7 @@ public:
     const BrickLayout& layout() const override { return mStore.layout(); }
     int levelCount() const override { return mStore.header().levelCount; }
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
-    std::span<const SubBlockCode> subBlockCodes() const override;
+    std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override;
     BrickHandle acquire(int64_t id) override;
     bool isResident(int64_t id) const override;
 

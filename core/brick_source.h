@@ -58,14 +58,15 @@ public:
     virtual const VolumeInfo& volume() const = 0;
     virtual const BrickLayout& layout() const = 0;
     // Levels of detail held, level 0 included (core/brick_levels.h). Brick ids, brickRanges()
-    // and subBlockCodes() run through every level, level 0's bricks first.
+    // and subBlockCodesOf() run through every level, level 0's bricks first.
     virtual int levelCount() const { return 1; }
     std::vector<BrickLevel> levels() const { return brickLevels(volume(), layout().brickSize, levelCount()); }
     // Min and max of each brick's cell samples, indexed by brick id.
     virtual std::span<const BrickRange> brickRanges() const = 0;
-    // The ranges of each brick's sub-blocks (core/trees/sub_blocks.h), kSubBlocksPerBrick per brick
-    // in brick order, also known without reading the bricks; empty when the source has none.
-    virtual std::span<const SubBlockCode> subBlockCodes() const { return {}; }
+    // The ranges of brick `id`'s kSubBlocksPerBrick sub-blocks (core/trees/sub_blocks.h), known
+    // without reading the brick; empty when the source has none. May wait for them (a remote
+    // store fetches them after its open) and throw as acquire does.
+    virtual std::span<const SubBlockCode> subBlockCodesOf(int64_t) const { return {}; }
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
     virtual BrickHandle acquire(int64_t id) = 0;
     // Whether acquire(id) would find the brick in memory now (a hint: it may be gone by then).

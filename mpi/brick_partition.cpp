@@ -16,15 +16,15 @@ uint64_t BrickPartition::weightOf(int r) const {
 
 std::vector<uint64_t> activeSubBlockWeights(const BrickSource& source, std::span<const int64_t> bricks,
                                             double iso) {
-    const std::span<const SubBlockCode> codes = source.subBlockCodes();
     const std::span<const BrickRange> ranges = source.brickRanges();
     std::vector<uint64_t> weights(bricks.size(), 1);
-    if (codes.empty()) return weights;
     for (size_t i = 0; i < bricks.size(); ++i) {
         const size_t id = size_t(bricks[i]);
+        const std::span<const SubBlockCode> codes = source.subBlockCodesOf(bricks[i]);
+        if (codes.empty()) continue;
         uint64_t active = 0;
         for (int s = 0; s < kSubBlocksPerBrick; ++s) {
-            const BrickRange r = decodeSubBlockRange(codes[id * kSubBlocksPerBrick + size_t(s)], ranges[id]);
+            const BrickRange r = decodeSubBlockRange(codes[size_t(s)], ranges[id]);
             active += rangeHoldsIso(r.minValue, r.maxValue, iso);
         }
         weights[i] = std::max<uint64_t>(1, active);

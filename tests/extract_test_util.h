@@ -11,6 +11,7 @@
 
 #include "core/brick_source.h"
 #include "core/synth/synth.h"
+#include "core/trees/sub_blocks.h"
 #include "core/mesh.h"
 
 namespace vdiso::test {
@@ -24,7 +25,9 @@ public:
     const VolumeInfo& volume() const override { return mInfo; }
     const BrickLayout& layout() const override { return mLayout; }
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
-    std::span<const SubBlockCode> subBlockCodes() const override { return mSubBlocks; }
+    std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override {
+        return std::span<const SubBlockCode>(mSubBlocks).subspan(size_t(id) * kSubBlocksPerBrick, kSubBlocksPerBrick);
+    }
     BrickHandle acquire(int64_t id) override;
     const std::vector<unsigned char>& samples() const { return mSamples; }
     int64_t acquired() const { return mAcquired; }

@@ -30,7 +30,7 @@ public:
     const VolumeInfo& volume() const override { return mInner.volume(); }
     const BrickLayout& layout() const override { return mInner.layout(); }
     std::span<const BrickRange> brickRanges() const override { return mInner.brickRanges(); }
-    std::span<const SubBlockCode> subBlockCodes() const override { return mInner.subBlockCodes(); }
+    std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override { return mInner.subBlockCodesOf(id); }
     BrickHandle acquire(int64_t id) override {
         {
             std::lock_guard lock(mMutex);

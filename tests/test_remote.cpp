@@ -105,6 +105,38 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     expectError(r, {"/missing.vdiso", "HTTP 404 (Not Found)"});
 }
 
+// A store at a URL reads its index's entries at open and its sub-block codes as views need
+// them (io/store/lazy_index.h). A corrupt part of codes: the local open refuses the store, the
+// remote `info` never reads that part, and a view that needs it (a distant one, whose coarse
+// bricks' codes lie in the last part) is an error naming the URL and the part.
+TEST_F(RemoteStore, SubBlockCodesAreReadAsViewsNeedThem) {
+    // 9,161 bricks of all levels: a raw index of two parts, the second holding codes only.
+    test::CommandResult r = test::runVdiso("synth " + file("bkt/fine.vdiso") + " --kind head --size 160 --brick 8 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::vector<unsigned char> bytes = test::readFile(file("bkt/fine.vdiso"));
+    bytes[bytes.size() - 20] ^= 0x10;  // inside the last part's stored bytes
+    test::writeFile(file("bkt/broken.vdiso"), bytes.data(), bytes.size());
+    LoopbackServer server = nginx();
+    const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/";
+
+    r = test::runVdiso("info " + file("bkt/broken.vdiso"));
+    expectError(r, {"broken.vdiso", "index part 1 of 2 is corrupt"});
+    r = test::runVdiso("info " + url + "broken.vdiso");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    const std::string view = " extract --iso 600.5 --method sage --lod-error 1 --size 128x128 --view distant -o ";
+    r = test::runCommand(std::string(VDISO_BINARY) + view + file("broken.ply") + " '" + url + "broken.vdiso'");
+    expectError(r, {url + "broken.vdiso", "index part 1 of 2 is corrupt"});
+    EXPECT_FALSE(std::filesystem::exists(file("broken.ply")));
+
+    // The intact store gives the local file's mesh, from every part.
+    for (const std::string& place : {file("bkt/fine.vdiso"), url + "fine.vdiso"}) {
+        const std::string out = file(place == url + "fine.vdiso" ? "remote.ply" : "local_fine.ply");
+        r = test::runCommand(std::string(VDISO_BINARY) + view + out + " '" + place + "'");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+    }
+    EXPECT_EQ(test::readFile(file("remote.ply")), test::readFile(file("local_fine.ply")));
+}
+
 TEST_F(RemoteStore, S3SignedWithEnvironmentOrProfilePathOrVirtualHost) {
     LoopbackServer server = s3();
     const int port = server.port();

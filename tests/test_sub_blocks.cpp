@@ -94,7 +94,7 @@ TEST(SubBlocks, StoreCodesContainEachSubBlocksCells) {
                 hasCells = hasCells && lo[k] < hi[k];
             }
             const SubBlockCode code = store.subBlockCodes()[size_t(id) * kSubBlocksPerBrick + size_t(sb)];
-            EXPECT_EQ(code.lo, memory->subBlockCodes()[size_t(id) * kSubBlocksPerBrick + size_t(sb)].lo);
+            EXPECT_EQ(code.lo, memory->subBlockCodesOf(id)[size_t(sb)].lo);
             if (!hasCells) {
                 EXPECT_EQ(code.lo, 255);
                 EXPECT_EQ(code.hi, 0);

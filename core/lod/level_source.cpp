@@ -10,8 +10,6 @@ LevelSource::LevelSource(BrickSource& base, int level)
     const size_t first = size_t(mLevel.firstBrick), count = size_t(mLevel.layout.brickCount());
     VDISO_CHECK_LE(first + count, base.brickRanges().size());
     mRanges = base.brickRanges().subspan(first, count);
-    const std::span<const SubBlockCode> codes = base.subBlockCodes();
-    if (!codes.empty()) mSubBlocks = codes.subspan(first * kSubBlocksPerBrick, count * kSubBlocksPerBrick);
 }
 
 }  // namespace vdiso

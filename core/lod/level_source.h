@@ -17,7 +17,9 @@ public:
     const VolumeInfo& volume() const override { return mLevel.volume; }
     const BrickLayout& layout() const override { return mLevel.layout; }
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
-    std::span<const SubBlockCode> subBlockCodes() const override { return mSubBlocks; }
+    std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override {
+        return mBase.subBlockCodesOf(mLevel.firstBrick + id);
+    }
     BrickHandle acquire(int64_t id) override { return mBase.acquire(mLevel.firstBrick + id); }
     bool isResident(int64_t id) const override { return mBase.isResident(mLevel.firstBrick + id); }
 
@@ -31,7 +33,6 @@ private:
     BrickSource& mBase;
     BrickLevel mLevel;
     std::span<const BrickRange> mRanges;
-    std::span<const SubBlockCode> mSubBlocks;
 };
 
 }  // namespace vdiso

@@ -33,14 +33,14 @@ void ViewCuller::nodeBox(const MinMaxNode& node, glm::dvec3& a, glm::dvec3& b) c
 }
 
 bool ViewCuller::subBlocksShow(int64_t brick) const {
-    const std::span<const SubBlockCode> codes = mSource.subBlockCodes();
+    const std::span<const SubBlockCode> codes = mSource.subBlockCodesOf(brick);
     if (codes.empty()) return true;
     const BrickLayout& layout = mSource.layout();
     const BrickRange whole = mSource.brickRanges()[size_t(brick)];
     const Dims3 c = layout.brickCoord(brick);
     const int C = subBlockCells(layout.brickSize);
     for (int s = 0; s < kSubBlocksPerBrick; ++s) {
-        const BrickRange range = decodeSubBlockRange(codes[size_t(brick) * kSubBlocksPerBrick + size_t(s)], whole);
+        const BrickRange range = decodeSubBlockRange(codes[size_t(s)], whole);
         if (!rangeHoldsIso(range.minValue, range.maxValue, mIso)) continue;
         const int block[3] = {s % kSubBlocksPerAxis, s / kSubBlocksPerAxis % kSubBlocksPerAxis,
                               s / (kSubBlocksPerAxis * kSubBlocksPerAxis)};

@@ -13,9 +13,19 @@
 
 #include "io/store/byte_shuffle.h"
 #include "io/error.h"
+#include "io/store/lazy_index.h"
 #include "io/store/store_format.h"
+#include "core/trees/sub_blocks.h"
 
 namespace vdiso {
+
+namespace {
+
+// A remote store's sub-block code parts fetched at once in the background (about 100 KB each):
+// half the default pool of 32 requests, leaving the other half to the bricks a view reads.
+constexpr size_t kCodePartsAtOnce = 16;
+
+}  // namespace
 
 const char* compressionName(Compression c) {
     return c == Compression::Zstd ? "zstd" : c == Compression::Lz4 ? "lz4" : "none";
@@ -100,16 +110,40 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
                                 std::to_string(mHeader.indexBytes) + " bytes from byte offset " +
                                 std::to_string(mHeader.indexOffset) + " but the file has " +
                                 std::to_string(mFileBytes));
-    // In pieces, which a remote source fetches at once.
-    const size_t indexBytes = size_t(mHeader.indexBytes);
-    auto stored = std::make_unique_for_overwrite<unsigned char[]>(indexBytes);
-    std::vector<ByteRange> pieces;
-    constexpr size_t kIndexPiece = size_t(1) << 20;
-    for (size_t at = 0; at < indexBytes; at += kIndexPiece)
-        pieces.push_back({mHeader.indexOffset + at, std::min(kIndexPiece, indexBytes - at), stored.get() + at});
-    mSource->readMany(pieces, "index");
-    mRawIndex = store_format::decodeIndex(std::move(stored), indexBytes, mHeader, mLayout, mPath, mIndex,
-                                          mHistogram, mSubBlocks);
+    const uint64_t count = uint64_t(store_format::totalBricks(mHeader));
+    mCodesAt = store_format::subBlockCodesAt(count);
+    const unsigned char* raw = nullptr;
+    if (mHeader.formatVersion >= 5) {
+        // The entries now; the sub-block codes as they are asked for (io/store/lazy_index.h).
+        mLazyIndex = std::make_unique<LazyIndex>(*mSource, mHeader.indexOffset, mHeader.indexBytes,
+                                                 store_format::indexBytes(count));
+        mLazyIndex->need(0, mCodesAt);
+        raw = mLazyIndex->raw();
+        store_format::decodeIndex(raw, size_t(mCodesAt), false, mHeader, mLayout, mPath, mIndex, mHistogram);
+        if (mSource->remote()) mLazyIndex->readInBackground(mCodesAt, kCodePartsAtOnce);
+        else mLazyIndex->need(mCodesAt, mLazyIndex->rawBytes());
+    } else {
+        const size_t indexBytes = size_t(mHeader.indexBytes);
+        mRawIndex = std::make_unique_for_overwrite<unsigned char[]>(indexBytes);
+        mSource->read(mHeader.indexOffset, indexBytes, mRawIndex.get(), "index");
+        raw = mRawIndex.get();
+        store_format::decodeIndex(raw, indexBytes, true, mHeader, mLayout, mPath, mIndex, mHistogram);
+    }
+    // The codes are (lo, hi) byte pairs, as SubBlockCode lays them out: used where they lie
+    // (a 2560^3 store's 75 MB are not copied).
+    static_assert(sizeof(SubBlockCode) == 2 && alignof(SubBlockCode) == 1);
+    mSubBlocks = {reinterpret_cast<const SubBlockCode*>(raw + mCodesAt), size_t(count) * kSubBlocksPerBrick};
+}
+
+std::span<const SubBlockCode> BrickStoreReader::subBlockCodes() const {
+    if (mLazyIndex) mLazyIndex->need(mCodesAt, mLazyIndex->rawBytes());
+    return mSubBlocks;
+}
+
+std::span<const SubBlockCode> BrickStoreReader::subBlockCodesOf(int64_t brick) const {
+    const size_t first = size_t(brick) * kSubBlocksPerBrick;
+    if (mLazyIndex) mLazyIndex->need(mCodesAt + 2 * first, mCodesAt + 2 * (first + kSubBlocksPerBrick));
+    return mSubBlocks.subspan(first, kSubBlocksPerBrick);
 }
 
 BrickStoreReader::~BrickStoreReader() = default;

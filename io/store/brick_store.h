@@ -29,6 +29,8 @@
 
 namespace vdiso {
 
+class LazyIndex;
+
 // 5: the index stored in compressed parts (io/store/index_parts.h): several times smaller, which is
 // what a remote store's open fetches. Version 4 stores open as before.
 // 4: the volume's orientation (direction matrix and whether the input had one) in the header.
@@ -120,8 +122,13 @@ public:
     // Every level's bricks, by brick id.
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
-    // kSubBlocksPerBrick codes per brick, in brick order (core/trees/sub_blocks.h).
-    std::span<const SubBlockCode> subBlockCodes() const { return mSubBlocks; }
+    // The sub-block codes (core/trees/sub_blocks.h): kSubBlocksPerBrick per brick, in brick order.
+    // A remote store fetches them after its open, in the background, coarse levels first
+    // (io/store/lazy_index.h): these may wait for them, and throw IoError if they cannot be read.
+    // Every brick's:
+    std::span<const SubBlockCode> subBlockCodes() const;
+    // Brick `id`'s kSubBlocksPerBrick (waiting only for the part holding them).
+    std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const;
     uint64_t fileBytes() const { return mFileBytes; }
     ReadMode readMode() const { return mMode; }
     // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read); "http",
@@ -156,7 +163,10 @@ private:
     std::vector<BrickLevel> mLevels;
     std::vector<BrickEntry> mIndex;
     ValueHistogram mHistogram;
-    std::unique_ptr<unsigned char[]> mRawIndex;  // the index as read, which mSubBlocks points into
+    // The raw index, which mSubBlocks points into: as read (before version 5), or unpacked by parts.
+    std::unique_ptr<unsigned char[]> mRawIndex;
+    std::unique_ptr<LazyIndex> mLazyIndex;
+    uint64_t mCodesAt = 0;  // where the codes start in the raw index
     std::span<const SubBlockCode> mSubBlocks;
 };
 

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 
@@ -65,37 +66,55 @@ std::vector<unsigned char> packIndex(const std::vector<unsigned char>& raw) {
     return out;
 }
 
-std::unique_ptr<unsigned char[]> unpackIndex(const unsigned char* stored, size_t n, uint64_t rawBytes,
-                                             const std::string& path) {
+size_t IndexDirectory::rawBytesOf(uint64_t i) const {
+    return size_t(std::min<uint64_t>(kIndexPartBytes, rawBytes - i * kIndexPartBytes));
+}
+
+uint64_t indexDirectoryBytes(uint64_t rawBytes) { return directoryBytes(partCount(rawBytes)); }
+
+IndexDirectory decodeIndexDirectory(const unsigned char* stored, uint64_t storedBytes, uint64_t rawBytes,
+                                    const std::string& path) {
     const uint64_t parts = partCount(rawBytes);
     const uint64_t directory = directoryBytes(parts);
-    if (n < directory || std::memcmp(stored, kPackedMagic, 8) != 0)
+    if (storedBytes < directory || std::memcmp(stored, kPackedMagic, 8) != 0)
         throwIoError(path, "index is missing or corrupt (wrong magic)");
     if (load<uint64_t>(stored + 8) != rawBytes || load<uint32_t>(stored + 16) != kIndexPartBytes ||
         load<uint32_t>(stored + 20) != parts)
         throwIoError(path, "index directory does not match the header's bricks");
     if (load<uint32_t>(stored + directory - 4) != crc32Of(stored, size_t(directory) - 4))
         throwIoError(path, "index directory checksum mismatch (the index is corrupt)");
-    std::vector<uint64_t> offsets(size_t(parts) + 1, directory);
-    for (uint64_t i = 0; i < parts; ++i) offsets[i + 1] = offsets[i] + load<uint32_t>(stored + kDirectoryHead + 8 * i);
-    if (offsets.back() != n)
-        throwIoError(path, "index parts hold " + std::to_string(offsets.back()) + " bytes where the header says " +
-                               std::to_string(n));
+    IndexDirectory d;
+    d.rawBytes = rawBytes;
+    d.offsets.assign(size_t(parts) + 1, directory);
+    d.crcs.resize(size_t(parts));
+    for (uint64_t i = 0; i < parts; ++i) {
+        d.offsets[i + 1] = d.offsets[i] + load<uint32_t>(stored + kDirectoryHead + 8 * i);
+        d.crcs[i] = load<uint32_t>(stored + kDirectoryHead + 8 * i + 4);
+    }
+    if (d.offsets.back() != storedBytes)
+        throwIoError(path, "index parts hold " + std::to_string(d.offsets.back()) + " bytes where the header says " +
+                               std::to_string(storedBytes));
+    return d;
+}
+
+bool unpackIndexPart(const IndexDirectory& d, uint64_t i, const unsigned char* stored, unsigned char* raw) {
+    const size_t size = size_t(d.offsets[i + 1] - d.offsets[i]), want = d.rawBytesOf(i);
+    return d.crcs[i] == crc32Of(stored, size) && ZSTD_decompress(raw, want, stored, size) == want;
+}
+
+std::unique_ptr<unsigned char[]> unpackIndex(const unsigned char* stored, size_t n, uint64_t rawBytes,
+                                             const std::string& path) {
+    const IndexDirectory d = decodeIndexDirectory(stored, n, rawBytes, path);
     auto raw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
     std::atomic<int64_t> badPart{-1};
-    tbb::parallel_for(uint64_t(0), parts, [&](uint64_t i) {
-        const unsigned char* part = stored + offsets[i];
-        const size_t size = size_t(offsets[i + 1] - offsets[i]);
-        const size_t want = size_t(std::min<uint64_t>(kIndexPartBytes, rawBytes - i * kIndexPartBytes));
-        const bool ok = load<uint32_t>(stored + kDirectoryHead + 8 * i + 4) == crc32Of(part, size) &&
-                        ZSTD_decompress(raw.get() + i * kIndexPartBytes, want, part, size) == want;
-        if (!ok) {
+    tbb::parallel_for(uint64_t(0), d.parts(), [&](uint64_t i) {
+        if (!unpackIndexPart(d, i, stored + d.offsets[i], raw.get() + i * kIndexPartBytes)) {
             int64_t none = -1;
             badPart.compare_exchange_strong(none, int64_t(i));
         }
     });
     if (badPart >= 0)
-        throwIoError(path, "index part " + std::to_string(badPart.load()) + " of " + std::to_string(parts) +
+        throwIoError(path, "index part " + std::to_string(badPart.load()) + " of " + std::to_string(d.parts()) +
                                " is corrupt (checksum mismatch or bad zstd data)");
     return raw;
 }

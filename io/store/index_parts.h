@@ -2,7 +2,8 @@
 // index cut into parts of kIndexPartBytes, each compressed on its own with zstd, behind a
 // directory of their stored sizes and CRC-32s. The raw index is 160 bytes a brick (94 MB for a
 // 2560^3 store with levels); stored, it is several times smaller, which is what crosses the
-// network when the store is remote, and its parts decompress in parallel. Internal to io/.
+// network when the store is remote, and its parts decompress in parallel or one at a time, as
+// they are needed (io/store/lazy_index.h). Internal to io/.
 #pragma once
 
 #include <cstddef>
@@ -23,10 +24,33 @@ std::vector<unsigned char> packIndex(const std::vector<unsigned char>& raw);
 uint64_t packedIndexMin(uint64_t rawBytes);
 uint64_t packedIndexMax(uint64_t rawBytes);
 
-// Validates the directory (magic, sizes, its CRC) and every part (its CRC, and that it
-// decompresses to exactly its share), decompressing in parallel into the raw index of
-// rawBytes. Throws IoError naming `path` and the part.
-// (The raw bytes are not zeroed first: at 94 MB that was a pass of page faults for nothing.)
+// The directory in front of the parts, validated: where part i lies in the stored index
+// ([offsets[i], offsets[i+1]), from the stored index's first byte) and its CRC-32.
+struct IndexDirectory {
+    uint64_t rawBytes = 0;
+    std::vector<uint64_t> offsets;  // parts + 1
+    std::vector<uint32_t> crcs;
+
+    uint64_t parts() const { return crcs.size(); }
+    // The part holding raw byte `at`, and the raw bytes part i unpacks to.
+    uint64_t partOf(uint64_t at) const { return at / kIndexPartBytes; }
+    size_t rawBytesOf(uint64_t i) const;
+};
+
+// The directory's size in bytes for a raw index of rawBytes (it is the stored index's start).
+uint64_t indexDirectoryBytes(uint64_t rawBytes);
+
+// Validates the directory (magic, sizes, its CRC, that its parts fill exactly storedBytes).
+// `bytes` holds its indexDirectoryBytes(rawBytes) bytes. Throws IoError naming `path`.
+IndexDirectory decodeIndexDirectory(const unsigned char* bytes, uint64_t storedBytes, uint64_t rawBytes,
+                                    const std::string& path);
+
+// Part i from its stored bytes into `raw` (its rawBytesOf(i) bytes): false when its CRC or its
+// zstd data is wrong, or it unpacks to another size.
+bool unpackIndexPart(const IndexDirectory& directory, uint64_t i, const unsigned char* stored, unsigned char* raw);
+
+// Validates and decompresses a whole packed index held in memory (`n` bytes) into the raw index
+// of rawBytes, in parallel. Throws IoError naming `path` and the part.
 std::unique_ptr<unsigned char[]> unpackIndex(const unsigned char* stored, size_t n, uint64_t rawBytes,
                                              const std::string& path);
 

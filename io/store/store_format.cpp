@@ -247,9 +247,7 @@ int64_t totalBricks(const StoreHeader& header) {
 }
 
 uint64_t indexBytes(uint64_t brickCount) {
-    const uint64_t perBrick = kEntryBytes + kSubBlocksPerBrick * 2;
-    return checkedAdd(checkedMul(brickCount, perBrick),
-                      16 + 24 + uint64_t(kHistogramBins) * 8 + 8 + 4);
+    return checkedAdd(checkedAdd(subBlockCodesAt(brickCount), checkedMul(brickCount, uint64_t(kSubBlocksPerBrick) * 2)), 4);
 }
 
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
@@ -283,29 +281,22 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
     return packIndex(bytes);
 }
 
-std::unique_ptr<unsigned char[]> decodeIndex(std::unique_ptr<unsigned char[]> stored, size_t n,
-                                             const StoreHeader& header, const BrickLayout& layout,
-                                             const std::string& path, std::vector<BrickEntry>& entries,
-                                             ValueHistogram& histogram,
-                                             std::span<const SubBlockCode>& subBlocks) {
+uint64_t subBlockCodesAt(uint64_t brickCount) {
+    return checkedAdd(checkedMul(brickCount, kEntryBytes), 16 + 24 + uint64_t(kHistogramBins) * 8 + 8);
+}
+
+void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHeader& header,
+                 const BrickLayout& layout, const std::string& path, std::vector<BrickEntry>& entries,
+                 ValueHistogram& histogram) {
     const uint64_t count = uint64_t(totalBricks(header));
-    const bool packed = header.formatVersion >= 5;
-    std::unique_ptr<unsigned char[]> raw =
-        packed ? unpackIndex(stored.get(), n, indexBytes(count), path) : std::move(stored);
-    if (packed) {
-        stored.reset();
-        n = size_t(indexBytes(count));
-    }
-    const unsigned char* bytes = raw.get();
-    if (n != indexBytes(count) || std::memcmp(bytes, kIndexMagic, 8) != 0)
+    if (n != (whole ? indexBytes(count) : subBlockCodesAt(count)) || std::memcmp(bytes, kIndexMagic, 8) != 0)
         throwIoError(path, "index is missing or corrupt (wrong magic at byte offset " +
                                std::to_string(header.indexOffset) + ")");
-    uint32_t storedCrc;
-    std::memcpy(&storedCrc, bytes + n - 4, 4);
-    // Packed, every part's CRC covered its stored bytes and zstd gave exactly its share: the
-    // raw CRC would add a pass over 160 bytes a brick (a sixth of a 2560^3 open) for nothing.
-    if (!packed && storedCrc != crc32Of(bytes, n - 4))
-        throwIoError(path, "index checksum mismatch (the index is corrupt)");
+    if (whole) {
+        uint32_t storedCrc;
+        std::memcpy(&storedCrc, bytes + n - 4, 4);
+        if (storedCrc != crc32Of(bytes, n - 4)) throwIoError(path, "index checksum mismatch (the index is corrupt)");
+    }
     ByteReader r(bytes, n);
     r.skip(8);
     if (r.get<uint64_t>() != count) throwIoError(path, "index brick count does not match header");
@@ -341,14 +332,6 @@ std::unique_ptr<unsigned char[]> decodeIndex(std::unique_ptr<unsigned char[]> st
     r.skip(4);
     for (uint64_t& c : histogram.counts) c = r.get<uint64_t>();
     if (r.get<uint32_t>() != kSubBlocksPerAxis) throwIoError(path, "index sub-block ranges are invalid");
-    r.skip(4);
-    // The codes are (lo, hi) byte pairs, as SubBlockCode lays them out: used where they lie
-    // (a 2560^3 store's 75 MB are not copied).
-    static_assert(sizeof(SubBlockCode) == 2 && alignof(SubBlockCode) == 1);
-    const size_t codes = size_t(count) * kSubBlocksPerBrick;
-    subBlocks = {reinterpret_cast<const SubBlockCode*>(bytes + r.at()), codes};
-    r.skip(2 * codes);
-    return raw;
 }
 
 }  // namespace vdiso::store_format

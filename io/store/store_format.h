@@ -37,15 +37,18 @@ int64_t totalBricks(const StoreHeader& header);
 // version 5; packed in compressed parts from 5: io/store/index_parts.h).
 uint64_t indexBytes(uint64_t brickCount);
 
-// Validates (version 5: the parts; then magic, count, checksum, every entry's offset and size
-// against the file) and decodes the stored index (`n` bytes); throws IoError naming the file
-// and, for a bad entry, the brick. The sub-block codes are not copied: `subBlocks` points into
-// the raw index, whose storage is returned (keep it while subBlocks is used).
-std::unique_ptr<unsigned char[]> decodeIndex(std::unique_ptr<unsigned char[]> stored, size_t n,
-                                             const StoreHeader& header, const BrickLayout& layout,
-                                             const std::string& path, std::vector<BrickEntry>& entries,
-                                             ValueHistogram& histogram,
-                                             std::span<const SubBlockCode>& subBlocks);
+// Where the sub-block codes start in the raw index: after the entries and the histogram.
+// The codes are (lo, hi) byte pairs, kSubBlocksPerBrick per brick in brick order, then the CRC.
+uint64_t subBlockCodesAt(uint64_t brickCount);
+
+// Validates (magic, count, every entry's offset and size against the file, the histogram) and
+// decodes the raw index's entries and histogram. `whole`: `bytes` holds the whole raw index
+// (`n` bytes), stored as such before version 5, and its CRC is checked too; otherwise its first
+// subBlockCodesAt(count) bytes (version 5, whose parts carry CRCs of their own). Throws IoError
+// naming the file and, for a bad entry, the brick.
+void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHeader& header,
+                 const BrickLayout& layout, const std::string& path, std::vector<BrickEntry>& entries,
+                 ValueHistogram& histogram);
 
 // CRC-32 (zlib) of a byte range: the store's checksum algorithm.
 uint32_t crc32Of(const void* data, size_t n);

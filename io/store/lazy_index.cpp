@@ -1,0 +1,114 @@
+#include "io/store/lazy_index.h"
+
+#include <algorithm>
+
+#include <tbb/parallel_for.h>
+
+#include "io/error.h"
+
+namespace vdiso {
+
+LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes)
+    : mSource(source), mOffset(offset) {
+    const uint64_t directoryBytes = store_format::indexDirectoryBytes(rawBytes);
+    if (storedBytes < directoryBytes) throwIoError(source.name(), "index is missing or corrupt (too short)");
+    std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
+    source.read(offset, directory.size(), directory.data(), "index directory");
+    mDirectory = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+    // Untouched until a part lands: the pages of parts never asked for are never faulted in.
+    mRaw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
+    mReady = std::make_unique<std::atomic<bool>[]>(size_t(mDirectory.parts()));
+    for (uint64_t i = 0; i < mDirectory.parts(); ++i) mReady[i].store(false, std::memory_order_relaxed);
+    mState.assign(size_t(mDirectory.parts()), State::Missing);
+}
+
+LazyIndex::~LazyIndex() {
+    {
+        std::lock_guard lock(mLock);
+        mStop = true;
+    }
+    mChanged.notify_all();
+    if (mBackground.joinable()) mBackground.join();
+}
+
+void LazyIndex::load(uint64_t begin, uint64_t end) const {
+    readParts(mDirectory.partOf(begin), mDirectory.partOf(end - 1) + 1, false);
+}
+
+void LazyIndex::readInBackground(uint64_t begin, size_t batch) {
+    const uint64_t first = mDirectory.partOf(begin);
+    batch = std::max<size_t>(batch, 1);
+    mBackground = std::thread([this, first, batch] {
+        for (uint64_t last = mDirectory.parts(); last > first && !mStop;) {
+            const uint64_t from = last - std::min<uint64_t>(batch, last - first);
+            if (!readParts(from, last, true)) return;
+            last = from;
+        }
+    });
+}
+
+bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const {
+    for (;;) {
+        std::vector<uint64_t> mine;
+        {
+            std::lock_guard lock(mLock);
+            for (uint64_t i = first; i < last; ++i)
+                if (mState[i] == State::Missing) {
+                    mState[i] = State::OnItsWay;
+                    mine.push_back(i);
+                }
+        }
+        if (!mine.empty()) {
+            std::vector<std::unique_ptr<unsigned char[]>> stored(mine.size());
+            std::vector<ByteRange> ranges(mine.size());
+            for (size_t k = 0; k < mine.size(); ++k) {
+                const uint64_t i = mine[k];
+                const size_t n = size_t(mDirectory.offsets[i + 1] - mDirectory.offsets[i]);
+                stored[k] = std::make_unique_for_overwrite<unsigned char[]>(n);
+                ranges[k] = {mOffset + mDirectory.offsets[i], n, stored[k].get()};
+            }
+            std::exception_ptr failure;
+            std::vector<char> good(mine.size(), 0);
+            try {
+                mSource.readMany(ranges, "index");
+                tbb::parallel_for(size_t(0), mine.size(), [&](size_t k) {
+                    const uint64_t i = mine[k];
+                    good[k] = store_format::unpackIndexPart(mDirectory, i, stored[k].get(),
+                                                           mRaw.get() + i * store_format::kIndexPartBytes);
+                });
+            } catch (...) {
+                failure = std::current_exception();
+            }
+            int64_t corrupt = -1;
+            {
+                std::lock_guard lock(mLock);
+                for (size_t k = 0; k < mine.size(); ++k) {
+                    mState[mine[k]] = good[k] ? State::Here : State::Missing;
+                    if (good[k]) mReady[mine[k]].store(true, std::memory_order_release);
+                    else if (corrupt < 0 && !failure) corrupt = int64_t(mine[k]);
+                }
+            }
+            mChanged.notify_all();
+            if ((failure || corrupt >= 0) && background) return false;
+            if (failure) std::rethrow_exception(failure);
+            if (corrupt >= 0)
+                throwIoError(mSource.name(), "index part " + std::to_string(corrupt) + " of " +
+                                                 std::to_string(mDirectory.parts()) +
+                                                 " is corrupt (checksum mismatch or bad zstd data)");
+        }
+        std::unique_lock lock(mLock);
+        auto settled = [&] {
+            for (uint64_t i = first; i < last; ++i)
+                if (mState[i] == State::OnItsWay) return false;
+            return true;
+        };
+        mChanged.wait(lock, [&] { return settled() || (background && mStop.load()); });
+        if (background && mStop) return false;
+        bool all = true;
+        for (uint64_t i = first; i < last; ++i) all = all && mState[i] == State::Here;
+        if (all) return true;
+        // Another reader's fetch of a part failed: read it here (and meet its error).
+    }
+}
+
+}  // namespace vdiso

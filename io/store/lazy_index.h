@@ -1,0 +1,73 @@
+// A packed index (io/store/index_parts.h) read by parts as they are asked for. The store reader
+// reads the parts of the bricks' entries at open and leaves the sub-block codes, three fifths
+// of the stored index, for later: a remote store fetches them in the background, last part
+// first (the coarse levels' bricks are numbered last, and a distant view wants them first),
+// and a part asked for before it came is fetched at once. So a view of a remote store waits
+// for the index bytes it looks at, not for the whole index. Internal to io/.
+//
+// Thread-safe: several threads may ask for bytes at once; a part is fetched by one of them and
+// waited for by the others. A part that fails in the background is fetched again when asked
+// for, and that fetch's error is thrown.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "io/store/byte_source.h"
+#include "io/store/index_parts.h"
+
+namespace vdiso {
+
+class LazyIndex {
+public:
+    // Reads and validates the directory of the packed index of `storedBytes` at `offset` of
+    // `source` (one read), which unpacks to rawBytes. No part is read yet. Throws IoError.
+    LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes);
+    // Stops the background reading (waiting for the parts in flight).
+    ~LazyIndex();
+    LazyIndex(const LazyIndex&) = delete;
+    LazyIndex& operator=(const LazyIndex&) = delete;
+
+    // The raw index. Bytes [begin, end) of it are valid once need(begin, end) has returned.
+    const unsigned char* raw() const { return mRaw.get(); }
+    uint64_t rawBytes() const { return mDirectory.rawBytes; }
+
+    // Makes raw bytes [begin, end) valid: reads the parts holding them that are neither here
+    // nor on their way (together: concurrently where the source can), waits for those on their
+    // way. Cheap when they are here. Throws IoError naming the store and the part.
+    void need(uint64_t begin, uint64_t end) const {
+        if (!mReady[mDirectory.partOf(begin)].load(std::memory_order_acquire) ||
+            !mReady[mDirectory.partOf(end - 1)].load(std::memory_order_acquire))
+            load(begin, end);
+    }
+
+    // Starts reading every part holding raw bytes from `begin` on, in a thread of its own, the
+    // last part first, `batch` parts at a time.
+    void readInBackground(uint64_t begin, size_t batch);
+
+private:
+    enum class State : uint8_t { Missing, OnItsWay, Here };
+    // Reads the parts [first, last) not here, as need() says; `background`: gives up quietly
+    // on a failure (the parts are left Missing) and stops when asked to.
+    void load(uint64_t begin, uint64_t end) const;
+    bool readParts(uint64_t first, uint64_t last, bool background) const;
+
+    const ByteSource& mSource;
+    uint64_t mOffset;
+    store_format::IndexDirectory mDirectory;
+    std::unique_ptr<unsigned char[]> mRaw;
+    std::unique_ptr<std::atomic<bool>[]> mReady;  // per part: its raw bytes are valid
+    mutable std::vector<State> mState;            // per part, under mLock
+    mutable std::mutex mLock;
+    mutable std::condition_variable mChanged;
+    std::atomic<bool> mStop{false};
+    std::thread mBackground;
+};
+
+}  // namespace vdiso
