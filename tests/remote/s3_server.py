@@ -335,6 +335,9 @@ class S3Server(ThreadingHTTPServer):
 
 class Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
+    # As S3 and nginx do: without it a body written after its headers waits for their ACK,
+    # which the client delays by 40 ms on every request of a kept-alive connection but the first.
+    disable_nagle_algorithm = True
     timeout = 120  # an idle keep-alive connection is closed after this
 
     def version_string(self):
