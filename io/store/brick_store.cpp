@@ -21,8 +21,8 @@ namespace vdiso {
 
 namespace {
 
-// A remote store's sub-block code parts fetched at once in the background (about 100 KB each):
-// half the default pool of 32 requests, leaving the other half to the bricks a view reads.
+// A remote store's sub-block code parts read at once in the background (about 100 KB each, one
+// a request): half the default pool of 32 requests, leaving the rest to the bricks a view reads.
 constexpr size_t kCodePartsAtOnce = 16;
 
 }  // namespace

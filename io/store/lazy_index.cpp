@@ -28,23 +28,31 @@ LazyIndex::~LazyIndex() {
         mStop = true;
     }
     mChanged.notify_all();
-    if (mBackground.joinable()) mBackground.join();
+    for (std::thread& t : mBackground) t.join();
 }
 
 void LazyIndex::load(uint64_t begin, uint64_t end) const {
     readParts(mDirectory.partOf(begin), mDirectory.partOf(end - 1) + 1, false);
 }
 
-void LazyIndex::readInBackground(uint64_t begin, size_t batch) {
+void LazyIndex::readInBackground(uint64_t begin, size_t readers) {
     const uint64_t first = mDirectory.partOf(begin);
-    batch = std::max<size_t>(batch, 1);
-    mBackground = std::thread([this, first, batch] {
-        for (uint64_t last = mDirectory.parts(); last > first && !mStop;) {
-            const uint64_t from = last - std::min<uint64_t>(batch, last - first);
-            if (!readParts(from, last, true)) return;
-            last = from;
-        }
-    });
+    for (size_t k = 0; k < std::max<size_t>(readers, 1); ++k)
+        mBackground.emplace_back([this, first] {
+            // Each reader takes the last part neither here nor on its way, alone, so that a
+            // part is here as soon as its own answer is.
+            for (;;) {
+                uint64_t part = 0;
+                {
+                    std::lock_guard lock(mLock);
+                    uint64_t i = mDirectory.parts();
+                    while (i > first && mState[i - 1] != State::Missing) --i;
+                    if (i == first || mStop) return;
+                    part = i - 1;
+                }
+                if (!readParts(part, part + 1, true)) return;
+            }
+        });
 }
 
 bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const {

@@ -47,15 +47,15 @@ public:
             load(begin, end);
     }
 
-    // Starts reading every part holding raw bytes from `begin` on, in a thread of its own, the
-    // last part first, `batch` parts at a time.
-    void readInBackground(uint64_t begin, size_t batch);
+    // Starts reading every part holding raw bytes from `begin` on, the last part first, in
+    // `readers` threads of its own, each reading a part at a time.
+    void readInBackground(uint64_t begin, size_t readers);
 
 private:
     enum class State : uint8_t { Missing, OnItsWay, Here };
-    // Reads the parts [first, last) not here, as need() says; `background`: gives up quietly
-    // on a failure (the parts are left Missing) and stops when asked to.
     void load(uint64_t begin, uint64_t end) const;
+    // Reads the parts [first, last) not here, as need() says; `background`: gives up quietly
+    // on a failure (false; the parts are left Missing) and stops when asked to.
     bool readParts(uint64_t first, uint64_t last, bool background) const;
 
     const ByteSource& mSource;
@@ -67,7 +67,7 @@ private:
     mutable std::mutex mLock;
     mutable std::condition_variable mChanged;
     std::atomic<bool> mStop{false};
-    std::thread mBackground;
+    std::vector<std::thread> mBackground;
 };
 
 }  // namespace vdiso
