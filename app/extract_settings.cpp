@@ -4,6 +4,7 @@
 #include <cmath>
 #include <thread>
 
+#include "core/extract/brick_look_ahead.h"
 #include "core/kernel/brick_extractor.h"
 #include "core/brick_levels.h"
 
@@ -55,9 +56,9 @@ CachePlan planCache(const ExtractSettings& s, const BrickCache& cache, int defau
 }
 
 void adaptToRemoteStore(ExtractSettings& s) {
-    if (!s.readersGiven) s.readers = kRemoteReaders;
-    if (!s.prefetchGiven) s.prefetch = kRemotePrefetch;
-    s.prefetchNear = kRemoteNear;
+    if (!s.readersGiven) s.readers = RemoteReadAhead::kReaders;
+    if (!s.prefetchGiven) s.prefetch = RemoteReadAhead::kBricks;
+    s.prefetchNear = RemoteReadAhead::kNear;
 }
 
 ViewExtractOptions viewExtractOptions(const ExtractSettings& s, const CachePlan& plan) {

@@ -32,7 +32,7 @@ struct ExtractSettings {
     int prefetch = 32;
     int readers = BrickPrefetcher::kDefaultReaders;
     bool prefetchGiven = false, readersGiven = false;
-    int prefetchNear = 2;  // BrickLookAhead::kNearBricks; kRemoteNear for a store at a URL
+    int prefetchNear = 2;  // BrickLookAhead::kNearBricks; RemoteReadAhead::kNear for a store at a URL
     uint64_t cacheMb = 1024;
     std::optional<bool> physicalMeshes;  // meshes in physical space (default) or volume space
     MeshPostOptions post;                // octree, noise: smooth, decimate, largest, min_piece
@@ -51,11 +51,8 @@ void checkExtractSettings(const ExtractSettings& s);
 // given; throws CacheBudgetError (cache/brick_cache.h) when the cache is too small for them.
 CachePlan planCache(const ExtractSettings& s, const BrickCache& cache, int defaultThreads);
 
-// Readers and look-ahead for a store read over the network, unless given: a request waits a
-// round trip where a disk read waits a seek, so more are kept in flight
-// (kRemoteReaders per strip, kRemotePrefetch bricks ahead, of which kRemoteNear are read
-// before they are known to show).
-constexpr int kRemoteReaders = 16, kRemotePrefetch = 128, kRemoteNear = 32;
+// Readers and look-ahead for a store read over the network, unless given (RemoteReadAhead,
+// core/extract/brick_look_ahead.h).
 void adaptToRemoteStore(ExtractSettings& s);
 
 // The view-dependent options (sage or wise, with the switches given) for a plan.

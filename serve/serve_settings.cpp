@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "cache/cache_plan.h"
+#include "core/extract/brick_look_ahead.h"
 #include "core/kernel/brick_extractor.h"
 #include "core/settings_error.h"
 
@@ -47,9 +48,9 @@ SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
     SessionSettings s{o.threads, o.metaCellSize, 8, 2, 2, size_t(32) << 20, o.lodError};
     for (size_t i = 0; i < stores.size(); ++i)
         if (stores[i].reader->remote()) {
-            s.prefetchBricks = 32;
-            s.prefetchReaders = 8;
-            s.prefetchNear = 16;
+            s.prefetchBricks = RemoteReadAhead::kBricks;
+            s.prefetchReaders = RemoteReadAhead::kReaders;
+            s.prefetchNear = RemoteReadAhead::kNear;
         }
     return s;
 }

@@ -11,8 +11,8 @@ namespace vdiso::serve {
 // The options with their defaults filled in (maxViewers).
 ServeOptions withDefaults(ServeOptions options);
 
-// A frame looks 8 bricks ahead with 2 readers a strip; over a network, where each read waits a
-// round trip, 32 with 8, of which 16 are read before they are known to show.
+// A frame looks 8 bricks ahead with 2 readers a strip; over a network, as far as vdiso extract
+// does (RemoteReadAhead, core/extract/brick_look_ahead.h).
 SessionSettings sessionSettings(const ServeOptions& options, StoreCatalog& stores);
 
 // Frames that may extract at once: each needs frameCacheBricks (cache/cache_plan.h, the rule

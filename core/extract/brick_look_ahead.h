@@ -35,6 +35,14 @@
 
 namespace vdiso {
 
+// How far ahead a traversal reads a store over the network, where a request waits a round trip
+// where a disk read waits a seek, so many more are kept in flight: per image strip `readers`
+// reader threads, `bricks` bricks found ahead, of which `near` are read before they are known
+// to show. vdiso extract and vdiso serve both read a remote store so.
+struct RemoteReadAhead {
+    static constexpr int kReaders = 16, kBricks = 128, kNear = 32;
+};
+
 class BrickLookAhead {
 public:
     static constexpr size_t kNearBricks = 2;
