@@ -19,6 +19,7 @@ start_bucket_server "$delay" "$rate"
 build/bin/vdiso info "s3://bucket/$name" "${remote[@]}" --remote-timeout 900 > /dev/null
 build/bin/vdiso_serve_bench "s3://bucket/$name" --iso "$iso" --frames "$frames" --size 1024 --no-warmup \
   --web web "${remote[@]}" > "$work/frames.json"
+[ -n "${KEEP_JSON:-}" ] && cp "$work/frames.json" "$KEEP_JSON"
 echo "| frame | coarse frame complete ms | first geometry ms | complete ms | bricks read | triangles |"
 echo "|---|---|---|---|---|---|"
 python3 - "$work/frames.json" <<'PY'

@@ -96,9 +96,12 @@ int main(int argc, char** argv) {
     }
     options.iso = iso;
     try {
+        // The bench's own view of the store (cameras, the full surface), opened first and read
+        // whole, so that its reads do not share the link with the server's first frames.
+        const BrickStoreReader store(argv[1], StoreOpenOptions{ReadMode::Buffered, options.remote});
+        store.subBlockCodes();
         Server server(options);
         std::thread serving([&] { server.run(); });
-        const BrickStoreReader store(argv[1], StoreOpenOptions{ReadMode::Buffered, options.remote});
         const VolumeInfo& volume = store.volume();
         const std::vector<Camera> orbit =
             orbitCameras(ViewPreset::Normal, volume.origin, volume.worldMax(), size, size, frames);
