@@ -98,12 +98,8 @@ BrickHandle BrickCache::acquire(int64_t id) {
         return BrickHandle(this, id, mSlots[slot].samples);
     }
     ++mCounters.misses;
-    const size_t slot = takeFreeSlot();
+    const size_t slot = claimLocked(id);
     Slot& s = mSlots[slot];
-    s.id = id;
-    s.pins = 1;
-    s.loading = true;
-    mSlotOfBrick[id] = slot;
     lock.unlock();
 
     double readSeconds = 0, decodeSeconds = 0;
@@ -117,15 +113,8 @@ BrickHandle BrickCache::acquire(int64_t id) {
         mStore.decodeBrick(id, stored, s.samples);
         decodeSeconds = secondsSince(start);
     } catch (...) {
-        // The slot holds nothing valid: forget the brick, free the slot for the next miss.
         lock.lock();
-        mSlotOfBrick.erase(id);
-        s.id = -1;
-        s.loading = false;
-        if (--s.pins == 0) {
-            mLru.push_back(slot);
-            s.lruPosition = std::prev(mLru.end());
-        }
+        abandonLocked(slot);
         mLoaded.notify_all();
         throw;
     }
@@ -136,6 +125,79 @@ BrickHandle BrickCache::acquire(int64_t id) {
     mCounters.bytesRead += storedBytes;
     mLoaded.notify_all();
     return BrickHandle(this, id, s.samples);
+}
+
+size_t BrickCache::claimLocked(int64_t id) {
+    const size_t slot = takeFreeSlot();
+    Slot& s = mSlots[slot];
+    s.id = id;
+    s.pins = 1;
+    s.loading = true;
+    mSlotOfBrick[id] = slot;
+    return slot;
+}
+
+void BrickCache::abandonLocked(size_t slot) {
+    // The slot holds nothing valid: forget the brick, free the slot for the next miss.
+    Slot& s = mSlots[slot];
+    mSlotOfBrick.erase(s.id);
+    s.id = -1;
+    s.loading = false;
+    if (--s.pins == 0) {
+        mLru.push_back(slot);
+        s.lruPosition = std::prev(mLru.end());
+    }
+}
+
+std::vector<BrickHandle> BrickCache::acquireRun(int64_t first, int count) {
+    std::vector<size_t> slots;
+    {
+        std::unique_lock lock(mMutex);
+        bool anyHeld = false;
+        for (int k = 0; k < count; ++k) anyHeld = anyHeld || mSlotOfBrick.count(first + k) > 0;
+        if (!anyHeld && count > 1) {
+            try {
+                for (int k = 0; k < count; ++k) slots.push_back(claimLocked(first + k));
+            } catch (...) {
+                for (const size_t slot : slots) abandonLocked(slot);
+                mLoaded.notify_all();
+                throw;
+            }
+            mCounters.requests += uint64_t(count);
+            mCounters.misses += uint64_t(count);
+        }
+    }
+    if (slots.empty()) return BrickSource::acquireRun(first, count);  // one by one, as they are
+
+    double readSeconds = 0, decodeSeconds = 0;
+    size_t storedBytes = 0;
+    try {
+        auto start = Clock::now();
+        const std::vector<std::span<const unsigned char>> stored = mStore.readStoredBricks(first, count);
+        readSeconds = secondsSince(start);
+        start = Clock::now();
+        for (int k = 0; k < count; ++k) {
+            storedBytes += stored[size_t(k)].size();
+            mStore.decodeBrick(first + k, stored[size_t(k)], mSlots[slots[size_t(k)]].samples);
+        }
+        decodeSeconds = secondsSince(start);
+    } catch (...) {
+        std::lock_guard lock(mMutex);
+        for (const size_t slot : slots) abandonLocked(slot);
+        mLoaded.notify_all();
+        throw;
+    }
+    std::vector<BrickHandle> handles;
+    std::lock_guard lock(mMutex);
+    for (int k = 0; k < count; ++k) {
+        mSlots[slots[size_t(k)]].loading = false;
+        handles.emplace_back(this, first + k, mSlots[slots[size_t(k)]].samples);
+    }
+    mCounters.readSeconds += readSeconds;
+    mCounters.decodeSeconds += decodeSeconds;
+    mCounters.bytesRead += storedBytes;
+    mLoaded.notify_all();
+    return handles;
 }
 
 void BrickCache::release(int64_t id) {

@@ -50,6 +50,10 @@ public:
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
     std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override;
     BrickHandle acquire(int64_t id) override;
+    // Neighbours in the store's file (BrickStoreReader::nextInFile): a run none of whose bricks is
+    // held is read in one request (over a network, one GET where there were several).
+    bool readsWithNext(int64_t id) const override { return mStore.nextInFile(id); }
+    std::vector<BrickHandle> acquireRun(int64_t first, int count) override;
     bool isResident(int64_t id) const override;
 
     CacheCounters counters() const;
@@ -81,6 +85,10 @@ private:
     };
 
     size_t takeFreeSlot();
+    // Under the lock: a slot for brick `id`, pinned and loading; and giving one back whose load
+    // failed (the brick forgotten, waiters woken by the caller).
+    size_t claimLocked(int64_t id);
+    void abandonLocked(size_t slot);
 
     const BrickStoreReader& mStore;
     std::vector<BrickRange> mRanges;

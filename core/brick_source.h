@@ -69,6 +69,12 @@ public:
     virtual std::span<const SubBlockCode> subBlockCodesOf(int64_t) const { return {}; }
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
     virtual BrickHandle acquire(int64_t id) = 0;
+    // Whether brick id + 1 is best acquired together with brick id (acquireRun): they lie next to
+    // each other where the source reads them, so one read brings both. False by default.
+    virtual bool readsWithNext(int64_t) const { return false; }
+    // Bricks first .. first + count - 1, each readsWithNext the one before, acquired at once: one
+    // read where none is in memory yet. By default, one acquire after another.
+    virtual std::vector<BrickHandle> acquireRun(int64_t first, int count);
     // Whether acquire(id) would find the brick in memory now (a hint: it may be gone by then).
     // Readers ahead skip such bricks. False when the source cannot tell.
     virtual bool isResident(int64_t) const { return false; }
@@ -88,6 +94,13 @@ inline BrickHandle& BrickHandle::operator=(BrickHandle&& o) noexcept {
         o.mSamples = nullptr;
     }
     return *this;
+}
+
+inline std::vector<BrickHandle> BrickSource::acquireRun(int64_t first, int count) {
+    std::vector<BrickHandle> handles;
+    handles.reserve(size_t(count));
+    for (int k = 0; k < count; ++k) handles.push_back(acquire(first + k));
+    return handles;
 }
 
 inline void BrickHandle::release() {

@@ -180,6 +180,41 @@ TEST_F(DamagedStore, CorruptBrickIsReportedWithItsOffset) {
     EXPECT_NE(msg.find("checksum mismatch"), std::string::npos) << msg;
 }
 
+// Neighbours in the file (x-neighbours in a row of bricks) read in one request give each
+// brick's own bytes; a corrupt one in the run is named as when read alone.
+TEST_F(DamagedStore, NeighboursInTheFileReadTogether) {
+    BrickStoreReader store(path);
+    int runs = 0;
+    for (int64_t id = 0; id + 1 < int64_t(store.index().size()); ++id) {
+        if (!store.nextInFile(id)) continue;
+        ++runs;
+        const std::vector<unsigned char> first(store.readStoredBrick(id).begin(), store.readStoredBrick(id).end());
+        const std::vector<unsigned char> second(store.readStoredBrick(id + 1).begin(), store.readStoredBrick(id + 1).end());
+        const auto both = store.readStoredBricks(id, 2);
+        EXPECT_TRUE(std::equal(both[0].begin(), both[0].end(), first.begin(), first.end())) << id;
+        EXPECT_TRUE(std::equal(both[1].begin(), both[1].end(), second.begin(), second.end())) << id;
+    }
+    EXPECT_GE(runs, 6);  // 3 x 2 x 2 bricks, rows of 3 (layers are written in brick order)
+    EXPECT_FALSE(store.nextInFile(int64_t(store.index().size()) - 1));
+    int64_t apart = 0;  // a brick whose successor is elsewhere (levels are written interleaved)
+    while (apart + 1 < int64_t(store.index().size()) && store.nextInFile(apart)) ++apart;
+    ASSERT_LT(apart + 1, int64_t(store.index().size()));
+    EXPECT_THROW(store.readStoredBricks(apart, 2), std::logic_error);
+
+    const BrickEntry& e = store.index()[1];
+    auto b = bytes;
+    b[e.offset + e.storedBytes / 2] ^= 0x40;
+    test::writeFile(dir.file("bad.vdiso"), b.data(), b.size());
+    BrickStoreReader bad(dir.file("bad.vdiso"));
+    try {
+        bad.readStoredBricks(0, 2);
+        ADD_FAILURE() << "a corrupt brick in a run was read";
+    } catch (const IoError& error) {
+        EXPECT_NE(std::string(error.what()).find("brick 1"), std::string::npos) << error.what();
+        EXPECT_NE(std::string(error.what()).find("checksum mismatch"), std::string::npos) << error.what();
+    }
+}
+
 // Compressed bytes damaged before their checksum was taken (a writer's bug, or a bit flipped
 // in memory before the write): the checksum passes, and where the damage breaks the stream's
 // structure the decoder must report the brick rather than overrun or return a short brick.

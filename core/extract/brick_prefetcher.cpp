@@ -37,6 +37,7 @@ size_t BrickPrefetcher::push(int64_t id) {
         if (mLookahead > 0) {
             mItems.push_back(id);
             mUsed.push_back(0);
+            mTaken.push_back(0);
         }
     }
     mChanged.notify_all();
@@ -88,27 +89,49 @@ void BrickPrefetcher::run() {
         });
         if (mStop || target() >= mItems.size()) return;
         const size_t i = target();
-        const int64_t id = mItems[i];
         mNext = i + 1;
-        if (id == kCancelled) continue;
+        if (mItems[i] == kCancelled || mTaken[i]) continue;
+        // With it, the bricks it is read with (x-neighbours in a store's file) found among the
+        // next items: one read for the run, where the source can.
+        std::vector<std::pair<int64_t, size_t>> run{{mItems[i], i}};  // brick, item
+        const size_t end = std::min({mItems.size(), i + kRunWindow, mConsumed + 1 + mLookahead});
+        for (bool grew = true; grew && run.size() < kMaxRun;) {
+            grew = false;
+            const int64_t lo = run.front().first, hi = run.back().first;
+            for (size_t j = i + 1; j < end && !grew; ++j) {
+                if (mTaken[j] || mItems[j] == kCancelled) continue;
+                if (mItems[j] == hi + 1 && mSource.readsWithNext(hi)) {
+                    run.emplace_back(mItems[j], j);
+                    grew = true;
+                } else if (mItems[j] == lo - 1 && mSource.readsWithNext(lo - 1)) {
+                    run.emplace(run.begin(), mItems[j], j);
+                    grew = true;
+                }
+                if (grew) mTaken[j] = 1;
+            }
+        }
         lock.unlock();
-        BrickHandle brick;
+        std::vector<BrickHandle> bricks;
         try {
-            brick = mSource.acquire(id);
+            if (run.size() == 1) bricks.push_back(mSource.acquire(run[0].first));
+            else bricks = mSource.acquireRun(run.front().first, int(run.size()));
         } catch (...) {
             return;
         }
         lock.lock();
-        // The extraction may have got there meanwhile and acquired the brick itself.
-        if (i < mConsumed) {
-            mSkippedLoaded += !mUsed[i];
-            lock.unlock();
-            continue;  // `brick` releases its pin
+        for (size_t k = 0; k < run.size(); ++k) {
+            const size_t item = run[k].second;
+            // The extraction may have got there meanwhile and acquired the brick itself.
+            if (item < mConsumed) {
+                mSkippedLoaded += !mUsed[item];
+                continue;  // its pin goes with `bricks`
+            }
+            // Readers finish out of order: keep the pins sorted for consumed().
+            auto at = mPinned.end();
+            while (at != mPinned.begin() && std::prev(at)->first > item) --at;
+            mPinned.emplace(at, item, std::move(bricks[k]));
         }
-        // Readers finish out of order: keep the pins sorted for consumed().
-        auto at = mPinned.end();
-        while (at != mPinned.begin() && std::prev(at)->first > i) --at;
-        mPinned.emplace(at, i, std::move(brick));
+        lock.unlock();  // `bricks` releases the pins of those passed, outside the lock
     }
 }
 

@@ -31,7 +31,9 @@ namespace vdiso {
 class BrickPrefetcher {
 public:
     // lookahead 0: no thread; every call does nothing. Items are taken in list order by
-    // `readers` threads, each loading one brick at a time.
+    // `readers` threads, each loading one brick at a time, or with it the bricks among the next
+    // items that the source reads with it (BrickSource::readsWithNext: neighbours in a store's
+    // file), in one read.
     BrickPrefetcher(BrickSource& source, size_t lookahead, int readers = kDefaultReaders);
     static constexpr int kDefaultReaders = 2;
     ~BrickPrefetcher();
@@ -61,7 +63,11 @@ private:
     size_t mLookahead;
     std::vector<int64_t> mItems;  // brick ids; kCancelled for cancelled items
     static constexpr int64_t kCancelled = -1;
+    // A run of bricks read together (BrickSource::acquireRun) gathers them from the next
+    // kRunWindow items, at most kMaxRun.
+    static constexpr size_t kRunWindow = 32, kMaxRun = 8;
     std::vector<uint8_t> mUsed;   // consumed() named it
+    std::vector<uint8_t> mTaken;  // read with an earlier item's brick, in one run
     size_t mConsumed = 0;
     size_t mNext = 0;             // the next item a reader takes
     bool mClosed = false, mStop = false;

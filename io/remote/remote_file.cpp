@@ -368,6 +368,16 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
     throw fail(lastProblem + " (tried " + std::to_string(options.attempts) + " times)");
 }
 
+void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces) const {
+    if (!mDiskCache || pieces.size() < 2) return read(offset, n, dst);
+    bool held = true;
+    for (size_t k = 0; k < pieces.size() && held; ++k) held = mDiskCache->read(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
+    if (held) return;
+    if (offset > mSize || n > mSize - offset || offset < mHead.size()) return read(offset, n, dst);
+    fetch(offset, n, dst, false);
+    for (const ByteRange& p : pieces) mDiskCache->write(p.offset, p.bytes, p.dst);
+}
+
 void RemoteFile::readMany(std::span<const ByteRange> ranges) const {
     mImpl->session->forEach(ranges.size(), [&](size_t i) { read(ranges[i].offset, ranges[i].bytes, ranges[i].dst); });
 }

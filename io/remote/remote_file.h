@@ -75,6 +75,9 @@ public:
     void read(uint64_t offset, size_t n, void* dst) const;
     // The ranges at once, as many in flight as the pool allows; throws the first error.
     void readMany(std::span<const ByteRange> ranges) const;
+    // n bytes at `offset` in one GET, of which `pieces` (within dst) are wanted: with a disk
+    // cache, each piece is kept and looked up apart, and the GET is sent only when one is missing.
+    void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces) const;
 
     // Requests sent (tries included) and object bytes received by the session.
     uint64_t requests() const;

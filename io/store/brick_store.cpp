@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <stdexcept>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -183,16 +184,41 @@ void BrickStoreReader::failBrick(int64_t id, const std::string& what) const {
 }
 
 std::span<const unsigned char> BrickStoreReader::readStoredBrick(int64_t id) const {
-    if (id < 0 || id >= int64_t(mIndex.size()))
-        throwIoError(mPath, "no brick " + std::to_string(id) + " (the store has " +
-                                std::to_string(mIndex.size()) + ")");
+    return readStoredBricks(id, 1)[0];
+}
+
+bool BrickStoreReader::nextInFile(int64_t id) const {
+    if (id < 0 || id + 1 >= int64_t(mIndex.size())) return false;
     const BrickEntry& e = mIndex[size_t(id)];
+    return mIndex[size_t(id) + 1].offset == (e.offset + e.storedBytes + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;
+}
+
+std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(int64_t first, int count) const {
+    if (first < 0 || count < 1 || first > int64_t(mIndex.size()) - count)
+        throwIoError(mPath, "no brick " + std::to_string(first < 0 || first >= int64_t(mIndex.size()) ? first : first + count - 1) +
+                                " (the store has " + std::to_string(mIndex.size()) + ")");
+    for (int k = 0; k + 1 < count; ++k)
+        if (!nextInFile(first + k)) throw std::logic_error("readStoredBricks: bricks not stored one after another");
+    const BrickEntry& firstEntry = mIndex[size_t(first)];
+    const BrickEntry& lastEntry = mIndex[size_t(first + count - 1)];
+    const size_t bytes = size_t(lastEntry.offset - firstEntry.offset) + lastEntry.storedBytes;
     thread_local AlignedBuffer buffer;
-    mSource->read(e.offset, e.storedBytes, buffer.reserve(e.storedBytes), "brick data");
-    const std::span<const unsigned char> bytes(buffer.data, e.storedBytes);
-    if (store_format::crc32Of(bytes.data(), bytes.size()) != e.checksum)
-        failBrick(id, "checksum mismatch (the brick is corrupt)");
-    return bytes;
+    unsigned char* dst = buffer.reserve(bytes);
+    std::vector<ByteRange> pieces;
+    for (int k = 0; k < count; ++k) {
+        const BrickEntry& e = mIndex[size_t(first + k)];
+        pieces.push_back({e.offset, e.storedBytes, dst + (e.offset - firstEntry.offset)});
+    }
+    mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data");
+    std::vector<std::span<const unsigned char>> stored;
+    stored.reserve(size_t(count));
+    for (int k = 0; k < count; ++k) {
+        const BrickEntry& e = mIndex[size_t(first + k)];
+        stored.emplace_back(buffer.data + (e.offset - firstEntry.offset), e.storedBytes);
+        if (store_format::crc32Of(stored.back().data(), e.storedBytes) != e.checksum)
+            failBrick(first + k, "checksum mismatch (the brick is corrupt)");
+    }
+    return stored;
 }
 
 void BrickStoreReader::decodeBrick(int64_t id, std::span<const unsigned char> stored,

@@ -149,6 +149,13 @@ public:
     // the calling thread, valid until its next readStoredBrick: with O_DIRECT the read lands
     // in it, aligned, and is decoded from there without a copy.
     std::span<const unsigned char> readStoredBrick(int64_t id) const;
+    // Whether brick id + 1 is stored right after brick id (only alignment padding between), so
+    // that readStoredBricks reads both in one request: x-neighbours in a row of bricks are.
+    bool nextInFile(int64_t id) const;
+    // Bricks first .. first + count - 1, each stored right after the one before (nextInFile),
+    // read in one request: the stored bytes of each (checksums verified), in the calling
+    // thread's buffer as readStoredBrick says.
+    std::vector<std::span<const unsigned char>> readStoredBricks(int64_t first, int count) const;
     void decodeBrick(int64_t id, std::span<const unsigned char> stored, void* dst) const;
 
 private:

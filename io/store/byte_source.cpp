@@ -89,6 +89,10 @@ public:
     const RemoteFile* remote() const override { return &mFile; }
     void read(uint64_t offset, size_t n, void* dst, const char*) const override { mFile.read(offset, n, dst); }
     void readMany(std::span<const ByteRange> ranges, const char*) const override { mFile.readMany(ranges); }
+    void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
+                      const char*) const override {
+        mFile.readCovering(offset, n, dst, pieces);
+    }
 
 private:
     RemoteFile mFile;

@@ -35,6 +35,14 @@ public:
     virtual void read(uint64_t offset, size_t n, void* dst, const char* what) const = 0;
     // The ranges at once where the source can (remote: concurrently), else in turn.
     virtual void readMany(std::span<const ByteRange> ranges, const char* what) const;
+    // n bytes at `offset` into dst, as read() does, in one request; only `pieces` of them (within
+    // dst, in order) are wanted, and a remote source's disk cache keeps and finds each apart,
+    // so a piece read in one run is found in the next however it is read there.
+    virtual void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
+                              const char* what) const {
+        (void)pieces;
+        read(offset, n, dst, what);
+    }
     // "buffered", "direct", "fadvise" (local), "http", "https", "s3" (remote).
     virtual const char* method() const = 0;
     // The remote object behind it, or null for a local file.
