@@ -46,12 +46,11 @@ protected:
         return test::startS3(mDir.path().string(), file("s3.log"), extra);
     }
     static void control(int port, const std::string& json) { ASSERT_TRUE(test::controlS3(port, json)); }
-    // extract's picture, its PLY and its stats, for a store at `location`, read by ranges (these
-    // stores are small enough to be fetched whole at open otherwise: see WholeSmallStore).
+    // extract's picture, its PLY and its stats, for a store at `location`.
     test::CommandResult extract(const std::string& prefix, const std::string& location, const std::string& name,
                                 const std::string& extra = "") {
         return test::runCommand(prefix + VDISO_BINARY + " extract '" + location +
-                                "' --fetch-whole-mb 0 --iso 600.5 --method sage --size 256x256 --png " + file(name + ".png") +
+                                "' --iso 600.5 --method sage --size 256x256 --png " + file(name + ".png") +
                                 " -o " + file(name + ".ply") + " --stats " + file(name + ".json") + " " + extra);
     }
     void expectSameAsLocal(const std::string& name) {
@@ -136,33 +135,6 @@ TEST_F(RemoteStore, SubBlockCodesAreReadAsViewsNeedThem) {
         ASSERT_EQ(r.exitCode, 0) << r.output;
     }
     EXPECT_EQ(test::readFile(file("remote.ply")), test::readFile(file("local_fine.ply")));
-}
-
-// A store of at most --fetch-whole-mb is fetched whole at open, in one GET after the header's,
-// and every later read comes from memory; --fetch-whole-mb 0 reads it by ranges.
-TEST_F(RemoteStore, WholeSmallStore) {
-    LoopbackServer server = nginx();
-    const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/head.vdiso";
-    const auto number = [](const std::string& json, const std::string& key) {
-        const size_t at = json.find("\"" + key + "\": ");
-        return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 4));
-    };
-    const std::string view = std::string(VDISO_BINARY) + " extract '" + url + "' --iso 600.5 --method sage --size 256x256 --stats ";
-    test::CommandResult r = test::runCommand(view + file("whole.json") + " -o " + file("whole.ply"));
-    ASSERT_EQ(r.exitCode, 0) << r.output;
-    std::string stats = test::readText(file("whole.json"));
-    const BrickStoreReader local(file("bkt/head.vdiso"));
-    EXPECT_EQ(number(stats, "remote_requests"), 2.0) << stats;
-    EXPECT_EQ(number(stats, "remote_bytes"), double(local.fileBytes())) << stats;
-    r = test::runCommand(view + file("ranges.json") + " -o " + file("ranges.ply") + " --fetch-whole-mb 0");
-    ASSERT_EQ(r.exitCode, 0) << r.output;
-    stats = test::readText(file("ranges.json"));
-    EXPECT_GT(number(stats, "remote_requests"), 3.0) << stats;
-    EXPECT_LT(number(stats, "remote_bytes"), 0.9 * double(local.fileBytes())) << stats;
-    EXPECT_EQ(test::readFile(file("whole.ply")), test::readFile(file("ranges.ply")));
-    r = test::runVdiso("extract x.vdiso --fetch-whole-mb -1");
-    EXPECT_EQ(r.exitCode, 2) << r.output;
-    EXPECT_NE(r.output.find("--fetch-whole-mb"), std::string::npos) << r.output;
 }
 
 TEST_F(RemoteStore, S3SignedWithEnvironmentOrProfilePathOrVirtualHost) {
@@ -258,7 +230,6 @@ TEST_F(RemoteStore, ObjectReplacedWhileReadIsAnError) {
     const int port = server.port();
     StoreOpenOptions options;
     options.remote.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
-    options.remote.wholeObjectBytes = 0;  // read by ranges, as a large store is
     ::setenv("AWS_ACCESS_KEY_ID", kKey, 1);
     ::setenv("AWS_SECRET_ACCESS_KEY", kSecret, 1);
     ::setenv("AWS_SESSION_TOKEN", kToken, 1);
@@ -285,7 +256,6 @@ TEST_F(RemoteStore, ServerDyingMidReadIsAnError) {
     LoopbackServer server = nginx();
     const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/head.vdiso";
     StoreOpenOptions options;
-    options.remote.wholeObjectBytes = 0;  // read by ranges, as a large store is
     options.remote.attempts = 2;
     const BrickStoreReader store(url, options);
     std::vector<unsigned char> brick(store.brickBytes());

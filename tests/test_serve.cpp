@@ -811,7 +811,6 @@ TEST(ServeServer, StoreInABucket) {
         s.iso = kHeadSkinIso;
         s.remote.s3Endpoint = "http://127.0.0.1:" + std::to_string(s3.port());
         s.remote.anonymous = true;
-        s.remote.wholeObjectBytes = 0;  // read by ranges, as a large store is: each GET can fail
         s.remote.attempts = 2;
         return std::make_unique<Server>(s);
     };

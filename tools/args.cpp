@@ -175,7 +175,6 @@ const char* const kRemoteOptionsHelp =
     "  --ca-file FILE          CA certificates for HTTPS (default AWS_CA_BUNDLE, else the system's)\n"
     "  --remote-timeout S      seconds without a byte before a request is tried again (default 15)\n"
     "  --connections N         requests in flight at once (default 32)\n"
-    "  --fetch-whole-mb N      fetch a store of at most N MB whole at open (default 16; 0: never)\n"
     "  --disk-cache DIR        keep fetched bricks in DIR across runs and processes, for the\n"
     "                          object's current version (its ETag)\n"
     "  --disk-cache-mb N       at most N MB in DIR (default 10240): least recently used go first\n";
@@ -199,8 +198,6 @@ bool takeRemoteOption(const std::string& flag, Args& args, RemoteOptions& option
         options.stallTimeoutMs = 1000 * parseInt(flag, args.value(flag), 1, 3600);
     } else if (flag == "--connections") {
         options.connections = int(parseInt(flag, args.value(flag), 1, 256));
-    } else if (flag == "--fetch-whole-mb") {
-        options.wholeObjectBytes = uint64_t(parseInt(flag, args.value(flag), 0, int64_t(1) << 20)) << 20;
     } else if (flag == "--disk-cache") {
         options.diskCacheDir = args.value(flag);
     } else if (flag == "--disk-cache-mb") {

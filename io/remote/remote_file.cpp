@@ -217,13 +217,6 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
         mDiskCache = std::make_unique<RangeDiskCache>(options.diskCacheDir, displayLocation(d.url), mVersion,
                                                       options.diskCacheBytes);
     }
-    // A small object whole, now: its reads come from memory (the disk cache keeps the rest as one range).
-    if (mSize > mHead.size() && mSize <= options.wholeObjectBytes) {
-        std::vector<unsigned char> whole(static_cast<size_t>(mSize));
-        std::memcpy(whole.data(), mHead.data(), mHead.size());
-        read(mHead.size(), whole.size() - mHead.size(), whole.data() + mHead.size());
-        mHead = std::move(whole);
-    }
 }
 
 RemoteFile::~RemoteFile() = default;
@@ -376,7 +369,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
 }
 
 void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces) const {
-    if (!mDiskCache || pieces.size() < 2 || offset + n <= mHead.size()) return read(offset, n, dst);
+    if (!mDiskCache || pieces.size() < 2) return read(offset, n, dst);
     bool held = true;
     for (size_t k = 0; k < pieces.size() && held; ++k) held = mDiskCache->read(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
     if (held) return;

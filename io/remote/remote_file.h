@@ -2,8 +2,7 @@
 // when it is given a URL (io/store/byte_source.h).
 //
 // Opening sends one ranged GET for the object's first bytes (the store's header), which pins
-// its size and version (an object of at most RemoteOptions::wholeObjectBytes is then fetched
-// whole, and read from memory after): the ETag, or Last-Modified when the server gives no strong ETag. Every
+// its size and version: the ETag, or Last-Modified when the server gives no strong ETag. Every
 // later read is a ranged GET sent with If-Match (If-Unmodified-Since), so an object replaced
 // while it is read is an error naming it, never a picture mixed from two versions; and the
 // answer's Content-Range must be exactly the range asked for, within the size pinned at open.
@@ -103,7 +102,7 @@ private:
     const char* mScheme = "http";
     uint64_t mSize = 0;
     std::string mVersion;
-    std::vector<unsigned char> mHead;  // the first bytes, kept from the open (all, when small)
+    std::vector<unsigned char> mHead;  // the first bytes, kept from the open
     std::unique_ptr<RangeDiskCache> mDiskCache;
 };
 

@@ -31,11 +31,6 @@ struct RemoteOptions {
     // none. At most diskCacheBytes are kept.
     std::string diskCacheDir;
     uint64_t diskCacheBytes = uint64_t(10) << 30;
-    // An object of at most this many bytes is fetched whole at open (one more GET), and every
-    // later read is served from memory: through 20 ms at 1 Gbit/s a view's dependent round trips
-    // cost more than moving 16 MB (the Debian CT's 12.4 MB store: 0.12 s whole against 0.16-0.23
-    // s a view). 0: never (every read a ranged GET).
-    uint64_t wholeObjectBytes = uint64_t(16) << 20;
     // Follow 3xx answers (at most 8). Off where the answers are untrusted test input (fuzz).
     bool followRedirects = true;
 };
