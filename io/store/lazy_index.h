@@ -1,9 +1,10 @@
-// A packed index (io/store/index_parts.h) read by parts as they are asked for. The store reader
-// reads the parts of the bricks' entries at open and leaves the sub-block codes, three fifths
-// of the stored index, for later: a remote store fetches them in the background, last part
-// first (the coarse levels' bricks are numbered last, and a distant view wants them first),
-// and a part asked for before it came is fetched at once. So a view of a remote store waits
-// for the index bytes it looks at, not for the whole index. Internal to io/.
+// A packed index (io/store/index_parts.h) read by parts as they are asked for: how a remote
+// store is opened (a local one reads its index whole). The store reader reads the parts of the
+// bricks' entries at open and leaves the sub-block codes, three fifths of the stored index, for
+// later: they are fetched in the background, last part first (the coarse levels' bricks are
+// numbered last, and a distant view wants them first), and a part asked for before it came is
+// fetched at once. So a view waits for the index bytes it looks at, not for the whole index.
+// Internal to io/.
 //
 // Thread-safe: several threads may ask for bytes at once; a part is fetched by one of them and
 // waited for by the others. A part that fails in the background is fetched again when asked
@@ -42,9 +43,8 @@ public:
     // nor on their way (together: concurrently where the source can), waits for those on their
     // way. Cheap when they are here. Throws IoError naming the store and the part.
     void need(uint64_t begin, uint64_t end) const {
-        if (!mReady[mDirectory.partOf(begin)].load(std::memory_order_acquire) ||
-            !mReady[mDirectory.partOf(end - 1)].load(std::memory_order_acquire))
-            load(begin, end);
+        for (uint64_t i = mDirectory.partOf(begin), last = mDirectory.partOf(end - 1); i <= last; ++i)
+            if (!mReady[i].load(std::memory_order_acquire)) return load(begin, end);
     }
 
     // Starts reading every part holding raw bytes from `begin` on, the last part first, in
