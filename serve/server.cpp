@@ -153,6 +153,7 @@ ServerCounters Server::counters() const {
     c.acceptsBackedOff = mImpl->acceptsBackedOff;
     c.viewersRefused = mImpl->viewersRefused;
     c.viewersDropped = mImpl->viewersDropped;
+    c.framePasses = mImpl->gate.entered();
     return c;
 }
 

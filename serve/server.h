@@ -46,6 +46,7 @@ struct ServerCounters {
     // the next accept. Viewers refused because a thread for them could not be started.
     uint64_t acceptsBackedOff = 0, viewersRefused = 0;
     uint64_t viewersDropped = 0;  // their writes timed out
+    uint64_t framePasses = 0;     // extraction passes begun, all viewers (a VIEW's coarse and final)
 };
 
 // Viewers a server takes at once by default: what the machine's memory holds beside the brick

@@ -111,6 +111,7 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
             const std::string text(message.begin(), message.end());
             const std::string type = typeOf(text);
             if (type == "error") f.errors.push_back(text);
+            if (type == "frameBegin") ++f.framesBegun;
             if (type != "frameEnd") continue;
             const nlohmann::json j = nlohmann::json::parse(text);
             if (j.value("frame", int64_t(-1)) != int64_t(frame)) continue;

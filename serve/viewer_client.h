@@ -33,6 +33,7 @@ struct ClientFrame {
     double firstGeometrySeconds = -1;  // from sending the VIEW to the first CHUNK or REFS
     double completeSeconds = -1;       // to frameEnd
     std::vector<std::string> errors;   // error messages that arrived meanwhile
+    int framesBegun = 0;               // frameBegin messages (of any frame) that arrived meanwhile
     // Coarser frames of the same VIEW that came first (levels of detail: frameEnd's "final"
     // false); the fields above are the final frame's. -1: none.
     int coarseFrames = 0;

@@ -11,6 +11,7 @@ namespace vdiso::serve {
 
 
 bool FrameGate::enter(const std::function<bool()>& giveUp) {
+    ++mEntered;
     std::unique_lock lock(mMutex);
     // Woken by leave(); polled for giveUp, which another thread sets without this lock.
     while (mFree == 0) {
@@ -140,7 +141,9 @@ void ViewerSession::work() {
         {
             std::unique_lock lock(mMutex);
             mWork.wait(lock, [&] { return mClosing || mPending; });
+            mWork.wait_until(lock, mLastStart + SessionSettings::kMinFrameInterval, [&] { return mClosing; });
             if (mClosing) return;
+            mLastStart = Clock::now();
             view = *mPending;
             arrival = mPendingArrival;
             mPending.reset();

@@ -38,6 +38,11 @@ struct SessionSettings {
     // it comes before, so the viewer shows a coarse surface at once and refines it.
     double lodError = 1.0;
     static constexpr double kCoarsePassFactor = 8.0;
+    // A viewer's frames start at most once in this time: VIEWs that come faster replace one
+    // another while the next start waits, so a client sending VIEWs as fast as it can costs the
+    // server 125 frame starts a second, not one per message. A browser sends one per animation
+    // frame (16 ms at 60 Hz), which never waits.
+    static constexpr std::chrono::milliseconds kMinFrameInterval{8};
 };
 
 // At most `slots` frames extract at once, so that their pinned bricks never fill a cache.
@@ -47,11 +52,14 @@ public:
     // Waits for a slot; false (no slot taken) once `giveUp` returns true.
     bool enter(const std::function<bool()>& giveUp);
     void leave();
+    // Calls of enter so far: extraction passes begun (a VIEW's coarse and final frames).
+    uint64_t entered() const { return mEntered.load(); }
 
 private:
     std::mutex mMutex;
     std::condition_variable mChanged;
     int mFree;
+    std::atomic<uint64_t> mEntered{0};
 };
 
 class ViewerSession {
@@ -95,6 +103,7 @@ private:
     std::condition_variable mWork;
     std::optional<ViewMessage> mPending;
     std::chrono::steady_clock::time_point mPendingArrival;
+    std::chrono::steady_clock::time_point mLastStart;  // of the last frame (kMinFrameInterval)
     std::optional<uint32_t> mLastSeq;
     bool mClosing = false;
     std::atomic<bool> mSuperseded{false};

@@ -37,6 +37,7 @@
 #include "serve/protocol.h"
 #include "serve/server.h"
 #include "serve/viewer_client.h"
+#include "serve/viewer_session.h"
 #include "tests/extract_test_util.h"
 #include "tests/loopback_servers.h"
 #include "tests/test_util.h"
@@ -1095,6 +1096,29 @@ TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
     EXPECT_EQ(fixture.server->counters().sessionsOpen, 1u);  // the dropped one is gone
     close(fd);
     EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160, 30), 2)).status, "complete");
+}
+
+// A client sending VIEWs as fast as it can gets frames started at most once in
+// SessionSettings::kMinFrameInterval (each VIEW replacing the one waiting), not one per message;
+// its last VIEW is still served whole.
+TEST(ServeServer, AFloodOfViewsStartsFramesAtABoundedRate) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160});
+    auto client = fixture.client();
+    const uint64_t before = fixture.server->counters().framePasses;
+    const auto start = std::chrono::steady_clock::now();
+    const uint32_t views = 300;
+    for (uint32_t seq = 1; seq <= views; ++seq) {
+        client->sendView(viewOf(presetFor(fixture.storePath, ViewPreset::Closeup, 1024, 3.0 * seq), seq));
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const ClientFrame last = client->readFrame(views);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(last.status, "complete");
+    const uint64_t passes = fixture.server->counters().framePasses - before;
+    // Two passes a frame at most (coarse and final, on a store with levels).
+    const double most = 2 * (ms / double(SessionSettings::kMinFrameInterval.count()) + 2);
+    EXPECT_LE(double(passes), most) << passes << " passes in " << ms << " ms";
+    EXPECT_LT(passes, views) << ms << " ms";
 }
 
 }  // namespace vdiso::serve
