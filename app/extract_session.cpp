@@ -129,6 +129,7 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
     // brought, from the open on.
     if (const RemoteFile* remote = store.remote()) {
         s.add("remote_requests", remote->requests()).add("remote_bytes", remote->bytesFetched());
+        s.add("remote_stragglers", remote->stragglers());
         s.add("disk_cache_hits", remote->diskCacheHits()).add("disk_cache_bytes", remote->diskCacheBytes());
     }
     s.add("prefetch", f.plan.threads > 1 && !isViewDependent(o.method) ? 0 : f.plan.prefetchBricks);

@@ -196,6 +196,20 @@ TEST_F(RemoteStore, PassingFailuresAreTriedAgain) {
     expectSameAsLocal("retried");
 }
 
+// A request without an answer for many times the usual wait is a straggler: ended and sent
+// again at once, where waiting for the stall timeout (60 s here) would hold the view.
+TEST_F(RemoteStore, AStragglerIsSentAgain) {
+    LoopbackServer server = s3();
+    const int port = server.port();
+    control(port, R"([{"op":"fault","action":"hang","count":1,"skip":24}])");
+    const test::CommandResult r = extract("timeout 40 " + s3Env(port), "s3://bkt/head.vdiso", "straggler",
+                                          "--remote-timeout 60");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("straggler");
+    const std::string stats = test::readText(file("straggler.json"));
+    EXPECT_NE(stats.find("\"remote_stragglers\": 1"), std::string::npos) << stats;
+}
+
 TEST_F(RemoteStore, BadMomentsAreErrorsNamingTheUrl) {
     LoopbackServer server = s3();
     const int port = server.port();

@@ -50,11 +50,16 @@ struct Transfer {
     bool overflow = false;
     long status = 0;
     std::string contentRange, etag, lastModified, errorBody;
+    // A straggler: no answer by `stragglerMs` after `start` (0: no deadline); ended, to be tried again.
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    int64_t stragglerMs = 0;
+    bool answered = false, straggler = false;
 };
 
 size_t onHeader(char* data, size_t size, size_t count, void* user) {
     auto& t = *static_cast<Transfer*>(user);
     const std::string_view line(data, size * count);
+    t.answered = true;
     if (line.rfind("HTTP/", 0) == 0) {
         t.contentRange.clear();
         t.etag.clear();
@@ -77,8 +82,14 @@ size_t onHeader(char* data, size_t size, size_t count, void* user) {
 
 // Ends a transfer on Ctrl-C, and when another read of the object failed for good meanwhile:
 // the frame that wanted both is lost, so its other requests stop instead of running their tries.
+// Ends a straggler too (libcurl calls this about once a second while nothing arrives).
 int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
-    const auto& t = *static_cast<Transfer*>(user);
+    auto& t = *static_cast<Transfer*>(user);
+    if (t.stragglerMs > 0 && !t.answered &&
+        std::chrono::steady_clock::now() - t.start > std::chrono::milliseconds(t.stragglerMs)) {
+        t.straggler = true;
+        return 1;
+    }
     return interruptRequested() || t.failures->load() != t.failuresAtStart;
 }
 
@@ -223,6 +234,7 @@ RemoteFile::~RemoteFile() = default;
 
 uint64_t RemoteFile::requests() const { return mImpl->session->requests.load(); }
 uint64_t RemoteFile::bytesFetched() const { return mImpl->session->bytesFetched.load(); }
+uint64_t RemoteFile::stragglers() const { return mImpl->session->stragglers.load(); }
 uint64_t RemoteFile::diskCacheHits() const { return mDiskCache ? mDiskCache->hits() : 0; }
 uint64_t RemoteFile::diskCacheBytes() const { return mDiskCache ? mDiskCache->hitBytes() : 0; }
 
@@ -273,6 +285,9 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         t.failuresAtStart = failuresAtStart;
         t.dst = static_cast<unsigned char*>(dst);
         t.capacity = n;
+        // Not on the open's request, nor beyond the stall timeout, which ends a transfer anyway.
+        const int64_t straggler = opening ? 0 : d.session->stragglerMs();
+        if (straggler < options.stallTimeoutMs) t.stragglerMs = straggler;
         curl_slist* headers = nullptr;
         for (const curl_slist* h = d.headers; h; h = h->next) headers = curl_slist_append(headers, h->data);
         if (!d.condition.empty()) headers = curl_slist_append(headers, d.condition.c_str());
@@ -305,6 +320,8 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, curlError);
         const CURLcode rc = curl_easy_perform(curl);
         curl_easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
+        curl_off_t firstByteUs = 0;
+        curl_easy_getinfo(curl, CURLINFO_STARTTRANSFER_TIME_T, &firstByteUs);
         curl_slist_free_all(headers);
         d.session->give(curl);
         ++d.session->requests;
@@ -316,6 +333,13 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         if (t.overflow)
             throw fail("sent more than the " + std::to_string(n) + " bytes of range " + range +
                                     " it announced");
+        if (rc == CURLE_ABORTED_BY_CALLBACK && t.straggler) {
+            ++d.session->stragglers;
+            lastProblem = "no answer to range " + range + " in " + std::to_string(t.stragglerMs) +
+                          " ms, " + std::to_string(RemoteSession::kStragglerFactor) +
+                          " times the usual wait (a straggler)";
+            continue;
+        }
         if (rc == CURLE_ABORTED_BY_CALLBACK) {
             throwIfInterrupted(mName);
             throw abandoned();
@@ -334,6 +358,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
             throw fail(what);
         }
         if (t.status == 206) {
+            d.session->noteFirstByteMs(double(firstByteUs) / 1000.0);
             const auto r = parseContentRange(t.contentRange);
             // Opening asks for the head, which may be longer than a small object.
             const uint64_t last = opening && r ? std::min<uint64_t>(offset + n, (*r)[2]) - 1 : offset + n - 1;

@@ -82,6 +82,8 @@ public:
     // Requests sent (tries included) and object bytes received by the session.
     uint64_t requests() const;
     uint64_t bytesFetched() const;
+    // Requests ended as stragglers and sent again (RemoteSession::stragglerMs).
+    uint64_t stragglers() const;
     // Ranges, and their bytes, read from the disk cache instead (0 without one).
     uint64_t diskCacheHits() const;
     uint64_t diskCacheBytes() const;

@@ -26,6 +26,10 @@ struct RemoteSession::Impl {
     int inUse = 0;
     mutable std::mutex bucketsLock;
     std::map<std::string, S3Location> buckets;  // resolved once per bucket
+    mutable std::mutex firstBytesLock;
+    std::vector<double> firstBytesMs;  // the last kFirstBytesKept, as a ring
+    size_t firstBytesNext = 0;
+    static constexpr size_t kFirstBytesKept = 64;
 };
 
 RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_unique<Impl>()) {
@@ -59,6 +63,25 @@ RemoteSession::~RemoteSession() {
 }
 
 const RemoteOptions& RemoteSession::options() const { return mImpl->options; }
+
+void RemoteSession::noteFirstByteMs(double ms) {
+    Impl& d = *mImpl;
+    std::lock_guard lock(d.firstBytesLock);
+    if (d.firstBytesMs.size() < Impl::kFirstBytesKept) d.firstBytesMs.push_back(ms);
+    else d.firstBytesMs[d.firstBytesNext++ % Impl::kFirstBytesKept] = ms;
+}
+
+int64_t RemoteSession::stragglerMs() const {
+    const Impl& d = *mImpl;
+    std::vector<double> seen;
+    {
+        std::lock_guard lock(d.firstBytesLock);
+        if (d.firstBytesMs.size() < kStragglerSamples) return 0;
+        seen = d.firstBytesMs;
+    }
+    std::nth_element(seen.begin(), seen.begin() + ptrdiff_t(seen.size() / 2), seen.end());
+    return std::max<int64_t>(kStragglerFloorMs, int64_t(kStragglerFactor * seen[seen.size() / 2]));
+}
 
 S3Location RemoteSession::s3Location(const std::string& s3Url) const {
     std::string bucket, key;

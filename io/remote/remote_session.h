@@ -43,8 +43,19 @@ public:
     // the environment and AWS's files, the others reuse what it found. Thread-safe.
     S3Location s3Location(const std::string& s3Url) const;
 
-    // Requests sent (tries included) and object bytes received by every object of the session.
-    std::atomic<uint64_t> requests{0}, bytesFetched{0};
+    // Requests sent (tries included) and object bytes received by every object of the session;
+    // requests given up as stragglers and sent again (stragglerMs).
+    std::atomic<uint64_t> requests{0}, bytesFetched{0}, stragglers{0};
+
+    // Answers' first bytes: each request's time to them is noted, and a request that has had
+    // none for kStragglerFactor times their median (at least kStragglerFloorMs, and only once
+    // kStragglerSamples were noted) is a straggler, tried again at once rather than waited for
+    // until the stall timeout: an object store's slowest answers take many times its usual ones.
+    // 0: no straggler deadline yet. Thread-safe.
+    static constexpr int64_t kStragglerFactor = 8, kStragglerFloorMs = 1000;
+    static constexpr size_t kStragglerSamples = 8;
+    void noteFirstByteMs(double ms);
+    int64_t stragglerMs() const;
 
 private:
     struct Impl;
