@@ -1121,4 +1121,45 @@ TEST(ServeServer, AFloodOfViewsStartsFramesAtABoundedRate) {
     EXPECT_LT(passes, views) << ms << " ms";
 }
 
+// A client writing bad messages as fast as it can and reading nothing: each earns an error
+// reply; once its replies back up the server stops reading it, and once a write to it has
+// waited the write timeout it is dropped. Meanwhile another viewer is served.
+TEST(ServeServer, AClientFloodingBadMessagesAndNeverReadingIsDropped) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {72, 72, 72}, 0, 1.0);
+    const uint16_t port = fixture.server->port();
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(fd, 0);
+    const int small = 4096;
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    const std::string host = "127.0.0.1:" + std::to_string(port);
+    const std::string upgrade = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
+                                "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                                "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
+    ASSERT_EQ(send(fd, upgrade.data(), upgrade.size(), 0), ssize_t(upgrade.size()));
+    // An unknown message type, 64 to a write, for 3 s or until the server drops the client.
+    std::string burst;
+    for (int k = 0; k < 64; ++k) burst += maskedFrame(0x2, {42, 1, 0, 0, 0, 0, 0, 0});
+    uint64_t sent = 0;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+    while (std::chrono::steady_clock::now() < until && fixture.server->counters().viewersDropped == 0) {
+        const ssize_t n = send(fd, burst.data(), burst.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n > 0) sent += uint64_t(n);
+        else if (errno != EAGAIN && errno != EWOULDBLOCK) break;  // dropped: the connection is gone
+        else std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    EXPECT_GT(sent, uint64_t(1) << 16);
+    auto other = fixture.client();
+    EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 128), 1)).status, "complete");
+    for (int wait = 0; wait < 100 && fixture.server->counters().viewersDropped == 0; ++wait)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(fixture.server->counters().viewersDropped, 1u);
+    close(fd);
+    EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 128, 30), 2)).status, "complete");
+}
+
 }  // namespace vdiso::serve
