@@ -50,9 +50,13 @@ struct Transfer {
     bool overflow = false;
     long status = 0;
     std::string contentRange, etag, lastModified, errorBody;
-    // A straggler: no answer by `stragglerMs` after `start` (0: no deadline); ended, to be tried again.
+    // A straggler: no answer `session->stragglerMs()` after `start` (asked while waiting, so that
+    // a request sent before the session knew its usual wait is judged too); ended, to be tried
+    // again. No session: no deadline.
+    const RemoteSession* session = nullptr;
+    int64_t stallMs = 0;
     std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-    int64_t stragglerMs = 0;
+    int64_t stragglerMs = 0;  // the deadline it was ended at
     bool answered = false, straggler = false;
 };
 
@@ -85,10 +89,14 @@ size_t onHeader(char* data, size_t size, size_t count, void* user) {
 // Ends a straggler too (libcurl calls this about once a second while nothing arrives).
 int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
     auto& t = *static_cast<Transfer*>(user);
-    if (t.stragglerMs > 0 && !t.answered &&
-        std::chrono::steady_clock::now() - t.start > std::chrono::milliseconds(t.stragglerMs)) {
-        t.straggler = true;
-        return 1;
+    if (t.session && !t.answered) {
+        const int64_t deadline = t.session->stragglerMs();
+        if (deadline > 0 && deadline < t.stallMs &&
+            std::chrono::steady_clock::now() - t.start > std::chrono::milliseconds(deadline)) {
+            t.stragglerMs = deadline;
+            t.straggler = true;
+            return 1;
+        }
     }
     return interruptRequested() || t.failures->load() != t.failuresAtStart;
 }
@@ -285,9 +293,9 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         t.failuresAtStart = failuresAtStart;
         t.dst = static_cast<unsigned char*>(dst);
         t.capacity = n;
-        // Not on the open's request, nor beyond the stall timeout, which ends a transfer anyway.
-        const int64_t straggler = opening ? 0 : d.session->stragglerMs();
-        if (straggler < options.stallTimeoutMs) t.stragglerMs = straggler;
+        // Not on the open's request; nor beyond the stall timeout, which ends a transfer anyway.
+        if (!opening) t.session = d.session.get();
+        t.stallMs = options.stallTimeoutMs;
         curl_slist* headers = nullptr;
         for (const curl_slist* h = d.headers; h; h = h->next) headers = curl_slist_append(headers, h->data);
         if (!d.condition.empty()) headers = curl_slist_append(headers, d.condition.c_str());
