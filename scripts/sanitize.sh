@@ -16,6 +16,9 @@ export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 # drew a picture (the OSMesa context is kept), sometimes crash LeakSanitizer's exit-time thread
 # stop ("Tracer caught signal 11") when tests run side by side (3 of 10 runs of the CLI tests
 # beside others; none of 8 with this).
+# It still happens now and then (2026-11-27: once in three whole runs, in a test drawing with
+# OSMesa beside another): a test that fails is run once more, and fails the script if it fails
+# again. A failure of the code fails both runs.
 export LP_NUM_THREADS=0
 cd build-fuzz
-ctest --output-on-failure -j "$(nproc)"
+ctest --output-on-failure --repeat until-pass:2 -j "$(nproc)"
