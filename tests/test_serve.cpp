@@ -1057,25 +1057,36 @@ TEST(ServeServer, OneViewerMoreThanTheMostIsRefused) {
     EXPECT_EQ(d->requestFrame(viewOf(camera, 1)).status, "complete");
 }
 
-// A client that sends VIEWs and never reads: once a write to it has waited the write timeout,
-// it is dropped (its queue and frame freed), and the other viewers are served meanwhile.
-TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
-    ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160}, 0, 1.0);
+// A WebSocket client over a raw socket with a small receive buffer, upgraded (its answer left
+// unread): a client that will not read. -1 when it cannot connect.
+int unreadingClient(const ServerFixture& fixture) {
     const uint16_t port = fixture.server->port();
     const int fd = socket(AF_INET, SOCK_STREAM, 0);
-    ASSERT_GE(fd, 0);
+    if (fd < 0) return -1;
     const int small = 4096;
     setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
     sockaddr_in address{};
     address.sin_family = AF_INET;
     address.sin_port = htons(port);
     address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
     const std::string host = "127.0.0.1:" + std::to_string(port);
-    std::string out = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
-                      "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
-                      "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
-    ASSERT_EQ(send(fd, out.data(), out.size(), 0), ssize_t(out.size()));
+    const std::string upgrade = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
+                                "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                                "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
+    if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+        send(fd, upgrade.data(), upgrade.size(), 0) != ssize_t(upgrade.size())) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+// A client that sends VIEWs and never reads: once a write to it has waited the write timeout,
+// it is dropped (its queue and frame freed), and the other viewers are served meanwhile.
+TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160}, 0, 1.0);
+    const int fd = unreadingClient(fixture);
+    ASSERT_GE(fd, 0);
     // A VIEW every 100 ms, each at another isovalue, so that every frame's chunks are new: more
     // than the sockets' buffers hold once the client reads nothing.
     for (uint32_t seq = 1; seq <= 300 && fixture.server->counters().viewersDropped == 0; ++seq) {
@@ -1126,21 +1137,8 @@ TEST(ServeServer, AFloodOfViewsStartsFramesAtABoundedRate) {
 // waited the write timeout it is dropped. Meanwhile another viewer is served.
 TEST(ServeServer, AClientFloodingBadMessagesAndNeverReadingIsDropped) {
     ServerFixture fixture(uint64_t(256) << 20, 1, {72, 72, 72}, 0, 1.0);
-    const uint16_t port = fixture.server->port();
-    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    const int fd = unreadingClient(fixture);
     ASSERT_GE(fd, 0);
-    const int small = 4096;
-    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_port = htons(port);
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-    const std::string host = "127.0.0.1:" + std::to_string(port);
-    const std::string upgrade = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
-                                "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
-                                "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
-    ASSERT_EQ(send(fd, upgrade.data(), upgrade.size(), 0), ssize_t(upgrade.size()));
     // An unknown message type, 64 to a write, for 3 s or until the server drops the client.
     std::string burst;
     for (int k = 0; k < 64; ++k) burst += maskedFrame(0x2, {42, 1, 0, 0, 0, 0, 0, 0});
