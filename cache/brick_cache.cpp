@@ -7,8 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <sys/mman.h>
-
+#include "core/huge_pages.h"
 #include "io/error.h"
 
 namespace vdiso {
@@ -16,14 +15,9 @@ namespace vdiso {
 
 std::span<const SubBlockCode> BrickCache::subBlockCodesOf(int64_t id) const { return mStore.subBlockCodesOf(id); }
 
-BrickCache::Chunk::Chunk(size_t n) : size(n) {
-    void* p = ::mmap(nullptr, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) throw std::bad_alloc();
-    ::madvise(p, n, MADV_HUGEPAGE);  // a hint; without THP the chunk still works
-    bytes = static_cast<unsigned char*>(p);
-}
+BrickCache::Chunk::Chunk(size_t n) : bytes(static_cast<unsigned char*>(mapHugePages(n))), size(n) {}
 
-BrickCache::Chunk::~Chunk() { ::munmap(bytes, size); }
+BrickCache::Chunk::~Chunk() { unmapHugePages(bytes, size); }
 
 BrickCache::BrickCache(const BrickStoreReader& store, uint64_t budgetBytes)
     : mStore(store), mBrickBytes(store.brickBytes()) {
