@@ -19,7 +19,8 @@ ViewFacing chooseFacing(ViewChoice& choice, const VolumeInfo& volume) {
 
 Camera viewCamera(ViewChoice& choice, const VolumeInfo& volume, int width, int height) {
     const ViewFacing facing = chooseFacing(choice, volume);
-    Camera camera = presetCamera(choice.distance, facing, volume.origin, volume.worldMax(), width, height);
+    Camera camera = presetCamera(choice.distance, facing, volume.origin, volume.worldMax(), width, height,
+                                 choice.times);
     fitClipPlanes(camera, volume);
     return camera;
 }

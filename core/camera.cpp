@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -133,7 +135,7 @@ Camera presetCamera(ViewPreset preset, const glm::dvec3& boundsMin, const glm::d
 }
 
 Camera presetCamera(ViewPreset preset, const ViewFacing& facing, const glm::dvec3& boundsMin,
-                    const glm::dvec3& boundsMax, int width, int height) {
+                    const glm::dvec3& boundsMax, int width, int height, double times) {
     if (width <= 0 || height <= 0)
         throw std::invalid_argument("presetCamera: image size must be positive");
     Camera camera;
@@ -171,7 +173,7 @@ Camera presetCamera(ViewPreset preset, const ViewFacing& facing, const glm::dvec
         break;
     }
     }
-    camera.eye = camera.target + facing.toEye * distance;
+    camera.eye = camera.target + facing.toEye * (distance * times);
     fitClipPlanes(camera, boundsMin, boundsMax);
     return camera;
 }
@@ -228,7 +230,8 @@ ViewChoice parseViewChoice(const std::string& text) {
     const auto refuse = [&] {
         throw std::invalid_argument(
             "unknown view '" + text +
-            "' (expected a distance: distant, normal or closeup; a side: anterior, posterior, "
+            "' (expected a distance: distant, normal, closeup or a multiple of the normal one "
+            "such as 2.5; a side: anterior, posterior, "
             "left, right, superior or inferior; or a distance and a side, as closeup,anterior)");
     };
     ViewChoice choice;
@@ -246,7 +249,11 @@ ViewChoice parseViewChoice(const std::string& text) {
             try {
                 choice.distance = parseViewPreset(word);
             } catch (const std::invalid_argument&) {
-                refuse();
+                char* end = nullptr;
+                const double times = word.empty() ? 0.0 : std::strtod(word.c_str(), &end);
+                if (end != word.c_str() + word.size() || !(times > 0.0) || !std::isfinite(times)) refuse();
+                choice.distance = ViewPreset::Normal;
+                choice.times = times;
             }
             distanceGiven = true;
         }
@@ -258,6 +265,11 @@ ViewChoice parseViewChoice(const std::string& text) {
 
 std::string viewChoiceName(const ViewChoice& choice) {
     std::string name = viewPresetName(choice.distance);
+    if (choice.distance == ViewPreset::Normal && choice.times != 1.0) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%g", choice.times);
+        name = text;
+    }
     if (choice.side) name += std::string(",") + patientSideName(*choice.side);
     return name;
 }
@@ -269,8 +281,8 @@ std::vector<Camera> orbitCameras(ViewPreset preset, const glm::dvec3& boundsMin,
 
 std::vector<Camera> orbitCameras(ViewPreset preset, const ViewFacing& facing,
                                  const glm::dvec3& boundsMin, const glm::dvec3& boundsMax,
-                                 int width, int height, int frames) {
-    const Camera base = presetCamera(preset, facing, boundsMin, boundsMax, width, height);
+                                 int width, int height, int frames, double times) {
+    const Camera base = presetCamera(preset, facing, boundsMin, boundsMax, width, height, times);
     const glm::dvec3 axis = glm::normalize(facing.up);
     std::vector<Camera> cameras;
     for (int k = 0; k < frames; ++k) {

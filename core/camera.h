@@ -119,6 +119,7 @@ ViewFacing patientFacing(PatientSide side, const glm::dmat3& direction);
 // What `vdiso extract --view` and the viewer choose: a distance and, optionally, a side.
 struct ViewChoice {
     ViewPreset distance = ViewPreset::Normal;
+    double times = 1.0;  // with Normal: the eye at this multiple of the normal distance
     std::optional<PatientSide> side;
 };
 
@@ -128,8 +129,9 @@ struct ViewChoice {
 // orientation, saying so and what to use instead.
 ViewFacing viewFacing(const std::optional<PatientSide>& side, const VolumeInfo& volume);
 
+// `times` moves the eye along the line to the target to that multiple of the preset's distance.
 Camera presetCamera(ViewPreset preset, const ViewFacing& facing, const glm::dvec3& boundsMin,
-                    const glm::dvec3& boundsMax, int width, int height);
+                    const glm::dvec3& boundsMax, int width, int height, double times = 1.0);
 // With defaultFacing().
 Camera presetCamera(ViewPreset preset, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax,
                     int width, int height);
@@ -139,7 +141,7 @@ Camera presetCamera(ViewPreset preset, const glm::dvec3& boundsMin, const glm::d
 // itself). The "dynamic" case of SAGE: a moving camera over one volume.
 std::vector<Camera> orbitCameras(ViewPreset preset, const ViewFacing& facing,
                                  const glm::dvec3& boundsMin, const glm::dvec3& boundsMax,
-                                 int width, int height, int frames);
+                                 int width, int height, int frames, double times = 1.0);
 // With defaultFacing(): about +z.
 std::vector<Camera> orbitCameras(ViewPreset preset, const glm::dvec3& boundsMin,
                                  const glm::dvec3& boundsMax, int width, int height, int frames);
@@ -155,10 +157,12 @@ std::optional<PatientSide> parsePatientSide(const std::string& name);
 const char* patientSideName(PatientSide side);
 
 // A distance, a side (at the normal distance), or both joined by a comma in either order:
-// "closeup", "anterior", "closeup,left". Throws std::invalid_argument naming every accepted name
+// "closeup", "anterior", "closeup,left". A distance may also be a multiple of the normal one,
+// a positive number: "2.5" (times 2.5), "10,left". Throws std::invalid_argument naming every accepted name
 // otherwise.
 ViewChoice parseViewChoice(const std::string& text);
-// "distance" or "distance,side" ("normal", "normal,anterior"): what parseViewChoice reads back.
+// "distance" or "distance,side" ("normal", "normal,anterior", "2.5,left"): what parseViewChoice
+// reads back.
 std::string viewChoiceName(const ViewChoice& choice);
 
 }  // namespace vdiso

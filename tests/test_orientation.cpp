@@ -330,7 +330,19 @@ TEST(PatientViews, ViewChoicesParse) {
     EXPECT_EQ(both.distance, ViewPreset::Closeup);
     EXPECT_EQ(both.side, PatientSide::Inferior);
     EXPECT_EQ(viewChoiceName(both), "closeup,inferior");
-    for (const char* bad : {"far", "anterior,left", "normal,distant", "normal,", ",left", "normal,left,right", ""}) {
+    const ViewChoice farther = parseViewChoice("left,2.5");
+    EXPECT_EQ(farther.distance, ViewPreset::Normal);
+    EXPECT_EQ(farther.times, 2.5);
+    EXPECT_EQ(viewChoiceName(farther), "2.5,left");
+    EXPECT_EQ(parseViewChoice(viewChoiceName(farther)).times, 2.5);
+    // The eye moves along its line to the target, the target stays.
+    const glm::dvec3 lo(0.0), hi(100.0, 80.0, 60.0);
+    const Camera normal = presetCamera(ViewPreset::Normal, lo, hi, 64, 64);
+    const Camera twice = presetCamera(ViewPreset::Normal, defaultFacing(), lo, hi, 64, 64, 2.0);
+    EXPECT_EQ(twice.target, normal.target);
+    EXPECT_NEAR(glm::length(twice.eye - twice.target), 2.0 * glm::length(normal.eye - normal.target), 1e-9);
+    for (const char* bad : {"far", "anterior,left", "normal,distant", "normal,", ",left", "normal,left,right", "",
+                            "0", "-2", "2.5x", "nan", "inf", "1e999"}) {
         SCOPED_TRACE(bad);
         EXPECT_THROW(parseViewChoice(bad), std::invalid_argument);
     }

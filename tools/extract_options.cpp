@@ -82,10 +82,12 @@ const char* const kExtractHelp =
     "  --view DISTANCE|SIDE|DISTANCE,SIDE\n"
     "                            camera preset framed from the volume: the picture's camera,\n"
     "                            and the extraction's for sage/wise. DISTANCE: distant, normal\n"
-    "                            (default) or closeup. SIDE, for a store with orientation: the\n"
-    "                            side of the patient the camera looks at, anterior (default:\n"
-    "                            a head's face, upright), posterior, left, right (superior up),\n"
-    "                            superior or inferior (anterior up); e.g. --view left,\n"
+    "                            (default), closeup, or a multiple of the normal distance (2.5:\n"
+    "                            that much farther; distant is about 10). SIDE, for a store\n"
+    "                            with orientation: the side of the patient the camera looks\n"
+    "                            at, anterior (default: a head's face, upright), posterior,\n"
+    "                            left, right (superior up), superior or inferior (anterior\n"
+    "                            up); e.g. --view left,\n"
     "                            --view closeup,anterior. A store without orientation is seen\n"
     "                            from the front (+y), a little from the side and above, +z up.\n"
     "                            (A mirrored grid, e.g. stored radiologically, is drawn in\n"
@@ -285,7 +287,7 @@ std::vector<Camera> extractCameras(const ExtractOptions& o, const VolumeInfo& vo
     std::vector<Camera> cameras;
     if (o.orbitFrames > 0)
         cameras = orbitCameras(view.distance, facing, volume.origin, volume.worldMax(), o.width, o.height,
-                               o.orbitFrames);
+                               o.orbitFrames, view.times);
     else if (!o.pathFile.empty())
         cameras = readCameraPath(o.pathFile, o.width, o.height);
     else if (!o.cameraPath.empty())
