@@ -1,5 +1,6 @@
 #include "core/mesh.h"
 
+#include <algorithm>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -36,6 +37,30 @@ void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex) {
     mesh.normals.resize(next - mesh.firstVertex);
     for (uint32_t& v : mesh.indices)
         if (v >= fromVertex) v = renumbered[v - fromVertex];
+}
+
+void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle, const glm::vec3* eye) {
+    const size_t end = mesh.indices.size();
+    if (3 * firstTriangle >= end) return;
+    uint32_t lo = UINT32_MAX, hi = 0;
+    for (size_t i = 3 * firstTriangle; i < end; ++i) {
+        lo = std::min(lo, mesh.indices[i]);
+        hi = std::max(hi, mesh.indices[i]);
+    }
+    std::vector<glm::vec3> faces(size_t(hi - lo) + 1, glm::vec3(0.0f));
+    auto held = [&](uint32_t v) { return size_t(v - mesh.firstVertex); };
+    for (size_t i = 3 * firstTriangle; i < end; i += 3) {
+        const uint32_t* t = &mesh.indices[i];
+        const glm::vec3 a = mesh.positions[held(t[0])], b = mesh.positions[held(t[1])], c = mesh.positions[held(t[2])];
+        const glm::vec3 n = glm::cross(b - a, c - a);  // twice the area, along the face normal
+        if (eye && glm::dot(n, *eye - a) <= 0.0f) continue;
+        for (int k = 0; k < 3; ++k) faces[t[k] - lo] += n;
+    }
+    for (size_t k = 0; k < faces.size(); ++k) {
+        const glm::vec3 f = faces[k];
+        glm::vec3& n = mesh.normals[held(lo + uint32_t(k))];
+        if (glm::dot(n, f) < 0.0f) n = glm::normalize(f);
+    }
 }
 
 }  // namespace vdiso
