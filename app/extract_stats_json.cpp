@@ -12,6 +12,7 @@ void addViewCounters(JsonObject& s, const ExtractStats& stats) {
     s.add("bricks_prefetched_unused", view.bricksPrefetchedUnused);
     s.add("bricks_culled_by_sub_blocks", view.bricksCulledBySubBlocks);
     s.add("polygons_hidden", view.polygonsHidden);
+    s.add("thin_part_points", view.thinPartPoints);
 }
 
 }  // namespace vdiso

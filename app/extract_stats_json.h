@@ -9,7 +9,8 @@ namespace vdiso {
 
 // The culling counters of sage and wise (core/extract/extract_stats.h ViewCounters): culled_range,
 // culled_frustum, culled_occlusion, culled_region, dropped_subpixel, meta_cells_extracted,
-// scan_s, cells_culled, bricks_prefetched_unused, bricks_culled_by_sub_blocks, polygons_hidden.
+// scan_s, cells_culled, bricks_prefetched_unused, bricks_culled_by_sub_blocks, polygons_hidden,
+// thin_part_points.
 void addViewCounters(JsonObject& s, const ExtractStats& stats);
 
 }  // namespace vdiso

@@ -84,6 +84,7 @@ public:
     // Sample (x,y,z) as a double.
     double at(int64_t x, int64_t y, int64_t z) const;
     const std::vector<unsigned char>& bytes() const { return mBytes; }
+    std::vector<unsigned char>& bytes() { return mBytes; }  // to write samples of one's own
 
 private:
     VolumeInfo mInfo;

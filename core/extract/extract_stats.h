@@ -18,6 +18,7 @@ struct ViewCounters {
     int64_t coarseBricks = 0;  // of the bricks acquired, those of a coarser level of detail
     int64_t cappedFaces = 0;   // brick faces closed where levels meet (core/lod/face_cap.h)
     uint64_t points = 0;
+    int64_t thinPartPoints = 0;  // of the points, those for thin parts a coarse level lost
     bool abandoned = false;  // a stream's beginBrick returned false
     double scanSeconds = 0;  // extracting visible meta-cells, with their projection and scan
                              // conversion into the pyramid (interleaved per polygon)
@@ -35,6 +36,7 @@ struct ViewCounters {
         coarseBricks += o.coarseBricks;
         cappedFaces += o.cappedFaces;
         points += o.points;
+        thinPartPoints += o.thinPartPoints;
         abandoned |= o.abandoned;
         scanSeconds += o.scanSeconds;
         return *this;

@@ -15,6 +15,7 @@
 #include "core/extract/brick_look_ahead.h"
 #include "core/extract/traversal_cursor.h"
 #include "core/lod/face_cap.h"
+#include "core/lod/thin_parts.h"
 #include "core/extract/image_strips.h"
 #include "core/kernel/iso.h"
 #include "core/kernel/mc_tables.h"
@@ -75,6 +76,11 @@ private:
     // asked for: a vertex is shared by up to four cells' polygons. False when it cannot be
     // placed on the image plane (behind the eye, clipped, or beyond what a double holds).
     bool screenPosition(uint32_t v, glm::dvec2& out);
+    // Adds to mThinParts (and mThinPixels) the points of coarse brick `at`'s lost thin parts
+    // that fall on pixels not covered yet; drawThinParts() draws those still not covered, one
+    // a pixel, and covers them.
+    void thinPartPoints(const ViewLevels::Brick& at, const void* samples);
+    void drawThinParts();
 
     BrickSource& mSource;
     const MinMaxTree& mTree;
@@ -100,6 +106,8 @@ private:
     // Screen positions by vertex number - mMesh.firstVertex; x NaN: not projected yet, x inf:
     // not on the image plane. Grows with the mesh; cleared with it in streaming.
     std::vector<glm::dvec2> mScreen;
+    PointSet mThinParts;
+    std::vector<glm::ivec2> mThinPixels;
 };
 
 // One brick of sample type T in the traversal: the visitor of its meta-cell walk
@@ -287,6 +295,40 @@ bool ViewTraversal::screenPosition(uint32_t v, glm::dvec2& out) {
     return !std::isinf(s.x);
 }
 
+void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samples) {
+    const int fine = std::max(at.level - 3, 0);  // sub-blocks of 1 to 4 coarse cells
+    const size_t first = mThinParts.size();
+    // A pixel not covered now (the brick's own surface drawn); the pixel is remembered in order.
+    auto wanted = [&](const glm::dvec3& position) {
+        const glm::dvec3 p = mPixels.project(position);
+        if (!(p.z >= 0.0 && p.z <= 1.0 && p.x >= 0.0 && p.y >= 0.0 && p.x < mPyramid.width() &&
+              p.y < mPyramid.height()))
+            return false;
+        const glm::ivec2 pixel(int(p.x), int(p.y));
+        if (mPyramid.isCovered(pixel.x, pixel.y)) return false;
+        mThinPixels.push_back(pixel);
+        return true;
+    };
+    appendThinPartPoints(mLevels.source(at.level), at.local, samples, mLevels.source(fine), at.level - fine,
+                         mOptions.iso, mCamera.eye, mThinParts, wanted);
+    VDISO_CHECK_EQ(mThinParts.size() - first, mThinPixels.size() - first);
+}
+
+void ViewTraversal::drawThinParts() {
+    for (size_t k = 0; k < mThinParts.size(); ++k) {
+        const glm::ivec2 p = mThinPixels[k];
+        if (mPyramid.isCovered(p.x, p.y)) continue;  // by what came after, or an earlier point
+        mPoints.positions.push_back(mThinParts.positions[k]);
+        mPoints.normals.push_back(mThinParts.normals[k]);
+        mPyramid.coverSpan(p.y, p.x, p.x);
+        ++mStats.view.points;
+        ++mStats.view.thinPartPoints;
+    }
+    mPyramid.propagate();
+    mThinParts.clear();
+    mThinPixels.clear();
+}
+
 std::vector<int64_t> ViewTraversal::run() {
     std::vector<int64_t> acquired;
     const BrickLayout& layout = mSource.layout();
@@ -333,10 +375,22 @@ std::vector<int64_t> ViewTraversal::run() {
         // camera: with the mesh, or apart from a stream's brick output (they are the camera's).
         const unsigned capFaces = mOptions.capSeams ? mLevels.seamFaces(mTree.nodes()[step.node], level) : 0u;
         mStats.view.cappedFaces += std::popcount(capFaces);
+        // Thin parts this level loses (core/lod/thin_parts.h), as points where nothing nearer
+        // covers them; drawn at the end where nothing farther does either (a hole in a coarse
+        // surface that the surface behind it fills is left to that: the points there would
+        // shade it otherwise). Streamed, at the end of the brick.
+        const size_t firstTriangle = mMesh.triangleCount();
         visitScalarType(mSource.volume().type, [&](auto zero) {
             BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole)
                 .run(capFaces, mOptions.stream ? mCaps : mMesh);
         });
+        if (level > 0 && mOptions.points && use != ViewStream::Use::Whole) thinPartPoints(at, handle.samples());
+        // Coarse cells are often as wide as the parts they cross (mesh.h).
+        if (level > 0) {
+            const glm::vec3 eye(mCamera.eye);
+            orientNormalsToFaces(mMesh, firstTriangle, &eye);
+        }
+        if (mOptions.stream) drawThinParts();  // a brick's output is final when handed over
         if (mOptions.stream) {
             mStats.triangles += mMesh.triangleCount();
             mStats.vertices += mMesh.vertexCount();
@@ -350,6 +404,7 @@ std::vector<int64_t> ViewTraversal::run() {
             mScreen.clear();
         }
     }
+    drawThinParts();
     mLookAhead.stop();
     if (mOptions.coverage) mOptions.coverage->ended(mPyramid);
     for (const auto& parts : mParts) mStats.cellsActive += parts->extractor.counters().cellsActive;

@@ -43,8 +43,14 @@ int ViewLevels::levelOf(const MinMaxNode& node, const glm::dvec3& a, const glm::
     if (!(depth > 0.0)) return 0;
     const int coarsest = std::min<int>(node.coarseLevel, count() - 1);
     for (int l = coarsest; l >= std::max<int>(node.fineLevel, 1); --l)
-        if (mLevels[size_t(l)]->cellSize * mFocalPixels / depth <= mLodError) return l;
+        if (mLevels[size_t(l)]->cellSize * mFocalPixels / depth <= mLodError && holdsIso(node, l)) return l;
     return 0;
+}
+
+bool ViewLevels::holdsIso(const MinMaxNode& node, int l) const {
+    const Brick at = brickOf(node, l);
+    const BrickRange r = mLevels[size_t(l)]->source.brickRanges()[size_t(at.local)];
+    return rangeHoldsIso(r.minValue, r.maxValue, mIso);
 }
 
 int ViewLevels::levelAt(const int64_t c[3]) const {

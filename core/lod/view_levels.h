@@ -6,8 +6,10 @@
 // node is one brick of whose cells span at most `lodError` pixels on screen, measured where
 // the node is nearest the eye (2^l times the largest spacing, over the least view depth of its
 // corners, in pixels of the image's focal length): 0 when there is none, and the node then
-// descends to its children, or is a leaf extracted at level 0. The traversal and its look-ahead
-// ask the same object, so they agree on every brick.
+// descends to its children, or is a leaf extracted at level 0. A level whose brick holds no
+// surface where the node's finer levels do is not taken either: a part thinner than its cells
+// (core/lod/thin_parts.h) is gone from the whole brick, so the node descends. The traversal
+// and its look-ahead ask the same object, so they agree on every brick.
 #pragma once
 
 #include <cstdint>
@@ -66,6 +68,8 @@ public:
     unsigned seamFaces(const MinMaxNode& node, int level) const;
 
 private:
+    // Whether level l's brick at node holds the isovalue.
+    bool holdsIso(const MinMaxNode& node, int l) const;
     // The faces of `node` inside the volume (those with a neighbour), in seamFaces' bits.
     unsigned innerFaces(const MinMaxNode& node) const;
 

@@ -1,0 +1,222 @@
+#include "core/lod/thin_parts.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "core/brick_layout.h"
+#include "core/kernel/iso.h"
+#include "core/scalar_type.h"
+#include "core/trees/sub_blocks.h"
+
+namespace vdiso {
+
+namespace {
+
+// The coarse brick's samples, by cell corner (ghosts included: -1 .. cells + 1 on each axis).
+template <class T>
+struct CoarseSamples {
+    const T* s;
+    int side;
+    double at(int x, int y, int z) const { return double(rangeValue(s[BrickLayout::cornerIndex(side, x, y, z)])); }
+};
+
+// The unit direction of largest |curvature| of the given sign at corner (x, y, z): the eigenvector
+// of the central-difference Hessian (in world units) whose eigenvalue is most negative (sign -1:
+// a peak) or most positive (+1: a trough), if it is kPlateCurvature times any other's; else zero.
+constexpr double kPlateCurvature = 2.0;
+template <class T>
+glm::dvec3 acrossPart(const CoarseSamples<T>& c, int x, int y, int z, const glm::dvec3& h, double sign) {
+    double H[3][3];
+    const int o[3] = {x, y, z};
+    auto sample = [&](int dx, int dy, int dz) { return c.at(o[0] + dx, o[1] + dy, o[2] + dz); };
+    const double centre = sample(0, 0, 0);
+    for (int a = 0; a < 3; ++a) {
+        int d[3] = {0, 0, 0};
+        d[a] = 1;
+        H[a][a] = (sample(d[0], d[1], d[2]) - 2 * centre + sample(-d[0], -d[1], -d[2])) / (h[a] * h[a]);
+        for (int b = a + 1; b < 3; ++b) {
+            int e[3] = {0, 0, 0};
+            e[a] = 1;
+            e[b] = 1;
+            int f[3] = {0, 0, 0};
+            f[a] = 1;
+            f[b] = -1;
+            const double mixed = (sample(e[0], e[1], e[2]) + sample(-e[0], -e[1], -e[2]) - sample(f[0], f[1], f[2]) -
+                                  sample(-f[0], -f[1], -f[2])) /
+                                 (4 * h[a] * h[b]);
+            H[a][b] = H[b][a] = mixed;
+        }
+    }
+    // Cyclic Jacobi rotations: H = V diag(H) V^T, the eigenvectors in V's columns.
+    double V[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int sweep = 0; sweep < 12; ++sweep)
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (!(std::abs(H[p][q]) > 1e-12 * (std::abs(H[p][p]) + std::abs(H[q][q])))) continue;
+                // tan of the angle that zeroes H[p][q], the smaller root (Numerical Recipes' form).
+                const double theta = (H[q][q] - H[p][p]) / (2 * H[p][q]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                for (int k = 0; k < 3; ++k) {  // H <- H J
+                    const double hp = H[k][p], hq = H[k][q];
+                    H[k][p] = c * hp - s * hq;
+                    H[k][q] = s * hp + c * hq;
+                }
+                for (int k = 0; k < 3; ++k) {  // H <- J^T H
+                    const double hp = H[p][k], hq = H[q][k];
+                    H[p][k] = c * hp - s * hq;
+                    H[q][k] = s * hp + c * hq;
+                }
+                for (int k = 0; k < 3; ++k) {  // V <- V J
+                    const double vp = V[k][p], vq = V[k][q];
+                    V[k][p] = c * vp - s * vq;
+                    V[k][q] = s * vp + c * vq;
+                }
+            }
+    // The column whose eigenvalue is most negative (a peak) or most positive (a trough), when
+    // it stands out: a plate curves across far more than along itself. A blob, which curves
+    // alike every way, has no such direction.
+    int best = 0;
+    for (int k = 1; k < 3; ++k)
+        if (sign * H[k][k] > sign * H[best][best]) best = k;
+    for (int k = 0; k < 3; ++k)
+        if (k != best && std::abs(H[k][k]) * kPlateCurvature > std::abs(H[best][best])) return glm::dvec3(0.0);
+    const glm::dvec3 v(V[0][best], V[1][best], V[2][best]);
+    return std::isfinite(v.x + v.y + v.z) ? v : glm::dvec3(0.0);
+}
+
+// Whether corner (x, y, z) is a ridge (sign -1) or a valley (+1) across a part: along the
+// lattice direction (of the 13) in which it stands out most from its two neighbours, it is at
+// least as high (low) as both, by at least kRidgeRise of its rise above (depth below) `other`
+// (the box's other extreme). A thick part's edge is a slope: no direction makes it stand out.
+constexpr double kRidgeRise = 0.1;
+constexpr double kLeastFacing = 0.25;  // cosine
+template <class T>
+bool isRidge(const CoarseSamples<T>& c, int x, int y, int z, double sign, double other) {
+    static constexpr int kDirections[13][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, -1, 0},
+                                               {1, 0, 1}, {1, 0, -1}, {0, 1, 1}, {0, 1, -1}, {1, 1, 1},
+                                               {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}};
+    const double v = -sign * c.at(x, y, z);
+    double best = -INFINITY;
+    bool ridge = false;
+    for (const int* d : kDirections) {
+        const double before = -sign * c.at(x - d[0], y - d[1], z - d[2]), after = -sign * c.at(x + d[0], y + d[1], z + d[2]);
+        const double rise = v - 0.5 * (before + after);
+        if (rise > best) {
+            best = rise;
+            ridge = v >= before && v >= after;
+        }
+    }
+    return ridge && best >= kRidgeRise * (v + sign * other);
+}
+
+// Whether the coarse surface passes next to corner (x, y, z): some neighbour (of the 26) lies on
+// the other side of the isovalue. There the part is kept, if thinned, within a cell.
+template <class T>
+bool crossingNextTo(const CoarseSamples<T>& c, int x, int y, int z, double iso) {
+    const bool above = c.at(x, y, z) > iso;
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+                if ((c.at(x + dx, y + dy, z + dz) > iso) != above) return true;
+    return false;
+}
+
+}  // namespace
+
+void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
+                          int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
+                          const std::function<bool(const glm::dvec3&)>& wanted) {
+    const BrickLayout& cl = coarse.layout();
+    const BrickLayout& fl = fine.layout();
+    const VolumeInfo& volume = coarse.volume();
+    const Dims3 cc = cl.brickCoord(brick);
+    const int64_t ratio = int64_t(1) << levelsBetween;  // fine cells per coarse cell
+    int cells[3];
+    int64_t f0[3], f1[3];  // the fine bricks under the coarse one, [f0, f1) per axis
+    for (int k = 0; k < 3; ++k) {
+        cells[k] = cl.cellsOnAxis(k, cc[k]);
+        f0[k] = cc[k] * cl.brickSize * ratio / fl.brickSize;
+        f1[k] = std::min<int64_t>(fl.brickCounts[k], (cc[k] * cl.brickSize + cells[k]) * ratio / fl.brickSize + 1);
+    }
+    const int C = subBlockCells(fl.brickSize);
+    visitScalarType(volume.type, [&](auto zero) {
+        using T = decltype(zero);
+        const CoarseSamples<T> c{static_cast<const T*>(samples), cl.side()};
+        for (int64_t fz = f0[2]; fz < f1[2]; ++fz)
+            for (int64_t fy = f0[1]; fy < f1[1]; ++fy)
+                for (int64_t fx = f0[0]; fx < f1[0]; ++fx) {
+                    const int64_t id = fl.brickId(fx, fy, fz);
+                    const BrickRange whole = fine.brickRanges()[size_t(id)];
+                    if (!crossesClearly(whole, iso)) continue;
+                    const std::span<const SubBlockCode> codes = fine.subBlockCodesOf(id);
+                    const int64_t fc[3] = {fx, fy, fz};
+                    const int blocks = codes.empty() ? 1 : kSubBlocksPerAxis;
+                    const int size = codes.empty() ? fl.brickSize : C;
+                    for (int b = 0; b < blocks * blocks * blocks; ++b) {
+                        const BrickRange r = codes.empty() ? whole : decodeSubBlockRange(codes[size_t(b)], whole);
+                        if (!crossesClearly(r, iso)) continue;
+                        const int at[3] = {b % blocks, b / blocks % blocks, b / (blocks * blocks)};
+                        int lo[3], hi[3];  // the coarse corners of the cells meeting the box
+                        bool inside = true;
+                        for (int k = 0; k < 3; ++k) {
+                            const int64_t first = fc[k] * fl.brickSize + int64_t(at[k]) * size;
+                            const int64_t last =
+                                std::min<int64_t>(first + size, fc[k] * fl.brickSize + fl.cellsOnAxis(k, fc[k]));
+                            const int64_t origin = cc[k] * cl.brickSize;
+                            lo[k] = int(std::clamp<int64_t>(first / ratio - origin, 0, cells[k]));
+                            hi[k] = int(std::clamp<int64_t>((last + ratio - 1) / ratio - origin, 0, cells[k]));
+                            inside = inside && first < last && lo[k] < hi[k];
+                        }
+                        if (!inside) continue;
+                        double least = INFINITY, most = -INFINITY;
+                        for (int z = lo[2]; z <= hi[2]; ++z)
+                            for (int y = lo[1]; y <= hi[1]; ++y)
+                                for (int x = lo[0]; x <= hi[0]; ++x) {
+                                    least = std::min(least, c.at(x, y, z));
+                                    most = std::max(most, c.at(x, y, z));
+                                }
+                        // A peak (the fine samples' reach above the isovalue) or a trough the
+                        // coarse level lost, or kept less than kKeptReach of: the part is gone
+                        // here, or in strips.
+                        const double fineUp = double(r.maxValue) - iso, fineDown = iso - double(r.minValue);
+                        const double sign = most - iso < kKeptReach * fineUp ? -1.0
+                                            : iso - least < kKeptReach * fineDown ? 1.0
+                                                                                 : 0.0;
+                        if (sign == 0.0) continue;
+                        const double halfway = 0.5 * (least + most);
+                        for (int z = lo[2]; z <= hi[2]; ++z)
+                            for (int y = lo[1]; y <= hi[1]; ++y)
+                                for (int x = lo[0]; x <= hi[0]; ++x) {
+                                    // The part's own samples: beyond halfway towards it, on the
+                                    // lost side of the isovalue, and a ridge (or a valley)
+                                    // across the part.
+                                    const double v = c.at(x, y, z);
+                                    if (sign < 0 ? (v < halfway || v > iso) : (v > halfway || v <= iso)) continue;
+                                    if (!isRidge(c, x, y, z, sign, sign < 0 ? least : most)) continue;
+                                    const glm::dvec3 p = volume.origin + glm::dvec3(double(cc[0] * cl.brickSize + x),
+                                                                                    double(cc[1] * cl.brickSize + y),
+                                                                                    double(cc[2] * cl.brickSize + z)) *
+                                                                             volume.spacing;
+                                    if (wanted && !wanted(p)) continue;
+                                    glm::dvec3 n = acrossPart(c, x, y, z, volume.spacing, sign);
+                                    const glm::dvec3 toEye = glm::normalize(eye - p);
+                                    if (n == glm::dvec3(0.0)) n = toEye;
+                                    if (glm::dot(n, toEye) < 0) n = -n;
+                                    // Turned to within 75 degrees of the eye: the coarse samples
+                                    // give a thin part's facing only roughly, and one seen edge
+                                    // on would shade black where the full surface shows its face.
+                                    const double facing = glm::dot(n, toEye);
+                                    if (facing < kLeastFacing)
+                                        n = glm::normalize(n + toEye * ((kLeastFacing - facing) / (1.0 - kLeastFacing)));
+                                    out.positions.push_back(glm::vec3(p));
+                                    out.normals.push_back(glm::vec3(n));
+                                }
+                    }
+                }
+    });
+}
+
+}  // namespace vdiso
