@@ -3,10 +3,11 @@
 //
 //   vdiso_serve_bench STORE.vdiso --iso V [--size 1024] [--frames 36] [--threads 1]
 //                     [--cache-mb 4096] [--web DIR] [--images DIR] [--no-warmup]
-//                     [--s3-endpoint URL] [--no-sign-request]
+//                     [--s3-endpoint URL] [--no-sign-request] [--no-full-surface]
 //
 // STORE may be a URL (http://, https://, s3://: the server reads it as vdiso serve would); the
-// summary's full-surface and SAGE figures, which read the whole store, are then left out.
+// summary's full-surface and SAGE figures, which read the whole store, are then left out (as
+// with --no-full-surface: a 28 GB store's full surface takes minutes).
 //
 // Orbit: the normal view turned 360/frames degrees a frame about the vertical axis. A first
 // client runs the orbit to warm the brick cache (unless --no-warmup: then the first frame is
@@ -72,7 +73,7 @@ int main(int argc, char** argv) {
     options.webRoot = VDISO_WEB_DIR;
     options.cacheBytes = uint64_t(4096) << 20;
     int size = 1024, frames = 36;
-    bool warmup = true;
+    bool warmup = true, fullSurface = true;
     std::string images;
     double iso = 0;
     for (int i = 2; i < argc; ++i) {
@@ -86,6 +87,7 @@ int main(int argc, char** argv) {
         else if (a == "--web") options.webRoot = next();
         else if (a == "--images") images = next();
         else if (a == "--no-warmup") warmup = false;
+        else if (a == "--no-full-surface") fullSurface = false;
         else if (a == "--lod-error") options.lodError = std::stod(next());
         else if (a == "--s3-endpoint") options.remote.s3Endpoint = next();
         else if (a == "--no-sign-request") options.remote.anonymous = true;
@@ -153,7 +155,7 @@ int main(int argc, char** argv) {
         summary.add("first_frame_points", firstEnd["points"].get<uint64_t>());
         summary.add("bytes_per_triangle_first_frame",
                     double(measured[0].binaryBytes) / double(std::max<uint64_t>(1, firstEnd["triangles"].get<uint64_t>())));
-        if (!store.remote()) {
+        if (!store.remote() && fullSurface) {
             // The full surface through the same codec, in one piece.
             BrickCache cache(store, options.cacheBytes);
             TriangleMesh full;

@@ -68,13 +68,13 @@ void FrameStream::queued(size_t bytes) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
 }
 
-bool FrameStream::beginBrick(int64_t brick, double cellPixels, Use& use) {
+bool FrameStream::beginBrick(int64_t brick, int level, double cellPixels, Use& use) {
     if (mSuperseded.load(std::memory_order_relaxed) || mRefused.load() || mOutbox.closed()) return false;
     const uint32_t b = uint32_t(brick);
     std::scoped_lock lock(mClient.mutex, mMutex);
     if (mWhole.contains(b) || mReferred.contains(b) || mClient.held.contains({mStore, mIso, b}))
         use = Use::Held;
-    else if (cellPixels >= kWholeCellPixels)
+    else if (sendsWhole(level, cellPixels))
         use = Use::Whole, mWhole.insert(b);
     else
         use = Use::Part;

@@ -2,9 +2,10 @@
 // ViewStream), and what that client holds across frames.
 //
 // Chunk policy (docs/protocol.md, "Chunks"): a visible brick the client holds already becomes
-// a REF; one it lacks, whose cells are at least kWholeCellPixels on screen, a cacheable chunk
-// of its whole surface (the same for every camera, so later frames only refer to it); a
-// smaller one goes to the frame's transient chunks the SAGE way (points, visible triangles).
+// a REF; a full-resolution one it lacks, whose cells are at least kWholeCellPixels on screen, a
+// cacheable chunk of its whole surface (the same for every camera, so later frames only refer
+// to it); a smaller one, or one of a coarser level, goes to the frame's transient chunks the
+// SAGE way (points, visible triangles).
 // Refs and transient geometry are batched; each cacheable chunk is encoded on the strip's
 // thread and queued as soon as its brick is done, refs queued before it, so the stream stays
 // front to back.
@@ -26,6 +27,13 @@ namespace vdiso::serve {
 // Cells smaller than this on screen (pixels per cell side) are not worth sending whole: the
 // brick's surface would cost more triangles than the pixels it covers.
 constexpr double kWholeCellPixels = 0.5;
+// Whether a brick goes whole. A coarse level's brick does not: a view takes it only where its
+// cells span at most the level of detail's error (about a pixel), so its whole surface is
+// several triangles a pixel, most of them hidden, and a step nearer or farther takes another
+// level. On the 2560^3 head's normal view (all of it coarse bricks) whole chunks made the cold
+// final frame 2.24 M triangles and 9.9 MB in 514 ms; parts 0.44 M, 3.4 MB, 263 ms (orbit steps
+// then 3.6 MB, not 0.7 MB, and 206 ms, not 180 ms: bench/RESULTS.md).
+inline bool sendsWhole(int level, double cellPixels) { return level == 0 && cellPixels >= kWholeCellPixels; }
 
 // The cacheable chunks a client holds: sent (written to its socket) and not evicted. Guarded
 // by `mutex`, which also orders a frame's REFS before an eviction's answer.
@@ -62,7 +70,7 @@ public:
     FrameStream(ClientChunks& client, Outbox& outbox, uint32_t frame, uint32_t store, double iso,
                 const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
 
-    bool beginBrick(int64_t brick, double cellPixels, Use& use) override;
+    bool beginBrick(int64_t brick, int level, double cellPixels, Use& use) override;
     void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
                   const TriangleMesh& seams) override;
     // Queues what is still batched. Call once, after the extraction.

@@ -366,8 +366,8 @@ struct LibraryFrame final : ViewStream {
     std::map<uint32_t, TriangleMesh> whole;
     TriangleMesh part;
     PointSet partPoints;
-    bool beginBrick(int64_t, double cellPixels, Use& use) override {
-        use = cellPixels >= kWholeCellPixels ? Use::Whole : Use::Part;
+    bool beginBrick(int64_t, int level, double cellPixels, Use& use) override {
+        use = sendsWhole(level, cellPixels) ? Use::Whole : Use::Part;
         return true;
     }
     void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,

@@ -356,7 +356,7 @@ std::vector<int64_t> ViewTraversal::run() {
             const double cellPixels =
                 box.crossesNearPlane ? INFINITY
                                      : std::max(box.right - box.left, box.bottom - box.top) / double(layout.brickSize);
-            if (!mOptions.stream->beginBrick(brick, cellPixels, use)) {
+            if (!mOptions.stream->beginBrick(brick, level, cellPixels, use)) {
                 mStats.view.abandoned = true;
                 break;
             }

@@ -61,10 +61,11 @@ class ViewStream {
 public:
     enum class Use { Whole, Held, Part };
     virtual ~ViewStream() = default;
-    // Before brick `brick` is read. `cellPixels`: how many pixels a cell's side spans on screen
-    // at most (infinite for a brick crossing the near plane). Returns false to abandon the
-    // extraction here (a newer camera came): nothing more is read or made.
-    virtual bool beginBrick(int64_t brick, double cellPixels, Use& use) = 0;
+    // Before brick `brick` (of level of detail `level`) is read. `cellPixels`: how many pixels a
+    // cell's side spans on screen at most (infinite for a brick crossing the near plane).
+    // Returns false to abandon the extraction here (a newer camera came): nothing more is read
+    // or made.
+    virtual bool beginBrick(int64_t brick, int level, double cellPixels, Use& use) = 0;
     virtual void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
                           const TriangleMesh& seams) = 0;
 };
