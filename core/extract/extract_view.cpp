@@ -309,8 +309,13 @@ void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samp
         mThinPixels.push_back(pixel);
         return true;
     };
+    // A box whose pixels are all covered now gives no point.
+    const ViewCuller& culler = mLevels.culler(at.level);
+    auto shows = [&](const glm::dvec3& a, const glm::dvec3& b) {
+        return culler.cullScreenBox(culler.screenBox(a, b)) == Cull::None;
+    };
     appendThinPartPoints(mLevels.source(at.level), at.local, samples, mLevels.source(fine), at.level - fine,
-                         mOptions.iso, mCamera.eye, mThinParts, wanted);
+                         mOptions.iso, mCamera.eye, mThinParts, wanted, shows);
     VDISO_CHECK_EQ(mThinParts.size() - first, mThinPixels.size() - first);
 }
 

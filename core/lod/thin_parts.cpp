@@ -128,7 +128,8 @@ bool crossingNextTo(const CoarseSamples<T>& c, int x, int y, int z, double iso) 
 
 void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
                           int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
-                          const std::function<bool(const glm::dvec3&)>& wanted) {
+                          const std::function<bool(const glm::dvec3&)>& wanted,
+                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows) {
     const BrickLayout& cl = coarse.layout();
     const BrickLayout& fl = fine.layout();
     const VolumeInfo& volume = coarse.volume();
@@ -139,7 +140,8 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
     for (int k = 0; k < 3; ++k) {
         cells[k] = cl.cellsOnAxis(k, cc[k]);
         f0[k] = cc[k] * cl.brickSize * ratio / fl.brickSize;
-        f1[k] = std::min<int64_t>(fl.brickCounts[k], (cc[k] * cl.brickSize + cells[k]) * ratio / fl.brickSize + 1);
+        f1[k] = std::min<int64_t>(fl.brickCounts[k],
+                                  ((cc[k] * cl.brickSize + cells[k]) * ratio + fl.brickSize - 1) / fl.brickSize);
     }
     const int C = subBlockCells(fl.brickSize);
     visitScalarType(volume.type, [&](auto zero) {
@@ -155,7 +157,13 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
                     const int64_t fc[3] = {fx, fy, fz};
                     const int blocks = codes.empty() ? 1 : kSubBlocksPerAxis;
                     const int size = codes.empty() ? fl.brickSize : C;
+                    // The isovalue in the codes' steps (255 over the brick's range): a code far
+                    // from it is not decoded.
+                    const double span = double(whole.maxValue) - double(whole.minValue);
+                    const double isoStep = span > 0 ? (iso - double(whole.minValue)) / span * 255.0 : 0.0;
                     for (int b = 0; b < blocks * blocks * blocks; ++b) {
+                        if (!codes.empty() && (codes[size_t(b)].lo > isoStep + 1 || codes[size_t(b)].hi < isoStep - 1))
+                            continue;
                         const BrickRange r = codes.empty() ? whole : decodeSubBlockRange(codes[size_t(b)], whole);
                         if (!crossesClearly(r, iso)) continue;
                         const int at[3] = {b % blocks, b / blocks % blocks, b / (blocks * blocks)};
@@ -186,6 +194,13 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
                                             : iso - least < kKeptReach * fineDown ? 1.0
                                                                                  : 0.0;
                         if (sign == 0.0) continue;
+                        if (shows) {
+                            const glm::dvec3 corner(double(cc[0] * cl.brickSize), double(cc[1] * cl.brickSize),
+                                                    double(cc[2] * cl.brickSize));
+                            const glm::dvec3 a = volume.origin + (corner + glm::dvec3(lo[0], lo[1], lo[2])) * volume.spacing;
+                            const glm::dvec3 b = volume.origin + (corner + glm::dvec3(hi[0], hi[1], hi[2])) * volume.spacing;
+                            if (!shows(a, b)) continue;
+                        }
                         const double halfway = 0.5 * (least + most);
                         for (int z = lo[2]; z <= hi[2]; ++z)
                             for (int y = lo[1]; y <= hi[1]; ++y)

@@ -44,9 +44,11 @@ inline bool crossesClearly(const BrickRange& r, double iso) {
 
 // Appends the points of coarse brick `brick` (in `coarse`'s numbering; `samples` its samples)
 // for the surface of `fine` (the level levelsBetween >= 1 finer) it loses; `eye` in world units.
-// `wanted` (if given) is asked about each point's position before its normal is worked out.
+// `wanted` (if given) is asked about each point's position before its normal is worked out, and
+// `shows` about each box that lost its part (its world corners) before its samples are looked at.
 void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
                           int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
-                          const std::function<bool(const glm::dvec3&)>& wanted = nullptr);
+                          const std::function<bool(const glm::dvec3&)>& wanted = nullptr,
+                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows = nullptr);
 
 }  // namespace vdiso
