@@ -3,7 +3,8 @@
 # on 1 thread (from Python over the same samples: bench/fe_python.py):
 #   one-shot   a fresh `vdiso extract` process per run, the store in the page cache (median)
 #   per frame  the median warm frame of a 36-step orbit (--path orbit:36, frames 1..35)
-# SAGE at the distant, normal and closeup views and vdiso's own octree (full surface), 1024^2.
+# SAGE at the distant, normal and closeup views and vdiso's own octree (full surface), 1024^2;
+# then the full extraction (octree) on 2 threads against 1 (median extract_s of REPEAT runs).
 # Data: the Debian CT (data/cranium.nhdr: invesalius-examples' Cranium.inv3; skin -423.5, bone
 # 200.5), the MRI (data/ch2better.nii.gz 40.5, data/ch2.nii.gz 40.5 with skin: mricron-data)
 # and the generated head (vdiso synth --kind head --size 512: skin 600.5, bone 1224.5).
@@ -73,3 +74,14 @@ for r in rows:
           f"{r['fe_s'] / r['sage_s']:.1f}x | {r['sage_s'] / r['octree_s']:.2f} | {r['frame_s']:.4f} | "
           f"{r['fe_s'] / r['frame_s']:.1f}x | {r['triangles']} + {r['points']} ({r['fe_triangles']}) |")
 PY
+echo
+echo "| scan | iso | octree 1 thread s | octree 2 threads s | 2 threads / 1 |"
+echo "|---|---|---|---|---|"
+for spec in "cranium -423.5" "cranium 200.5" "ch2better 40.5" "ch2 40.5" "head512 600.5" "head512 1224.5"; do
+  set -- $spec
+  one=$(oneshot "$1" "$2" --method octree | $py -c "import json,sys,statistics; print(statistics.median(json.loads(l)['extract_s'] for l in sys.stdin))")
+  two=$(for _ in $(seq "$repeat"); do
+          $vdiso extract "data/bench/$1.vdiso" --iso "$2" --threads 2 --method octree --stats - --quiet
+        done | $py -c "import json,sys,statistics; print(statistics.median(json.loads(l)['extract_s'] for l in sys.stdin))")
+  $py -c "import sys; a, b = float(sys.argv[3]), float(sys.argv[4]); print(f'| {sys.argv[1]} | {sys.argv[2]} | {a:.4f} | {b:.4f} | {a / b:.2f}x |')" "$1" "$2" "$one" "$two"
+done
