@@ -229,9 +229,10 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         stats.brickWaitSeconds = double(waitNanoseconds) * 1e-9;
     };
     // A surface crossing a brick has on the order of B^2 active cells, two triangles and one
-    // vertex each: reserving that up front saves the copies of repeated regrowth (reserved
-    // pages that are never touched cost nothing).
-    const size_t perBrick = size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
+    // vertex each (the 512^3 head about 1,700 vertices a brick of 32^3, the MRI more): twice
+    // that reserved up front saves the copies and fresh page faults of regrowth (reserved pages
+    // that are never touched cost nothing; process wall A/B 0.94-0.98 against B^2).
+    const size_t perBrick = 2 * size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
     const size_t expectVertices = options.sink        ? options.streamPieceVertices + perBrick * 4
                                   : brickSink != nullptr ? perBrick * 4
                                                          : items.size() * perBrick;
