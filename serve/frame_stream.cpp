@@ -45,10 +45,10 @@ size_t ClientChunks::flushRefsLocked(Outbox& outbox, bool* refused) {
     return bytes;
 }
 
-FrameStream::FrameStream(ClientChunks& client, Outbox& outbox, uint32_t frame, uint32_t store,
-                         double iso, const std::atomic<bool>& superseded,
+FrameStream::FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& outbox, uint32_t frame,
+                         uint32_t store, double iso, const std::atomic<bool>& superseded,
                          std::chrono::steady_clock::time_point start)
-    : mClient(client), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
+    : mClient(client), mShared(shared), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
       mSuperseded(superseded), mStart(start) {}
 
 void FrameStream::push(OutMessage m, bool waitForRoom) {
@@ -72,12 +72,19 @@ bool FrameStream::beginBrick(int64_t brick, int level, double cellPixels, Use& u
     if (mSuperseded.load(std::memory_order_relaxed) || mRefused.load() || mOutbox.closed()) return false;
     const uint32_t b = uint32_t(brick);
     std::scoped_lock lock(mClient.mutex, mMutex);
-    if (mWhole.contains(b) || mReferred.contains(b) || mClient.held.contains({mStore, mIso, b}))
+    if (mWhole.contains(b) || mReferred.contains(b) || mFromShared.contains(b) || mSharedSent.contains(b) ||
+        mClient.held.contains({mStore, mIso, b})) {
         use = Use::Held;
-    else if (sendsWhole(level, cellPixels))
-        use = Use::Whole, mWhole.insert(b);
-    else
+    } else if (sendsWhole(level, cellPixels)) {
+        if (std::optional<SharedChunks::Chunk> chunk = mShared.find(mIso, b)) {
+            use = Use::Held;  // made only to mark the pyramid; the shared chunk goes out
+            mFromShared.emplace(b, std::move(*chunk));
+        } else {
+            use = Use::Whole, mWhole.insert(b);
+        }
+    } else {
         use = Use::Part;
+    }
     return true;
 }
 
@@ -93,27 +100,29 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
         header.store = mStore;
         header.brick = b;
         header.iso = mIso;
-        OutMessage m;
-        m.bytes = std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, PointSet{}));
-        m.frame = mFrame;
-        m.cacheable = true;
-        m.store = mStore;
-        m.brick = b;
-        m.iso = mIso;
-        m.triangles = uint32_t(mesh.triangleCount());
-        const size_t bytes = m.bytes->size();
-        {
-            std::scoped_lock lock(mClient.mutex, mMutex);
-            mClient.pendingFrame = mFrame;
-            flushRefsLocked();
-            ++mCounters.chunks;
-            mCounters.triangles += mesh.triangleCount();
-            queued(bytes);
-        }
-        push(std::move(m), true);  // waits while the client is behind
+        auto message = std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, PointSet{}));
+        mShared.insert(mIso, b, {message, uint32_t(mesh.triangleCount())});
+        pushCacheable(b, std::move(message), uint32_t(mesh.triangleCount()));
         return;
     }
     if (use == Use::Held) {
+        std::optional<SharedChunks::Chunk> shared;
+        {
+            std::scoped_lock lock(mMutex);
+            const auto found = mFromShared.find(b);
+            if (found != mFromShared.end()) {  // the first strip to end it sends it
+                shared = std::move(found->second);
+                mFromShared.erase(found);
+                mSharedSent.insert(b);
+            } else if (mSharedSent.contains(b)) {
+                return;
+            }
+        }
+        if (shared) {
+            pushCacheable(b, std::make_shared<const std::vector<uint8_t>>(SharedChunks::forFrame(*shared, mFrame)),
+                          shared->triangles);
+            return;
+        }
         std::scoped_lock lock(mClient.mutex, mMutex);
         if (mWhole.contains(b) || mReferred.contains(b)) return;  // another strip has it
         const auto held = mClient.held.find({mStore, mIso, b});
@@ -130,6 +139,28 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
         // Evicted since beginBrick: what was made for it this frame goes as transient geometry.
     }
     addTransient(mesh, points);
+}
+
+void FrameStream::pushCacheable(uint32_t brick, std::shared_ptr<const std::vector<uint8_t>> message,
+                                uint32_t triangles) {
+    OutMessage m;
+    m.bytes = std::move(message);
+    m.frame = mFrame;
+    m.cacheable = true;
+    m.store = mStore;
+    m.brick = brick;
+    m.iso = mIso;
+    m.triangles = triangles;
+    const size_t bytes = m.bytes->size();
+    {
+        std::scoped_lock lock(mClient.mutex, mMutex);
+        mClient.pendingFrame = mFrame;
+        flushRefsLocked();
+        ++mCounters.chunks;
+        mCounters.triangles += triangles;
+        queued(bytes);
+    }
+    push(std::move(m), true);  // waits while the client is behind
 }
 
 void FrameStream::addTransient(const TriangleMesh& mesh, const PointSet& points) {

@@ -4,8 +4,10 @@
 // Chunk policy (docs/protocol.md, "Chunks"): a visible brick the client holds already becomes
 // a REF; a full-resolution one it lacks, whose cells are at least kWholeCellPixels on screen, a
 // cacheable chunk of its whole surface (the same for every camera, so later frames only refer
-// to it); a smaller one, or one of a coarser level, goes to the frame's transient chunks the
-// SAGE way (points, visible triangles).
+// to it), taken from the store's shared chunks when another frame of any client encoded it
+// (then only its visible part is made, to mark the pyramid), else extracted, encoded and shared;
+// a smaller one, or one of a coarser level, goes to the frame's transient chunks the SAGE way
+// (points, visible triangles).
 // Refs and transient geometry are batched; each cacheable chunk is encoded on the strip's
 // thread and queued as soon as its brick is done, refs queued before it, so the stream stays
 // front to back.
@@ -21,6 +23,7 @@
 
 #include "core/extract/extract_view.h"
 #include "serve/outbox.h"
+#include "serve/shared_chunks.h"
 
 namespace vdiso::serve {
 
@@ -67,8 +70,9 @@ struct FrameCounters {
 class FrameStream final : public ViewStream {
 public:
     // `superseded` is read before every brick: set, the frame is abandoned there.
-    FrameStream(ClientChunks& client, Outbox& outbox, uint32_t frame, uint32_t store, double iso,
-                const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
+    // `shared`: the store's chunks as encoded for every client.
+    FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& outbox, uint32_t frame, uint32_t store,
+                double iso, const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
 
     bool beginBrick(int64_t brick, int level, double cellPixels, Use& use) override;
     void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
@@ -88,7 +92,11 @@ private:
     void push(OutMessage m, bool waitForRoom);  // notes a refusal
     void flushRefsLocked();                      // the client's pending REFs; holds both locks
 
+    // Queues a cacheable chunk's message (REFs decided before it first).
+    void pushCacheable(uint32_t brick, std::shared_ptr<const std::vector<uint8_t>> message, uint32_t triangles);
+
     ClientChunks& mClient;
+    SharedChunks& mShared;
     Outbox& mOutbox;
     const uint32_t mFrame, mStore;
     const double mIso;
@@ -97,6 +105,9 @@ private:
     const std::chrono::steady_clock::time_point mStart;
     std::mutex mMutex;  // below; taken after mClient.mutex when both are held
     std::unordered_set<uint32_t> mWhole, mReferred;  // bricks of this frame, by use
+    // Bricks sent from the shared chunks: the chunk (until a strip sends it), and those sent.
+    std::unordered_map<uint32_t, SharedChunks::Chunk> mFromShared;
+    std::unordered_set<uint32_t> mSharedSent;
     TriangleMesh mTransient;
     PointSet mTransientPoints;
     FrameCounters mCounters;

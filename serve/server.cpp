@@ -154,6 +154,11 @@ ServerCounters Server::counters() const {
     c.viewersRefused = mImpl->viewersRefused;
     c.viewersDropped = mImpl->viewersDropped;
     c.framePasses = mImpl->gate.entered();
+    for (size_t i = 0; i < mImpl->stores.size(); ++i) {
+        const SharedChunks::Counters shared = mImpl->stores[i].chunks->counters();
+        c.chunksEncoded += shared.encoded;
+        c.chunksShared += shared.reused;
+    }
     return c;
 }
 

@@ -26,6 +26,8 @@ struct ServeOptions {
     std::string host = "127.0.0.1";
     uint16_t port = 8080;  // 0: the system chooses
     uint64_t cacheBytes = uint64_t(1024) << 20;  // brick cache, split across the stores
+    // Encoded cacheable chunks kept for every viewer (serve/shared_chunks.h), split likewise.
+    uint64_t chunkCacheBytes = uint64_t(256) << 20;
     int threads = 1;  // image strips per frame
     int metaCellSize = 4;
     double lodError = 1.0;  // levels of detail: the final frame's error in pixels; 0: level 0 only
@@ -47,6 +49,8 @@ struct ServerCounters {
     uint64_t acceptsBackedOff = 0, viewersRefused = 0;
     uint64_t viewersDropped = 0;  // their writes timed out
     uint64_t framePasses = 0;     // extraction passes begun, all viewers (a VIEW's coarse and final)
+    // Cacheable chunks encoded, and sent from the shared chunks instead (every store).
+    uint64_t chunksEncoded = 0, chunksShared = 0;
 };
 
 // Viewers a server takes at once by default: what the machine's memory holds beside the brick

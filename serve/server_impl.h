@@ -60,7 +60,7 @@ struct Server::Impl {
     net::steady_timer acceptTimer{ioc};
 
     explicit Impl(const ServeOptions& o)
-        : options(withDefaults((checkServeOptions(o), o))), stores(o.stores, o.cacheBytes, o.iso, o.remote), web(o.webRoot),
+        : options(withDefaults((checkServeOptions(o), o))), stores(o.stores, o.cacheBytes, o.chunkCacheBytes, o.iso, o.remote), web(o.webRoot),
           settings(sessionSettings(o, stores)), gate(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 

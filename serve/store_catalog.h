@@ -13,6 +13,7 @@
 #include "core/trees/meta_cell_range_cache.h"
 #include "core/trees/minmax_tree.h"
 #include "io/store/brick_store.h"
+#include "serve/shared_chunks.h"
 
 namespace vdiso::serve {
 
@@ -25,6 +26,8 @@ struct ServedStore {
     std::unique_ptr<MetaCellRangeCache> ranges;
     // The min/max tree over every level's bricks, built once for every frame.
     std::unique_ptr<MinMaxTree> tree;
+    // Its cacheable chunks as encoded once for every client (serve/shared_chunks.h).
+    std::unique_ptr<SharedChunks> chunks;
     double defaultIso = 0;  // --iso, else Otsu's threshold of the histogram
     std::string description;  // the store's JSON object in `hello`
 };
@@ -32,8 +35,9 @@ struct ServedStore {
 class StoreCatalog {
 public:
     // Opens every store, a path or a URL (throws IoError naming the one that fails) and gives each a cache of
-    // cacheBytes / stores.size(). Two stores of the same name are refused.
-    StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes,
+    // cacheBytes / stores.size() and shared chunks of chunkBytes / stores.size(). Two stores of the same
+    // name are refused.
+    StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes, uint64_t chunkBytes,
                  std::optional<double> iso, const RemoteOptions& remote = {});
 
     size_t size() const { return mStores.size(); }

@@ -180,7 +180,7 @@ std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point ar
                                          .add("final", final)
                                          .str()),
                  false);
-    FrameStream stream(mClient, mOutbox, view.seq, view.store, view.iso, mSuperseded, arrival);
+    FrameStream stream(mClient, *store.chunks, mOutbox, view.seq, view.store, view.iso, mSuperseded, arrival);
     ViewExtractOptions options = ViewExtractOptions::sage(view.iso);
     options.metaCellSize = mSettings.metaCellSize;
     options.threads = mSettings.threads;

@@ -312,7 +312,8 @@ struct ServerFixture {
     std::thread thread;
 
     explicit ServerFixture(uint64_t cacheBytes = uint64_t(256) << 20, int threads = 1,
-                           const Dims3& dims = {72, 72, 72}, int maxViewers = 0, double writeTimeout = 30) {
+                           const Dims3& dims = {72, 72, 72}, int maxViewers = 0, double writeTimeout = 30,
+                           uint64_t chunkCacheBytes = uint64_t(256) << 20) {
         SynthParams p;
         p.kind = SynthKind::Head;
         p.dims = dims;
@@ -330,6 +331,7 @@ struct ServerFixture {
         s.iso = kHeadSkinIso;
         s.maxViewers = maxViewers;
         s.writeTimeoutSeconds = writeTimeout;
+        s.chunkCacheBytes = chunkCacheBytes;
         server = std::make_unique<Server>(s);
         thread = std::thread([this] { server->run(); });
     }
@@ -1107,6 +1109,48 @@ TEST(ServeServer, AViewerThatNeverReadsIsDropped) {
     EXPECT_EQ(fixture.server->counters().sessionsOpen, 1u);  // the dropped one is gone
     close(fd);
     EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160, 30), 2)).status, "complete");
+}
+
+// Two viewers looking at the same volume: the second's cacheable chunks come from the store's
+// shared chunks, encoded once for both, and make the same surface; with no room for shared
+// chunks each viewer's frame encodes its own. On 2 strips, so that a brick offered by both
+// strips is still sent once.
+TEST(ServeServer, ViewersShareEncodedChunks) {
+    for (const uint64_t budget : {uint64_t(64) << 20, uint64_t(0)}) {
+        SCOPED_TRACE("shared chunks of " + std::to_string(budget >> 20) + " MB");
+        ServerFixture fixture(uint64_t(256) << 20, 2, {72, 72, 72}, 0, 30, budget);
+        auto first = fixture.client(), second = fixture.client();
+        const Camera camera = presetFor(fixture.storePath, ViewPreset::Normal, 512);
+        const ClientFrame a = first->requestFrame(viewOf(camera, 1));
+        const ServerCounters afterFirst = fixture.server->counters();
+        const ClientFrame b = second->requestFrame(viewOf(camera, 1));
+        const ServerCounters afterSecond = fixture.server->counters();
+        ASSERT_EQ(a.status, "complete");
+        ASSERT_EQ(b.status, "complete");
+        ASSERT_GT(a.chunks.size(), 0u);
+        std::vector<uint32_t> chunksA = a.chunks, chunksB = b.chunks;
+        std::sort(chunksA.begin(), chunksA.end());
+        std::sort(chunksB.begin(), chunksB.end());
+        EXPECT_EQ(chunksA, chunksB);
+        EXPECT_EQ(std::adjacent_find(chunksB.begin(), chunksB.end()), chunksB.end());  // each once
+        // Chunks of both frames of the VIEW (coarse and final), each held once by the client.
+        const uint64_t held = first->cachedChunks();
+        EXPECT_EQ(second->cachedChunks(), held);
+        EXPECT_EQ(afterFirst.chunksEncoded, held);
+        if (budget > 0) {
+            EXPECT_EQ(afterSecond.chunksEncoded, afterFirst.chunksEncoded);
+            EXPECT_EQ(afterSecond.chunksShared - afterFirst.chunksShared, held);
+        } else {
+            EXPECT_EQ(afterSecond.chunksEncoded, afterFirst.chunksEncoded + held);
+        }
+        TriangleMesh meshA, meshB;
+        PointSet pointsA, pointsB;
+        first->assemble(a, meshA, pointsA);
+        second->assemble(b, meshB, pointsB);
+        EXPECT_EQ(test::canonicalTriangles(meshA), test::canonicalTriangles(meshB));
+        for (const uint32_t brick : chunksA)
+            EXPECT_EQ(first->chunkBytes(0, kHeadSkinIso, brick), second->chunkBytes(0, kHeadSkinIso, brick));
+    }
 }
 
 // A client sending VIEWs as fast as it can gets frames started at most once in

@@ -23,6 +23,8 @@ constexpr const char* kHelp =
     "  --host ADDRESS      the address to listen on (default 127.0.0.1: this machine only)\n"
     "  --port N            the port (default 8080; 0: any free port)\n"
     "  --cache-mb N        brick cache shared by every client, in MB (default 1024)\n"
+    "  --chunk-cache-mb N  encoded chunks kept for every client, in MB (default 256; 0:\n"
+    "                      none, each viewer's frames encode their own)\n"
     "  --threads N         extraction threads per frame: image strips (default: the\n"
     "                      machine's cores)\n"
     "  --metacell M        meta-cell size in cells, 1 to 32 (default 4)\n"
@@ -57,6 +59,8 @@ int runServe(int argc, char** argv) {
             o.port = uint16_t(parseInt(a, args.value(a), 0, 65535));
         } else if (a == "--cache-mb") {
             o.cacheBytes = uint64_t(parseInt(a, args.value(a), 1, int64_t(1) << 30)) << 20;
+        } else if (a == "--chunk-cache-mb") {
+            o.chunkCacheBytes = uint64_t(parseInt(a, args.value(a), 0, int64_t(1) << 30)) << 20;
         } else if (a == "--max-viewers") {
             o.maxViewers = int(parseInt(a, args.value(a), 1, 100000));
         } else if (a == "--threads") {
