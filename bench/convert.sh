@@ -7,7 +7,7 @@
 # Generates data/headSIZE.raw (u16 CT-like head) if missing, then converts it RUNS times into
 # data/headSIZE.vdiso, dropping the page cache before each run (root only; otherwise the input
 # is warm and the table says so). Also converts the real MRI (NIfTI, gzip) and generates a
-# store straight from `synth`. Prints a Markdown table; bench/RESULTS.md records one.
+# store straight from `synth`. Prints a Markdown table; bench/log.md records one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size=${1:-1024}

@@ -9,7 +9,7 @@
 # converts each RUNS times into data/bench_inputs/out.vdiso, dropping the page cache before each
 # run (root only; otherwise the input is warm and the table says so). Rounds alternate the
 # inputs (raw, DICOM, ..., raw, DICOM, ...) so a busy minute on this shared machine falls on all
-# rows alike. Prints a Markdown table; bench/RESULTS.md records one. The store is deleted at the end.
+# rows alike. Prints a Markdown table; bench/log.md records one. The store is deleted at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${1:-3}

@@ -4,7 +4,7 @@
 # downloading the whole store first. The server is tests/remote/s3_server.py on loopback (a
 # public bucket, no signature, so the server's own signature check does not count), which
 # holds each request's first byte for DELAY_MS: the delay is in user space, as this kernel has
-# no netem. No bandwidth limit is applied (loopback); see bench/RESULTS.md for what that means.
+# no netem. No bandwidth limit is applied (loopback); see bench/log.md for what that means.
 #
 #   bench/remote.sh [SIZE] [DELAY_MS] [ISO] [RATE_MBIT]   (default 512, 20, 600.5 and 0: no
 #                                          limit; the store is kept in data/bench/)

@@ -2,7 +2,7 @@
 // approximates is the isosurface of the volume's trilinear interpolant; extracting from the
 // volume resampled k times finer (trilinearly) converges to its area as k grows. Comparing
 // k = 1 (what we extract) with the limit tells how much a triangulation over- or
-// under-estimates, e.g. vdiso's fans against VTK's table (bench/RESULTS.md).
+// under-estimates, e.g. vdiso's fans against VTK's table (bench/log.md).
 //
 //   vdiso_trilinear_area VOLUME ISO K     (VOLUME: any input `vdiso convert` reads)
 #include <cmath>

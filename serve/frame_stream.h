@@ -35,7 +35,7 @@ constexpr double kWholeCellPixels = 0.5;
 // several triangles a pixel, most of them hidden, and a step nearer or farther takes another
 // level. On the 2560^3 head's normal view (all of it coarse bricks) whole chunks made the cold
 // final frame 2.24 M triangles and 9.9 MB in 514 ms; parts 0.44 M, 3.4 MB, 263 ms (orbit steps
-// then 3.6 MB, not 0.7 MB, and 206 ms, not 180 ms: bench/RESULTS.md).
+// then 3.6 MB, not 0.7 MB, and 206 ms, not 180 ms: bench/log.md).
 inline bool sendsWhole(int level, double cellPixels) { return level == 0 && cellPixels >= kWholeCellPixels; }
 
 // The cacheable chunks a client holds: sent (written to its socket) and not evicted. Guarded

@@ -238,7 +238,7 @@ TEST(Levels, ThinPlateStaysAtADistance) {
 // The Debian CT's head holder, a curved shell one or two voxels thick beside the skull: at ten
 // times the normal distance the coarse levels keep it only in strips, and the points for thin
 // parts (core/lod/thin_parts.h) fill it in without reading a finer brick. Without them 16 % of
-// the bone's pixels went (bench/RESULTS.md).
+// the bone's pixels went (bench/log.md).
 TEST(Levels, RealCtKeepsItsThinPartsAtADistance) {
     const std::string path = test::dataFile("cranium.nhdr");
     if (path.empty()) GTEST_SKIP() << "VDISO_DATA_DIR has no cranium.nhdr (scripts/test.sh fetches it)";
@@ -261,7 +261,7 @@ TEST(Levels, RealCtKeepsItsThinPartsAtADistance) {
 // a large error, so that levels change within the view, caps are made where levels meet, the
 // capped picture misses no more of the full surface's pixels than the open one, and agrees
 // with the full surface. (On the 2560^3 head's normal view at 1 px, the open seams let the
-// background through at 4 of 169,029 pixels, the capped ones at none: bench/RESULTS.md.)
+// background through at 4 of 169,029 pixels, the capped ones at none: bench/log.md.)
 TEST(Levels, CapsCloseTheSeamsBetweenLevels) {
     test::ScratchDir dir;
     const BrickStoreReader store(headStore(dir, {192, 192, 192}, 8));

@@ -229,7 +229,7 @@ TEST_F(TiffReader, BigTiff) {
 }
 
 // The file is read, not memory-mapped: libtiff maps it by default, which made converting a
-// 2 GiB stack hold the whole file resident (bench/RESULTS.md, "Readers").
+// 2 GiB stack hold the whole file resident (bench/log.md, "Readers").
 TEST_F(TiffReader, DoesNotMapTheFile) {
     const Dims3 d = test::kDims;
     const std::vector<double> values = tiffValues(FileScalar::U16, d);
