@@ -1,0 +1,177 @@
+// vdiso serve under many viewers (issue: many viewers, one server): a server in this process
+// and N viewers (the C++ client of docs/protocol.md over loopback WebSockets, one thread each)
+// orbiting the same store in 10-degree steps, each sending its next camera when its frame ends,
+// the viewers' orbits spread around the circle. Halfway, one more viewer joins and asks for one
+// view: its first coarse and final frame are timed. Prints one JSON line:
+//   frame_ms_p50/p95/p99   viewers' final frames, from the VIEW to its frameEnd (client side)
+//   frames_min/max         frames a viewer completed in the run; frames_per_s all of them
+//   join_coarse_ms, join_final_ms   the joining viewer's first frame
+//   threads_max            threads of the process (server and clients) sampled every 100 ms
+//   peak_rss_mb            the process's peak (server and clients: the clients hold their
+//                          chunks, as browsers would; VmHWM)
+//   chunks_encoded, chunks_shared, distinct_chunks, encodings_per_chunk
+//                          cacheable chunks the server encoded and sent from its shared chunks,
+//                          and the distinct ones the viewers received
+//
+//   vdiso_serve_load STORE.vdiso --iso V --viewers N [--seconds 15] [--size 1024] [--threads 2]
+//                    [--cache-mb 1024] [--chunk-cache-mb 256]
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/camera.h"
+#include "io/json.h"
+#include "io/store/brick_store.h"
+#include "serve/server.h"
+#include "serve/viewer_client.h"
+
+using namespace vdiso;
+using namespace vdiso::serve;
+
+namespace {
+
+double percentile(std::vector<double> v, double p) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
+}
+
+size_t threadCount() {
+    size_t n = 0;
+    for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) ++n;
+    return n;
+}
+
+double peakRssMb() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) {
+        std::fprintf(stderr, "usage: vdiso_serve_load STORE.vdiso --iso V --viewers N [--seconds S] [--size PX]\n"
+                             "       [--threads N] [--cache-mb N] [--chunk-cache-mb N]\n");
+        return 2;
+    }
+    ServeOptions options;
+    options.stores = {argv[1]};
+    options.port = 0;
+    options.threads = 2;
+    options.webRoot = VDISO_WEB_DIR;
+    options.maxViewers = 1000;
+    double iso = 0, seconds = 15;
+    int viewers = 1, size = 1024;
+    for (int i = 2; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&] { return std::string(i + 1 < argc ? argv[++i] : ""); };
+        if (a == "--iso") iso = std::stod(next());
+        else if (a == "--viewers") viewers = std::stoi(next());
+        else if (a == "--seconds") seconds = std::stod(next());
+        else if (a == "--size") size = std::stoi(next());
+        else if (a == "--threads") options.threads = std::stoi(next());
+        else if (a == "--cache-mb") options.cacheBytes = uint64_t(std::stoll(next())) << 20;
+        else if (a == "--chunk-cache-mb") options.chunkCacheBytes = uint64_t(std::stoll(next())) << 20;
+        else {
+            std::fprintf(stderr, "unknown option %s\n", a.c_str());
+            return 2;
+        }
+    }
+    options.iso = iso;
+    try {
+        std::vector<Camera> orbit;
+        {
+            const BrickStoreReader store(argv[1]);
+            const VolumeInfo& v = store.volume();
+            orbit = orbitCameras(ViewPreset::Normal, v.origin, v.worldMax(), size, size, 36);
+        }
+        Server server(options);
+        std::thread serving([&] { server.run(); });
+        const auto start = std::chrono::steady_clock::now();
+        const auto deadline = start + std::chrono::duration<double>(seconds);
+
+        std::mutex mutex;  // guards the results below
+        std::vector<double> frameMs;
+        std::vector<int> framesOf(size_t(viewers), 0);
+        std::set<uint32_t> distinct;
+        std::vector<std::string> failures;
+        std::atomic<size_t> threadsMax{0};
+        std::atomic<bool> done{false};
+        std::thread sampler([&] {
+            while (!done) {
+                threadsMax = std::max(threadsMax.load(), threadCount());
+                std::this_thread::sleep_for(std::chrono::milliseconds(100));
+            }
+        });
+        std::vector<std::thread> clients;
+        for (int k = 0; k < viewers; ++k)
+            clients.emplace_back([&, k] {
+                try {
+                    ViewerClient client("127.0.0.1", server.port(), server.token());
+                    const size_t first = size_t(k) * orbit.size() / size_t(viewers);
+                    for (uint32_t seq = 1; std::chrono::steady_clock::now() < deadline; ++seq) {
+                        const ClientFrame f =
+                            client.requestFrame(viewMessage(orbit[(first + seq) % orbit.size()], seq, 0, iso));
+                        std::lock_guard lock(mutex);
+                        if (f.status != "complete") continue;
+                        frameMs.push_back(f.completeSeconds * 1e3);
+                        ++framesOf[size_t(k)];
+                        distinct.insert(f.chunks.begin(), f.chunks.end());
+                    }
+                } catch (const std::exception& e) {
+                    std::lock_guard lock(mutex);
+                    failures.push_back(e.what());
+                }
+            });
+        // The joining viewer, halfway.
+        std::this_thread::sleep_until(start + std::chrono::duration<double>(seconds / 2));
+        double joinCoarse = -1, joinFinal = -1;
+        {
+            ViewerClient joining("127.0.0.1", server.port(), server.token());
+            const ClientFrame f = joining.requestFrame(viewMessage(orbit[0], 1, 0, iso));
+            joinCoarse = f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1;
+            joinFinal = f.completeSeconds * 1e3;
+        }
+        for (std::thread& t : clients) t.join();
+        done = true;
+        sampler.join();
+        const ServerCounters counters = server.counters();
+        server.stop();
+        serving.join();
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+        JsonObject line;
+        line.add("store", std::filesystem::path(argv[1]).filename().string()).add("viewers", int64_t(viewers));
+        line.add("threads_per_frame", int64_t(options.threads)).add("seconds", elapsed);
+        line.add("chunk_cache_mb", int64_t(options.chunkCacheBytes >> 20));
+        line.add("frames", uint64_t(frameMs.size())).add("frames_per_s", double(frameMs.size()) / elapsed);
+        line.add("frame_ms_p50", percentile(frameMs, 0.5)).add("frame_ms_p95", percentile(frameMs, 0.95));
+        line.add("frame_ms_p99", percentile(frameMs, 0.99));
+        line.add("frames_min", int64_t(*std::min_element(framesOf.begin(), framesOf.end())));
+        line.add("frames_max", int64_t(*std::max_element(framesOf.begin(), framesOf.end())));
+        line.add("join_coarse_ms", joinCoarse).add("join_final_ms", joinFinal);
+        line.add("threads_max", uint64_t(threadsMax.load())).add("peak_rss_mb", peakRssMb());
+        line.add("chunks_encoded", counters.chunksEncoded).add("chunks_shared", counters.chunksShared);
+        line.add("distinct_chunks", uint64_t(distinct.size()));
+        line.add("encodings_per_chunk", distinct.empty() ? 0.0 : double(counters.chunksEncoded) / double(distinct.size()));
+        line.add("viewer_failures", uint64_t(failures.size()));
+        std::printf("%s\n", line.str().c_str());
+        for (const std::string& f : failures) std::fprintf(stderr, "vdiso_serve_load: a viewer failed: %s\n", f.c_str());
+        return failures.empty() ? 0 : 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vdiso_serve_load: %s\n", e.what());
+        return 1;
+    }
+}
