@@ -51,6 +51,12 @@ FrameStream::FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& out
     : mClient(client), mShared(shared), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
       mSuperseded(superseded), mStart(start) {}
 
+FrameStream::~FrameStream() {
+    // Claims of bricks whose chunk this frame did not make (an error, or a stop, between the
+    // brick's beginning and end): frames waiting for them go on without.
+    for (const uint32_t b : mClaims) mShared.release(mIso, b);
+}
+
 void FrameStream::push(OutMessage m, bool waitForRoom) {
     if (!mOutbox.push(std::move(m), waitForRoom)) mRefused = true;
 }
@@ -76,11 +82,21 @@ bool FrameStream::beginBrick(int64_t brick, int level, double cellPixels, Use& u
         mClient.held.contains({mStore, mIso, b})) {
         use = Use::Held;
     } else if (sendsWhole(level, cellPixels)) {
-        if (std::optional<SharedChunks::Chunk> chunk = mShared.find(mIso, b)) {
-            use = Use::Held;  // made only to mark the pyramid; the shared chunk goes out
-            mFromShared.emplace(b, std::move(*chunk));
-        } else {
-            use = Use::Whole, mWhole.insert(b);
+        SharedChunks::Chunk chunk;
+        switch (mShared.findOrClaim(mIso, b, chunk)) {
+            case SharedChunks::Found::Held:  // made only to mark the pyramid; the shared chunk goes out
+                use = Use::Held;
+                mFromShared.emplace(b, std::move(chunk));
+                break;
+            case SharedChunks::Found::Encoding:  // another frame makes it: wait for it at the end
+                use = Use::Held;
+                mFromShared.emplace(b, std::nullopt);
+                break;
+            case SharedChunks::Found::Claimed:
+                use = Use::Whole;
+                mWhole.insert(b);
+                mClaims.insert(b);
+                break;
         }
     } else {
         use = Use::Part;
@@ -102,25 +118,36 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
         header.iso = mIso;
         auto message = std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, PointSet{}));
         mShared.insert(mIso, b, {message, uint32_t(mesh.triangleCount())});
+        {
+            std::lock_guard lock(mMutex);
+            mClaims.erase(b);
+        }
         pushCacheable(b, std::move(message), uint32_t(mesh.triangleCount()));
         return;
     }
     if (use == Use::Held) {
         std::optional<SharedChunks::Chunk> shared;
+        bool fromShared = false;
         {
             std::scoped_lock lock(mMutex);
             const auto found = mFromShared.find(b);
             if (found != mFromShared.end()) {  // the first strip to end it sends it
                 shared = std::move(found->second);
+                fromShared = true;
                 mFromShared.erase(found);
                 mSharedSent.insert(b);
             } else if (mSharedSent.contains(b)) {
                 return;
             }
         }
+        if (fromShared && !shared) shared = mShared.wait(mIso, b);  // another frame is encoding it
         if (shared) {
             pushCacheable(b, std::make_shared<const std::vector<uint8_t>>(SharedChunks::forFrame(*shared, mFrame)),
                           shared->triangles);
+            return;
+        }
+        if (fromShared) {  // its encoder stopped: what was made of it here goes as transient geometry
+            addTransient(mesh, points);
             return;
         }
         std::scoped_lock lock(mClient.mutex, mMutex);

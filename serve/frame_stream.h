@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -73,6 +74,9 @@ public:
     // `shared`: the store's chunks as encoded for every client.
     FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& outbox, uint32_t frame, uint32_t store,
                 double iso, const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
+    ~FrameStream();
+    FrameStream(const FrameStream&) = delete;
+    FrameStream& operator=(const FrameStream&) = delete;
 
     bool beginBrick(int64_t brick, int level, double cellPixels, Use& use) override;
     void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
@@ -105,9 +109,10 @@ private:
     const std::chrono::steady_clock::time_point mStart;
     std::mutex mMutex;  // below; taken after mClient.mutex when both are held
     std::unordered_set<uint32_t> mWhole, mReferred;  // bricks of this frame, by use
-    // Bricks sent from the shared chunks: the chunk (until a strip sends it), and those sent.
-    std::unordered_map<uint32_t, SharedChunks::Chunk> mFromShared;
-    std::unordered_set<uint32_t> mSharedSent;
+    // Bricks sent from the shared chunks: the chunk (until a strip sends it; none: another
+    // frame is encoding it), and those sent; bricks this frame claimed to encode for all.
+    std::unordered_map<uint32_t, std::optional<SharedChunks::Chunk>> mFromShared;
+    std::unordered_set<uint32_t> mSharedSent, mClaims;
     TriangleMesh mTransient;
     PointSet mTransientPoints;
     FrameCounters mCounters;
