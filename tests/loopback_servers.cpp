@@ -3,6 +3,9 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -22,6 +25,7 @@ LoopbackServer::LoopbackServer(const std::vector<std::string>& argv, const std::
     if (::pipe2(in, O_CLOEXEC) != 0 || ::pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
     mPid = ::fork();
     if (mPid == 0) {
+        ::setpgid(0, 0);  // its own group, which stop() ends whole (nginx runs under a wrapper)
         ::dup2(in[0], STDIN_FILENO);
         ::dup2(out[1], STDOUT_FILENO);
         const int err = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
@@ -55,11 +59,26 @@ LoopbackServer::LoopbackServer(LoopbackServer&& other) noexcept
 
 void LoopbackServer::stop() {
     if (mPid <= 0) return;
+    // The whole group: nginx's master and workers too, not only the wrapper (they would follow
+    // it on their parent-death signal, but a moment later, still answering meanwhile).
+    ::kill(-mPid, SIGKILL);
     ::kill(mPid, SIGKILL);
     ::waitpid(mPid, nullptr, 0);
     mPid = -1;
     ::close(mStdin);
     ::close(mStdout);
+    // Returns once the port takes no connection (at most 10 s).
+    for (int wait = 0; wait < 1000 && mPort > 0; ++wait) {
+        const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_port = htons(uint16_t(mPort));
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        const bool answered = fd >= 0 && ::connect(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+        if (fd >= 0) ::close(fd);
+        if (!answered) break;
+        ::usleep(10000);
+    }
 }
 
 LoopbackServer startNginx(const std::string& root, const std::string& tmpdir, const std::string& log,
