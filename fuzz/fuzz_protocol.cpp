@@ -36,7 +36,8 @@ struct World {
         o.brickSize = 8;
         vdiso::writeBrickStore(*vdiso::openSynthVolume(p), (dir / "head.vdiso").string(), o);
         stores = std::make_unique<vdiso::serve::StoreCatalog>(
-            std::vector<std::string>{(dir / "head.vdiso").string()}, uint64_t(64) << 20, std::nullopt);
+            std::vector<std::string>{(dir / "head.vdiso").string()}, uint64_t(64) << 20, uint64_t(16) << 20,
+            std::nullopt);
         gate = std::make_unique<vdiso::serve::FrameGate>(4);
         session = std::make_unique<vdiso::serve::ViewerSession>(*stores, vdiso::serve::SessionSettings{}, *gate, [] {});
         session->start();
