@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <string>
+#include <thread>
 
 #include <unistd.h>
 
@@ -56,7 +57,13 @@ SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
 }
 
 int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
-    int slots = 64;
+    // As many as keep the cores busy: a frame's strips each take a core; more frames at once
+    // only share them (each slower), and the waiting ones go in turn, coarse passes first
+    // (FrameGate). Where bricks come over the network a frame mostly waits: four a core then.
+    const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
+    bool remote = false;
+    for (size_t i = 0; i < stores.size(); ++i) remote = remote || stores[i].reader->remote() != nullptr;
+    int slots = std::max(2, remote ? 4 * cores : cores);
     for (size_t i = 0; i < stores.size(); ++i) {
         const BrickCache& cache = *stores[i].cache;
         const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();

@@ -15,8 +15,9 @@ ServeOptions withDefaults(ServeOptions options);
 // does (RemoteReadAhead, core/extract/brick_look_ahead.h).
 SessionSettings sessionSettings(const ServeOptions& options, StoreCatalog& stores);
 
-// Frames that may extract at once: each needs frameCacheBricks (cache/cache_plan.h, the rule
-// vdiso extract plans by) of every store's cache, so that pins never fill a cache; at most 64.
+// Frames that may extract at once: the machine's cores (four a core for a store at a URL, at
+// least 2), and no more than every store's cache holds the pins of: each frame needs
+// frameCacheBricks (cache/cache_plan.h, the rule vdiso extract plans by).
 // Throws CacheBudgetError naming the store whose cache cannot hold one frame.
 int frameSlots(StoreCatalog& stores, const SessionSettings& settings);
 

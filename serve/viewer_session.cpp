@@ -1,5 +1,6 @@
 #include "serve/viewer_session.h"
 
+#include <algorithm>
 #include <cstring>
 #include <exception>
 
@@ -10,15 +11,30 @@
 namespace vdiso::serve {
 
 
-bool FrameGate::enter(const std::function<bool()>& giveUp) {
+bool FrameGate::enter(const std::function<bool()>& giveUp, bool coarse) {
     ++mEntered;
     std::unique_lock lock(mMutex);
-    // Woken by leave(); polled for giveUp, which another thread sets without this lock.
-    while (mFree == 0) {
-        if (giveUp()) return false;
+    const uint64_t ticket = mNextTicket++;
+    std::deque<uint64_t>& queue = coarse ? mCoarse : mFinal;
+    queue.push_back(ticket);
+    auto myTurn = [&] {
+        return mFree > 0 && (coarse ? mCoarse.front() == ticket : mCoarse.empty() && mFinal.front() == ticket);
+    };
+    // Woken by leave() and by passes ahead going in or giving up; polled for giveUp, which
+    // another thread sets without this lock.
+    while (!myTurn()) {
+        if (giveUp()) {
+            queue.erase(std::find(queue.begin(), queue.end(), ticket));
+            lock.unlock();
+            mChanged.notify_all();
+            return false;
+        }
         mChanged.wait_for(lock, std::chrono::milliseconds(20));
     }
+    queue.pop_front();
     --mFree;
+    lock.unlock();
+    mChanged.notify_all();  // the next in turn may go too, if a slot is left
     return true;
 }
 
@@ -27,7 +43,7 @@ void FrameGate::leave() {
         std::lock_guard lock(mMutex);
         ++mFree;
     }
-    mChanged.notify_one();
+    mChanged.notify_all();
 }
 
 ViewerSession::ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FrameGate& gate,
@@ -194,7 +210,7 @@ std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point ar
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;
     ExtractStats stats;
-    if (!mGate.enter([&] { return mSuperseded.load(); })) {
+    if (!mGate.enter([&] { return mSuperseded.load(); }, !final)) {
         status = "superseded";
     } else {
         try {

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <deque>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -45,12 +46,16 @@ struct SessionSettings {
     static constexpr std::chrono::milliseconds kMinFrameInterval{8};
 };
 
-// At most `slots` frames extract at once, so that their pinned bricks never fill a cache.
+// At most `slots` frames extract at once, so that their pinned bricks never fill a cache and
+// the cores are not shared among more frames than keep them busy. Waiting frames go in turn, in
+// the order they came, every coarse pass (a VIEW's first, quick picture: someone joining or
+// turning the volume) before any final one, so that a viewer sees the volume at once however
+// busy the server is.
 class FrameGate {
 public:
     explicit FrameGate(int slots) : mFree(slots) {}
-    // Waits for a slot; false (no slot taken) once `giveUp` returns true.
-    bool enter(const std::function<bool()>& giveUp);
+    // Waits for a slot and its turn; false (no slot taken) once `giveUp` returns true.
+    bool enter(const std::function<bool()>& giveUp, bool coarse = false);
     void leave();
     // Calls of enter so far: extraction passes begun (a VIEW's coarse and final frames).
     uint64_t entered() const { return mEntered.load(); }
@@ -59,6 +64,8 @@ private:
     std::mutex mMutex;
     std::condition_variable mChanged;
     int mFree;
+    uint64_t mNextTicket = 0;
+    std::deque<uint64_t> mCoarse, mFinal;  // tickets of the waiting passes, in order
     std::atomic<uint64_t> mEntered{0};
 };
 
