@@ -39,7 +39,7 @@ void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex) {
         if (v >= fromVertex) v = renumbered[v - fromVertex];
 }
 
-void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle, const glm::vec3* eye) {
+void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle) {
     const size_t end = mesh.indices.size();
     if (3 * firstTriangle >= end) return;
     uint32_t lo = UINT32_MAX, hi = 0;
@@ -53,7 +53,6 @@ void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle, const glm::v
         const uint32_t* t = &mesh.indices[i];
         const glm::vec3 a = mesh.positions[held(t[0])], b = mesh.positions[held(t[1])], c = mesh.positions[held(t[2])];
         const glm::vec3 n = glm::cross(b - a, c - a);  // twice the area, along the face normal
-        if (eye && glm::dot(n, *eye - a) <= 0.0f) continue;
         for (int k = 0; k < 3; ++k) faces[t[k] - lo] += n;
     }
     for (size_t k = 0; k < faces.size(); ++k) {

@@ -110,10 +110,8 @@ void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex);
 // against those triangles (against the sum of their area-weighted face normals, which the
 // winding orients) to that sum's direction. A gradient normal points the wrong way where a part
 // is about a cell thin and central differences span it: on coarse levels of detail such
-// vertices were drawn nearly black. With `eye`, only the triangles facing it count: where a
-// part is a cell thin its front and back triangles share vertices, and the front ones are
-// those drawn. Indices must refer to vertices the mesh holds.
-void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle, const glm::vec3* eye = nullptr);
+// vertices were drawn nearly black. Indices must refer to vertices the mesh holds.
+void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle);
 
 // Hands what `mesh` holds to the sink and drops it, keeping the global vertex numbering.
 inline void drainInto(MeshSink& sink, TriangleMesh& mesh) {

@@ -76,9 +76,11 @@ private:
     // asked for: a vertex is shared by up to four cells' polygons. False when it cannot be
     // placed on the image plane (behind the eye, clipped, or beyond what a double holds).
     bool screenPosition(uint32_t v, glm::dvec2& out);
-    // Adds to mThinParts (and mThinPixels) the points of coarse brick `at`'s lost thin parts
-    // that fall on pixels not covered yet; drawThinParts() draws those still not covered, one
-    // a pixel, and covers them.
+    // The pixel a point falls on; false when it is off the image or not on the image plane.
+    bool pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const;
+    // Adds to mThinParts the points of coarse brick `at`'s lost thin parts that fall on pixels
+    // not covered yet; drawThinParts() draws those still not covered, one a pixel, and covers
+    // them.
     void thinPartPoints(const ViewLevels::Brick& at, const void* samples);
     void drawThinParts();
 
@@ -107,7 +109,6 @@ private:
     // not on the image plane. Grows with the mesh; cleared with it in streaming.
     std::vector<glm::dvec2> mScreen;
     PointSet mThinParts;
-    std::vector<glm::ivec2> mThinPixels;
 };
 
 // One brick of sample type T in the traversal: the visitor of its meta-cell walk
@@ -295,34 +296,35 @@ bool ViewTraversal::screenPosition(uint32_t v, glm::dvec2& out) {
     return !std::isinf(s.x);
 }
 
+bool ViewTraversal::pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const {
+    const glm::dvec3 p = mPixels.project(position);
+    if (!(p.z >= 0.0 && p.z <= 1.0 && p.x >= 0.0 && p.y >= 0.0 && p.x < mPyramid.width() && p.y < mPyramid.height()))
+        return false;
+    pixel = {int(p.x), int(p.y)};
+    return true;
+}
+
 void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samples) {
     const int fine = std::max(at.level - 3, 0);  // sub-blocks of 1 to 4 coarse cells
-    const size_t first = mThinParts.size();
-    // A pixel not covered now (the brick's own surface drawn); the pixel is remembered in order.
+    // A point on a pixel not covered now (the brick's own surface drawn), and a box whose pixels
+    // are not all covered now.
     auto wanted = [&](const glm::dvec3& position) {
-        const glm::dvec3 p = mPixels.project(position);
-        if (!(p.z >= 0.0 && p.z <= 1.0 && p.x >= 0.0 && p.y >= 0.0 && p.x < mPyramid.width() &&
-              p.y < mPyramid.height()))
-            return false;
-        const glm::ivec2 pixel(int(p.x), int(p.y));
-        if (mPyramid.isCovered(pixel.x, pixel.y)) return false;
-        mThinPixels.push_back(pixel);
-        return true;
+        glm::ivec2 pixel;
+        return pixelOf(position, pixel) && !mPyramid.isCovered(pixel.x, pixel.y);
     };
-    // A box whose pixels are all covered now gives no point.
     const ViewCuller& culler = mLevels.culler(at.level);
     auto shows = [&](const glm::dvec3& a, const glm::dvec3& b) {
         return culler.cullScreenBox(culler.screenBox(a, b)) == Cull::None;
     };
     appendThinPartPoints(mLevels.source(at.level), at.local, samples, mLevels.source(fine), at.level - fine,
                          mOptions.iso, mCamera.eye, mThinParts, wanted, shows);
-    VDISO_CHECK_EQ(mThinParts.size() - first, mThinPixels.size() - first);
 }
 
 void ViewTraversal::drawThinParts() {
     for (size_t k = 0; k < mThinParts.size(); ++k) {
-        const glm::ivec2 p = mThinPixels[k];
-        if (mPyramid.isCovered(p.x, p.y)) continue;  // by what came after, or an earlier point
+        glm::ivec2 p;
+        // Covered by what came after, or by an earlier point.
+        if (!pixelOf(glm::dvec3(mThinParts.positions[k]), p) || mPyramid.isCovered(p.x, p.y)) continue;
         mPoints.positions.push_back(mThinParts.positions[k]);
         mPoints.normals.push_back(mThinParts.normals[k]);
         mPyramid.coverSpan(p.y, p.x, p.x);
@@ -331,7 +333,6 @@ void ViewTraversal::drawThinParts() {
     }
     mPyramid.propagate();
     mThinParts.clear();
-    mThinPixels.clear();
 }
 
 std::vector<int64_t> ViewTraversal::run() {
@@ -391,12 +392,9 @@ std::vector<int64_t> ViewTraversal::run() {
         });
         if (level > 0 && mOptions.points && use != ViewStream::Use::Whole) thinPartPoints(at, handle.samples());
         // Coarse cells are often as wide as the parts they cross (mesh.h).
-        if (level > 0) {
-            const glm::vec3 eye(mCamera.eye);
-            orientNormalsToFaces(mMesh, firstTriangle, &eye);
-        }
-        if (mOptions.stream) drawThinParts();  // a brick's output is final when handed over
+        if (level > 0) orientNormalsToFaces(mMesh, firstTriangle);
         if (mOptions.stream) {
+            drawThinParts();  // a brick's output is final when handed over
             mStats.triangles += mMesh.triangleCount();
             mStats.vertices += mMesh.vertexCount();
             mStats.triangles += mCaps.triangleCount();

@@ -58,21 +58,21 @@ glm::dvec3 acrossPart(const CoarseSamples<T>& c, int x, int y, int z, const glm:
                 // tan of the angle that zeroes H[p][q], the smaller root (Numerical Recipes' form).
                 const double theta = (H[q][q] - H[p][p]) / (2 * H[p][q]);
                 const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
-                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                const double cosine = 1 / std::sqrt(t * t + 1), sine = t * cosine;
                 for (int k = 0; k < 3; ++k) {  // H <- H J
                     const double hp = H[k][p], hq = H[k][q];
-                    H[k][p] = c * hp - s * hq;
-                    H[k][q] = s * hp + c * hq;
+                    H[k][p] = cosine * hp - sine * hq;
+                    H[k][q] = sine * hp + cosine * hq;
                 }
                 for (int k = 0; k < 3; ++k) {  // H <- J^T H
                     const double hp = H[p][k], hq = H[q][k];
-                    H[p][k] = c * hp - s * hq;
-                    H[q][k] = s * hp + c * hq;
+                    H[p][k] = cosine * hp - sine * hq;
+                    H[q][k] = sine * hp + cosine * hq;
                 }
                 for (int k = 0; k < 3; ++k) {  // V <- V J
                     const double vp = V[k][p], vq = V[k][q];
-                    V[k][p] = c * vp - s * vq;
-                    V[k][q] = s * vp + c * vq;
+                    V[k][p] = cosine * vp - sine * vq;
+                    V[k][q] = sine * vp + cosine * vq;
                 }
             }
     // The column whose eigenvalue is most negative (a peak) or most positive (a trough), when
@@ -112,16 +112,41 @@ bool isRidge(const CoarseSamples<T>& c, int x, int y, int z, double sign, double
     return ridge && best >= kRidgeRise * (v + sign * other);
 }
 
-// Whether the coarse surface passes next to corner (x, y, z): some neighbour (of the 26) lies on
-// the other side of the isovalue. There the part is kept, if thinned, within a cell.
+// Where the coarse brick's cell corners are in the world.
+struct CornerPlace {
+    glm::dvec3 first, spacing;  // corner (0, 0, 0), and the level's spacing
+    glm::dvec3 operator()(int x, int y, int z) const { return first + glm::dvec3(x, y, z) * spacing; }
+};
+
+// The points of a part lost in the coarse corners [lo, hi] (each inclusive), a peak (sign -1) or
+// a trough (+1) whose samples there run from `least` to `most`: at the corners on the lost side
+// of the isovalue, at least halfway from the box's other extreme towards the part, and a ridge
+// (or a valley) across it.
 template <class T>
-bool crossingNextTo(const CoarseSamples<T>& c, int x, int y, int z, double iso) {
-    const bool above = c.at(x, y, z) > iso;
-    for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx)
-                if ((c.at(x + dx, y + dy, z + dz) > iso) != above) return true;
-    return false;
+void appendBoxPoints(const CoarseSamples<T>& c, const CornerPlace& place, const int lo[3], const int hi[3], double sign,
+                     double least, double most, double iso, const glm::dvec3& eye, PointSet& out,
+                     const std::function<bool(const glm::dvec3&)>& wanted) {
+    const double halfway = 0.5 * (least + most);
+    for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+            for (int x = lo[0]; x <= hi[0]; ++x) {
+                const double v = c.at(x, y, z);
+                if (sign < 0 ? (v < halfway || v > iso) : (v > halfway || v <= iso)) continue;
+                if (!isRidge(c, x, y, z, sign, sign < 0 ? least : most)) continue;
+                const glm::dvec3 p = place(x, y, z);
+                if (wanted && !wanted(p)) continue;
+                glm::dvec3 n = acrossPart(c, x, y, z, place.spacing, sign);
+                const glm::dvec3 toEye = glm::normalize(eye - p);
+                if (n == glm::dvec3(0.0)) n = toEye;
+                if (glm::dot(n, toEye) < 0) n = -n;
+                // Turned to within 75 degrees of the eye: the coarse samples give a thin part's
+                // facing only roughly, and one seen edge on would shade black where the full
+                // surface shows its face.
+                const double facing = glm::dot(n, toEye);
+                if (facing < kLeastFacing) n = glm::normalize(n + toEye * ((kLeastFacing - facing) / (1.0 - kLeastFacing)));
+                out.positions.push_back(glm::vec3(p));
+                out.normals.push_back(glm::vec3(n));
+            }
 }
 
 }  // namespace
@@ -134,6 +159,8 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
     const BrickLayout& fl = fine.layout();
     const VolumeInfo& volume = coarse.volume();
     const Dims3 cc = cl.brickCoord(brick);
+    const CornerPlace place{volume.origin + glm::dvec3(cc[0], cc[1], cc[2]) * double(cl.brickSize) * volume.spacing,
+                            volume.spacing};
     const int64_t ratio = int64_t(1) << levelsBetween;  // fine cells per coarse cell
     int cells[3];
     int64_t f0[3], f1[3];  // the fine bricks under the coarse one, [f0, f1) per axis
@@ -194,41 +221,8 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
                                             : iso - least < kKeptReach * fineDown ? 1.0
                                                                                  : 0.0;
                         if (sign == 0.0) continue;
-                        if (shows) {
-                            const glm::dvec3 corner(double(cc[0] * cl.brickSize), double(cc[1] * cl.brickSize),
-                                                    double(cc[2] * cl.brickSize));
-                            const glm::dvec3 a = volume.origin + (corner + glm::dvec3(lo[0], lo[1], lo[2])) * volume.spacing;
-                            const glm::dvec3 b = volume.origin + (corner + glm::dvec3(hi[0], hi[1], hi[2])) * volume.spacing;
-                            if (!shows(a, b)) continue;
-                        }
-                        const double halfway = 0.5 * (least + most);
-                        for (int z = lo[2]; z <= hi[2]; ++z)
-                            for (int y = lo[1]; y <= hi[1]; ++y)
-                                for (int x = lo[0]; x <= hi[0]; ++x) {
-                                    // The part's own samples: beyond halfway towards it, on the
-                                    // lost side of the isovalue, and a ridge (or a valley)
-                                    // across the part.
-                                    const double v = c.at(x, y, z);
-                                    if (sign < 0 ? (v < halfway || v > iso) : (v > halfway || v <= iso)) continue;
-                                    if (!isRidge(c, x, y, z, sign, sign < 0 ? least : most)) continue;
-                                    const glm::dvec3 p = volume.origin + glm::dvec3(double(cc[0] * cl.brickSize + x),
-                                                                                    double(cc[1] * cl.brickSize + y),
-                                                                                    double(cc[2] * cl.brickSize + z)) *
-                                                                             volume.spacing;
-                                    if (wanted && !wanted(p)) continue;
-                                    glm::dvec3 n = acrossPart(c, x, y, z, volume.spacing, sign);
-                                    const glm::dvec3 toEye = glm::normalize(eye - p);
-                                    if (n == glm::dvec3(0.0)) n = toEye;
-                                    if (glm::dot(n, toEye) < 0) n = -n;
-                                    // Turned to within 75 degrees of the eye: the coarse samples
-                                    // give a thin part's facing only roughly, and one seen edge
-                                    // on would shade black where the full surface shows its face.
-                                    const double facing = glm::dot(n, toEye);
-                                    if (facing < kLeastFacing)
-                                        n = glm::normalize(n + toEye * ((kLeastFacing - facing) / (1.0 - kLeastFacing)));
-                                    out.positions.push_back(glm::vec3(p));
-                                    out.normals.push_back(glm::vec3(n));
-                                }
+                        if (shows && !shows(place(lo[0], lo[1], lo[2]), place(hi[0], hi[1], hi[2]))) continue;
+                        appendBoxPoints(c, place, lo, hi, sign, least, most, iso, eye, out, wanted);
                     }
                 }
     });
