@@ -59,6 +59,11 @@ public:
     void leave();
     // Calls of enter so far: extraction passes begun (a VIEW's coarse and final frames).
     uint64_t entered() const { return mEntered.load(); }
+    // Passes waiting now.
+    size_t waiting() {
+        std::lock_guard lock(mMutex);
+        return mCoarse.size() + mFinal.size();
+    }
 
 private:
     std::mutex mMutex;
