@@ -7,6 +7,8 @@
 //   frames_min/max         frames a viewer completed in the run; frames_per_s all of them
 //   join_coarse_ms, join_final_ms   the joining viewer's first frame
 //   threads_max            threads of the process (server and clients) sampled every 100 ms
+//   server_threads_max     of them the server's: less this program's own (main, the sampler)
+//                          and the clients' running at the time, until the run's end
 //   peak_rss_mb            the process's peak (server and clients: the clients hold their
 //                          chunks, as browsers would; VmHWM)
 //   chunks_encoded, chunks_shared, distinct_chunks, encodings_per_chunk
@@ -107,17 +109,28 @@ int main(int argc, char** argv) {
         std::vector<int> framesOf(size_t(viewers), 0);
         std::set<uint32_t> distinct;
         std::vector<std::string> failures;
-        std::atomic<size_t> threadsMax{0};
+        std::atomic<size_t> threadsMax{0}, serverThreadsMax{0};
+        std::atomic<int> liveClients{0};
         std::atomic<bool> done{false};
         std::thread sampler([&] {
             while (!done) {
-                threadsMax = std::max(threadsMax.load(), threadCount());
+                const int live = liveClients.load();
+                const size_t all = threadCount();
+                threadsMax = std::max(threadsMax.load(), all);
+                // Until the deadline: after it, clients' threads end after they say so.
+                if (std::chrono::steady_clock::now() < deadline)
+                    serverThreadsMax = std::max(serverThreadsMax.load(), all - size_t(std::max(0, live)) - 2);
                 std::this_thread::sleep_for(std::chrono::milliseconds(100));
             }
         });
         std::vector<std::thread> clients;
-        for (int k = 0; k < viewers; ++k)
+        for (int k = 0; k < viewers; ++k) {
+            ++liveClients;  // before its thread exists: never counted as the server's
             clients.emplace_back([&, k] {
+                struct Live {
+                    std::atomic<int>& n;
+                    ~Live() { --n; }
+                } live{liveClients};
                 try {
                     ViewerClient client("127.0.0.1", server.port(), server.token());
                     const size_t first = size_t(k) * orbit.size() / size_t(viewers);
@@ -135,11 +148,12 @@ int main(int argc, char** argv) {
                     failures.push_back(e.what());
                 }
             });
+        }
         // The joining viewer, halfway.
         std::this_thread::sleep_until(start + std::chrono::duration<double>(seconds / 2));
         double joinCoarse = -1, joinFinal = -1;
         {
-            ViewerClient joining("127.0.0.1", server.port(), server.token());
+            ViewerClient joining("127.0.0.1", server.port(), server.token());  // on this thread
             const ClientFrame f = joining.requestFrame(viewMessage(orbit[0], 1, 0, iso));
             joinCoarse = f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1;
             joinFinal = f.completeSeconds * 1e3;
@@ -162,7 +176,8 @@ int main(int argc, char** argv) {
         line.add("frames_min", int64_t(*std::min_element(framesOf.begin(), framesOf.end())));
         line.add("frames_max", int64_t(*std::max_element(framesOf.begin(), framesOf.end())));
         line.add("join_coarse_ms", joinCoarse).add("join_final_ms", joinFinal);
-        line.add("threads_max", uint64_t(threadsMax.load())).add("peak_rss_mb", peakRssMb());
+        line.add("threads_max", uint64_t(threadsMax.load())).add("server_threads_max", uint64_t(serverThreadsMax.load()));
+        line.add("peak_rss_mb", peakRssMb());
         line.add("chunks_encoded", counters.chunksEncoded).add("chunks_shared", counters.chunksShared);
         line.add("distinct_chunks", uint64_t(distinct.size()));
         line.add("encodings_per_chunk", distinct.empty() ? 0.0 : double(counters.chunksEncoded) / double(distinct.size()));

@@ -23,7 +23,7 @@ namespace {
 struct World {
     std::filesystem::path dir;
     std::unique_ptr<vdiso::serve::StoreCatalog> stores;
-    std::unique_ptr<vdiso::serve::FrameGate> gate;
+    std::unique_ptr<vdiso::serve::FramePool> pool;
     std::unique_ptr<vdiso::serve::ViewerSession> session;
     uint32_t seq = 0;
 
@@ -38,8 +38,8 @@ struct World {
         stores = std::make_unique<vdiso::serve::StoreCatalog>(
             std::vector<std::string>{(dir / "head.vdiso").string()}, uint64_t(64) << 20, uint64_t(16) << 20,
             std::nullopt);
-        gate = std::make_unique<vdiso::serve::FrameGate>(4);
-        session = std::make_unique<vdiso::serve::ViewerSession>(*stores, vdiso::serve::SessionSettings{}, *gate, [] {});
+        pool = std::make_unique<vdiso::serve::FramePool>(2);
+        session = std::make_unique<vdiso::serve::ViewerSession>(*stores, vdiso::serve::SessionSettings{}, *pool, [] {});
         session->start();
     }
     ~World() {

@@ -64,7 +64,7 @@ public:
         // Holds no executor: the session may be retired (serve/server.cpp, retire) and outlive
         // the I/O context, and an executor must not.
         std::weak_ptr<WsSession> weak = weak_from_this();
-        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.gate, [weak] {
+        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.pool, [weak] {
             if (auto self = weak.lock()) net::post(self->mWs.get_executor(), [self] { self->pump(); });
         });
         mWs.async_accept(request, beast::bind_front_handler(&WsSession::onAccept, shared_from_this()));
@@ -84,12 +84,10 @@ private:
         if (error) return;
         try {
             mViewer->start();
-        } catch (const std::system_error& e) {
-            // No thread for this viewer (a process or container thread limit): this viewer is
-            // told and closed; the others and the server go on.
+        } catch (const std::exception& e) {
+            // No memory for this viewer: it is told and closed; the others and the server go on.
             ++mServer.viewersRefused;
-            refuse("the server cannot start work for another viewer now (" + std::string(e.what()) +
-                   "); try again later");
+            refuse("the server cannot take another viewer now (" + std::string(e.what()) + "); try again later");
             return;
         }
         ++mServer.sessionsOpened;

@@ -46,7 +46,9 @@ ServeOptions withDefaults(ServeOptions o) {
 }
 
 SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
-    SessionSettings s{o.threads, o.metaCellSize, 8, 2, 2, size_t(32) << 20, o.lodError};
+    // Two readers a frame however many strips: with 2 frames of 2 strips on 2 cores, 4 readers
+    // a frame made 13 threads for no more frames a second (bench/log.md, "Many viewers").
+    SessionSettings s{o.threads, o.metaCellSize, 8, std::max(1, 2 / o.threads), 2, size_t(32) << 20, o.lodError};
     for (size_t i = 0; i < stores.size(); ++i)
         if (stores[i].reader->remote()) {
             s.prefetchBricks = RemoteReadAhead::kBricks;
@@ -58,12 +60,14 @@ SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
 
 int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
     // As many as keep the cores busy: a frame's strips each take a core; more frames at once
-    // only share them (each slower), and the waiting ones go in turn, coarse passes first
-    // (FrameGate). Where bricks come over the network a frame mostly waits: four a core then.
+    // only share them (each slower), and the waiting ones go in turn, first passes first
+    // (FramePool). With one strip a frame, at least two, so that a first pass need not wait for
+    // a whole final one. Where bricks come over the network a frame mostly waits: four a core.
     const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
     bool remote = false;
     for (size_t i = 0; i < stores.size(); ++i) remote = remote || stores[i].reader->remote() != nullptr;
-    int slots = std::max(2, remote ? 4 * cores : cores);
+    const int perCore = remote ? 4 : 1;
+    int slots = std::max(2, perCore * cores);
     for (size_t i = 0; i < stores.size(); ++i) {
         const BrickCache& cache = *stores[i].cache;
         const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();

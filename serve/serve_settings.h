@@ -11,8 +11,9 @@ namespace vdiso::serve {
 // The options with their defaults filled in (maxViewers).
 ServeOptions withDefaults(ServeOptions options);
 
-// A frame looks 8 bricks ahead with 2 readers a strip; over a network, as far as vdiso extract
-// does (RemoteReadAhead, core/extract/brick_look_ahead.h).
+// A frame looks 8 bricks ahead with 2 readers in all (at least one a strip), so that a frame's
+// threads stay near the cores it runs on; over a network, as far as vdiso extract does
+// (RemoteReadAhead, core/extract/brick_look_ahead.h).
 SessionSettings sessionSettings(const ServeOptions& options, StoreCatalog& stores);
 
 // Frames that may extract at once: the machine's cores (four a core for a store at a URL, at

@@ -153,7 +153,8 @@ ServerCounters Server::counters() const {
     c.acceptsBackedOff = mImpl->acceptsBackedOff;
     c.viewersRefused = mImpl->viewersRefused;
     c.viewersDropped = mImpl->viewersDropped;
-    c.framePasses = mImpl->gate.entered();
+    c.framePasses = mImpl->pool.passes();
+    c.frameWorkers = uint64_t(mImpl->pool.workers());
     for (size_t i = 0; i < mImpl->stores.size(); ++i) {
         const SharedChunks::Counters shared = mImpl->stores[i].chunks->counters();
         c.chunksEncoded += shared.encoded;

@@ -16,6 +16,7 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
+#include "serve/frame_pool.h"
 #include "serve/serve_settings.h"
 #include "serve/server.h"
 #include "serve/store_catalog.h"
@@ -40,7 +41,7 @@ struct Server::Impl {
     StoreCatalog stores;
     WebFiles web;
     SessionSettings settings;
-    FrameGate gate;
+    FramePool pool;  // every viewer's frames
     std::string token;
     uint16_t port = 0;
     std::mutex mutex;
@@ -61,7 +62,7 @@ struct Server::Impl {
 
     explicit Impl(const ServeOptions& o)
         : options(withDefaults((checkServeOptions(o), o))), stores(o.stores, o.cacheBytes, o.chunkCacheBytes, o.iso, o.remote), web(o.webRoot),
-          settings(sessionSettings(o, stores)), gate(frameSlots(stores, settings)),
+          settings(sessionSettings(o, stores)), pool(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 
     void accept();

@@ -32,14 +32,14 @@ std::string typeOf(const std::string& text) {
 
 }  // namespace
 
-ViewerClient::ViewerClient(const std::string& host, uint16_t port, const std::string& token)
+ViewerClient::ViewerClient(const std::string& host, uint16_t port, const std::string& token, const std::string& query)
     : mConnection(std::make_unique<Connection>()) {
     try {
         tcp::resolver resolver(mConnection->ioc);
         net::connect(mConnection->ws.next_layer(), resolver.resolve(host, std::to_string(port)));
         mConnection->ws.next_layer().set_option(tcp::no_delay(true));
         mConnection->ws.read_message_max(uint64_t(1) << 30);
-        mConnection->ws.handshake(host + ":" + std::to_string(port), "/ws?token=" + token);
+        mConnection->ws.handshake(host + ":" + std::to_string(port), "/ws?token=" + token + (query.empty() ? "" : "&" + query));
     } catch (const beast::system_error& e) {
         throw IoError(host + ":" + std::to_string(port) + ": WebSocket connection failed: " + e.code().message());
     }

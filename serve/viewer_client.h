@@ -43,9 +43,9 @@ struct ClientFrame {
 
 class ViewerClient {
 public:
-    // Connects to ws://host:port/ws?token=TOKEN and reads the hello. Throws IoError (refused,
-    // handshake failed) or ProtocolError (no hello).
-    ViewerClient(const std::string& host, uint16_t port, const std::string& token);
+    // Connects to ws://host:port/ws?token=TOKEN (&QUERY, e.g. follow=ID) and reads the hello.
+    // Throws IoError (refused, handshake failed) or ProtocolError (no hello).
+    ViewerClient(const std::string& host, uint16_t port, const std::string& token, const std::string& query = "");
     ~ViewerClient();
     ViewerClient(const ViewerClient&) = delete;
     ViewerClient& operator=(const ViewerClient&) = delete;

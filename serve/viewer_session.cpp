@@ -11,71 +11,26 @@
 namespace vdiso::serve {
 
 
-bool FrameGate::enter(const std::function<bool()>& giveUp, bool coarse) {
-    ++mEntered;
-    std::unique_lock lock(mMutex);
-    const uint64_t ticket = mNextTicket++;
-    std::deque<uint64_t>& queue = coarse ? mCoarse : mFinal;
-    queue.push_back(ticket);
-    auto myTurn = [&] {
-        return mFree > 0 && (coarse ? mCoarse.front() == ticket : mCoarse.empty() && mFinal.front() == ticket);
-    };
-    // Woken by leave() and by passes ahead going in or giving up; polled for giveUp, which
-    // another thread sets without this lock.
-    while (!myTurn()) {
-        if (giveUp()) {
-            queue.erase(std::find(queue.begin(), queue.end(), ticket));
-            lock.unlock();
-            mChanged.notify_all();
-            return false;
-        }
-        mChanged.wait_for(lock, std::chrono::milliseconds(20));
-    }
-    queue.pop_front();
-    --mFree;
-    lock.unlock();
-    mChanged.notify_all();  // the next in turn may go too, if a slot is left
-    return true;
-}
-
-void FrameGate::leave() {
-    {
-        std::lock_guard lock(mMutex);
-        ++mFree;
-    }
-    mChanged.notify_all();
-}
-
-ViewerSession::ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FrameGate& gate,
+ViewerSession::ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FramePool& pool,
                              std::function<void()> wake)
-    : mStores(stores), mSettings(settings), mGate(gate), mOutbox(settings.outboxBytes, std::move(wake)) {}
+    : mStores(stores), mSettings(settings), mPool(pool), mOutbox(settings.outboxBytes, std::move(wake)) {}
 
 ViewerSession::~ViewerSession() {
     close();
     join();
 }
 
-void ViewerSession::join() {
-    std::lock_guard lock(mJoinMutex);
-    if (mWorker.joinable()) mWorker.join();
-}
+void ViewerSession::join() { mPool.join(*this); }
 
-void ViewerSession::start() {
-    // The worker first: when no thread can be started (std::system_error), nothing was sent.
-    mWorker = std::thread([this] {
-        work();
-        mWorkerDone = true;
-    });
-    mOutbox.push(OutMessage::control(mStores.hello()));
-}
+void ViewerSession::start() { mOutbox.push(OutMessage::control(mStores.hello())); }
 
 void ViewerSession::close() {
     {
         std::lock_guard lock(mMutex);
         mClosing = true;
         mSuperseded = true;
+        mPool.remove(*this);
     }
-    mWork.notify_all();
     mOutbox.close();
 }
 
@@ -113,11 +68,12 @@ void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
                                         " does not follow the last one (" + std::to_string(*mLastSeq) + ")");
                 mLastSeq = view.seq;
                 mPending = view;
+                mFinalDue.reset();
                 mPendingArrival = Clock::now();
                 mSuperseded = true;  // the running frame stops at its next brick
+                if (!mClosing) mPool.post(*this, true, mLastStart + SessionSettings::kMinFrameInterval);
             }
             mOutbox.beginFrame(view.seq);  // what is queued of older frames is dropped now
-            mWork.notify_one();
             return;
         }
         const EvictMessage evict = parseEvict(bytes);
@@ -150,38 +106,48 @@ std::optional<OutMessage> ViewerSession::nextToWrite() {
     return m;
 }
 
-void ViewerSession::work() {
-    while (true) {
-        ViewMessage view;
-        Clock::time_point arrival;
-        {
-            std::unique_lock lock(mMutex);
-            mWork.wait(lock, [&] { return mClosing || mPending; });
-            mWork.wait_until(lock, mLastStart + SessionSettings::kMinFrameInterval, [&] { return mClosing; });
-            if (mClosing) return;
+void ViewerSession::runPass() {
+    ViewMessage view;
+    Clock::time_point arrival;
+    bool first = false;
+    {
+        std::lock_guard lock(mMutex);
+        if (mClosing) return;
+        if (mPending) {
+            first = true;
             mLastStart = Clock::now();
             view = *mPending;
-            arrival = mPendingArrival;
             mPending.reset();
             mSuperseded = false;
+        } else if (mFinalDue) {
+            view = *mFinalDue;
+            mFinalDue.reset();
+        } else {
+            return;
         }
-        try {
-            runFrame(view, arrival);
-        } catch (const std::exception& e) {  // never past the worker: the server stays up
-            reply("frame " + std::to_string(view.seq) + ": " + e.what(), view.seq);
+        arrival = mPendingArrival;
+    }
+    const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.lodError : 0.0;
+    const bool coarse = first && lodError > 0;
+    try {
+        const std::string status =
+            extractPass(view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse);
+        // A complete coarse frame: the final one goes to the back of the queue, behind other
+        // viewers' passes. Superseded (or failed): no finer one follows.
+        if (coarse && status == "complete") {
+            std::lock_guard lock(mMutex);
+            if (!mPending && !mClosing) {
+                mFinalDue = view;
+                mPool.post(*this, false);
+            }
         }
+    } catch (const std::exception& e) {  // never past the pass: the server stays up
+        reply("frame " + std::to_string(view.seq) + ": " + e.what(), view.seq);
     }
 }
 
-void ViewerSession::runFrame(const ViewMessage& view, Clock::time_point arrival) {
-    const ServedStore& store = mStores[view.store];
-    const double lodError = store.reader->header().levelCount > 1 ? mSettings.lodError : 0.0;
-    if (lodError > 0 && runPass(view, arrival, lodError * SessionSettings::kCoarsePassFactor, false) != "complete")
-        return;  // superseded (or failed): the coarse frame says so, no finer one follows
-    runPass(view, arrival, lodError, true);
-}
-
-std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point arrival, double lodError, bool final) {
+std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_point arrival, double lodError,
+                                       bool final) {
     ServedStore& store = mStores[view.store];
     const VolumeInfo& volume = store.reader->volume();
     Camera camera = cameraOf(view);
@@ -210,19 +176,14 @@ std::string ViewerSession::runPass(const ViewMessage& view, Clock::time_point ar
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;
     ExtractStats stats;
-    if (!mGate.enter([&] { return mSuperseded.load(); }, !final)) {
-        status = "superseded";
-    } else {
-        try {
-            TriangleMesh unused;
-            PointSet unusedPoints;
-            stats = extractViewDependent(*store.cache, camera, options, unused, unusedPoints);
-            if (stats.view.abandoned) status = "superseded";
-        } catch (const std::exception& e) {  // a brick that cannot be read, say
-            status = "error";
-            error = e.what();
-        }
-        mGate.leave();
+    try {
+        TriangleMesh unused;
+        PointSet unusedPoints;
+        stats = extractViewDependent(*store.cache, camera, options, unused, unusedPoints);
+        if (stats.view.abandoned) status = "superseded";
+    } catch (const std::exception& e) {  // a brick that cannot be read, say
+        status = "error";
+        error = e.what();
     }
     stream.finish();
     if (status == "complete" && stream.incomplete()) status = "superseded";

@@ -2,24 +2,23 @@
 //
 // The connection hands every message it reads to onMessage() and writes what nextToWrite()
 // gives it, one at a time (its `wake` callback says when there is something). A VIEW replaces
-// the pending camera and marks the running frame superseded, so the worker thread abandons it
-// at its next brick and extracts for the newest camera: frames are never queued. Every
-// malformed or invalid message is answered with an error message; the session goes on.
-// close() stops the worker at its next brick and drops whatever is queued; the destructor
-// joins it.
+// the pending camera and marks the running frame superseded, so the pass running for it
+// abandons it at its next brick, and posts the session to the server's frame pool
+// (serve/frame_pool.h), whose workers run its passes in turn with every other viewer's: frames
+// are never queued, and a session has no thread of its own. Every malformed or invalid message
+// is answered with an error message; the session goes on. close() stops the running pass at
+// its next brick and drops whatever is queued; the destructor waits for that pass.
 #pragma once
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
-#include <deque>
 #include <cstdint>
 #include <functional>
 #include <mutex>
 #include <optional>
 #include <span>
-#include <thread>
 
+#include "serve/frame_pool.h"
 #include "serve/frame_stream.h"
 #include "serve/outbox.h"
 #include "serve/protocol.h"
@@ -46,44 +45,15 @@ struct SessionSettings {
     static constexpr std::chrono::milliseconds kMinFrameInterval{8};
 };
 
-// At most `slots` frames extract at once, so that their pinned bricks never fill a cache and
-// the cores are not shared among more frames than keep them busy. Waiting frames go in turn, in
-// the order they came, every coarse pass (a VIEW's first, quick picture: someone joining or
-// turning the volume) before any final one, so that a viewer sees the volume at once however
-// busy the server is.
-class FrameGate {
+class ViewerSession final : private FramePool::Task {
 public:
-    explicit FrameGate(int slots) : mFree(slots) {}
-    // Waits for a slot and its turn; false (no slot taken) once `giveUp` returns true.
-    bool enter(const std::function<bool()>& giveUp, bool coarse = false);
-    void leave();
-    // Calls of enter so far: extraction passes begun (a VIEW's coarse and final frames).
-    uint64_t entered() const { return mEntered.load(); }
-    // Passes waiting now.
-    size_t waiting() {
-        std::lock_guard lock(mMutex);
-        return mCoarse.size() + mFinal.size();
-    }
-
-private:
-    std::mutex mMutex;
-    std::condition_variable mChanged;
-    int mFree;
-    uint64_t mNextTicket = 0;
-    std::deque<uint64_t> mCoarse, mFinal;  // tickets of the waiting passes, in order
-    std::atomic<uint64_t> mEntered{0};
-};
-
-class ViewerSession {
-public:
-    ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FrameGate& gate,
+    ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FramePool& pool,
                   std::function<void()> wake);
     ~ViewerSession();
     ViewerSession(const ViewerSession&) = delete;
     ViewerSession& operator=(const ViewerSession&) = delete;
 
-    // Starts the worker and queues the hello message; throws std::system_error, having queued
-    // nothing, when no thread can be started for it.
+    // Queues the hello message.
     void start();
     void onMessage(std::span<const uint8_t> bytes, bool text);
     // A message above kMaxClientMessageBytes was skipped unread.
@@ -91,37 +61,35 @@ public:
     // The next message to write, if any; a cacheable chunk counts as held from here on.
     std::optional<OutMessage> nextToWrite();
     void close();
-    // Waits for the worker to stop (after close()).
+    // Waits for the running pass to stop (after close()).
     void join();
-    // The worker has finished (after close()): join() returns at once.
-    bool stopped() const { return mWorkerDone.load() || !mWorker.joinable(); }
+    // No pass runs (after close()): join() returns at once.
+    bool stopped() { return mPool.idle(*this); }
     bool backlogged() const { return mOutbox.backlogged(); }
 
 private:
-    void work();
-    void runFrame(const ViewMessage& view, std::chrono::steady_clock::time_point arrival);
+    // FramePool::Task: the pending VIEW's first pass (its coarse frame on a store with levels of
+    // detail, else its only one), or the final pass due after a complete coarse one.
+    void runPass() override;
     // One frame of a VIEW at `lodError`; `final`: the last for it. Returns its status.
-    std::string runPass(const ViewMessage& view, std::chrono::steady_clock::time_point arrival, double lodError,
-                        bool final);
+    std::string extractPass(const ViewMessage& view, std::chrono::steady_clock::time_point arrival,
+                            double lodError, bool final);
     void reply(const std::string& error, std::optional<uint32_t> seq = std::nullopt);
 
     StoreCatalog& mStores;
     const SessionSettings mSettings;
-    FrameGate& mGate;
+    FramePool& mPool;
     Outbox mOutbox;
     ClientChunks mClient;
 
     std::mutex mMutex;
-    std::condition_variable mWork;
-    std::optional<ViewMessage> mPending;
+    std::optional<ViewMessage> mPending;  // its first pass not begun
+    std::optional<ViewMessage> mFinalDue;  // its coarse pass complete, its final one not begun
     std::chrono::steady_clock::time_point mPendingArrival;
     std::chrono::steady_clock::time_point mLastStart;  // of the last frame (kMinFrameInterval)
     std::optional<uint32_t> mLastSeq;
     bool mClosing = false;
     std::atomic<bool> mSuperseded{false};
-    std::mutex mJoinMutex;
-    std::atomic<bool> mWorkerDone{false};
-    std::thread mWorker;
 };
 
 }  // namespace vdiso::serve

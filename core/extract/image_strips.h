@@ -37,8 +37,8 @@ struct StripOutput {
     std::exception_ptr error;
 };
 
-// Runs strip(k, output[k]) for each strip on a thread of its own and waits for all; then
-// rethrows the first strip's exception, if any.
+// Runs strip(k, output[k]) for each strip, the first on the calling thread and each other on a
+// thread of its own, and waits for all; then rethrows the first strip's exception, if any.
 template <class Strip>
 void runStrips(std::vector<StripOutput>& outputs, Strip&& strip);
 
@@ -59,11 +59,12 @@ void runStrips(std::vector<StripOutput>& outputs, Strip&& strip) {
         }
     };
     try {
-        for (size_t k = 0; k < outputs.size(); ++k) threads.emplace_back(run, k);
+        for (size_t k = 1; k < outputs.size(); ++k) threads.emplace_back(run, k);
     } catch (...) {  // a thread could not start: let the others finish, then report it
         for (std::thread& t : threads) t.join();
         throw;
     }
+    if (!outputs.empty()) run(0);
     for (std::thread& t : threads) t.join();
     for (const StripOutput& output : outputs)
         if (output.error) std::rethrow_exception(output.error);

@@ -1,0 +1,78 @@
+// The server's extraction workers: a fixed number of threads that run every viewer's frames,
+// one pass (a VIEW's coarse or final frame) at a time, so the threads do not grow with the
+// viewers. Passes go in turn: every first pass (a VIEW's first picture: someone joining or
+// turning the volume) before any later one, each kind in the order it was posted; a task that
+// has another pass due posts it again and goes to the back, so a heavy viewer and a light one
+// get their passes in turn. A task is queued at most once: a newer VIEW replaces the pending
+// one inside the task, so a superseded frame never runs at all.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+namespace vdiso::serve {
+
+class FramePool {
+public:
+    using Clock = std::chrono::steady_clock;
+
+    // Something with passes to run: a viewer's session.
+    class Task {
+    public:
+        virtual ~Task() = default;
+        // Runs one pass on a worker; may post() itself again for the next.
+        virtual void runPass() = 0;
+    };
+
+    // Starts `workers` threads; throws std::system_error when they cannot be started.
+    explicit FramePool(int workers);
+    // Waits for the running passes and stops the workers; queued passes do not run.
+    ~FramePool();
+    FramePool(const FramePool&) = delete;
+    FramePool& operator=(const FramePool&) = delete;
+
+    // Queues a pass of `task` (not before `notBefore`) unless one is queued; while its pass runs,
+    // the next is queued when it ends. `first`: the pass goes ahead of every later one. A first
+    // pass posted for a task already queued for a later one moves it ahead.
+    void post(Task& task, bool first, Clock::time_point notBefore = {});
+    // Takes `task` out of the queue; a running pass goes on (join() waits for it). Later posts
+    // are ignored.
+    void remove(Task& task);
+    // Waits while a pass of `task` runs; after remove(), the pool forgets the task.
+    void join(Task& task);
+    // No pass of `task` runs or is queued.
+    bool idle(Task& task);
+
+    int workers() const { return int(mThreads.size()); }
+    uint64_t passes() const;  // passes begun so far
+    size_t waiting() const;   // passes queued now
+
+private:
+    struct State {
+        bool queued = false, running = false, removed = false;
+        bool again = false, againFirst = false;  // posted while running
+        Clock::time_point againNotBefore;
+    };
+    struct Entry {
+        Task* task;
+        Clock::time_point notBefore;
+    };
+    void work();
+    void enqueueLocked(Task& task, State& state, bool first, Clock::time_point notBefore);
+
+    mutable std::mutex mMutex;
+    std::condition_variable mChanged;  // a pass queued or ended, or stopping
+    std::deque<Entry> mFirst, mLater;
+    std::unordered_map<Task*, State> mStates;
+    uint64_t mPasses = 0;
+    bool mStopping = false;
+    std::vector<std::thread> mThreads;
+};
+
+}  // namespace vdiso::serve
