@@ -24,6 +24,7 @@ struct World {
     std::filesystem::path dir;
     std::unique_ptr<vdiso::serve::StoreCatalog> stores;
     std::unique_ptr<vdiso::serve::FramePool> pool;
+    vdiso::serve::SessionDirectory directory;
     std::unique_ptr<vdiso::serve::ViewerSession> session;
     uint32_t seq = 0;
 
@@ -39,7 +40,7 @@ struct World {
             std::vector<std::string>{(dir / "head.vdiso").string()}, uint64_t(64) << 20, uint64_t(16) << 20,
             std::nullopt);
         pool = std::make_unique<vdiso::serve::FramePool>(2);
-        session = std::make_unique<vdiso::serve::ViewerSession>(*stores, vdiso::serve::SessionSettings{}, *pool, [] {});
+        session = std::make_unique<vdiso::serve::ViewerSession>(*stores, vdiso::serve::SessionSettings{}, *pool, directory, [] {});
         session->start();
     }
     ~World() {

@@ -64,9 +64,13 @@ public:
         // Holds no executor: the session may be retired (serve/server.cpp, retire) and outlive
         // the I/O context, and an executor must not.
         std::weak_ptr<WsSession> weak = weak_from_this();
-        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.pool, [weak] {
+        mViewer = std::make_unique<ViewerSession>(mServer.stores, mServer.settings, mServer.pool, mServer.directory, [weak] {
             if (auto self = weak.lock()) net::post(self->mWs.get_executor(), [self] { self->pump(); });
         });
+        // ?follow=ID: this viewer sees session ID's frames (docs/protocol.md, "Follow mode").
+        const std::string target(request.target());
+        const size_t q = target.find('?');
+        if (q != std::string::npos) mFollow = findParameter(target.substr(q + 1), "follow", '&').value_or("");
         mWs.async_accept(request, beast::bind_front_handler(&WsSession::onAccept, shared_from_this()));
     }
 
@@ -83,7 +87,7 @@ private:
     void onAccept(beast::error_code error) {
         if (error) return;
         try {
-            mViewer->start();
+            mViewer->start(mFollow);
         } catch (const std::exception& e) {
             // No memory for this viewer: it is told and closed; the others and the server go on.
             ++mServer.viewersRefused;
@@ -177,6 +181,7 @@ private:
     beast::flat_buffer mBuffer;
     uint64_t mMessageBytes = 0;
     std::unique_ptr<ViewerSession> mViewer;
+    std::string mFollow;  // the session this viewer asked to follow
     std::optional<OutMessage> mCurrent;
     bool mWriting = false;
     bool mReadPaused = false;

@@ -47,9 +47,9 @@ size_t ClientChunks::flushRefsLocked(Outbox& outbox, bool* refused) {
 
 FrameStream::FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& outbox, uint32_t frame,
                          uint32_t store, double iso, const std::atomic<bool>& superseded,
-                         std::chrono::steady_clock::time_point start)
+                         std::chrono::steady_clock::time_point start, bool mayWait)
     : mClient(client), mShared(shared), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
-      mSuperseded(superseded), mStart(start) {}
+      mSuperseded(superseded), mMayWait(mayWait), mStart(start) {}
 
 FrameStream::~FrameStream() {
     // Claims of bricks whose chunk this frame did not make (an error, or a stop, between the
@@ -187,7 +187,7 @@ void FrameStream::pushCacheable(uint32_t brick, std::shared_ptr<const std::vecto
         mCounters.triangles += triangles;
         queued(bytes);
     }
-    push(std::move(m), true);  // waits while the client is behind
+    push(std::move(m), mMayWait);  // waits while the client is behind
 }
 
 void FrameStream::addTransient(const TriangleMesh& mesh, const PointSet& points) {
@@ -227,7 +227,7 @@ void FrameStream::pushTransient(bool force) {
         mCounters.points += points.size();
         queued(m.bytes->size());
     }
-    push(std::move(m), true);
+    push(std::move(m), mMayWait);
 }
 
 void FrameStream::finish() {

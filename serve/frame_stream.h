@@ -16,6 +16,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <unordered_map>
@@ -63,6 +64,17 @@ struct ClientChunks {
     size_t flushRefsLocked(Outbox& outbox, bool* refused = nullptr);
 };
 
+// Where one client's frames go: its outgoing queue and the chunks it holds. Shared by its
+// session and, in follow mode (serve/session_directory.h), by the leader's frames, which
+// write into every follower's. `pass` is held by the pass writing a frame into it, so that
+// two frames never interleave there (a leader's pass and the one before a hand-over).
+struct ViewerOutput {
+    ViewerOutput(size_t outboxBytes, std::function<void()> wake) : outbox(outboxBytes, std::move(wake)) {}
+    Outbox outbox;
+    ClientChunks client;
+    std::mutex pass;
+};
+
 struct FrameCounters {
     uint64_t chunks = 0, refs = 0, triangles = 0, points = 0, bytes = 0;
     double firstChunkSeconds = -1;  // from the frame's start to its first CHUNK or REFS queued
@@ -71,9 +83,12 @@ struct FrameCounters {
 class FrameStream final : public ViewStream {
 public:
     // `superseded` is read before every brick: set, the frame is abandoned there.
-    // `shared`: the store's chunks as encoded for every client.
+    // `shared`: the store's chunks as encoded for every client. `mayWait`: a message waits
+    // while the outbox is full (Outbox::push); else the frame stops for this client at once (a
+    // follower, whose slowness must not hold up its leader's frame).
     FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& outbox, uint32_t frame, uint32_t store,
-                double iso, const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start);
+                double iso, const std::atomic<bool>& superseded, std::chrono::steady_clock::time_point start,
+                bool mayWait = true);
     ~FrameStream();
     FrameStream(const FrameStream&) = delete;
     FrameStream& operator=(const FrameStream&) = delete;
@@ -105,6 +120,7 @@ private:
     const uint32_t mFrame, mStore;
     const double mIso;
     const std::atomic<bool>& mSuperseded;
+    const bool mMayWait;
     std::atomic<bool> mRefused{false};
     const std::chrono::steady_clock::time_point mStart;
     std::mutex mMutex;  // below; taken after mClient.mutex when both are held

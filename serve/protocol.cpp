@@ -1,5 +1,6 @@
 #include "serve/protocol.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -54,9 +55,10 @@ MessageType clientMessageType(std::span<const uint8_t> message) {
         throw ProtocolError("message of " + std::to_string(message.size()) +
                             " bytes is shorter than a header (4 bytes)");
     const uint8_t type = message[0];
-    if (type != uint8_t(MessageType::View) && type != uint8_t(MessageType::Evict))
+    if (type != uint8_t(MessageType::View) && type != uint8_t(MessageType::Evict) &&
+        type != uint8_t(MessageType::HandOver))
         throw ProtocolError("unknown message type " + std::to_string(type) +
-                            " (a client sends VIEW = 1 or EVICT = 2)");
+                            " (a client sends VIEW = 1, EVICT = 2 or HANDOVER = 3)");
     if (message[1] != kProtocolVersion)
         throw ProtocolError("message version " + std::to_string(message[1]) +
                             " is not the server's (" + std::to_string(kProtocolVersion) + ")");
@@ -124,6 +126,29 @@ EvictMessage parseEvict(std::span<const uint8_t> message) {
     e.bricks.resize(count);
     if (count) std::memcpy(e.bricks.data(), p + kEvictHeaderBytes, 4 * size_t(count));
     return e;
+}
+
+HandOverMessage parseHandOver(std::span<const uint8_t> message) {
+    if (clientMessageType(message) != MessageType::HandOver) throw ProtocolError("not a HANDOVER message");
+    if (message.size() != kHandOverMessageBytes)
+        throw ProtocolError("HANDOVER of " + std::to_string(message.size()) + " bytes, expected " +
+                            std::to_string(kHandOverMessageBytes));
+    const std::span<const uint8_t> to = message.subspan(4, kSessionIdChars);
+    HandOverMessage h;
+    if (std::all_of(to.begin(), to.end(), [](uint8_t c) { return c == 0; })) return h;
+    for (const uint8_t c : to)
+        if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f')))
+            throw ProtocolError("HANDOVER: the session id must be 8 lower-case hex digits (or 8 zero bytes)");
+    h.to.assign(to.begin(), to.end());
+    return h;
+}
+
+std::vector<uint8_t> encodeHandOver(const HandOverMessage& handOver) {
+    std::vector<uint8_t> m(kHandOverMessageBytes, 0);
+    m[0] = uint8_t(MessageType::HandOver);
+    m[1] = kProtocolVersion;
+    std::copy_n(handOver.to.begin(), std::min(handOver.to.size(), kSessionIdChars), m.begin() + 4);
+    return m;
 }
 
 ViewMessage viewMessage(const Camera& camera, uint32_t seq, uint32_t store, double iso) {

@@ -25,7 +25,7 @@ constexpr uint32_t kMaxEvictCount = 65536;
 constexpr uint32_t kNoBrick = 0xFFFFFFFFu;
 constexpr uint32_t kMaxSeq = 0xFFFFFFFEu;  // a VIEW's seq (0xFFFFFFFF marks control messages)
 
-enum class MessageType : uint8_t { View = 1, Evict = 2, Chunk = 16, Refs = 17 };
+enum class MessageType : uint8_t { View = 1, Evict = 2, HandOver = 3, Chunk = 16, Refs = 17 };
 
 class ProtocolError : public std::runtime_error {
 public:
@@ -52,6 +52,14 @@ struct EvictMessage {
 };
 constexpr size_t kEvictHeaderBytes = 24;
 
+// HANDOVER (follow mode): the leader gives control to one of its followers, named by its
+// session id (8 hex digits), or to its first follower (`to` empty: eight zero bytes). 12 bytes.
+struct HandOverMessage {
+    std::string to;
+};
+constexpr size_t kHandOverMessageBytes = 12;
+constexpr size_t kSessionIdChars = 8;
+
 // The type of a client message (its first byte), after checking its size, type byte, version
 // and reserved bytes. Throws ProtocolError.
 MessageType clientMessageType(std::span<const uint8_t> message);
@@ -61,6 +69,8 @@ MessageType clientMessageType(std::span<const uint8_t> message);
 // [kMinViewport, kMaxViewport], sizes). Throws ProtocolError.
 ViewMessage parseView(std::span<const uint8_t> message);
 EvictMessage parseEvict(std::span<const uint8_t> message);
+// A HANDOVER's `to`: 8 lower-case hex digits, or 8 zero bytes. Throws ProtocolError.
+HandOverMessage parseHandOver(std::span<const uint8_t> message);
 
 // A VIEW for `camera` (its clip planes are not sent: the server fits them to the volume), and
 // the camera a VIEW describes, without clip planes.
@@ -70,6 +80,7 @@ Camera cameraOf(const ViewMessage& view);
 // The client side, for tests and benchmarks.
 std::vector<uint8_t> encodeView(const ViewMessage& view);
 std::vector<uint8_t> encodeEvict(const EvictMessage& evict);
+std::vector<uint8_t> encodeHandOver(const HandOverMessage& handOver);
 
 // CHUNK's fixed part, before its payload (vertexBytes + indexBytes + pointBytes). 72 bytes.
 struct ChunkHeader {

@@ -48,7 +48,7 @@ ServeOptions withDefaults(ServeOptions o) {
 SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
     // Two readers a frame however many strips: with 2 frames of 2 strips on 2 cores, 4 readers
     // a frame made 13 threads for no more frames a second (bench/log.md, "Many viewers").
-    SessionSettings s{o.threads, o.metaCellSize, 8, std::max(1, 2 / o.threads), 2, size_t(32) << 20, o.lodError};
+    SessionSettings s{o.threads, o.metaCellSize, 8, std::max(1, 2 / o.threads), 2, o.outboxBytes, o.lodError};
     for (size_t i = 0; i < stores.size(); ++i)
         if (stores[i].reader->remote()) {
             s.prefetchBricks = RemoteReadAhead::kBricks;

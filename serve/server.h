@@ -37,6 +37,8 @@ struct ServeOptions {
     bool handleSignals = false;  // SIGINT and SIGTERM stop run()
     // Viewers at once; one more is answered 503. 0: defaultMaxViewers().
     int maxViewers = 0;
+    // A viewer's outgoing queue holds at most this many bytes (serve/outbox.h).
+    size_t outboxBytes = size_t(32) << 20;
     // A write to a viewer that has not completed in this long (a client that stopped reading)
     // drops the viewer: its memory is freed, its frame slot and pins released.
     double writeTimeoutSeconds = 30;

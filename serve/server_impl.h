@@ -18,6 +18,7 @@
 
 #include "serve/frame_pool.h"
 #include "serve/serve_settings.h"
+#include "serve/session_directory.h"
 #include "serve/server.h"
 #include "serve/store_catalog.h"
 #include "serve/viewer_session.h"
@@ -42,6 +43,7 @@ struct Server::Impl {
     WebFiles web;
     SessionSettings settings;
     FramePool pool;  // every viewer's frames
+    SessionDirectory directory;  // the viewers by session id, and who follows whom
     std::string token;
     uint16_t port = 0;
     std::mutex mutex;

@@ -92,9 +92,14 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
         s.description = describe(s);
         mStores.push_back(std::move(s));
     }
-    mHello = "{\"type\": \"hello\", \"version\": " + std::to_string(kProtocolVersion) + ", \"stores\": [";
-    for (size_t i = 0; i < mStores.size(); ++i) mHello += (i ? ", " : "") + mStores[i].description;
-    mHello += "]}";
+    mStoresJson = "[";
+    for (size_t i = 0; i < mStores.size(); ++i) mStoresJson += (i ? ", " : "") + mStores[i].description;
+    mStoresJson += "]";
+}
+
+std::string StoreCatalog::hello(const std::string& session) const {
+    return "{\"type\": \"hello\", \"version\": " + std::to_string(kProtocolVersion) + ", \"stores\": " + mStoresJson +
+           ", \"session\": " + jsonQuote(session) + "}";
 }
 
 }  // namespace vdiso::serve

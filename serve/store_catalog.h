@@ -42,12 +42,12 @@ public:
 
     size_t size() const { return mStores.size(); }
     ServedStore& operator[](size_t i) { return mStores[i]; }
-    // {"type":"hello","version":1,"stores":[...]}
-    const std::string& hello() const { return mHello; }
+    // {"type":"hello","version":1,"stores":[...],"session":"SESSION"}
+    std::string hello(const std::string& session) const;
 
 private:
     std::vector<ServedStore> mStores;
-    std::string mHello;
+    std::string mStoresJson;  // [...]
 };
 
 }  // namespace vdiso::serve

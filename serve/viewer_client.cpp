@@ -98,12 +98,22 @@ ClientFrame ViewerClient::requestFrame(const ViewMessage& view) {
 }
 
 ClientFrame ViewerClient::readFrame(uint32_t frame) {
-    ClientFrame f;
-    f.frame = frame;
     const auto view = mViews.find(frame);
     if (view == mViews.end()) throw ProtocolError("no VIEW was sent for frame " + std::to_string(frame));
+    ClientFrame f;
+    f.frame = frame;
     f.store = view->second.first;
     f.iso = view->second.second;
+    return readUntilEnd(std::move(f), false);
+}
+
+ClientFrame ViewerClient::readFollowedFrame() { return readUntilEnd(ClientFrame{}, true); }
+
+std::string ViewerClient::session() const { return nlohmann::json::parse(mHello).value("session", std::string()); }
+
+ClientFrame ViewerClient::readUntilEnd(ClientFrame f, bool followed) {
+    uint32_t frame = f.frame;
+    bool begun = !followed;
     std::vector<uint8_t> message;
     auto since = [&] { return std::chrono::duration<double>(Clock::now() - mSent).count(); };
     while (true) {
@@ -111,8 +121,23 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
             const std::string text(message.begin(), message.end());
             const std::string type = typeOf(text);
             if (type == "error") f.errors.push_back(text);
-            if (type == "frameBegin") ++f.framesBegun;
-            if (type != "frameEnd") continue;
+            if (type == "frameBegin") {
+                ++f.framesBegun;
+                const nlohmann::json j = nlohmann::json::parse(text);
+                // A follower's frame is the one that begins (a newer one replaces it).
+                if (followed && (!begun || j.value("frame", int64_t(-1)) != int64_t(frame))) {
+                    const int begins = f.framesBegun;
+                    std::vector<std::string> errors = std::move(f.errors);
+                    f = ClientFrame{};
+                    f.framesBegun = begins;
+                    f.errors = std::move(errors);
+                    frame = f.frame = uint32_t(j.value("frame", int64_t(0)));
+                    f.store = uint32_t(j.value("store", int64_t(0)));
+                    f.iso = j.value("iso", 0.0);
+                    begun = true;
+                }
+            }
+            if (type != "frameEnd" || !begun) continue;
             const nlohmann::json j = nlohmann::json::parse(text);
             if (j.value("frame", int64_t(-1)) != int64_t(frame)) continue;
             f.status = j.value("status", std::string());
@@ -137,7 +162,7 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
         if (message[0] == uint8_t(MessageType::Chunk)) {
             DecodedChunk chunk = decodeChunk(message);
             const bool cacheable = chunk.header.flags & kChunkCacheable;
-            const bool ours = chunk.header.frame == frame;
+            const bool ours = begun && chunk.header.frame == frame;
             if (ours && f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();
             if (ours) f.binaryBytes += message.size();
             if (ours && cacheable) f.chunks.push_back(chunk.header.brick);
@@ -149,7 +174,7 @@ ClientFrame ViewerClient::readFrame(uint32_t frame) {
         } else if (message[0] == uint8_t(MessageType::Refs)) {
             uint32_t refsFrame = 0;
             const std::vector<uint32_t> bricks = decodeRefs(message, refsFrame);
-            if (refsFrame != frame) continue;
+            if (!begun || refsFrame != frame) continue;
             if (f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();
             f.binaryBytes += message.size();
             f.refs.insert(f.refs.end(), bricks.begin(), bricks.end());

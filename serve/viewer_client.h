@@ -51,6 +51,8 @@ public:
     ViewerClient& operator=(const ViewerClient&) = delete;
 
     const std::string& hello() const { return mHello; }
+    // This viewer's session id, from the hello (what ?follow= names).
+    std::string session() const;
 
     // Sends raw bytes as one message (binary, or text), for tests of what the server refuses.
     void sendRaw(const std::vector<uint8_t>& bytes, bool text = false);
@@ -61,6 +63,9 @@ public:
     void sendView(const ViewMessage& view);
     // Reads until the frameEnd of `frame`.
     ClientFrame readFrame(uint32_t frame);
+    // A follower's next frame (follow mode): from the next frameBegin, whatever its number, to
+    // its final frameEnd (a newer frame beginning first takes its place).
+    ClientFrame readFollowedFrame();
     // The next text message (skipping binary ones). Throws IoError when the connection ends.
     std::string readText();
     // Drops chunks from the cache, tells the server, and waits for its answer.
@@ -81,6 +86,8 @@ private:
     struct Connection;
     // One message; true when it is text.
     bool read(std::vector<uint8_t>& message);
+    // Reads f's frame to its final frameEnd; `followed`: f is not known yet (its frameBegin says).
+    ClientFrame readUntilEnd(ClientFrame f, bool followed);
     // Caches a cacheable chunk under what it holds.
     void keep(DecodedChunk chunk, size_t bytes);
 

@@ -1,19 +1,21 @@
 #include "serve/viewer_session.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <exception>
 
 #include "core/clock.h"
 #include "core/camera.h"
 #include "io/json.h"
+#include "serve/fan_out_stream.h"
 
 namespace vdiso::serve {
 
-
 ViewerSession::ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FramePool& pool,
-                             std::function<void()> wake)
-    : mStores(stores), mSettings(settings), mPool(pool), mOutbox(settings.outboxBytes, std::move(wake)) {}
+                             SessionDirectory& directory, std::function<void()> wake)
+    : mStores(stores), mSettings(settings), mPool(pool), mDirectory(directory),
+      mOut(std::make_shared<ViewerOutput>(settings.outboxBytes, std::move(wake))) {}
 
 ViewerSession::~ViewerSession() {
     close();
@@ -22,23 +24,50 @@ ViewerSession::~ViewerSession() {
 
 void ViewerSession::join() { mPool.join(*this); }
 
-void ViewerSession::start() { mOutbox.push(OutMessage::control(mStores.hello())); }
+void ViewerSession::start(const std::string& follow) {
+    mId = mDirectory.add(*this, mOut);
+    mOut->outbox.push(OutMessage::control(mStores.hello(mId)));
+    if (follow.empty()) return;
+    try {
+        mDirectory.follow(mId, follow);
+    } catch (const ProtocolError& e) {  // this viewer leads its own frames instead
+        reply(e.what());
+    }
+}
 
 void ViewerSession::close() {
+    // The directory first (its lock comes before this session's): no frame of a leader is
+    // written here from now on, and if this session led, its first follower leads.
+    if (!mId.empty()) mDirectory.remove(mId);
     {
         std::lock_guard lock(mMutex);
         mClosing = true;
         mSuperseded = true;
         mPool.remove(*this);
     }
-    mOutbox.close();
+    mOut->outbox.close();
+}
+
+void ViewerSession::catchUp(std::shared_ptr<ViewerOutput> output, const ViewMessage& view) {
+    std::lock_guard lock(mMutex);
+    if (mClosing) return;
+    mCatchUps.emplace_back(std::move(output), view);
+    mPool.post(*this, true);
+}
+
+void ViewerSession::stopLeading() {
+    std::lock_guard lock(mMutex);
+    mPending.reset();
+    mFinalDue.reset();
+    mCatchUps.clear();
+    mSuperseded = true;
 }
 
 void ViewerSession::reply(const std::string& error, std::optional<uint32_t> seq) {
     JsonObject o;
     o.add("type", "error").add("message", error);
     if (seq) o.add("seq", int64_t(*seq));
-    mOutbox.push(OutMessage::control(o.str()));
+    mOut->outbox.push(OutMessage::control(o.str()));
 }
 
 void ViewerSession::onOversize(uint64_t bytes) {
@@ -49,9 +78,10 @@ void ViewerSession::onOversize(uint64_t bytes) {
 void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
     try {
         if (text)
-            throw ProtocolError("text message refused: a client sends binary VIEW and EVICT "
+            throw ProtocolError("text message refused: a client sends binary VIEW, EVICT and HANDOVER "
                                 "messages (docs/protocol.md)");
-        if (clientMessageType(bytes) == MessageType::View) {
+        const MessageType type = clientMessageType(bytes);
+        if (type == MessageType::View) {
             const ViewMessage view = parseView(bytes);
             if (view.store >= mStores.size())
                 throw ProtocolError("VIEW: unknown store " + std::to_string(view.store) + " (" +
@@ -61,29 +91,33 @@ void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
                 throw ProtocolError("VIEW: iso " + jsonNumber(view.iso) + " is outside store '" +
                                     mStores[view.store].name + "''s values [" + jsonNumber(h.valueMin) +
                                     ", " + jsonNumber(h.valueMax) + "]");
+            mDirectory.acceptView(mId, view);  // this viewer leads; the seq follows the group's last
             {
                 std::lock_guard lock(mMutex);
-                if (mLastSeq && view.seq <= *mLastSeq)
-                    throw ProtocolError("VIEW: seq " + std::to_string(view.seq) +
-                                        " does not follow the last one (" + std::to_string(*mLastSeq) + ")");
-                mLastSeq = view.seq;
                 mPending = view;
                 mFinalDue.reset();
+                mCatchUps.clear();  // the new frame goes to every follower
                 mPendingArrival = Clock::now();
                 mSuperseded = true;  // the running frame stops at its next brick
                 if (!mClosing) mPool.post(*this, true, mLastStart + SessionSettings::kMinFrameInterval);
             }
-            mOutbox.beginFrame(view.seq);  // what is queued of older frames is dropped now
+            // What is queued of older frames is dropped now, here and at the followers'.
+            for (const std::shared_ptr<ViewerOutput>& out : mDirectory.outputsOf(mId)) out->outbox.beginFrame(view.seq);
+            return;
+        }
+        if (type == MessageType::HandOver) {
+            mDirectory.handOver(mId, parseHandOver(bytes).to);
             return;
         }
         const EvictMessage evict = parseEvict(bytes);
         if (evict.store >= mStores.size())
             throw ProtocolError("EVICT: unknown store " + std::to_string(evict.store));
-        std::lock_guard lock(mClient.mutex);
+        ClientChunks& client = mOut->client;
+        std::lock_guard lock(client.mutex);
         // REFs decided before the eviction go out before its answer.
-        mClient.flushRefsLocked(mOutbox);
-        for (const uint32_t brick : evict.bricks) mClient.held.erase({evict.store, evict.iso, brick});
-        mOutbox.push(OutMessage::control(
+        client.flushRefsLocked(mOut->outbox);
+        for (const uint32_t brick : evict.bricks) client.held.erase({evict.store, evict.iso, brick});
+        mOut->outbox.push(OutMessage::control(
             JsonObject().add("type", "evicted").add("seq", int64_t(evict.seq)).str()));
     } catch (const ProtocolError& e) {
         // A refused VIEW is named by its seq when it has one, so the client can tell which.
@@ -98,10 +132,10 @@ void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
 }
 
 std::optional<OutMessage> ViewerSession::nextToWrite() {
-    std::optional<OutMessage> m = mOutbox.pop();
+    std::optional<OutMessage> m = mOut->outbox.pop();
     if (m && m->cacheable) {
-        std::lock_guard lock(mClient.mutex);
-        mClient.held[{m->store, m->iso, m->brick}] = m->triangles;
+        std::lock_guard lock(mOut->client.mutex);
+        mOut->client.held[{m->store, m->iso, m->brick}] = m->triangles;
     }
     return m;
 }
@@ -110,9 +144,11 @@ void ViewerSession::runPass() {
     ViewMessage view;
     Clock::time_point arrival;
     bool first = false;
+    std::vector<std::shared_ptr<ViewerOutput>> catchUps;
     {
         std::lock_guard lock(mMutex);
         if (mClosing) return;
+        arrival = mPendingArrival;
         if (mPending) {
             first = true;
             mLastStart = Clock::now();
@@ -122,16 +158,24 @@ void ViewerSession::runPass() {
         } else if (mFinalDue) {
             view = *mFinalDue;
             mFinalDue.reset();
+        } else if (!mCatchUps.empty()) {
+            view = mCatchUps.back().second;  // the group's view when the last one joined
+            for (auto& [output, unused] : mCatchUps) catchUps.push_back(std::move(output));
+            arrival = Clock::now();
         } else {
             return;
         }
-        arrival = mPendingArrival;
+        mCatchUps.clear();  // a VIEW's pass goes to every follower, new ones too
     }
+    // A new follower's frame: the final one alone, into its output.
+    const std::vector<std::shared_ptr<ViewerOutput>> outputs =
+        catchUps.empty() ? mDirectory.outputsOf(mId) : catchUps;
+    if (outputs.empty()) return;  // no longer leading
     const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.lodError : 0.0;
     const bool coarse = first && lodError > 0;
     try {
-        const std::string status =
-            extractPass(view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse);
+        const std::string status = extractPass(
+            view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs);
         // A complete coarse frame: the final one goes to the back of the queue, behind other
         // viewers' passes. Superseded (or failed): no finer one follows.
         if (coarse && status == "complete") {
@@ -146,30 +190,60 @@ void ViewerSession::runPass() {
     }
 }
 
+namespace {
+
+std::string frameBegin(const ViewMessage& view, double lodError, bool final) {
+    auto vec = [](const glm::dvec3& v) { return jsonArray(std::array<double, 3>{v.x, v.y, v.z}); };
+    JsonObject camera;
+    camera.addRaw("eye", vec(view.eye)).addRaw("target", vec(view.target)).addRaw("up", vec(view.up));
+    camera.add("fov", view.fovYDegrees).add("width", int64_t(view.width)).add("height", int64_t(view.height));
+    return JsonObject()
+        .add("type", "frameBegin")
+        .add("frame", int64_t(view.seq))
+        .add("store", int64_t(view.store))
+        .addExact("iso", view.iso)
+        .add("lodError", lodError)
+        .add("final", final)
+        .addRaw("view", camera.str())
+        .str();
+}
+
+}  // namespace
+
 std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_point arrival, double lodError,
-                                       bool final) {
+                                       bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs) {
     ServedStore& store = mStores[view.store];
     const VolumeInfo& volume = store.reader->volume();
     Camera camera = cameraOf(view);
     fitClipPlanes(camera, volume.origin, volume.worldMax());
 
-    mOutbox.push(OutMessage::control(JsonObject()
-                                         .add("type", "frameBegin")
-                                         .add("frame", int64_t(view.seq))
-                                         .add("store", int64_t(view.store))
-                                         .addExact("iso", view.iso)
-                                         .add("lodError", lodError)
-                                         .add("final", final)
-                                         .str()),
-                 false);
-    FrameStream stream(mClient, *store.chunks, mOutbox, view.seq, view.store, view.iso, mSuperseded, arrival);
+    // Each output takes one frame at a time (a pass of the leader before a hand-over may still
+    // be ending), in one order for every pass.
+    std::vector<ViewerOutput*> order;
+    for (const auto& out : outputs) order.push_back(out.get());
+    std::sort(order.begin(), order.end());
+    std::vector<std::unique_lock<std::mutex>> held;
+    for (ViewerOutput* out : order) held.emplace_back(out->pass);
+
+    const std::string begin = frameBegin(view, lodError, final);
+    std::vector<std::unique_ptr<FrameStream>> streams;
+    std::vector<FrameStream*> fanned;
+    for (const auto& out : outputs) {
+        out->outbox.beginFrame(view.seq);
+        out->outbox.push(OutMessage::control(begin), false);
+        // Only the pass's own viewer may make it wait for room (a follower drops out instead).
+        streams.push_back(std::make_unique<FrameStream>(out->client, *store.chunks, out->outbox, view.seq, view.store,
+                                                        view.iso, mSuperseded, arrival, streams.empty()));
+        fanned.push_back(streams.back().get());
+    }
+    FanOutStream fanOut(fanned);
     ViewExtractOptions options = ViewExtractOptions::sage(view.iso);
     options.metaCellSize = mSettings.metaCellSize;
     options.threads = mSettings.threads;
     options.prefetchBricks = mSettings.prefetchBricks;
     options.prefetchReaders = mSettings.prefetchReaders;
     options.prefetchNear = mSettings.prefetchNear;
-    options.stream = &stream;
+    options.stream = streams.size() == 1 ? static_cast<ViewStream*>(streams[0].get()) : &fanOut;
     options.rangeCache = store.ranges.get();
     options.tree = store.tree.get();
     options.lodError = lodError;
@@ -185,32 +259,43 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
         status = "error";
         error = e.what();
     }
-    stream.finish();
-    if (status == "complete" && stream.incomplete()) status = "superseded";
-    if (!error.empty()) reply("frame " + std::to_string(view.seq) + ": " + error, view.seq);
-    const FrameCounters c = stream.counters();
     const CacheCounters after = store.cache->counters();
     const double seconds = std::chrono::duration<double>(Clock::now() - arrival).count();
-    auto frameEnd = [&](const std::string& said) {
-        JsonObject end;
-        end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", said);
-        end.add("lodError", lodError).add("final", final);
-        end.add("chunks", c.chunks).add("refs", c.refs).add("triangles", c.triangles);
-        end.add("points", c.points).add("bytes", c.bytes);
-        // The cache is shared: misses while this frame ran, whoever caused them.
-        end.add("bricksRead", after.misses - before.misses);
-        end.add("bricksVisited", stats.bricksActive);
-        end.add("serverMs", seconds * 1e3);
-        end.add("firstChunkMs", c.firstChunkSeconds < 0 ? -1.0 : c.firstChunkSeconds * 1e3);
-        return end.str();
-    };
-    // If a newer frame drops any of this one's messages before they are written, the end
-    // says so (serve/outbox.h).
-    OutMessage end = OutMessage::control(frameEnd(status));
-    end.ends = view.seq;
-    if (status == "complete") end.ifIncomplete = OutMessage::control(frameEnd("superseded")).bytes;
-    mOutbox.push(std::move(end));
-    return status;
+    std::string firstStatus;
+    for (size_t k = 0; k < outputs.size(); ++k) {
+        FrameStream& stream = *streams[k];
+        Outbox& outbox = outputs[k]->outbox;
+        stream.finish();
+        const std::string own = status == "complete" && stream.incomplete() ? "superseded" : status;
+        if (k == 0) firstStatus = own;
+        if (!error.empty()) {
+            JsonObject o;
+            o.add("type", "error").add("message", "frame " + std::to_string(view.seq) + ": " + error);
+            o.add("seq", int64_t(view.seq));
+            outbox.push(OutMessage::control(o.str()));
+        }
+        const FrameCounters c = stream.counters();
+        auto frameEnd = [&](const std::string& said) {
+            JsonObject end;
+            end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", said);
+            end.add("lodError", lodError).add("final", final);
+            end.add("chunks", c.chunks).add("refs", c.refs).add("triangles", c.triangles);
+            end.add("points", c.points).add("bytes", c.bytes);
+            // The cache is shared: misses while this frame ran, whoever caused them.
+            end.add("bricksRead", after.misses - before.misses);
+            end.add("bricksVisited", stats.bricksActive);
+            end.add("serverMs", seconds * 1e3);
+            end.add("firstChunkMs", c.firstChunkSeconds < 0 ? -1.0 : c.firstChunkSeconds * 1e3);
+            return end.str();
+        };
+        // If a newer frame drops any of this one's messages before they are written, the end
+        // says so (serve/outbox.h).
+        OutMessage end = OutMessage::control(frameEnd(own));
+        end.ends = view.seq;
+        if (own == "complete") end.ifIncomplete = OutMessage::control(frameEnd("superseded")).bytes;
+        outbox.push(std::move(end));
+    }
+    return firstStatus;
 }
 
 }  // namespace vdiso::serve

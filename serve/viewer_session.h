@@ -7,7 +7,9 @@
 // (serve/frame_pool.h), whose workers run its passes in turn with every other viewer's: frames
 // are never queued, and a session has no thread of its own. Every malformed or invalid message
 // is answered with an error message; the session goes on. close() stops the running pass at
-// its next brick and drops whatever is queued; the destructor waits for that pass.
+// its next brick and drops whatever is queued; the destructor waits for that pass. In follow
+// mode (serve/session_directory.h) a leader's frames are written into its followers' outputs
+// too, and a follower's VIEWs are refused.
 #pragma once
 
 #include <atomic>
@@ -17,11 +19,15 @@
 #include <mutex>
 #include <optional>
 #include <span>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "serve/frame_pool.h"
 #include "serve/frame_stream.h"
 #include "serve/outbox.h"
 #include "serve/protocol.h"
+#include "serve/session_directory.h"
 #include "serve/store_catalog.h"
 
 namespace vdiso::serve {
@@ -45,16 +51,18 @@ struct SessionSettings {
     static constexpr std::chrono::milliseconds kMinFrameInterval{8};
 };
 
-class ViewerSession final : private FramePool::Task {
+class ViewerSession final : private FramePool::Task, private FollowedSession {
 public:
     ViewerSession(StoreCatalog& stores, const SessionSettings& settings, FramePool& pool,
-                  std::function<void()> wake);
+                  SessionDirectory& directory, std::function<void()> wake);
     ~ViewerSession();
     ViewerSession(const ViewerSession&) = delete;
     ViewerSession& operator=(const ViewerSession&) = delete;
 
-    // Queues the hello message.
-    void start();
+    // Enrolls the session in the directory and queues the hello message (with its session id);
+    // with `follow` (a session id, from ?follow=ID), it follows that session, or is told why not
+    // and leads its own frames.
+    void start(const std::string& follow = "");
     void onMessage(std::span<const uint8_t> bytes, bool text);
     // A message above kMaxClientMessageBytes was skipped unread.
     void onOversize(uint64_t bytes);
@@ -65,29 +73,36 @@ public:
     void join();
     // No pass runs (after close()): join() returns at once.
     bool stopped() { return mPool.idle(*this); }
-    bool backlogged() const { return mOutbox.backlogged(); }
+    bool backlogged() const { return mOut->outbox.backlogged(); }
+    const std::string& id() const { return mId; }
 
 private:
     // FramePool::Task: the pending VIEW's first pass (its coarse frame on a store with levels of
-    // detail, else its only one), or the final pass due after a complete coarse one.
+    // detail, else its only one), or the final pass due after a complete coarse one, or a new
+    // follower's first frame.
     void runPass() override;
-    // One frame of a VIEW at `lodError`; `final`: the last for it. Returns its status.
+    // FollowedSession
+    void catchUp(std::shared_ptr<ViewerOutput> output, const ViewMessage& view) override;
+    void stopLeading() override;
+    // One frame of a VIEW at `lodError` into `outputs` (this viewer's, and its followers'; the
+    // first one's stopping stops it); `final`: the last for it. Returns the first one's status.
     std::string extractPass(const ViewMessage& view, std::chrono::steady_clock::time_point arrival,
-                            double lodError, bool final);
+                            double lodError, bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs);
     void reply(const std::string& error, std::optional<uint32_t> seq = std::nullopt);
 
     StoreCatalog& mStores;
     const SessionSettings mSettings;
     FramePool& mPool;
-    Outbox mOutbox;
-    ClientChunks mClient;
+    SessionDirectory& mDirectory;
+    const std::shared_ptr<ViewerOutput> mOut;
+    std::string mId;
 
     std::mutex mMutex;
     std::optional<ViewMessage> mPending;  // its first pass not begun
     std::optional<ViewMessage> mFinalDue;  // its coarse pass complete, its final one not begun
     std::chrono::steady_clock::time_point mPendingArrival;
     std::chrono::steady_clock::time_point mLastStart;  // of the last frame (kMinFrameInterval)
-    std::optional<uint32_t> mLastSeq;
+    std::vector<std::pair<std::shared_ptr<ViewerOutput>, ViewMessage>> mCatchUps;  // new followers
     bool mClosing = false;
     std::atomic<bool> mSuperseded{false};
 };

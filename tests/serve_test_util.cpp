@@ -30,7 +30,7 @@ void writeWebRoot(const ScratchDir& dir) {
 }
 
 ServerFixture::ServerFixture(uint64_t cacheBytes, int threads, const Dims3& dims, int maxViewers, double writeTimeout,
-                             uint64_t chunkCacheBytes) {
+                             uint64_t chunkCacheBytes, size_t outboxBytes) {
     SynthParams p;
     p.kind = SynthKind::Head;
     p.dims = dims;
@@ -49,6 +49,7 @@ ServerFixture::ServerFixture(uint64_t cacheBytes, int threads, const Dims3& dims
     s.maxViewers = maxViewers;
     s.writeTimeoutSeconds = writeTimeout;
     s.chunkCacheBytes = chunkCacheBytes;
+    s.outboxBytes = outboxBytes;
     server = std::make_unique<serve::Server>(s);
     thread = std::thread([this] { server->run(); });
 }

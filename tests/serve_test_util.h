@@ -30,7 +30,7 @@ struct ServerFixture {
 
     explicit ServerFixture(uint64_t cacheBytes = uint64_t(256) << 20, int threads = 1,
                            const Dims3& dims = {72, 72, 72}, int maxViewers = 0, double writeTimeout = 30,
-                           uint64_t chunkCacheBytes = uint64_t(256) << 20);
+                           uint64_t chunkCacheBytes = uint64_t(256) << 20, size_t outboxBytes = size_t(32) << 20);
     ~ServerFixture();
     std::unique_ptr<serve::ViewerClient> client(const std::string& query = "");
 };

@@ -5,6 +5,7 @@
 //
 //   node tests/browser/e2e.mjs --url URL --camera CAM.json --size 800x800 --out SHOT.png
 //                              [--iso V] [--store NAME] [--orbit N] [--timeout S] [--page PAGE.png]
+//                              [--follow-out FOLLOWER.png]
 //
 // Opens URL (the one the server printed, with its token) at the camera of CAM.json
 // ({"eye":[x,y,z],"target":[x,y,z],"up":[x,y,z],"fov":30}) with the overlay hidden, waits
@@ -12,6 +13,9 @@
 // the frame's stats as one JSON line (--page: also the whole page with its overlays). With --orbit N it then turns the camera about its up
 // axis through the target in N equal steps (as `vdiso extract --path orbit` does about +z),
 // printing one JSON line of stats per frame ("step": 0..N-1; step 0 is CAM.json itself).
+// With --follow-out, a second page opens the first one's follow link (follow mode): its first
+// frame (screenshot to FOLLOWER.png) and the one after the leader turns must be the leader's;
+// then the leader hands over control, and the follower's next view must reach the first page.
 // Exits non-zero on a page error, a console error, a failed request or the timeout
 // (60 s by default, for the whole run).
 import fs from 'node:fs';
@@ -94,8 +98,8 @@ function turned(camera, angle) {
   return { ...camera, eye: rotated.map((c, i) => c + target[i]) };
 }
 
-async function run(options, browser, failure) {
-  const camera = readCamera(options.camera);
+// A page of the viewer at `url`, ready (its hello handled); any error on it fails the run.
+async function openViewer(browser, options, url, failure) {
   const page = await browser.newPage();
   page.on('pageerror', (error) => failure(`page error: ${error.message}`));
   page.on('console', (message) => {
@@ -103,10 +107,67 @@ async function run(options, browser, failure) {
   });
   page.on('requestfailed', (request) => failure(`request failed: ${request.url()} (${request.failure()?.errorText})`));
   await page.setViewport({ width: options.width, height: options.height, deviceScaleFactor: 1 });
-  const response = await page.goto(pageUrl(options, camera), { waitUntil: 'load' });
-  if (!response.ok()) throw new Error(`${options.url} answered HTTP ${response.status()}`);
+  const response = await page.goto(url, { waitUntil: 'load' });
+  if (!response.ok()) throw new Error(`${url} answered HTTP ${response.status()}`);
   await page.waitForFunction(() => window.vdisoViewer !== undefined);
   await page.evaluate(() => window.vdisoViewer.ready.then(() => undefined));
+  return page;
+}
+
+// Waits until `page` shows a complete, final frame numbered `frame` or later; its stats.
+async function frameFrom(page, frame) {
+  await page.waitForFunction((n) => window.vdisoViewer.frameComplete().then((s) => s.frame >= n), { polling: 50 }, frame);
+  return page.evaluate(() => window.vdisoViewer.frameComplete());
+}
+
+// The same frame on two pages: its number (each page's triangles may differ a little, as what
+// each holds already differs: a brick sent whole marks more of the pyramid than its visible
+// part; the screenshots are compared instead).
+function sameFrame(what, seen, shown) {
+  if (seen.frame !== shown.frame || seen.status !== 'complete') {
+    throw new Error(`${what}: frame ${seen.frame} (${seen.status}), the other page's ${shown.frame}`);
+  }
+}
+
+// Follow mode between two pages: the follower sees the leader's frames; after the hand-over
+// the first page sees the follower's.
+// The follower runs in a browser of its own, as another person's would: a page in a
+// background tab of one browser draws nothing (no animation frames).
+async function follow(options, failure, page, camera, first) {
+  const link = await page.evaluate(() => window.vdisoViewer.followLink());
+  const browser = await launch();
+  try {
+    await followIn(browser, options, failure, page, camera, first, link);
+  } finally {
+    await browser.close();
+  }
+}
+
+async function followIn(browser, options, failure, page, camera, first, link) {
+  const follower = await openViewer(browser, options, link, failure);
+  const seen = await frameFrom(follower, first.frame);
+  sameFrame('the follower\'s first frame', seen, first);
+  await (await follower.$('#view')).screenshot({ path: options['follow-out'], captureBeyondViewport: false });
+  const moved = await page.evaluate(async (cam) => {
+    window.vdisoViewer.setCamera(cam);
+    return window.vdisoViewer.frameComplete();
+  }, turned(camera, 0.4));
+  sameFrame('the follower after the leader turned', await frameFrom(follower, moved.frame), moved);
+  await page.evaluate(() => window.vdisoViewer.handOver());
+  await follower.waitForFunction(() => !window.vdisoViewer.role().following, { polling: 50 });
+  await page.waitForFunction(() => window.vdisoViewer.role().following, { polling: 50 });
+  const led = await follower.evaluate(async (cam) => {
+    window.vdisoViewer.setCamera(cam);
+    return window.vdisoViewer.frameComplete();
+  }, camera);
+  sameFrame('the first page after the hand-over', await frameFrom(page, led.frame), led);
+  const roles = await page.evaluate(() => window.vdisoViewer.role());
+  console.log(JSON.stringify({ follow: { followerFirstFrame: seen.frame, afterTurn: moved.frame, afterHandOver: led.frame, roles } }));
+}
+
+async function run(options, browser, failure) {
+  const camera = readCamera(options.camera);
+  const page = await openViewer(browser, options, pageUrl(options, camera), failure);
   const first = await page.evaluate(() => window.vdisoViewer.frameComplete());
   if (options.out) {
     const canvas = await page.$('#view');
@@ -119,6 +180,7 @@ async function run(options, browser, failure) {
     await new Promise((resolve) => setTimeout(resolve, 200));  // a few frames drawn
     await page.screenshot({ path: options.page, captureBeyondViewport: false });
   }
+  if (options['follow-out']) await follow(options, failure, page, camera, first);
   if (options.orbit === 0) {
     console.log(JSON.stringify(first));
     return;
@@ -134,9 +196,13 @@ async function run(options, browser, failure) {
   }
 }
 
+function launch() {
+  return puppeteer.launch({ executablePath: CHROMIUM, headless: true, args: CHROMIUM_ARGS });
+}
+
 async function main() {
   const options = parseArgs(process.argv.slice(2));
-  const browser = await puppeteer.launch({ executablePath: CHROMIUM, headless: true, args: CHROMIUM_ARGS });
+  const browser = await launch();
   let fail;
   const failed = new Promise((_, reject) => (fail = (message) => reject(new Error(message))));
   failed.catch(() => {}); // also fails the race below; an error after the run has nothing to fail

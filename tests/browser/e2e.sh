@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The viewer end to end on the real MRI: `vdiso serve` on the skull-stripped head, headless
 # chromium on the page (tests/browser/e2e.mjs) until the frame is complete, its screenshot
-# against `vdiso extract --method sage --camera ... --png` for the same camera. Different
+# against `vdiso extract --method sage --camera ... --png` for the same camera; a second page
+# following the first (follow mode) shows the same picture and takes over control. Different
 # rasterizers, so what must agree is coverage: the pixels the surface covers (--tolerance 255
 # compares covered against background only), at least 99.5%; the colour agreement is printed.
 #
@@ -43,7 +44,7 @@ echo '{"eye": [338, 736, 170], "target": [150, 199.25, 9.25], "up": [0, 0, 1], "
 page=()
 [ -n "${2:-}" ] && page=(--page "$out/viewer_page.png")
 node "$here/e2e.mjs" --url "$url" --camera "$work/cam.json" --size 800x800 --out "$out/viewer_frame.png" \
-  "${page[@]}" | tee "$work/stats.json"
+  --follow-out "$out/follower_frame.png" "${page[@]}" | tee "$work/stats.json"
 "$vdiso" extract "$work/ch2better.vdiso" --iso 40.5 --method sage --camera "$work/cam.json" \
   --size 800x800 --png "$out/extract_sage.png" --force --quiet
 echo -n "colour (tolerance 24): "
@@ -52,6 +53,9 @@ echo -n "coverage: "
 "$vdiso" compare "$out/extract_sage.png" "$out/viewer_frame.png" --tolerance 255 --min 0.995
 echo -n "coverage, the other way: "
 "$vdiso" compare "$out/viewer_frame.png" "$out/extract_sage.png" --tolerance 255 --min 0.995
+# Follow mode: a second page, opened at the first one's follow link, shows the same picture.
+echo -n "follower against leader: "
+"$vdiso" compare "$out/viewer_frame.png" "$out/follower_frame.png" --min 0.995
 # The server stays up after the browser leaves, and stops cleanly on SIGTERM.
 kill -TERM "$server"
 wait "$server"

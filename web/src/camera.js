@@ -70,6 +70,13 @@ export class CameraController {
     this.onChange = onChange;
     this.controls = null;
     this.up = null;
+    this.enabled = true;
+  }
+
+  // A follower's camera is its leader's: the user's drags do nothing then.
+  setEnabled(enabled) {
+    this.enabled = enabled;
+    if (this.controls) this.controls.enabled = enabled;
   }
 
   get() {
@@ -99,6 +106,7 @@ export class CameraController {
       this.controls.minPolarAngle = 1e-3;
       this.controls.maxPolarAngle = Math.PI - 1e-3;
       this.controls.addEventListener('change', () => this.onChange());
+      this.controls.enabled = this.enabled;
       this.up = [...up];
     }
     this.camera.fov = fov;

@@ -2,11 +2,15 @@
 // The token comes from the page's own URL (?token=T); the server also sets it as a cookie,
 // which the upgrade request carries, so either suffices.
 
-export function webSocketUrl(location) {
+// follow: a session id to follow (follow mode), or null.
+export function webSocketUrl(location, follow = null) {
   const token = new URLSearchParams(location.search).get('token');
   const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
-  const query = token === null ? '' : `?token=${encodeURIComponent(token)}`;
-  return `${scheme}//${location.host}/ws${query}`;
+  const query = new URLSearchParams();
+  if (token !== null) query.set('token', token);
+  if (follow !== null) query.set('follow', follow);
+  const text = query.toString();
+  return `${scheme}//${location.host}/ws${text ? `?${text}` : ''}`;
 }
 
 export class Connection {

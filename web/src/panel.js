@@ -46,6 +46,12 @@ export class Panel {
     this.drawHistogram();
   }
 
+  // A follower's store, isovalue and view are its leader's: its controls are off.
+  setEnabled(enabled) {
+    const { store, slider, isoInput, presets } = this.elements;
+    for (const input of [store, slider, isoInput, ...presets.querySelectorAll('button')]) input.disabled = !enabled;
+  }
+
   setIso(value) {
     this.elements.slider.value = String(value);
     this.elements.isoInput.value = String(value);

@@ -7,12 +7,15 @@ export const PROTOCOL_VERSION = 1;
 export const MessageType = Object.freeze({
   VIEW: 1,
   EVICT: 2,
+  HANDOVER: 3,
   CHUNK: 16,
   REFS: 17,
 });
 
 export const VIEW_BYTES = 112;
 export const EVICT_HEADER_BYTES = 24;
+export const HANDOVER_BYTES = 12;
+const SESSION_ID = /^[0-9a-f]{8}$/;
 export const EVICT_MAX_BRICKS = 65536;
 export const CHUNK_HEADER_BYTES = 72;
 export const REFS_HEADER_BYTES = 12;
@@ -99,6 +102,18 @@ export function encodeEvict({ seq, store, iso, bricks }) {
   view.setUint32(12, bricks.length, LE);
   view.setFloat64(16, iso, LE);
   bricks.forEach((brick, i) => view.setUint32(EVICT_HEADER_BYTES + 4 * i, brick, LE));
+  return buffer;
+}
+
+// Gives control to follower `to` (a session id), or to the first follower (to undefined).
+export function encodeHandOver(to) {
+  const buffer = new ArrayBuffer(HANDOVER_BYTES);
+  const view = new DataView(buffer);
+  writeHeader(view, MessageType.HANDOVER);
+  if (to !== undefined) {
+    if (!SESSION_ID.test(to)) throw new Error(`session id ${to} is not 8 lower-case hex digits`);
+    for (let i = 0; i < 8; i += 1) view.setUint8(4 + i, to.charCodeAt(i));
+  }
   return buffer;
 }
 

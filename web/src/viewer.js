@@ -3,15 +3,17 @@
 // exposes window.vdisoViewer, the page's scriptable interface (documented in the README).
 //
 // URL parameters: token (access), store (by name), iso, eye, target, up (x,y,z in world
-// units), fov (vertical, degrees), cacheMb (client cache budget), overlay=0 (hide overlays).
+// units), fov (vertical, degrees), cacheMb (client cache budget), overlay=0 (hide overlays),
+// follow=ID (show session ID's frames: follow mode, docs/protocol.md).
 import { ChunkCache } from './cache.js';
 import { CameraController, presetCamera } from './camera.js';
 import { Connection, webSocketUrl } from './connection.js';
 import { decoderReady } from './decode.js';
+import { Follow } from './follow.js';
 import { FrameAssembler } from './frames.js';
 import { Overlay } from './overlay.js';
 import { Panel } from './panel.js';
-import { MessageType, PROTOCOL_VERSION, decodeServerMessage, encodeEvict, encodeView } from './protocol.js';
+import { MessageType, PROTOCOL_VERSION, decodeServerMessage, encodeEvict, encodeHandOver, encodeView } from './protocol.js';
 import { SurfaceScene, fitClipPlanes } from './scene.js';
 
 const DEFAULT_CACHE_MB = 512;
@@ -66,6 +68,16 @@ class Viewer {
         preset: (name) => this.applyPreset(name),
       },
     );
+    this.follow = new Follow(
+      {
+        state: document.getElementById('follow-state'),
+        link: document.getElementById('follow-link'),
+        copy: document.getElementById('copy-link'),
+        handOver: document.getElementById('hand-over'),
+      },
+      params.get('follow'),
+      () => this.handOver(),
+    );
     document.body.classList.toggle('no-overlay', params.get('overlay') === '0');
     window.addEventListener('keydown', (event) => {
       if (event.key === 'o' && !event.target.closest('input, select')) document.body.classList.toggle('no-overlay');
@@ -86,11 +98,12 @@ class Viewer {
     this.waiters = []; // frameComplete() calls not answered yet: { resolve, reject }
     this.closed = false;
     this.ready = new Promise((resolve, reject) => (this.readyHandlers = { resolve, reject }));
+    this.roleChanged();
   }
 
   async start() {
     await decoderReady;
-    this.connection = new Connection(webSocketUrl(window.location), {
+    this.connection = new Connection(webSocketUrl(window.location, this.params.get('follow')), {
       text: (text) => this.guard(() => this.onText(JSON.parse(text))),
       binary: (buffer) => this.guard(() => this.onBinary(buffer)),
       close: (event) => this.onClose(event),
@@ -121,14 +134,22 @@ class Viewer {
       case 'hello':
         return this.onHello(message);
       case 'frameBegin':
+        if (this.follow.following) this.showLeadersView(message);
         this.frames.begin(message, this.sentAt.get(message.frame));
         for (const seq of this.sentAt.keys()) if (seq < message.frame) this.sentAt.delete(seq);
         return;
+      case 'role':
+        this.follow.role(message);
+        return this.roleChanged(message.seq);
       case 'frameEnd':
         return this.onFrameEnd(this.frames.end(message));
       case 'evicted':
         return this.cache.evicted(message.seq);
       case 'error':
+        if (this.follow.waiting && message.message.startsWith('follow:')) {
+          this.follow.refused();
+          this.roleChanged();
+        }
         // A refused VIEW (named by its seq) gets no frame: whoever waits for it hears why.
         if (message.seq === this.seq) {
           for (const waiter of this.waiters.splice(0)) waiter.reject(new Error(`server: ${message.message}`));
@@ -151,6 +172,7 @@ class Viewer {
     if (!Array.isArray(hello.stores) || hello.stores.length === 0) throw new Error('the server offers no store');
     this.stores = hello.stores;
     this.panel.setStores(this.stores);
+    this.follow.hello(hello.session);
     try {
       const name = this.params.get('store');
       const index = name === null ? 0 : this.stores.findIndex((store) => store.name === name);
@@ -232,6 +254,35 @@ class Viewer {
     this.viewDirty = false;
   }
 
+  // Follow mode: the page shows the leader's frames with the leader's camera, store and
+  // isovalue, and sends no VIEW; leading (again), it sends its view, numbered after the
+  // group's last frame (`seq` of the role message).
+  roleChanged(seq = 0) {
+    const following = this.follow.following;
+    this.cameraController.setEnabled(!following);
+    this.panel.setEnabled(!following);
+    if (!following) this.seq = Math.max(this.seq, seq);
+    if (this.wasFollowing && !following) this.viewDirty = this.storeIndex >= 0;
+    this.wasFollowing = following;
+  }
+
+  showLeadersView(begin) {
+    if (begin.store !== this.storeIndex && this.stores[begin.store]) {
+      this.storeIndex = begin.store;
+      this.panel.setStore(begin.store, this.stores[begin.store]);
+    }
+    this.iso = begin.iso;
+    this.panel.setIso(begin.iso);
+    if (begin.view) this.cameraController.set(begin.view);
+    this.seq = begin.frame;
+    this.sentAt.set(begin.frame, this.sentAt.get(begin.frame) ?? performance.now());
+    this.viewDirty = false;
+  }
+
+  handOver(to = undefined) {
+    this.connection.send(encodeHandOver(to));
+  }
+
   sendEvictions(messages) {
     for (const message of messages) this.connection.send(encodeEvict(message));
   }
@@ -263,6 +314,7 @@ class Viewer {
   // while a frame streams in), answer frameComplete() once its frame is on screen, and show
   // the stats of what is drawn.
   tick() {
+    if (this.viewDirty && this.follow.following) this.viewDirty = false; // the leader's view is drawn
     if (this.viewDirty && this.storeIndex >= 0 && !this.closed) this.sendView();
     const streaming = this.frames.streaming;
     if (this.needsRender || streaming) {
@@ -314,6 +366,11 @@ window.vdisoViewer = {
   },
   setIso: (value) => viewer.setIso(value),
   frameComplete: () => viewer.frameComplete(),
+  // Follow mode: { session, leader, followers, following }, the link that follows this page's
+  // group, and the hand-over of control (to a follower's session id; none: the first).
+  role: () => viewer.follow.snapshot(),
+  followLink: () => viewer.follow.link(),
+  handOver: (to) => viewer.handOver(to),
 };
 
 viewer.start().catch((error) => viewer.reportError(error.message));
