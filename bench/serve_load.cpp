@@ -1,11 +1,13 @@
 // vdiso serve under many viewers (issue: many viewers, one server): a server in this process
 // and N viewers (the C++ client of docs/protocol.md over loopback WebSockets, one thread each)
 // orbiting the same store in 10-degree steps, each sending its next camera when its frame ends,
-// the viewers' orbits spread around the circle. Halfway, one more viewer joins and asks for one
+// the viewers' orbits spread around the circle. From halfway, one more viewer at a time joins
+// (8 in turn, through the second half) and asks for one
 // view: its first coarse and final frame are timed. Prints one JSON line:
 //   frame_ms_p50/p95/p99   viewers' final frames, from the VIEW to its frameEnd (client side)
 //   frames_min/max         frames a viewer completed in the run; frames_per_s all of them
-//   join_coarse_ms, join_final_ms   the joining viewer's first frame
+//   join_coarse_ms, join_final_ms   the joining viewers' first frame, median; and p95 (of 8:
+//                          the second worst) join_coarse_ms_p95, join_final_ms_p95
 //   threads_max            threads of the process (server and clients) sampled every 100 ms
 //   server_threads_max     of them the server's: less this program's own (main, the sampler)
 //                          and the clients' running at the time, until the run's end
@@ -15,14 +17,21 @@
 //                          cacheable chunks the server encoded and sent from its shared chunks,
 //                          and the distinct ones the viewers received
 //
+// With --followers F instead: one leader orbiting and F viewers following it (follow mode);
+// prints one JSON line with the leader's frames and, for every follower's copy of a leader's
+// final frame, how much later than the leader's its frameEnd arrived:
+//   lag_ms_p50/p95/max, frames_followed_min/max (of leader_frames), passes_per_frame
+//
 //   vdiso_serve_load STORE.vdiso --iso V --viewers N [--seconds 15] [--size 1024] [--threads 2]
 //                    [--cache-mb 1024] [--chunk-cache-mb 256]
+//   vdiso_serve_load STORE.vdiso --iso V --followers F [--seconds 15] ...
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <set>
 #include <string>
@@ -60,6 +69,66 @@ double peakRssMb() {
     return 0;
 }
 
+using Clock = std::chrono::steady_clock;
+
+// One leader orbiting, `followers` following it: when each follower's copy of each of the
+// leader's frames ends, against the leader's. Returns the JSON line.
+std::string followRun(Server& server, const std::vector<Camera>& orbit, double iso, double seconds, int followers) {
+    ViewerClient leader("127.0.0.1", server.port(), server.token());
+    std::vector<std::unique_ptr<ViewerClient>> clients;
+    for (int k = 0; k < followers; ++k)
+        clients.push_back(std::make_unique<ViewerClient>("127.0.0.1", server.port(), server.token(),
+                                                         "follow=" + leader.session()));
+    std::mutex mutex;
+    std::vector<std::map<uint32_t, Clock::time_point>> seen{size_t(followers)};
+    std::vector<std::thread> threads;
+    for (int k = 0; k < followers; ++k)
+        threads.emplace_back([&, k] {
+            try {  // until the server stops and closes the connection
+                while (true) {
+                    const ClientFrame f = clients[size_t(k)]->readFollowedFrame();
+                    const Clock::time_point at = Clock::now();
+                    std::lock_guard lock(mutex);
+                    if (f.status == "complete") seen[size_t(k)][f.frame] = at;
+                }
+            } catch (const std::exception&) {
+            }
+        });
+    std::map<uint32_t, Clock::time_point> led;
+    const uint64_t passesBefore = server.counters().framePasses;
+    const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+    for (uint32_t seq = 1; Clock::now() < deadline; ++seq) {
+        const ClientFrame f = leader.requestFrame(viewMessage(orbit[seq % orbit.size()], seq, 0, iso));
+        if (f.status == "complete") led[seq] = Clock::now();
+    }
+    const uint64_t passes = server.counters().framePasses - passesBefore;
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the last copies arrive
+    for (auto& client : clients) client->interrupt();
+    for (std::thread& t : threads) t.join();
+    leader.close();  // while the server still answers
+    server.stop();
+    std::vector<double> lags;
+    int fewest = int(led.size()), most = 0;
+    for (const auto& copies : seen) {
+        int followed = 0;
+        for (const auto& [frame, at] : led) {
+            const auto copy = copies.find(frame);
+            if (copy == copies.end()) continue;
+            ++followed;
+            lags.push_back(std::chrono::duration<double, std::milli>(copy->second - at).count());
+        }
+        fewest = std::min(fewest, followed);
+        most = std::max(most, followed);
+    }
+    JsonObject line;
+    line.add("followers", int64_t(followers)).add("leader_frames", uint64_t(led.size()));
+    line.add("passes_per_frame", led.empty() ? 0.0 : double(passes) / double(led.size()));
+    line.add("frames_followed_min", int64_t(fewest)).add("frames_followed_max", int64_t(most));
+    line.add("lag_ms_p50", percentile(lags, 0.5)).add("lag_ms_p95", percentile(lags, 0.95));
+    line.add("lag_ms_max", lags.empty() ? 0.0 : *std::max_element(lags.begin(), lags.end()));
+    return line.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -75,12 +144,13 @@ int main(int argc, char** argv) {
     options.webRoot = VDISO_WEB_DIR;
     options.maxViewers = 1000;
     double iso = 0, seconds = 15;
-    int viewers = 1, size = 1024;
+    int viewers = 1, size = 1024, followers = 0;
     for (int i = 2; i < argc; ++i) {
         const std::string a = argv[i];
         auto next = [&] { return std::string(i + 1 < argc ? argv[++i] : ""); };
         if (a == "--iso") iso = std::stod(next());
         else if (a == "--viewers") viewers = std::stoi(next());
+        else if (a == "--followers") followers = std::stoi(next());
         else if (a == "--seconds") seconds = std::stod(next());
         else if (a == "--size") size = std::stoi(next());
         else if (a == "--threads") options.threads = std::stoi(next());
@@ -101,6 +171,13 @@ int main(int argc, char** argv) {
         }
         Server server(options);
         std::thread serving([&] { server.run(); });
+        if (followers > 0) {
+            const std::string line = followRun(server, orbit, iso, seconds, followers);
+            serving.join();
+            std::printf("{\"store\": %s, %s\n", jsonQuote(std::filesystem::path(argv[1]).filename().string()).c_str(),
+                        line.c_str() + 1);
+            return 0;
+        }
         const auto start = std::chrono::steady_clock::now();
         const auto deadline = start + std::chrono::duration<double>(seconds);
 
@@ -149,14 +226,15 @@ int main(int argc, char** argv) {
                 }
             });
         }
-        // The joining viewer, halfway.
-        std::this_thread::sleep_until(start + std::chrono::duration<double>(seconds / 2));
-        double joinCoarse = -1, joinFinal = -1;
-        {
+        // The joining viewers, one at a time through the second half.
+        constexpr int kJoins = 8;
+        std::vector<double> joinCoarse, joinFinal;
+        for (int j = 0; j < kJoins; ++j) {
+            std::this_thread::sleep_until(start + std::chrono::duration<double>(seconds * (0.5 + 0.45 * j / kJoins)));
             ViewerClient joining("127.0.0.1", server.port(), server.token());  // on this thread
-            const ClientFrame f = joining.requestFrame(viewMessage(orbit[0], 1, 0, iso));
-            joinCoarse = f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1;
-            joinFinal = f.completeSeconds * 1e3;
+            const ClientFrame f = joining.requestFrame(viewMessage(orbit[size_t(5 * j) % orbit.size()], 1, 0, iso));
+            joinCoarse.push_back(f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1);
+            joinFinal.push_back(f.completeSeconds * 1e3);
         }
         for (std::thread& t : clients) t.join();
         done = true;
@@ -175,7 +253,8 @@ int main(int argc, char** argv) {
         line.add("frame_ms_p99", percentile(frameMs, 0.99));
         line.add("frames_min", int64_t(*std::min_element(framesOf.begin(), framesOf.end())));
         line.add("frames_max", int64_t(*std::max_element(framesOf.begin(), framesOf.end())));
-        line.add("join_coarse_ms", joinCoarse).add("join_final_ms", joinFinal);
+        line.add("join_coarse_ms", percentile(joinCoarse, 0.5)).add("join_final_ms", percentile(joinFinal, 0.5));
+        line.add("join_coarse_ms_p95", percentile(joinCoarse, 0.95)).add("join_final_ms_p95", percentile(joinFinal, 0.95));
         line.add("threads_max", uint64_t(threadsMax.load())).add("server_threads_max", uint64_t(serverThreadsMax.load()));
         line.add("peak_rss_mb", peakRssMb());
         line.add("chunks_encoded", counters.chunksEncoded).add("chunks_shared", counters.chunksShared);

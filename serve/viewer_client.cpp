@@ -55,6 +55,11 @@ void ViewerClient::close() {
     mConnection->ws.close(websocket::close_code::normal, ignored);
 }
 
+void ViewerClient::interrupt() {
+    beast::error_code ignored;
+    mConnection->ws.next_layer().shutdown(tcp::socket::shutdown_both, ignored);
+}
+
 bool ViewerClient::read(std::vector<uint8_t>& message) {
     beast::flat_buffer buffer;
     try {

@@ -81,6 +81,9 @@ public:
         return mCache.contains({store, iso, brick});
     }
     void close();
+    // From another thread: shuts the socket down, so that a read blocked on it ends (with an
+    // IoError) and no more is sent. The only call that may come from another thread.
+    void interrupt();
 
 private:
     struct Connection;
