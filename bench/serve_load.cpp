@@ -191,8 +191,9 @@ int main(int argc, char** argv) {
         std::atomic<bool> done{false};
         std::thread sampler([&] {
             while (!done) {
-                const int live = liveClients.load();
+                // Counted before the clients: a client counts as live before its thread exists.
                 const size_t all = threadCount();
+                const int live = liveClients.load();
                 threadsMax = std::max(threadsMax.load(), all);
                 // Until the deadline: after it, clients' threads end after they say so.
                 if (std::chrono::steady_clock::now() < deadline)

@@ -34,9 +34,11 @@ void FramePool::enqueueLocked(Task& task, State& state, bool first, Clock::time_
         if (later == mLater.end()) return;  // queued first already
         mFirst.push_back(*later);
         mLater.erase(later);
+        mFirstWaiting = mFirst.size();
         return;
     }
     (first ? mFirst : mLater).push_back({&task, notBefore});
+    mFirstWaiting = mFirst.size();
     state.queued = true;
 }
 
@@ -64,6 +66,7 @@ void FramePool::remove(Task& task) {
     if (!state.queued) return;
     for (std::deque<Entry>* queue : {&mFirst, &mLater})
         std::erase_if(*queue, [&](const Entry& e) { return e.task == &task; });
+    mFirstWaiting = mFirst.size();
     state.queued = false;
 }
 
@@ -93,24 +96,74 @@ size_t FramePool::waiting() const {
     return mFirst.size() + mLater.size();
 }
 
+namespace {
+thread_local bool tNested = false;
+}  // namespace
+
+bool FramePool::nested() { return tNested; }
+
+FramePool::Task* FramePool::takeDueLocked(bool firstOnly, Clock::time_point& soonest) {
+    const Clock::time_point now = Clock::now();
+    soonest = Clock::time_point::max();
+    for (std::deque<Entry>* queue : {&mFirst, &mLater}) {
+        if (firstOnly && queue == &mLater) break;
+        for (auto e = queue->begin(); e != queue->end(); ++e) {
+            if (e->notBefore <= now) {
+                Task* task = e->task;
+                queue->erase(e);
+                mFirstWaiting = mFirst.size();
+                State& state = mStates[task];
+                state.queued = false;
+                state.running = true;
+                ++mPasses;
+                return task;
+            }
+            soonest = std::min(soonest, e->notBefore);
+        }
+    }
+    return nullptr;
+}
+
+void FramePool::runLocked(Task* task, std::unique_lock<std::mutex>& lock) {
+    lock.unlock();
+    try {
+        task->runPass();
+    } catch (...) {  // a task answers its own errors; none may end a worker
+    }
+    lock.lock();
+    State& after = mStates[task];
+    after.running = false;
+    if (after.again && !after.removed) {
+        after.again = false;
+        enqueueLocked(*task, after, after.againFirst, after.againNotBefore);
+    }
+    mChanged.notify_all();
+}
+
+int FramePool::runFirstPassesHere() {
+    if (tNested) return 0;
+    std::unique_lock lock(mMutex);
+    int ran = 0;
+    while (!mStopping && mNested < workers()) {
+        Clock::time_point soonest;
+        Task* task = takeDueLocked(true, soonest);
+        if (!task) break;
+        ++mNested;
+        tNested = true;
+        runLocked(task, lock);
+        tNested = false;
+        --mNested;
+        ++ran;
+    }
+    return ran;
+}
+
 void FramePool::work() {
     std::unique_lock lock(mMutex);
     while (!mStopping) {
         // The first due entry, first passes before later ones; else the soonest one not yet due.
-        const Clock::time_point now = Clock::now();
-        Clock::time_point soonest = Clock::time_point::max();
-        Task* task = nullptr;
-        for (std::deque<Entry>* queue : {&mFirst, &mLater}) {
-            for (auto e = queue->begin(); e != queue->end() && !task; ++e) {
-                if (e->notBefore <= now) {
-                    task = e->task;
-                    queue->erase(e);
-                    break;
-                }
-                soonest = std::min(soonest, e->notBefore);
-            }
-            if (task) break;
-        }
+        Clock::time_point soonest;
+        Task* task = takeDueLocked(false, soonest);
         if (!task) {
             if (soonest == Clock::time_point::max())
                 mChanged.wait(lock);
@@ -118,23 +171,7 @@ void FramePool::work() {
                 mChanged.wait_until(lock, soonest);
             continue;
         }
-        State& state = mStates[task];
-        state.queued = false;
-        state.running = true;
-        ++mPasses;
-        lock.unlock();
-        try {
-            task->runPass();
-        } catch (...) {  // a task answers its own errors; none may end a worker
-        }
-        lock.lock();
-        State& after = mStates[task];
-        after.running = false;
-        if (after.again && !after.removed) {
-            after.again = false;
-            enqueueLocked(*task, after, after.againFirst, after.againNotBefore);
-        }
-        mChanged.notify_all();
+        runLocked(task, lock);
     }
 }
 

@@ -5,8 +5,14 @@
 // has another pass due posts it again and goes to the back, so a heavy viewer and a light one
 // get their passes in turn. A task is queued at most once: a newer VIEW replaces the pending
 // one inside the task, so a superseded frame never runs at all.
+//
+// A first pass need not wait for a long later one to end: a later pass calls
+// runFirstPassesHere() between its bricks, which runs the waiting first passes on its own
+// thread, nested, while its other strips go on (at most one nested pass a worker at once).
+// Someone joining a busy server sees the volume within a coarse pass's time, not a final one's.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -49,6 +55,14 @@ public:
     // No pass of `task` runs or is queued.
     bool idle(Task& task);
 
+    // Whether a first pass waits (cheap: for a later pass to ask between its bricks).
+    bool firstPassWaits() const { return mFirstWaiting.load(std::memory_order_relaxed) > 0; }
+    // Runs the due first passes on this thread, one after another, while any waits and fewer
+    // than workers() run so; returns how many ran.
+    int runFirstPassesHere();
+    // Whether this thread is running a nested first pass (it then uses no threads of its own).
+    static bool nested();
+
     int workers() const { return int(mThreads.size()); }
     uint64_t passes() const;  // passes begun so far
     size_t waiting() const;   // passes queued now
@@ -65,10 +79,17 @@ private:
     };
     void work();
     void enqueueLocked(Task& task, State& state, bool first, Clock::time_point notBefore);
+    // The first due entry (first passes before later ones, unless `firstOnly`), taken out of
+    // the queue and marked running; else nullptr and the soonest time one becomes due.
+    Task* takeDueLocked(bool firstOnly, Clock::time_point& soonest);
+    // Runs `task`'s pass (the lock released meanwhile) and queues its next one if posted.
+    void runLocked(Task* task, std::unique_lock<std::mutex>& lock);
 
     mutable std::mutex mMutex;
     std::condition_variable mChanged;  // a pass queued or ended, or stopping
     std::deque<Entry> mFirst, mLater;
+    std::atomic<size_t> mFirstWaiting{0};  // mFirst.size(), read without the lock
+    int mNested = 0;                       // nested first passes running
     std::unordered_map<Task*, State> mStates;
     uint64_t mPasses = 0;
     bool mStopping = false;

@@ -174,8 +174,10 @@ void ViewerSession::runPass() {
     const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.lodError : 0.0;
     const bool coarse = first && lodError > 0;
     try {
+        // The final pass after a coarse one lets first passes run inside it.
+        const bool later = !first && catchUps.empty();
         const std::string status = extractPass(
-            view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs);
+            view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs, later);
         // A complete coarse frame: the final one goes to the back of the queue, behind other
         // viewers' passes. Superseded (or failed): no finer one follows.
         if (coarse && status == "complete") {
@@ -191,6 +193,25 @@ void ViewerSession::runPass() {
 }
 
 namespace {
+
+// A later pass's stream: between bricks, first passes waiting for a worker run here, nested
+// (FramePool::runFirstPassesHere), so that a joining viewer does not wait for this whole pass.
+class YieldToFirstPasses final : public ViewStream {
+public:
+    YieldToFirstPasses(ViewStream& inner, FramePool& pool) : mInner(inner), mPool(pool) {}
+    bool beginBrick(int64_t brick, int level, double cellPixels, Use& use) override {
+        if (mPool.firstPassWaits()) mPool.runFirstPassesHere();
+        return mInner.beginBrick(brick, level, cellPixels, use);
+    }
+    void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
+                  const TriangleMesh& seams) override {
+        mInner.endBrick(brick, use, mesh, points, seams);
+    }
+
+private:
+    ViewStream& mInner;
+    FramePool& mPool;
+};
 
 std::string frameBegin(const ViewMessage& view, double lodError, bool final) {
     auto vec = [](const glm::dvec3& v) { return jsonArray(std::array<double, 3>{v.x, v.y, v.z}); };
@@ -211,7 +232,8 @@ std::string frameBegin(const ViewMessage& view, double lodError, bool final) {
 }  // namespace
 
 std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_point arrival, double lodError,
-                                       bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs) {
+                                       bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs,
+                                       bool yields) {
     ServedStore& store = mStores[view.store];
     const VolumeInfo& volume = store.reader->volume();
     Camera camera = cameraOf(view);
@@ -243,7 +265,13 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
     options.prefetchBricks = mSettings.prefetchBricks;
     options.prefetchReaders = mSettings.prefetchReaders;
     options.prefetchNear = mSettings.prefetchNear;
-    options.stream = streams.size() == 1 ? static_cast<ViewStream*>(streams[0].get()) : &fanOut;
+    ViewStream& stream = streams.size() == 1 ? static_cast<ViewStream&>(*streams[0]) : fanOut;
+    YieldToFirstPasses yielding(stream, mPool);
+    options.stream = yields ? &yielding : &stream;
+    if (FramePool::nested()) {  // a first pass inside another's: one strip, no read-ahead threads
+        options.threads = 1;
+        options.prefetchBricks = 0;
+    }
     options.rangeCache = store.ranges.get();
     options.tree = store.tree.get();
     options.lodError = lodError;

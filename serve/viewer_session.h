@@ -85,9 +85,11 @@ private:
     void catchUp(std::shared_ptr<ViewerOutput> output, const ViewMessage& view) override;
     void stopLeading() override;
     // One frame of a VIEW at `lodError` into `outputs` (this viewer's, and its followers'; the
-    // first one's stopping stops it); `final`: the last for it. Returns the first one's status.
+    // first one's stopping stops it); `final`: the last for it; `yields`: waiting first passes
+    // run inside it (FramePool::runFirstPassesHere). Returns the first one's status.
     std::string extractPass(const ViewMessage& view, std::chrono::steady_clock::time_point arrival,
-                            double lodError, bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs);
+                            double lodError, bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs,
+                            bool yields);
     void reply(const std::string& error, std::optional<uint32_t> seq = std::nullopt);
 
     StoreCatalog& mStores;
