@@ -104,5 +104,36 @@ TEST(FramePool, ARemovedTaskDoesNotRunAndNotBeforeIsKept) {
     EXPECT_EQ(pool.workers(), 2);
 }
 
+// A later pass that yields between its bricks runs the waiting first pass inside itself, on its
+// own thread (marked nested), while the pool's one worker is busy with it.
+TEST(FramePool, AWaitingFirstPassRunsInsideALaterOne) {
+    FramePool pool(1);
+    std::mutex mutex;
+    std::vector<int> order;
+    Recorded first(1, mutex, order);
+    std::atomic<bool> firstWasNested{false};
+    first.during = [&] { firstWasNested = FramePool::nested(); };
+    std::atomic<bool> laterRunning{false}, firstPosted{false};
+    int ranInside = -1;
+    Recorded later(0, mutex, order);
+    later.during = [&] {
+        laterRunning = true;
+        while (!firstPosted) std::this_thread::yield();
+        EXPECT_TRUE(pool.firstPassWaits());
+        ranInside = pool.runFirstPassesHere();  // between two of its bricks
+        std::lock_guard lock(mutex);
+        order.push_back(2);  // the later pass goes on after it
+    };
+    pool.post(later, false);
+    while (!laterRunning) std::this_thread::yield();
+    pool.post(first, true);
+    firstPosted = true;
+    while (!pool.idle(later) || !pool.idle(first)) std::this_thread::yield();
+    EXPECT_EQ(ranInside, 1);
+    EXPECT_TRUE(firstWasNested.load());
+    EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
+    EXPECT_FALSE(pool.firstPassWaits());
+}
+
 }  // namespace
 }  // namespace vdiso::serve
