@@ -2,8 +2,8 @@
 // and N viewers (the C++ client of docs/protocol.md over loopback WebSockets, one thread each)
 // orbiting the same store in 10-degree steps, each sending its next camera when its frame ends,
 // the viewers' orbits spread around the circle. From halfway, one more viewer at a time joins
-// (8 in turn, through the second half) and asks for one
-// view: its first coarse and final frame are timed. Prints one JSON line:
+// (8 in turn, through the second half, the others orbiting on until the last has its frame)
+// and asks for one view: its first coarse and final frame are timed. Prints one JSON line:
 //   frame_ms_p50/p95/p99   viewers' final frames, from the VIEW to its frameEnd (client side)
 //   frames_min/max         frames a viewer completed in the run; frames_per_s all of them
 //   join_coarse_ms, join_final_ms   the joining viewers' first frame, median; and p95 (of 8:
@@ -11,8 +11,9 @@
 //   threads_max            threads of the process (server and clients) sampled every 100 ms
 //   server_threads_max     of them the server's: less this program's own (main, the sampler)
 //                          and the clients' running at the time, until the run's end
-//   peak_rss_mb            the process's peak (server and clients: the clients hold their
-//                          chunks, as browsers would; VmHWM)
+//   peak_rss_mb            the process's peak (VmHWM): the server's, and the clients' chunk ids
+//                          (they keep chunks undecoded, so that the figures are the server's:
+//                          --decode to decode them too, as a browser would)
 //   chunks_encoded, chunks_shared, distinct_chunks, encodings_per_chunk
 //                          cacheable chunks the server encoded and sent from its shared chunks,
 //                          and the distinct ones the viewers received
@@ -73,12 +74,15 @@ using Clock = std::chrono::steady_clock;
 
 // One leader orbiting, `followers` following it: when each follower's copy of each of the
 // leader's frames ends, against the leader's. Returns the JSON line.
-std::string followRun(Server& server, const std::vector<Camera>& orbit, double iso, double seconds, int followers) {
+std::string followRun(Server& server, const std::vector<Camera>& orbit, double iso, double seconds, int followers,
+                      bool decode) {
     ViewerClient leader("127.0.0.1", server.port(), server.token());
+    leader.setDecode(decode);
     std::vector<std::unique_ptr<ViewerClient>> clients;
     for (int k = 0; k < followers; ++k)
         clients.push_back(std::make_unique<ViewerClient>("127.0.0.1", server.port(), server.token(),
                                                          "follow=" + leader.session()));
+    for (auto& client : clients) client->setDecode(decode);
     std::mutex mutex;
     std::vector<std::map<uint32_t, Clock::time_point>> seen{size_t(followers)};
     std::vector<std::thread> threads;
@@ -134,7 +138,7 @@ std::string followRun(Server& server, const std::vector<Camera>& orbit, double i
 int main(int argc, char** argv) {
     if (argc < 2) {
         std::fprintf(stderr, "usage: vdiso_serve_load STORE.vdiso --iso V --viewers N [--seconds S] [--size PX]\n"
-                             "       [--threads N] [--cache-mb N] [--chunk-cache-mb N]\n");
+                             "       [--threads N] [--cache-mb N] [--chunk-cache-mb N] [--followers F] [--decode]\n");
         return 2;
     }
     ServeOptions options;
@@ -145,12 +149,14 @@ int main(int argc, char** argv) {
     options.maxViewers = 1000;
     double iso = 0, seconds = 15;
     int viewers = 1, size = 1024, followers = 0;
+    bool decode = false;
     for (int i = 2; i < argc; ++i) {
         const std::string a = argv[i];
         auto next = [&] { return std::string(i + 1 < argc ? argv[++i] : ""); };
         if (a == "--iso") iso = std::stod(next());
         else if (a == "--viewers") viewers = std::stoi(next());
         else if (a == "--followers") followers = std::stoi(next());
+        else if (a == "--decode") decode = true;
         else if (a == "--seconds") seconds = std::stod(next());
         else if (a == "--size") size = std::stoi(next());
         else if (a == "--threads") options.threads = std::stoi(next());
@@ -172,7 +178,7 @@ int main(int argc, char** argv) {
         Server server(options);
         std::thread serving([&] { server.run(); });
         if (followers > 0) {
-            const std::string line = followRun(server, orbit, iso, seconds, followers);
+            const std::string line = followRun(server, orbit, iso, seconds, followers, decode);
             serving.join();
             std::printf("{\"store\": %s, %s\n", jsonQuote(std::filesystem::path(argv[1]).filename().string()).c_str(),
                         line.c_str() + 1);
@@ -188,7 +194,7 @@ int main(int argc, char** argv) {
         std::vector<std::string> failures;
         std::atomic<size_t> threadsMax{0}, serverThreadsMax{0};
         std::atomic<int> liveClients{0};
-        std::atomic<bool> done{false};
+        std::atomic<bool> done{false}, joined{false};
         std::thread sampler([&] {
             while (!done) {
                 // Counted before the clients: a client counts as live before its thread exists.
@@ -211,8 +217,10 @@ int main(int argc, char** argv) {
                 } live{liveClients};
                 try {
                     ViewerClient client("127.0.0.1", server.port(), server.token());
+                    client.setDecode(decode);
                     const size_t first = size_t(k) * orbit.size() / size_t(viewers);
-                    for (uint32_t seq = 1; std::chrono::steady_clock::now() < deadline; ++seq) {
+                    // Until the deadline, and on while viewers still join (so that they join a busy server).
+                    for (uint32_t seq = 1; std::chrono::steady_clock::now() < deadline || !joined; ++seq) {
                         const ClientFrame f =
                             client.requestFrame(viewMessage(orbit[(first + seq) % orbit.size()], seq, 0, iso));
                         std::lock_guard lock(mutex);
@@ -227,16 +235,35 @@ int main(int argc, char** argv) {
                 }
             });
         }
-        // The joining viewers, one at a time through the second half.
+        // The joining viewers, one at a time through the second half, each on a thread of its
+        // own (a slow final frame does not put off the next one's joining).
         constexpr int kJoins = 8;
         std::vector<double> joinCoarse, joinFinal;
+        std::vector<std::thread> joiners;
         for (int j = 0; j < kJoins; ++j) {
             std::this_thread::sleep_until(start + std::chrono::duration<double>(seconds * (0.5 + 0.45 * j / kJoins)));
-            ViewerClient joining("127.0.0.1", server.port(), server.token());  // on this thread
-            const ClientFrame f = joining.requestFrame(viewMessage(orbit[size_t(5 * j) % orbit.size()], 1, 0, iso));
-            joinCoarse.push_back(f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1);
-            joinFinal.push_back(f.completeSeconds * 1e3);
+            ++liveClients;
+            joiners.emplace_back([&, j] {
+                struct Live {
+                    std::atomic<int>& n;
+                    ~Live() { --n; }
+                } live{liveClients};
+                try {
+                    ViewerClient joining("127.0.0.1", server.port(), server.token());
+                    joining.setDecode(decode);
+                    const ClientFrame f =
+                        joining.requestFrame(viewMessage(orbit[size_t(5 * j) % orbit.size()], 1, 0, iso));
+                    std::lock_guard lock(mutex);
+                    joinCoarse.push_back(f.coarseFrames ? f.coarseCompleteSeconds * 1e3 : -1);
+                    joinFinal.push_back(f.completeSeconds * 1e3);
+                } catch (const std::exception& e) {
+                    std::lock_guard lock(mutex);
+                    failures.push_back(e.what());
+                }
+            });
         }
+        for (std::thread& t : joiners) t.join();
+        joined = true;
         for (std::thread& t : clients) t.join();
         done = true;
         sampler.join();

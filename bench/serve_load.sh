@@ -2,7 +2,8 @@
 # One `vdiso serve` shared by many viewers (issue: many viewers, one server): 1 to 64 viewers
 # orbiting the MRI (ch2better) and the generated 1024^3 head on this machine's cores, each
 # sending its next camera when its frame ends; from halfway, 8 more join one at a time
-# (vdiso_serve_load, a server and C++ clients of docs/protocol.md in one process). Then 32 viewers again with no shared
+# (vdiso_serve_load, a server and C++ clients of docs/protocol.md in one process; the clients
+# keep chunks undecoded, so that the CPU, threads and memory measured are the server's). Then 32 viewers again with no shared
 # chunks (--chunk-cache-mb 0), to see what sharing buys; then one leader orbiting with 8
 # followers (follow mode): how much later than the leader's each follower's copy of a frame ends.
 #

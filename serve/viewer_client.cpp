@@ -81,8 +81,15 @@ void ViewerClient::sendRaw(const std::vector<uint8_t>& bytes, bool text) {
 std::string ViewerClient::readText() {
     std::vector<uint8_t> message;
     while (!read(message))
-        if (!message.empty() && message[0] == uint8_t(MessageType::Chunk)) keep(decodeChunk(message), message.size());
+        if (!message.empty() && message[0] == uint8_t(MessageType::Chunk)) keep(decodeOrNot(message), message.size());
     return std::string(message.begin(), message.end());
+}
+
+DecodedChunk ViewerClient::decodeOrNot(const std::vector<uint8_t>& message) const {
+    if (mDecode) return decodeChunk(message);
+    DecodedChunk header;
+    header.header = readChunkHeader(message);
+    return header;
 }
 
 void ViewerClient::keep(DecodedChunk chunk, size_t bytes) {
@@ -165,7 +172,7 @@ ClientFrame ViewerClient::readUntilEnd(ClientFrame f, bool followed) {
         }
         if (message.empty()) throw ProtocolError("empty binary message");
         if (message[0] == uint8_t(MessageType::Chunk)) {
-            DecodedChunk chunk = decodeChunk(message);
+            DecodedChunk chunk = decodeOrNot(message);
             const bool cacheable = chunk.header.flags & kChunkCacheable;
             const bool ours = begun && chunk.header.frame == frame;
             if (ours && f.firstGeometrySeconds < 0) f.firstGeometrySeconds = since();

@@ -81,6 +81,9 @@ public:
         return mCache.contains({store, iso, brick});
     }
     void close();
+    // false: chunks are kept by their headers alone, undecoded (a load generator that measures
+    // the server, not its clients: frames then assemble to no geometry).
+    void setDecode(bool decode) { mDecode = decode; }
     // From another thread: shuts the socket down, so that a read blocked on it ends (with an
     // IoError) and no more is sent. The only call that may come from another thread.
     void interrupt();
@@ -91,6 +94,8 @@ private:
     bool read(std::vector<uint8_t>& message);
     // Reads f's frame to its final frameEnd; `followed`: f is not known yet (its frameBegin says).
     ClientFrame readUntilEnd(ClientFrame f, bool followed);
+    // The chunk decoded, or its header alone (setDecode(false)).
+    DecodedChunk decodeOrNot(const std::vector<uint8_t>& message) const;
     // Caches a cacheable chunk under what it holds.
     void keep(DecodedChunk chunk, size_t bytes);
 
@@ -100,6 +105,7 @@ private:
     std::map<std::tuple<uint32_t, double, uint32_t>, uint64_t> mCacheBytes;
     std::map<uint32_t, std::pair<uint32_t, double>> mViews;  // seq -> store, iso
     uint32_t mEvictSeq = 0;
+    bool mDecode = true;
     std::chrono::steady_clock::time_point mSent;
 };
 
