@@ -72,6 +72,13 @@ double peakRssMb() {
 
 using Clock = std::chrono::steady_clock;
 
+// A client thread's count among the live ones: counted by whoever starts the thread, before
+// it exists; uncounted when its work ends.
+struct LiveClient {
+    std::atomic<int>& count;
+    ~LiveClient() { --count; }
+};
+
 // One leader orbiting, `followers` following it: when each follower's copy of each of the
 // leader's frames ends, against the leader's. Returns the JSON line.
 std::string followRun(Server& server, const std::vector<Camera>& orbit, double iso, double seconds, int followers,
@@ -211,10 +218,7 @@ int main(int argc, char** argv) {
         for (int k = 0; k < viewers; ++k) {
             ++liveClients;  // before its thread exists: never counted as the server's
             clients.emplace_back([&, k] {
-                struct Live {
-                    std::atomic<int>& n;
-                    ~Live() { --n; }
-                } live{liveClients};
+                const LiveClient live{liveClients};
                 try {
                     ViewerClient client("127.0.0.1", server.port(), server.token());
                     client.setDecode(decode);
@@ -244,10 +248,7 @@ int main(int argc, char** argv) {
             std::this_thread::sleep_until(start + std::chrono::duration<double>(seconds * (0.5 + 0.45 * j / kJoins)));
             ++liveClients;
             joiners.emplace_back([&, j] {
-                struct Live {
-                    std::atomic<int>& n;
-                    ~Live() { --n; }
-                } live{liveClients};
+                const LiveClient live{liveClients};
                 try {
                     ViewerClient joining("127.0.0.1", server.port(), server.token());
                     joining.setDecode(decode);
