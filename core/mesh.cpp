@@ -62,4 +62,28 @@ void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle) {
     }
 }
 
+size_t splitVerticesFacingAway(TriangleMesh& mesh, size_t firstTriangle, const glm::vec3& eye) {
+    size_t copies = 0;
+    const size_t end = mesh.indices.size();
+    for (size_t i = 3 * firstTriangle; i < end; i += 3) {
+        uint32_t* t = &mesh.indices[i];
+        const glm::vec3 a = mesh.positions[t[0] - mesh.firstVertex];
+        const glm::vec3 face = glm::cross(mesh.positions[t[1] - mesh.firstVertex] - a,
+                                          mesh.positions[t[2] - mesh.firstVertex] - a);
+        const float length = glm::length(face);
+        if (!(length > 0.0f)) continue;
+        const float side = glm::dot(face, eye - a) >= 0.0f ? 1.0f : -1.0f;  // back: normals turned
+        for (int k = 0; k < 3; ++k) {
+            const size_t v = t[k] - mesh.firstVertex;
+            const glm::vec3 p = mesh.positions[v];
+            if (glm::dot(side * mesh.normals[v], eye - p) >= 0.0f) continue;
+            mesh.positions.push_back(p);
+            mesh.normals.push_back(face / length);
+            t[k] = mesh.nextVertex() - 1;
+            ++copies;
+        }
+    }
+    return copies;
+}
+
 }  // namespace vdiso

@@ -113,6 +113,14 @@ void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex);
 // vertices were drawn nearly black. Indices must refer to vertices the mesh holds.
 void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle);
 
+// Seen from `eye`, lit from it with two-sided lighting (a triangle's normals turned for its
+// back), each vertex of triangles [firstTriangle, triangleCount()) whose normal would face away
+// from the eye in that triangle (a fold of a coarse surface, where one vertex joins triangles
+// facing the eye and facing away) gets a copy of its own for that triangle, with the
+// triangle's face normal, which faces the eye once turned. Such vertices were drawn black where
+// the full-resolution surface is lit. Returns the copies made (appended to the mesh).
+size_t splitVerticesFacingAway(TriangleMesh& mesh, size_t firstTriangle, const glm::vec3& eye);
+
 // Hands what `mesh` holds to the sink and drops it, keeping the global vertex numbering.
 inline void drainInto(MeshSink& sink, TriangleMesh& mesh) {
     sink.append(mesh);

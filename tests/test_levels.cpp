@@ -249,11 +249,41 @@ TEST(Levels, RealCtKeepsItsThinPartsAtADistance) {
     const DistanceResult lost = viewAtDistance(store, 200.5, 10.0, 800, false, false);
     const std::string label = std::to_string(kept.missing) + " of " + std::to_string(kept.referenceCovered) +
                               " pixels missing with points for thin parts (" + std::to_string(kept.thinPartPoints) +
-                              "), " + std::to_string(lost.missing) + " without";
+                              "), " + std::to_string(lost.missing) + " without; " + std::to_string(kept.dark) +
+                              " drawn dark where the full surface is lit";
     EXPECT_GT(kept.thinPartPoints, 0) << label;
+    // The head holder's shell folds at the coarse levels; its vertices facing away were drawn
+    // black at 16 pixels (core/mesh.h splitVerticesFacingAway).
+    EXPECT_EQ(kept.dark, 0u) << label;
     EXPECT_GT(double(lost.missing), 0.05 * double(lost.referenceCovered)) << label;
     EXPECT_LE(double(kept.missing), 0.01 * double(kept.referenceCovered)) << label;
     EXPECT_LT(double(kept.bytesRead), 0.5 * double(kept.bytesReadFull)) << label;
+}
+
+// A fold: two triangles on one edge, the first facing the eye, the second away from it, their
+// shared vertices' normals along the second's face. Lit from the eye with two-sided lighting,
+// the first triangle would be drawn black there; its vertices get copies of their own with its
+// face normal, and the second triangle (whose normals its back turns to the eye) keeps its own.
+TEST(Levels, AFoldsVerticesFacingAwayGetCopiesOfTheirOwn) {
+    TriangleMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5f, 0.5f, -1}};
+    const glm::vec3 eye(0.2f, 0.2f, 5);
+    mesh.indices = {0, 1, 2, 0, 3, 1};  // the first faces +z, the eye; the second faces down
+    const glm::vec3 away = glm::normalize(glm::cross(mesh.positions[3] - mesh.positions[0],
+                                                     mesh.positions[1] - mesh.positions[0]));
+    ASSERT_LT(glm::dot(away, eye - mesh.positions[3]), 0.0f);
+    mesh.normals.assign(4, away);
+    const size_t copies = splitVerticesFacingAway(mesh, 0, eye);
+    EXPECT_EQ(copies, 3u);  // the first triangle's three vertices
+    ASSERT_EQ(mesh.vertexCount(), 7u);
+    for (int k = 0; k < 3; ++k) {
+        const uint32_t v = mesh.indices[size_t(k)];
+        EXPECT_GE(v, 4u);
+        EXPECT_EQ(mesh.positions[v], mesh.positions[size_t(k)]);
+        EXPECT_GT(glm::dot(mesh.normals[v], eye - mesh.positions[v]), 0.0f);
+    }
+    EXPECT_EQ(std::vector<uint32_t>(mesh.indices.begin() + 3, mesh.indices.end()), (std::vector<uint32_t>{0, 3, 1}));
+    EXPECT_EQ(splitVerticesFacingAway(mesh, 0, eye), 0u);  // nothing left to split
 }
 
 // Where neighbouring bricks are extracted at different levels, their surfaces meet the shared

@@ -392,7 +392,10 @@ std::vector<int64_t> ViewTraversal::run() {
         });
         if (level > 0 && mOptions.points && use != ViewStream::Use::Whole) thinPartPoints(at, handle.samples());
         // Coarse cells are often as wide as the parts they cross (mesh.h).
-        if (level > 0) orientNormalsToFaces(mMesh, firstTriangle);
+        if (level > 0) {
+            orientNormalsToFaces(mMesh, firstTriangle);
+            splitVerticesFacingAway(mMesh, firstTriangle, glm::vec3(mCamera.eye));
+        }
         if (mOptions.stream) {
             drawThinParts();  // a brick's output is final when handed over
             mStats.triangles += mMesh.triangleCount();
