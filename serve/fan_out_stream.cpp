@@ -2,8 +2,8 @@
 
 namespace vdiso::serve {
 
-FanOutStream::FanOutStream(std::vector<FrameStream*> streams)
-    : mStreams(std::move(streams)), mActive(mStreams.size(), true) {}
+FanOutStream::FanOutStream(std::vector<FrameStream*> streams, uint32_t frame, uint32_t store, double iso)
+    : mFrame(frame), mStore(store), mIso(iso), mStreams(std::move(streams)), mActive(mStreams.size(), true) {}
 
 bool FanOutStream::beginBrick(int64_t brick, int level, double cellPixels, Use& use) {
     std::vector<std::optional<Use>> uses(mStreams.size());
@@ -45,8 +45,44 @@ void FanOutStream::endBrick(int64_t brick, Use, const TriangleMesh& mesh, const 
         mUses.erase(found);
         active = mActive;
     }
+    // The caps are every client's transient geometry, and so is a part no client takes whole.
+    if (!seams.indices.empty()) addShared(seams, PointSet{});
+    bool allParts = true;
     for (size_t i = 0; i < mStreams.size(); ++i)
-        if (uses[i] && active[i]) mStreams[i]->endBrick(brick, *uses[i], mesh, points, seams);
+        if (uses[i] && active[i]) allParts = allParts && *uses[i] == Use::Part;
+    if (allParts) {
+        addShared(mesh, points);
+        return;
+    }
+    const TriangleMesh none;
+    for (size_t i = 0; i < mStreams.size(); ++i)
+        if (uses[i] && active[i]) mStreams[i]->endBrick(brick, *uses[i], mesh, points, none);
 }
+
+void FanOutStream::addShared(const TriangleMesh& mesh, const PointSet& points) {
+    bool full = false;
+    {
+        std::lock_guard lock(mMutex);
+        full = mShared.add(mesh, points);
+    }
+    if (full) pushShared(false);
+}
+
+void FanOutStream::pushShared(bool force) {
+    TriangleMesh mesh;
+    PointSet points;
+    std::vector<bool> active;
+    {
+        std::lock_guard lock(mMutex);
+        if (!mShared.take(mesh, points, force)) return;
+        active = mActive;
+    }
+    const auto message =
+        std::make_shared<const std::vector<uint8_t>>(TransientBatch::encode(mFrame, mStore, mIso, mesh, points));
+    for (size_t i = 0; i < mStreams.size(); ++i)
+        if (active[i]) mStreams[i]->pushSharedTransient(message, mesh.triangleCount(), points.size());
+}
+
+void FanOutStream::finish() { pushShared(true); }
 
 }  // namespace vdiso::serve

@@ -13,17 +13,6 @@ namespace {
 // REFs go out in batches this large (or before the next chunk, or at the frame's end); the
 // first batch of a frame is small, so the nearest surface shows soon.
 constexpr size_t kRefsPerBatch = 64, kRefsInFirstBatch = 4;
-// Transient geometry goes out when a batch holds this many vertices and points.
-constexpr size_t kTransientVerticesPerBatch = 32768;
-
-void append(TriangleMesh& to, PointSet& toPoints, const TriangleMesh& mesh, const PointSet& points) {
-    const uint32_t offset = uint32_t(to.positions.size());
-    to.positions.insert(to.positions.end(), mesh.positions.begin(), mesh.positions.end());
-    to.normals.insert(to.normals.end(), mesh.normals.begin(), mesh.normals.end());
-    for (const uint32_t v : mesh.indices) to.indices.push_back(v - mesh.firstVertex + offset);
-    toPoints.positions.insert(toPoints.positions.end(), points.positions.begin(), points.positions.end());
-    toPoints.normals.insert(toPoints.normals.end(), points.normals.begin(), points.normals.end());
-}
 
 }  // namespace
 
@@ -31,6 +20,14 @@ size_t ClientChunks::KeyHash::operator()(const Key& k) const {
     uint64_t h = std::bit_cast<uint64_t>(k.iso) * 0x9E3779B97F4A7C15ull;
     h ^= (uint64_t(k.store) << 32 | k.brick) + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2);
     return size_t(h);
+}
+
+const uint32_t* ClientChunks::heldBy(const Key& key, uint32_t frame) const {
+    const auto h = held.find(key);
+    if (h != held.end()) return &h->second;
+    if (frame != queuedFrame) return nullptr;
+    const auto q = queued.find(key);
+    return q == queued.end() ? nullptr : &q->second;
 }
 
 size_t ClientChunks::flushRefsLocked(Outbox& outbox, bool* refused) {
@@ -79,7 +76,7 @@ bool FrameStream::beginBrick(int64_t brick, int level, double cellPixels, Use& u
     const uint32_t b = uint32_t(brick);
     std::scoped_lock lock(mClient.mutex, mMutex);
     if (mWhole.contains(b) || mReferred.contains(b) || mFromShared.contains(b) || mSharedSent.contains(b) ||
-        mClient.held.contains({mStore, mIso, b})) {
+        mClient.heldBy({mStore, mIso, b}, mFrame)) {
         use = Use::Held;
     } else if (sendsWhole(level, cellPixels)) {
         SharedChunks::Chunk chunk;
@@ -152,11 +149,10 @@ void FrameStream::endBrick(int64_t brick, Use use, const TriangleMesh& mesh, con
         }
         std::scoped_lock lock(mClient.mutex, mMutex);
         if (mWhole.contains(b) || mReferred.contains(b)) return;  // another strip has it
-        const auto held = mClient.held.find({mStore, mIso, b});
-        if (held != mClient.held.end()) {
+        if (const uint32_t* held = mClient.heldBy({mStore, mIso, b}, mFrame)) {
             mReferred.insert(b);
             ++mCounters.refs;
-            mCounters.triangles += held->second;
+            mCounters.triangles += *held;
             mClient.pendingFrame = mFrame;
             mClient.pendingRefs.push_back(b);
             const size_t batch = mCounters.firstChunkSeconds < 0 ? kRefsInFirstBatch : kRefsPerBatch;
@@ -179,6 +175,7 @@ void FrameStream::pushCacheable(uint32_t brick, std::shared_ptr<const std::vecto
     m.iso = mIso;
     m.triangles = triangles;
     const size_t bytes = m.bytes->size();
+    const ClientChunks::Key key{mStore, mIso, brick};
     {
         std::scoped_lock lock(mClient.mutex, mMutex);
         mClient.pendingFrame = mFrame;
@@ -186,16 +183,55 @@ void FrameStream::pushCacheable(uint32_t brick, std::shared_ptr<const std::vecto
         ++mCounters.chunks;
         mCounters.triangles += triangles;
         queued(bytes);
+        // Held by the client from here for this frame's later passes (before the writer can
+        // take it, which moves it to `held`).
+        if (mClient.queuedFrame != mFrame) {
+            mClient.queued.clear();
+            mClient.queuedFrame = mFrame;
+        }
+        mClient.queued[key] = triangles;
     }
-    push(std::move(m), mMayWait);  // waits while the client is behind
+    if (!mOutbox.push(std::move(m), mMayWait)) {  // waits while the client is behind
+        mRefused = true;
+        std::lock_guard lock(mClient.mutex);
+        mClient.queued.erase(key);
+    }
+}
+
+bool TransientBatch::add(const TriangleMesh& mesh, const PointSet& points) {
+    const uint32_t offset = uint32_t(mMesh.positions.size());
+    mMesh.positions.insert(mMesh.positions.end(), mesh.positions.begin(), mesh.positions.end());
+    mMesh.normals.insert(mMesh.normals.end(), mesh.normals.begin(), mesh.normals.end());
+    for (const uint32_t v : mesh.indices) mMesh.indices.push_back(v - mesh.firstVertex + offset);
+    mPoints.positions.insert(mPoints.positions.end(), points.positions.begin(), points.positions.end());
+    mPoints.normals.insert(mPoints.normals.end(), points.normals.begin(), points.normals.end());
+    return mMesh.positions.size() + mPoints.size() >= kVertices;
+}
+
+bool TransientBatch::take(TriangleMesh& mesh, PointSet& points, bool force) {
+    const size_t held = mMesh.positions.size() + mPoints.size();
+    if (held == 0 || (!force && held < kVertices)) return false;
+    mesh = std::move(mMesh);
+    points = std::move(mPoints);
+    mMesh = TriangleMesh{};
+    mPoints = PointSet{};
+    return true;
+}
+
+std::vector<uint8_t> TransientBatch::encode(uint32_t frame, uint32_t store, double iso, const TriangleMesh& mesh,
+                                            const PointSet& points) {
+    ChunkHeader header;
+    header.frame = frame;
+    header.store = store;
+    header.iso = iso;
+    return encodeChunk(header, mesh, points);
 }
 
 void FrameStream::addTransient(const TriangleMesh& mesh, const PointSet& points) {
     bool full = false;
     {
         std::lock_guard lock(mMutex);
-        append(mTransient, mTransientPoints, mesh, points);
-        full = mTransient.positions.size() + mTransientPoints.size() >= kTransientVerticesPerBatch;
+        full = mTransient.add(mesh, points);
     }
     if (full) pushTransient(false);
 }
@@ -206,25 +242,24 @@ void FrameStream::pushTransient(bool force) {
     PointSet points;
     {
         std::lock_guard lock(mMutex);
-        if (!force && mTransient.positions.size() + mTransientPoints.size() < kTransientVerticesPerBatch)
-            return;
-        if (mTransient.positions.empty() && mTransientPoints.positions.empty()) return;
-        std::swap(mesh, mTransient);
-        std::swap(points, mTransientPoints);
+        if (!mTransient.take(mesh, points, force)) return;
     }
-    ChunkHeader header;
-    header.frame = mFrame;
-    header.store = mStore;
-    header.iso = mIso;
+    pushSharedTransient(std::make_shared<const std::vector<uint8_t>>(
+                            TransientBatch::encode(mFrame, mStore, mIso, mesh, points)),
+                        mesh.triangleCount(), points.size());
+}
+
+void FrameStream::pushSharedTransient(std::shared_ptr<const std::vector<uint8_t>> message, uint64_t triangles,
+                                      uint64_t points) {
     OutMessage m;
-    m.bytes = std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, points));
+    m.bytes = std::move(message);
     m.frame = mFrame;
     {
         std::scoped_lock lock(mClient.mutex, mMutex);
         flushRefsLocked();
         ++mCounters.chunks;
-        mCounters.triangles += mesh.triangleCount();
-        mCounters.points += points.size();
+        mCounters.triangles += triangles;
+        mCounters.points += points;
         queued(m.bytes->size());
     }
     push(std::move(m), mMayWait);

@@ -54,6 +54,14 @@ struct ClientChunks {
     };
     std::mutex mutex;
     std::unordered_map<Key, uint32_t, KeyHash> held;  // -> triangles
+    // Cacheable chunks queued in frame `queuedFrame` and not yet taken to be written. A later
+    // pass of that same frame (a VIEW's final one after its coarse one) may name them in REFS:
+    // the outbox writes in order and drops a frame's messages only for a newer frame, which
+    // drops those REFS too.
+    std::unordered_map<Key, uint32_t, KeyHash> queued;
+    uint32_t queuedFrame = OutMessage::kControl;
+    // The triangles of a chunk the client holds, or will before a REFS of `frame` reaches it.
+    const uint32_t* heldBy(const Key& key, uint32_t frame) const;
     // REFs of the running frame not yet queued (flushed before an eviction is answered).
     uint32_t pendingFrame = 0;
     std::vector<uint32_t> pendingRefs;
@@ -73,6 +81,26 @@ struct ViewerOutput {
     Outbox outbox;
     ClientChunks client;
     std::mutex pass;
+};
+
+// Transient geometry gathered into CHUNK messages of about kVertices vertices and points
+// each (batches, so that a frame's small parts do not each cost a message). Not thread-safe:
+// its owner locks.
+class TransientBatch {
+public:
+    static constexpr size_t kVertices = 32768;
+    // Adds the geometry; returns whether the batch is full now.
+    bool add(const TriangleMesh& mesh, const PointSet& points);
+    // Moves what is gathered into mesh and points when the batch is full, or with `force` when
+    // it holds anything; returns whether it did.
+    bool take(TriangleMesh& mesh, PointSet& points, bool force);
+    // A transient CHUNK of frame `frame` holding mesh and points.
+    static std::vector<uint8_t> encode(uint32_t frame, uint32_t store, double iso, const TriangleMesh& mesh,
+                                       const PointSet& points);
+
+private:
+    TriangleMesh mMesh;
+    PointSet mPoints;
 };
 
 struct FrameCounters {
@@ -98,6 +126,10 @@ public:
                   const TriangleMesh& seams) override;
     // Queues what is still batched. Call once, after the extraction.
     void finish();
+    // Queues a transient CHUNK of this frame encoded once for several clients (follow mode,
+    // serve/fan_out_stream.h), counting it as this client's.
+    void pushSharedTransient(std::shared_ptr<const std::vector<uint8_t>> message, uint64_t triangles,
+                             uint64_t points);
     FrameCounters counters();
     // A message of this frame could not be queued (superseded, closed, or the client stopped
     // reading): the frame is not whole, and the traversal stops at its next brick.
@@ -129,8 +161,7 @@ private:
     // frame is encoding it), and those sent; bricks this frame claimed to encode for all.
     std::unordered_map<uint32_t, std::optional<SharedChunks::Chunk>> mFromShared;
     std::unordered_set<uint32_t> mSharedSent, mClaims;
-    TriangleMesh mTransient;
-    PointSet mTransientPoints;
+    TransientBatch mTransient;
     FrameCounters mCounters;
 };
 

@@ -135,7 +135,9 @@ std::optional<OutMessage> ViewerSession::nextToWrite() {
     std::optional<OutMessage> m = mOut->outbox.pop();
     if (m && m->cacheable) {
         std::lock_guard lock(mOut->client.mutex);
-        mOut->client.held[{m->store, m->iso, m->brick}] = m->triangles;
+        const ClientChunks::Key key{m->store, m->iso, m->brick};
+        mOut->client.held[key] = m->triangles;
+        mOut->client.queued.erase(key);
     }
     return m;
 }
@@ -258,7 +260,7 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
                                                         view.iso, mSuperseded, arrival, streams.empty()));
         fanned.push_back(streams.back().get());
     }
-    FanOutStream fanOut(fanned);
+    FanOutStream fanOut(fanned, view.seq, view.store, view.iso);
     ViewExtractOptions options = ViewExtractOptions::sage(view.iso);
     options.metaCellSize = mSettings.metaCellSize;
     options.threads = mSettings.threads;
@@ -287,6 +289,7 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
         status = "error";
         error = e.what();
     }
+    if (streams.size() > 1) fanOut.finish();
     const CacheCounters after = store.cache->counters();
     const double seconds = std::chrono::duration<double>(Clock::now() - arrival).count();
     std::string firstStatus;
