@@ -180,6 +180,20 @@ void ViewerSession::runPass() {
         const bool later = !first && catchUps.empty();
         const std::string status = extractPass(
             view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs, later);
+        if (status == "busy") {  // nested, an output taken by another pass: again, on its turn
+            std::lock_guard lock(mMutex);
+            if (!mClosing && !mPending) {
+                if (!catchUps.empty()) {
+                    for (auto& output : catchUps) mCatchUps.emplace_back(std::move(output), view);
+                } else if (first) {
+                    mPending = view;
+                } else {
+                    mFinalDue = view;
+                }
+                mPool.post(*this, first || !mCatchUps.empty());
+            }
+            return;
+        }
         // A complete coarse frame: the final one goes to the back of the queue, behind other
         // viewers' passes. Superseded (or failed): no finer one follows.
         if (coarse && status == "complete") {
@@ -247,7 +261,17 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
     for (const auto& out : outputs) order.push_back(out.get());
     std::sort(order.begin(), order.end());
     std::vector<std::unique_lock<std::mutex>> held;
-    for (ViewerOutput* out : order) held.emplace_back(out->pass);
+    for (ViewerOutput* out : order) {
+        // A pass nested in another (FramePool::runFirstPassesHere) never waits here while its
+        // host holds outputs of its own: it gives way ("busy") and runs again later.
+        if (FramePool::nested()) {
+            std::unique_lock<std::mutex> lock(out->pass, std::try_to_lock);
+            if (!lock.owns_lock()) return "busy";
+            held.push_back(std::move(lock));
+        } else {
+            held.emplace_back(out->pass);
+        }
+    }
 
     const std::string begin = frameBegin(view, lodError, final);
     std::vector<std::unique_ptr<FrameStream>> streams;

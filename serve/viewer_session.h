@@ -86,7 +86,8 @@ private:
     void stopLeading() override;
     // One frame of a VIEW at `lodError` into `outputs` (this viewer's, and its followers'; the
     // first one's stopping stops it); `final`: the last for it; `yields`: waiting first passes
-    // run inside it (FramePool::runFirstPassesHere). Returns the first one's status.
+    // run inside it (FramePool::runFirstPassesHere). Returns the first one's status, or "busy"
+    // (nothing sent) for a nested pass whose output another pass holds.
     std::string extractPass(const ViewMessage& view, std::chrono::steady_clock::time_point arrival,
                             double lodError, bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs,
                             bool yields);
