@@ -513,5 +513,64 @@ TEST(ExtractView, VertexNormalsAreTheFullExtractionsNormals) {
     }
 }
 
+// A brick whose surface the consumer holds (ViewStream::Use::Held) marks the coverage its kept
+// cells would, and makes no triangle: the bricks after it keep exactly what they keep when
+// every brick's visible part is made.
+TEST(ExtractView, HeldBricksMarkTheCoverageWithoutTriangles) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {96, 96, 96}));
+    BrickCache cache(store, 64 * store.brickBytes());
+    struct ByBrick final : ViewStream {
+        bool holdEven = false;
+        std::map<int64_t, std::vector<std::array<float, 9>>> made;  // Part bricks' triangles
+        size_t heldBricks = 0, heldTriangles = 0;
+        bool beginBrick(int64_t brick, int, double, Use& use) override {
+            use = holdEven && brick % 2 == 0 ? Use::Held : Use::Part;
+            return true;
+        }
+        void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet&, const TriangleMesh&) override {
+            if (use == Use::Held) {
+                ++heldBricks;
+                heldTriangles += mesh.triangleCount();
+                return;
+            }
+            std::vector<std::array<float, 9>>& out = made[brick];
+            for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+                std::array<float, 9> triangle;
+                for (int k = 0; k < 3; ++k) {
+                    const glm::vec3& p = mesh.positions[mesh.indices[t + size_t(k)] - mesh.firstVertex];
+                    triangle[size_t(3 * k)] = p.x;
+                    triangle[size_t(3 * k + 1)] = p.y;
+                    triangle[size_t(3 * k + 2)] = p.z;
+                }
+                out.push_back(triangle);
+            }
+        }
+    };
+    const VolumeInfo& v = store.volume();
+    for (ViewPreset preset : {ViewPreset::Normal, ViewPreset::Closeup}) {
+        const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
+        ByBrick all, someHeld;
+        someHeld.holdEven = true;
+        for (ByBrick* stream : {&all, &someHeld}) {
+            ViewExtractOptions options = ViewExtractOptions::sage(kHeadSkinIso);
+            options.stream = stream;
+            TriangleMesh mesh;
+            PointSet points;
+            extractViewDependent(cache, camera, options, mesh, points);
+        }
+        const char* label = viewPresetName(preset);
+        EXPECT_GT(someHeld.heldBricks, 0u) << label;
+        EXPECT_EQ(someHeld.heldTriangles, 0u) << label;
+        size_t compared = 0;
+        for (const auto& [brick, triangles] : someHeld.made) {
+            ASSERT_TRUE(all.made.contains(brick)) << label << " brick " << brick;
+            EXPECT_EQ(triangles, all.made.at(brick)) << label << " brick " << brick;
+            compared += triangles.size();
+        }
+        EXPECT_GT(compared, 0u) << label;
+    }
+}
+
 }  // namespace
 }  // namespace vdiso

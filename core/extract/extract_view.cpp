@@ -128,19 +128,22 @@ struct BrickVisit {
     // The brick is extracted whole (ViewStream::Use::Whole): hidden meta-cells too, without
     // points or per-cell tests.
     bool whole;
+    // The consumer holds the brick's surface (ViewStream::Use::Held): its polygons mark the
+    // pyramid; no triangle is kept.
+    bool held;
     bool cellTests;  // per-cell tests on and not whole
     glm::dvec3 eyeCell;
     MetaCellRangeCache::Ranges kept;         // from the options' range cache, if any
     const std::vector<BrickRange>& ranges;  // of the brick's meta-cells
 
-    BrickVisit(ViewTraversal& traversal, const ViewLevels::Brick& at, const void* samples, bool wholeBrick)
+    BrickVisit(ViewTraversal& traversal, const ViewLevels::Brick& at, const void* samples, ViewStream::Use use)
         : t(traversal), culler(traversal.mLevels.culler(at.level)),
           extractor(traversal.mParts[size_t(at.level)]->extractor),
           layout(traversal.mLevels.source(at.level).layout()), brick(at.local),
           kernel(extractor, at.local, samples, traversal.mOptions.iso, traversal.mMesh,
                  traversal.mParts[size_t(at.level)]->seams),
-          whole(wholeBrick),
-          cellTests(traversal.mOptions.cellTests && traversal.mOptions.occlusion && !wholeBrick),
+          whole(use == ViewStream::Use::Whole), held(use == ViewStream::Use::Held),
+          cellTests(traversal.mOptions.cellTests && traversal.mOptions.occlusion && !whole),
           eyeCell(kernel.eyeInCells(traversal.mCamera.eye)),
           kept(traversal.mOptions.rangeCache ? traversal.mOptions.rangeCache->get(at.id, at.local, extractor, samples)
                                              : nullptr),
@@ -165,6 +168,8 @@ struct BrickVisit {
         t.mStats.view.polygonsHidden += !draws;
         return draws;
     }
+
+    bool keepsTriangles() const { return !held; }
 
     // Tests 1-4 of core/extract/extract_view.h for a box of meta-cells [a, b] whose range is `range`.
     Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b) {
@@ -387,7 +392,7 @@ std::vector<int64_t> ViewTraversal::run() {
         // shade it otherwise). Streamed, at the end of the brick.
         const size_t firstTriangle = mMesh.triangleCount();
         visitScalarType(mSource.volume().type, [&](auto zero) {
-            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use == ViewStream::Use::Whole)
+            BrickVisit<decltype(zero)>(*this, at, handle.samples(), use)
                 .run(capFaces, mOptions.stream ? mCaps : mMesh);
         });
         if (level > 0 && mOptions.points && use != ViewStream::Use::Whole) thinPartPoints(at, handle.samples());

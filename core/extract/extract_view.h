@@ -45,7 +45,8 @@ namespace vdiso {
 //          extracted too, without scan conversion; no points, no per-cell tests). Every polygon
 //          it scan-converts lies in that surface, so the coverage stays conservative.
 //   Held:  the consumer has the brick's whole surface already: the visible part is made only
-//          to mark the occlusion pyramid, and handed over to be dropped.
+//          to mark the occlusion pyramid (its polygons are scan-converted; no triangle is
+//          appended and no normal computed), and what is left handed over to be dropped.
 //   Part:  what SAGE makes of it for this camera: points and the triangles of visible cells.
 // endBrick then gets that output: mesh.positions hold the vertices numbered mesh.firstVertex
 // onwards (with per-cell tests, also some no kept triangle refers to: a consumer that packs

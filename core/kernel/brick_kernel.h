@@ -8,9 +8,12 @@
 //   static constexpr bool kTestsCells, kTestsPolygons;
 //   bool keepCell(int64_t x, int64_t y, int64_t z);   // global cell coordinates; false skips it
 //   bool keepPolygon(const uint32_t* vertices, int count);
+//   bool keepsTriangles();  // with kTestsPolygons: false when only keepPolygon's effects count
 // keepPolygon gets each polygon's outline (global vertex numbers into the mesh, in order) before
 // its fan triangles are appended; a cell's triangles are appended when any of its polygons is
-// wanted (the polygons of one cell come in no front-to-back order, so one may hide another).
+// wanted (the polygons of one cell come in no front-to-back order, so one may hide another),
+// and the policy keeps triangles (a traversal marking its coverage with a brick whose surface
+// the consumer holds wants the scan conversion, not the triangles or their normals).
 // With kTestsPolygons, vertex normals are computed only for cells that are kept: the
 // view-dependent traversal drops about half the vertices it makes, and the normal is most of a
 // vertex's cost.
@@ -261,8 +264,10 @@ struct BrickKernel {
                         outlineLength = at + pc.vertexCount[p];
                     }
                     if (!wanted) continue;
-                    if constexpr (Cells::kTestsPolygons)
+                    if constexpr (Cells::kTestsPolygons) {
+                        if (!cellPolicy.keepsTriangles()) continue;
                         for (int k = 0; k < outlineLength; ++k) ensureNormal(outline[k], cx, cy, cz, pc.edges[k]);
+                    }
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++])
                         for (int k = 2; k < pc.vertexCount[p]; ++k)
                             mesh.indices.insert(mesh.indices.end(),
