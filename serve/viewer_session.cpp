@@ -318,10 +318,10 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
     const double seconds = std::chrono::duration<double>(Clock::now() - arrival).count();
     std::string firstStatus;
     for (size_t k = 0; k < outputs.size(); ++k) {
-        FrameStream& stream = *streams[k];
+        FrameStream& member = *streams[k];
         Outbox& outbox = outputs[k]->outbox;
-        stream.finish();
-        const std::string own = status == "complete" && stream.incomplete() ? "superseded" : status;
+        member.finish();
+        const std::string own = status == "complete" && member.incomplete() ? "superseded" : status;
         if (k == 0) firstStatus = own;
         if (!error.empty()) {
             JsonObject o;
@@ -329,7 +329,7 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
             o.add("seq", int64_t(view.seq));
             outbox.push(OutMessage::control(o.str()));
         }
-        const FrameCounters c = stream.counters();
+        const FrameCounters c = member.counters();
         auto frameEnd = [&](const std::string& said) {
             JsonObject end;
             end.add("type", "frameEnd").add("frame", int64_t(view.seq)).add("status", said);
