@@ -12,6 +12,7 @@
 #include <glm/common.hpp>
 
 #include "core/view/occlusion_pyramid.h"
+#include "core/view/pixel_round.h"
 #include "core/view/scan_convert.h"
 
 namespace vdiso {
@@ -98,6 +99,23 @@ Polygon randomPolygon(std::mt19937& rng, int width, int height, bool quantize) {
         poly.push_back(p);
     }
     return poly;
+}
+
+// The pixel rounding every test above relies on: std::ceil's and std::floor's results, at
+// integers and half-integers, a hair either side of them, signed zeros, and random values over
+// the clamped range.
+TEST(PixelRound, IsCeilAndFloor) {
+    std::vector<double> xs = {0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 1023.5, 1e-300, -1e-300};
+    for (int k = -3; k <= 2050; ++k)
+        for (double base : {double(k), k + 0.5})
+            xs.insert(xs.end(), {base, std::nextafter(base, -1e9), std::nextafter(base, 1e9)});
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> any(-2.0, 2050.0);
+    for (int i = 0; i < 100000; ++i) xs.push_back(any(random));
+    for (double x : xs) {
+        ASSERT_EQ(ceilToInt(x), int(std::ceil(x))) << x;
+        ASSERT_EQ(floorToInt(x), int(std::floor(x))) << x;
+    }
 }
 
 TEST(ScanConvert, MatchesBruteForceWindingOnRandomPolygons) {

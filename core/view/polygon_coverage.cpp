@@ -5,6 +5,7 @@
 #include <span>
 
 #include "core/view/edge_function.h"
+#include "core/view/pixel_round.h"
 #include "core/view/scan_convert.h"
 
 namespace vdiso {
@@ -44,10 +45,10 @@ bool PolygonCoverage::nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2
     const double yMax = std::max({p0.y, p1.y, p2.y}) + kRasterSlack;
     // Clamped to the image before the conversion (a vertex far off it holds no int).
     const double w = mPyramid.width(), h = mPyramid.height();
-    const int x0 = int(std::clamp(std::ceil(xMin - 0.5), 0.0, w));
-    const int x1 = int(std::clamp(std::floor(xMax - 0.5), -1.0, w - 1));
-    const int y0 = int(std::clamp(std::ceil(yMin - 0.5), 0.0, h));
-    const int y1 = int(std::clamp(std::floor(yMax - 0.5), -1.0, h - 1));
+    const int x0 = ceilToInt(std::clamp(xMin - 0.5, 0.0, w));
+    const int x1 = floorToInt(std::clamp(xMax - 0.5, -1.0, w - 1));
+    const int y0 = ceilToInt(std::clamp(yMin - 0.5, 0.0, h));
+    const int y1 = floorToInt(std::clamp(yMax - 0.5, -1.0, h - 1));
     if (x0 > x1 || y0 > y1 || mPyramid.isOccluded(x0, y0, x1, y1)) return false;
     const TriangleEdgeFunctions f = TriangleEdgeFunctions::of(p0, p1, p2);
     if (f.degenerate) return false;

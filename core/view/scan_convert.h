@@ -35,6 +35,8 @@
 
 #include <glm/vec2.hpp>
 
+#include "core/view/pixel_round.h"
+
 namespace vdiso {
 
 class OcclusionPyramid;
@@ -58,8 +60,7 @@ struct ScanCrossing {
 // Smallest i with i + 0.5 >= v, for v clamped to [-1, limit + 1] so that far off-image
 // coordinates cannot overflow the int.
 inline int firstCentreAtOrAfter(double v, int limit) {
-    v = std::clamp(v, -1.0, double(limit) + 1.0);
-    return int(std::ceil(v - 0.5));
+    return ceilToInt(std::clamp(v, -1.0, double(limit) + 1.0) - 0.5);
 }
 
 // Fills edges[] (room for n) with the polygon's non-horizontal edges and returns how many; 0

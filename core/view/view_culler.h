@@ -19,6 +19,7 @@
 #include "core/camera.h"
 #include "core/trees/minmax_tree.h"
 #include "core/view/occlusion_pyramid.h"
+#include "core/view/pixel_round.h"
 #include "core/view/screen_box.h"
 
 namespace vdiso {
@@ -91,12 +92,11 @@ private:
 // Inline: asked for every cell of every visible meta-cell.
 inline PixelRect ViewCuller::pixelRect(const ScreenBox& box) const {
     if (box.crossesNearPlane) return {0, 0, mCamera.width - 1, mCamera.height - 1};
-    // Clamped a pixel beyond the image before the conversion: a box far off it has
+    // Clamped a pixel beyond the image before the rounding: a box far off it has
     // coordinates no int holds. (NaN boxes never get here: cullScreenBox culls them.)
-    auto column = [&](double x) { return int(std::clamp(x, -1.0, double(mCamera.width))); };
-    auto row = [&](double y) { return int(std::clamp(y, -1.0, double(mCamera.height))); };
-    return {column(std::ceil(box.left - 0.5)), row(std::ceil(box.top - 0.5)),
-            column(std::floor(box.right - 0.5)), row(std::floor(box.bottom - 0.5))};
+    const double w = mCamera.width, h = mCamera.height;
+    return {ceilToInt(std::clamp(box.left - 0.5, -1.0, w)), ceilToInt(std::clamp(box.top - 0.5, -1.0, h)),
+            floorToInt(std::clamp(box.right - 0.5, -1.0, w)), floorToInt(std::clamp(box.bottom - 0.5, -1.0, h))};
 }
 
 inline Cull ViewCuller::cullScreenBox(const ScreenBox& box) const {
