@@ -34,7 +34,10 @@ ExtractSession::ExtractSession(const BrickStoreReader& store, ExtractSettings se
       mCache(store, mSettings.cacheMb << 20),
       // Meta-cell ranges are kept across the frames of a path, for as many bricks as the cache.
       mRanges(mCache.budgetBytes() / store.brickBytes()) {
-    if (store.remote()) adaptToRemoteStore(mSettings);
+    if (store.remote())
+        adaptToRemoteStore(mSettings);
+    else
+        adaptToLocalStore(mSettings, machineThreads());
     if (isViewDependent(mSettings.method)) {
         const auto start = Clock::now();
         mTree.emplace(mCache.levels(), mCache.brickRanges());

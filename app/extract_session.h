@@ -46,7 +46,8 @@ struct FrameOutput {
 class ExtractSession {
 public:
     // Checks the settings (SettingsError) and against the store (a level it does not hold); adapts
-    // readers and look-ahead to a store at a URL (adaptToRemoteStore).
+    // readers and look-ahead to a store at a URL (adaptToRemoteStore) or on this machine
+    // (adaptToLocalStore: no more readers than the cores beside the extraction).
     ExtractSession(const BrickStoreReader& store, ExtractSettings settings);
 
     // One frame; `camera` is needed by sage and wise, ignored by octree and noise.

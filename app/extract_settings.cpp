@@ -61,6 +61,10 @@ void adaptToRemoteStore(ExtractSettings& s) {
     s.prefetchNear = RemoteReadAhead::kNear;
 }
 
+void adaptToLocalStore(ExtractSettings& s, int cores) {
+    if (!s.readersGiven) s.readers = std::clamp(cores - 1, 1, BrickPrefetcher::kDefaultReaders);
+}
+
 ViewExtractOptions viewExtractOptions(const ExtractSettings& s, const CachePlan& plan) {
     ViewExtractOptions v = s.method == "sage" ? ViewExtractOptions::sage(*s.iso) : ViewExtractOptions::wise(*s.iso);
     v.metaCellSize = s.metaCellSize;

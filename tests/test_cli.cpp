@@ -362,6 +362,23 @@ TEST(CliExtract, ThreadsDefaultToTheMachinesCores) {
     EXPECT_EQ(small.exitCode, 0) << small.output;
 }
 
+// Threads reading ahead: the default 2, but no more than the cores beside the extraction's
+// own thread, at least one; --readers as given.
+TEST(CliExtract, ReadersDefaultToTheCoresBesideTheExtraction) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 64 --brick 16 --quiet").exitCode, 0);
+    const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
+    const std::string readers = "\"readers\": " + std::to_string(std::clamp(cores - 1, 1, 2)) + ",";
+    for (const char* method : {"octree", "sage"}) {
+        const auto r = test::runVdiso("extract " + store + " --iso 600.5 --method " + method + " --threads 1 --stats -");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_NE(r.output.find(readers), std::string::npos) << method << ": " << r.output;
+        const auto asked = test::runVdiso("extract " + store + " --iso 600.5 --method " + method + " --readers 3 --stats -");
+        EXPECT_NE(asked.output.find("\"readers\": 3,"), std::string::npos) << method << ": " << asked.output;
+    }
+}
+
 TEST(CliExtract, OrbitPathWritesAStatsLineAndAPicturePerFrame) {
     test::ScratchDir dir;
     const std::string store = dir.file("h.vdiso"), stats = dir.file("path.jsonl");
