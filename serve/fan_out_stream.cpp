@@ -3,7 +3,7 @@
 namespace vdiso::serve {
 
 FanOutStream::FanOutStream(std::vector<FrameStream*> streams, uint32_t frame, uint32_t store, double iso)
-    : mFrame(frame), mStore(store), mIso(iso), mStreams(std::move(streams)), mActive(mStreams.size(), true) {}
+    : mStreams(std::move(streams)), mActive(mStreams.size(), true), mShared(frame, store, iso) {}
 
 bool FanOutStream::beginBrick(int64_t brick, int level, double cellPixels, Use& use) {
     std::vector<std::optional<Use>> uses(mStreams.size());
@@ -60,27 +60,19 @@ void FanOutStream::endBrick(int64_t brick, Use, const TriangleMesh& mesh, const 
 }
 
 void FanOutStream::addShared(const TriangleMesh& mesh, const PointSet& points) {
-    bool full = false;
-    {
-        std::lock_guard lock(mMutex);
-        full = mShared.add(mesh, points);
-    }
-    if (full) pushShared(false);
+    if (mShared.add(mesh, points)) pushShared(false);
 }
 
 void FanOutStream::pushShared(bool force) {
-    TriangleMesh mesh;
-    PointSet points;
+    const auto chunk = mShared.take(force);
+    if (!chunk) return;
     std::vector<bool> active;
     {
         std::lock_guard lock(mMutex);
-        if (!mShared.take(mesh, points, force)) return;
         active = mActive;
     }
-    const auto message =
-        std::make_shared<const std::vector<uint8_t>>(TransientBatch::encode(mFrame, mStore, mIso, mesh, points));
     for (size_t i = 0; i < mStreams.size(); ++i)
-        if (active[i]) mStreams[i]->pushSharedTransient(message, mesh.triangleCount(), points.size());
+        if (active[i]) mStreams[i]->pushTransient(*chunk);
 }
 
 void FanOutStream::finish() { pushShared(true); }

@@ -34,20 +34,18 @@ public:
     void finish();
 
 private:
-    // Adds to the batch made once for all; encodes and queues it to each active stream when
-    // full (or, with `force`, when it holds anything).
+    // Adds to the batch made once for all; queues it to each active stream when full (or, with
+    // `force`, when it holds anything).
     void addShared(const TriangleMesh& mesh, const PointSet& points);
     void pushShared(bool force);
 
-    const uint32_t mFrame, mStore;
-    const double mIso;
     std::vector<FrameStream*> mStreams;
     std::mutex mMutex;
     std::vector<bool> mActive;  // still in this frame
     // Each stream's use of a brick begun on a strip's thread (none: it was not in the frame
     // then); two strips may make the same brick.
     std::map<std::pair<int64_t, std::thread::id>, std::vector<std::optional<Use>>> mUses;
-    TransientBatch mShared;  // guarded by mMutex
+    TransientBatch mShared;
 };
 
 }  // namespace vdiso::serve

@@ -46,7 +46,7 @@ FrameStream::FrameStream(ClientChunks& client, SharedChunks& shared, Outbox& out
                          uint32_t store, double iso, const std::atomic<bool>& superseded,
                          std::chrono::steady_clock::time_point start, bool mayWait)
     : mClient(client), mShared(shared), mOutbox(outbox), mFrame(frame), mStore(store), mIso(iso),
-      mSuperseded(superseded), mMayWait(mayWait), mStart(start) {}
+      mSuperseded(superseded), mMayWait(mayWait), mStart(start), mTransient(frame, store, iso) {}
 
 FrameStream::~FrameStream() {
     // Claims of bricks whose chunk this frame did not make (an error, or a stop, between the
@@ -199,6 +199,7 @@ void FrameStream::pushCacheable(uint32_t brick, std::shared_ptr<const std::vecto
 }
 
 bool TransientBatch::add(const TriangleMesh& mesh, const PointSet& points) {
+    std::lock_guard lock(mMutex);
     const uint32_t offset = uint32_t(mMesh.positions.size());
     mMesh.positions.insert(mMesh.positions.end(), mesh.positions.begin(), mesh.positions.end());
     mMesh.normals.insert(mMesh.normals.end(), mesh.normals.begin(), mesh.normals.end());
@@ -208,65 +209,46 @@ bool TransientBatch::add(const TriangleMesh& mesh, const PointSet& points) {
     return mMesh.positions.size() + mPoints.size() >= kVertices;
 }
 
-bool TransientBatch::take(TriangleMesh& mesh, PointSet& points, bool force) {
-    const size_t held = mMesh.positions.size() + mPoints.size();
-    if (held == 0 || (!force && held < kVertices)) return false;
-    mesh = std::move(mMesh);
-    points = std::move(mPoints);
-    mMesh = TriangleMesh{};
-    mPoints = PointSet{};
-    return true;
-}
-
-std::vector<uint8_t> TransientBatch::encode(uint32_t frame, uint32_t store, double iso, const TriangleMesh& mesh,
-                                            const PointSet& points) {
-    ChunkHeader header;
-    header.frame = frame;
-    header.store = store;
-    header.iso = iso;
-    return encodeChunk(header, mesh, points);
-}
-
-void FrameStream::addTransient(const TriangleMesh& mesh, const PointSet& points) {
-    bool full = false;
-    {
-        std::lock_guard lock(mMutex);
-        full = mTransient.add(mesh, points);
-    }
-    if (full) pushTransient(false);
-}
-
-// Encodes and queues the transient batch (taken under the lock, encoded outside it).
-void FrameStream::pushTransient(bool force) {
+std::optional<TransientBatch::Encoded> TransientBatch::take(bool force) {
     TriangleMesh mesh;
     PointSet points;
     {
         std::lock_guard lock(mMutex);
-        if (!mTransient.take(mesh, points, force)) return;
+        const size_t held = mMesh.positions.size() + mPoints.size();
+        if (held == 0 || (!force && held < kVertices)) return std::nullopt;
+        std::swap(mesh, mMesh);
+        std::swap(points, mPoints);
     }
-    pushSharedTransient(std::make_shared<const std::vector<uint8_t>>(
-                            TransientBatch::encode(mFrame, mStore, mIso, mesh, points)),
-                        mesh.triangleCount(), points.size());
+    ChunkHeader header;
+    header.frame = mFrame;
+    header.store = mStore;
+    header.iso = mIso;
+    return Encoded{std::make_shared<const std::vector<uint8_t>>(encodeChunk(header, mesh, points)),
+                   mesh.triangleCount(), points.size()};
 }
 
-void FrameStream::pushSharedTransient(std::shared_ptr<const std::vector<uint8_t>> message, uint64_t triangles,
-                                      uint64_t points) {
+void FrameStream::addTransient(const TriangleMesh& mesh, const PointSet& points) {
+    if (!mTransient.add(mesh, points)) return;
+    if (const auto chunk = mTransient.take(false)) pushTransient(*chunk);
+}
+
+void FrameStream::pushTransient(const TransientBatch::Encoded& chunk) {
     OutMessage m;
-    m.bytes = std::move(message);
+    m.bytes = chunk.bytes;
     m.frame = mFrame;
     {
         std::scoped_lock lock(mClient.mutex, mMutex);
         flushRefsLocked();
         ++mCounters.chunks;
-        mCounters.triangles += triangles;
-        mCounters.points += points;
+        mCounters.triangles += chunk.triangles;
+        mCounters.points += chunk.points;
         queued(m.bytes->size());
     }
     push(std::move(m), mMayWait);
 }
 
 void FrameStream::finish() {
-    pushTransient(true);
+    if (const auto chunk = mTransient.take(true)) pushTransient(*chunk);
     std::scoped_lock lock(mClient.mutex, mMutex);
     flushRefsLocked();
 }

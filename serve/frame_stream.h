@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <unordered_map>
@@ -84,21 +85,28 @@ struct ViewerOutput {
 };
 
 // Transient geometry gathered into CHUNK messages of about kVertices vertices and points
-// each (batches, so that a frame's small parts do not each cost a message). Not thread-safe:
-// its owner locks.
+// each (batches, so that a frame's small parts do not each cost a message), for one frame.
+// Thread-safe: the strips add to it at once; a batch is encoded outside the lock.
 class TransientBatch {
 public:
     static constexpr size_t kVertices = 32768;
+    // A transient CHUNK, encoded, and what it holds.
+    struct Encoded {
+        std::shared_ptr<const std::vector<uint8_t>> bytes;
+        uint64_t triangles = 0, points = 0;
+    };
+    TransientBatch(uint32_t frame, uint32_t store, double iso) : mFrame(frame), mStore(store), mIso(iso) {}
+
     // Adds the geometry; returns whether the batch is full now.
     bool add(const TriangleMesh& mesh, const PointSet& points);
-    // Moves what is gathered into mesh and points when the batch is full, or with `force` when
-    // it holds anything; returns whether it did.
-    bool take(TriangleMesh& mesh, PointSet& points, bool force);
-    // A transient CHUNK of frame `frame` holding mesh and points.
-    static std::vector<uint8_t> encode(uint32_t frame, uint32_t store, double iso, const TriangleMesh& mesh,
-                                       const PointSet& points);
+    // What is gathered, encoded as a CHUNK of the frame, when the batch is full, or with
+    // `force` when it holds anything; the batch starts again empty.
+    std::optional<Encoded> take(bool force);
 
 private:
+    const uint32_t mFrame, mStore;
+    const double mIso;
+    std::mutex mMutex;
     TriangleMesh mMesh;
     PointSet mPoints;
 };
@@ -126,10 +134,9 @@ public:
                   const TriangleMesh& seams) override;
     // Queues what is still batched. Call once, after the extraction.
     void finish();
-    // Queues a transient CHUNK of this frame encoded once for several clients (follow mode,
-    // serve/fan_out_stream.h), counting it as this client's.
-    void pushSharedTransient(std::shared_ptr<const std::vector<uint8_t>> message, uint64_t triangles,
-                             uint64_t points);
+    // Queues a transient CHUNK of this frame (its own batch's, or one encoded once for several
+    // clients in follow mode: serve/fan_out_stream.h), counting it as this client's.
+    void pushTransient(const TransientBatch::Encoded& chunk);
     FrameCounters counters();
     // A message of this frame could not be queued (superseded, closed, or the client stopped
     // reading): the frame is not whole, and the traversal stops at its next brick.
@@ -138,7 +145,6 @@ public:
 private:
     // Adds to the frame's transient batch, sent when full (and at the end).
     void addTransient(const TriangleMesh& mesh, const PointSet& points);
-    void pushTransient(bool force);
     void queued(size_t bytes);  // counts bytes queued; notes the first
     void push(OutMessage m, bool waitForRoom);  // notes a refusal
     void flushRefsLocked();                      // the client's pending REFs; holds both locks
