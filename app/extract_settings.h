@@ -57,7 +57,8 @@ void adaptToRemoteStore(ExtractSettings& s);
 // Readers for a store on this machine, unless given: the default, but no more than the cores
 // beside the extraction's own thread (`cores`), and at least one. On 2 cores a second reader
 // took the extraction's core: from the page cache, one-shot views were 5-29 % and 1-thread full
-// extractions 6-37 % slower with two readers than with one; cold, within 1 % (bench/log.md).
+// extractions 6-37 % slower with two readers than with one; cold, one was as fast or faster
+// (the 1024^3 head: 1 % slower; bench/log.md).
 void adaptToLocalStore(ExtractSettings& s, int cores);
 
 // The view-dependent options (sage or wise, with the switches given) for a plan.
