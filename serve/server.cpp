@@ -5,6 +5,7 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/strand.hpp>
 
+#include "core/interrupt.h"
 #include "io/error.h"
 #include "serve/server_impl.h"
 
@@ -97,8 +98,12 @@ Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(optio
     if (options.handleSignals) {
         s.signals.add(SIGINT);
         s.signals.add(SIGTERM);
+        // Ctrl-C is the process's interrupt too (core/interrupt.h): every read in flight, local
+        // or remote, stops within a second, so the passes end and the server exits at once.
         s.signals.async_wait([this](beast::error_code e, int) {
-            if (!e) mImpl->shutdown();
+            if (e) return;
+            requestInterrupt();
+            mImpl->shutdown();
         });
     }
     s.port = s.acceptor.local_endpoint(error).port();

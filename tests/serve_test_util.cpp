@@ -1,6 +1,13 @@
 #include "tests/serve_test_util.h"
 
 #include <cmath>
+#include <csignal>
+#include <cstring>
+
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <filesystem>
 
 #include <boost/asio/ip/tcp.hpp>
@@ -97,6 +104,88 @@ int httpGet(uint16_t port, const std::string& target, const std::string& cookie,
     beast::error_code ignored;
     stream.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_both, ignored);
     return int(response.result_int());
+}
+
+ServeProcess::ServeProcess(const std::vector<std::string>& args, int (*inChild)()) {
+    std::vector<std::string> argv = {VDISO_BINARY, "serve"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> pointers;
+    for (std::string& a : argv) pointers.push_back(a.data());
+    pointers.push_back(nullptr);
+    int out[2];
+    if (::pipe(out) != 0) return;
+    mPid = ::fork();
+    if (mPid < 0) return;
+    if (mPid == 0) {  // only async-signal-safe calls until exec
+        ::dup2(out[1], 1);
+        ::close(out[0]);
+        if (inChild && inChild() != 0) ::_exit(126);
+        ::execv(VDISO_BINARY, pointers.data());
+        ::_exit(127);
+    }
+    ::close(out[1]);
+    // "vdiso serve: open http://127.0.0.1:PORT/?token=..."
+    std::string line;
+    char c;
+    while (line.find('\n') == std::string::npos && ::read(out[0], &c, 1) == 1) line += c;
+    ::close(out[0]);
+    const size_t at = line.find("127.0.0.1:");
+    if (at != std::string::npos) mPort = uint16_t(std::stoi(line.substr(at + 10)));
+}
+
+ServeProcess::~ServeProcess() {
+    if (mPid <= 0) return;
+    ::kill(mPid, SIGKILL);
+    ::waitpid(mPid, nullptr, 0);
+}
+
+int ServeProcess::wait() {
+    int status = 0;
+    ::waitpid(mPid, &status, 0);
+    mPid = -1;
+    return status;
+}
+
+// A client frame as RFC 6455 wants it: FIN, the opcode, the masked length and payload.
+std::string maskedFrame(uint8_t opcode, const std::vector<uint8_t>& payload) {
+    std::string f;
+    f += char(0x80 | opcode);
+    const size_t n = payload.size();
+    if (n < 126) {
+        f += char(0x80 | n);
+    } else {
+        f += char(0x80 | 126);
+        f += char(n >> 8);
+        f += char(n & 255);
+    }
+    const uint8_t mask[4] = {0x12, 0x34, 0x56, 0x78};
+    for (uint8_t m : mask) f += char(m);
+    for (size_t i = 0; i < n; ++i) f += char(payload[i] ^ mask[i % 4]);
+    return f;
+}
+
+// A WebSocket client over a raw socket with a small receive buffer, upgraded (its answer left
+// unread): a client that will not read. -1 when it cannot connect.
+int unreadingClient(const ServerFixture& fixture, bool smallBuffer) {
+    const uint16_t port = fixture.server->port();
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0) return -1;
+    const int small = 4096;
+    if (smallBuffer) setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(port);
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    const std::string host = "127.0.0.1:" + std::to_string(port);
+    const std::string upgrade = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
+                                "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                                "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
+    if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+        send(fd, upgrade.data(), upgrade.size(), 0) != ssize_t(upgrade.size())) {
+        close(fd);
+        return -1;
+    }
+    return fd;
 }
 
 }  // namespace vdiso::test

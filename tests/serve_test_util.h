@@ -4,8 +4,10 @@
 
 #include <cstdint>
 #include <memory>
+#include <sys/types.h>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "core/camera.h"
 #include "core/synth/synth.h"
@@ -44,5 +46,32 @@ inline serve::ViewMessage viewOf(const Camera& c, uint32_t seq, double iso = kHe
 // One HTTP GET; returns the status code, with the body and the Set-Cookie header.
 int httpGet(uint16_t port, const std::string& target, const std::string& cookie, std::string* body = nullptr,
             std::string* setCookie = nullptr);
+
+// `vdiso serve ARGS` in a child process, its port read from the URL it prints; killed
+// (SIGKILL) when this goes unless wait() took it. `inChild` runs between fork and exec
+// (async-signal-safe calls only; a non-zero return ends the child with 126).
+class ServeProcess {
+public:
+    ServeProcess(const std::vector<std::string>& args, int (*inChild)() = nullptr);
+    ~ServeProcess();
+    ServeProcess(const ServeProcess&) = delete;
+    ServeProcess& operator=(const ServeProcess&) = delete;
+    // 0 when the server did not print its URL (it failed to start).
+    uint16_t port() const { return mPort; }
+    pid_t pid() const { return mPid; }
+    // Waits for the process to end; its wait status.
+    int wait();
+
+private:
+    pid_t mPid = -1;
+    uint16_t mPort = 0;
+};
+
+// A client frame as RFC 6455 wants it: FIN, the opcode, the masked length and payload.
+std::string maskedFrame(uint8_t opcode, const std::vector<uint8_t>& payload);
+// A WebSocket client over a raw socket (with a small receive buffer unless `smallBuffer` is
+// false), upgraded, its answer left unread: a client that will not read, or that reads only
+// what the caller recv()s. -1 when it cannot connect.
+int unreadingClient(const ServerFixture& fixture, bool smallBuffer = true);
 
 }  // namespace vdiso::test

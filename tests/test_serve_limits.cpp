@@ -20,6 +20,7 @@
 #include "io/store/brick_store.h"
 #include "serve/protocol.h"
 #include "serve/viewer_client.h"
+#include "tests/serve_test_util.h"
 #include "tests/test_util.h"
 
 namespace vdiso::serve {
@@ -58,38 +59,16 @@ TEST(ServeLimits, AThreadLimitDoesNotLimitTheViewers) {
     const BrickStoreReader reader(store);
     const std::string token = "0123456789abcdef0123";
 
-    int out[2];
-    ASSERT_EQ(::pipe(out), 0);
-    const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {  // only async-signal-safe calls until exec
-        ::dup2(out[1], 1);
-        ::close(out[0]);
+    // The server's user may run only kThreads threads at once.
+    test::ServeProcess server({store, "--port", "0", "--threads", "1", "--token", token}, [] {
         const rlimit limit{kThreads, kThreads};
-        if (::setrlimit(RLIMIT_NPROC, &limit) != 0 || ::setgid(kLimitedUser) != 0 || ::setuid(kLimitedUser) != 0)
-            ::_exit(126);
-        ::execl(VDISO_BINARY, VDISO_BINARY, "serve", store.c_str(), "--port", "0", "--threads", "1",
-                "--token", token.c_str(), static_cast<char*>(nullptr));
-        ::_exit(127);
-    }
-    ::close(out[1]);
-    // The server goes with the test, whatever ends it.
-    struct Stop {
-        pid_t pid;
-        ~Stop() {
-            if (pid <= 0) return;
-            ::kill(pid, SIGKILL);
-            ::waitpid(pid, nullptr, 0);
-        }
-    } stop{pid};
-    // "vdiso serve: open http://127.0.0.1:PORT/?token=..."
-    std::string line;
-    char c;
-    while (line.find('\n') == std::string::npos && ::read(out[0], &c, 1) == 1) line += c;
-    ::close(out[0]);
-    const size_t at = line.find("127.0.0.1:");
-    ASSERT_NE(at, std::string::npos) << "the server did not start: '" << line << "'";
-    const uint16_t port = uint16_t(std::stoi(line.substr(at + 10)));
+        return ::setrlimit(RLIMIT_NPROC, &limit) != 0 || ::setgid(kLimitedUser) != 0 || ::setuid(kLimitedUser) != 0
+                   ? 1
+                   : 0;
+    });
+    ASSERT_NE(server.port(), 0) << "the server did not start";
+    const uint16_t port = server.port();
+    const pid_t pid = server.pid();
 
     // Viewers join, each served in turn, three times as many as the server may run threads.
     std::vector<std::unique_ptr<ViewerClient>> viewers;
@@ -111,10 +90,8 @@ TEST(ServeLimits, AThreadLimitDoesNotLimitTheViewers) {
     EXPECT_EQ(fresh.requestFrame(viewOf(reader, 200)).status, "complete");
 
     ::kill(pid, SIGINT);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
+    const int status = server.wait();
     EXPECT_TRUE(WIFEXITED(status)) << status;
-    stop.pid = -1;
 }
 
 }  // namespace

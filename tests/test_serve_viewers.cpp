@@ -28,6 +28,8 @@ using test::presetFor;
 using test::ServerFixture;
 using test::viewOf;
 using test::httpGet;
+using test::maskedFrame;
+using test::unreadingClient;
 
 double processCpuSeconds() {
     rusage usage{};
@@ -82,24 +84,6 @@ TEST(ServeServer, OutOfDescriptorsBacksOffAndRecovers) {
 }
 
 namespace {
-
-// A client frame as RFC 6455 wants it: FIN, the opcode, the masked length and payload.
-std::string maskedFrame(uint8_t opcode, const std::vector<uint8_t>& payload) {
-    std::string f;
-    f += char(0x80 | opcode);
-    const size_t n = payload.size();
-    if (n < 126) {
-        f += char(0x80 | n);
-    } else {
-        f += char(0x80 | 126);
-        f += char(n >> 8);
-        f += char(n & 255);
-    }
-    const uint8_t mask[4] = {0x12, 0x34, 0x56, 0x78};
-    for (uint8_t m : mask) f += char(m);
-    for (size_t i = 0; i < n; ++i) f += char(payload[i] ^ mask[i % 4]);
-    return f;
-}
 
 // Writes a WebSocket upgrade request for /ws and `after` in one send, and returns what the
 // server answers, until *ended (a frameEnd came) or the connection closes or stays silent 30 s.
@@ -176,30 +160,6 @@ TEST(ServeServer, OneViewerMoreThanTheMostIsRefused) {
     }
     ASSERT_TRUE(d);
     EXPECT_EQ(d->requestFrame(viewOf(camera, 1)).status, "complete");
-}
-
-// A WebSocket client over a raw socket with a small receive buffer, upgraded (its answer left
-// unread): a client that will not read. -1 when it cannot connect.
-int unreadingClient(const ServerFixture& fixture) {
-    const uint16_t port = fixture.server->port();
-    const int fd = socket(AF_INET, SOCK_STREAM, 0);
-    if (fd < 0) return -1;
-    const int small = 4096;
-    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_port = htons(port);
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    const std::string host = "127.0.0.1:" + std::to_string(port);
-    const std::string upgrade = "GET /ws?token=" + fixture.server->token() + " HTTP/1.1\r\nHost: " + host +
-                                "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
-                                "Sec-WebSocket-Version: 13\r\nOrigin: http://" + host + "\r\n\r\n";
-    if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
-        send(fd, upgrade.data(), upgrade.size(), 0) != ssize_t(upgrade.size())) {
-        close(fd);
-        return -1;
-    }
-    return fd;
 }
 
 // A client that sends VIEWs and never reads: once a write to it has waited the write timeout,

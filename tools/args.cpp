@@ -174,6 +174,8 @@ const char* const kRemoteOptionsHelp =
     "                          the AWS_PROFILE profile of ~/.aws/credentials\n"
     "  --ca-file FILE          CA certificates for HTTPS (default AWS_CA_BUNDLE, else the system's)\n"
     "  --remote-timeout S      seconds without a byte before a request is tried again (default 15)\n"
+    "  --remote-deadline S     seconds one read may take in all, tries and pauses included\n"
+    "                          (default 60): a server that drips bytes is ended by it\n"
     "  --connections N         requests in flight at once (default 32)\n"
     "  --disk-cache DIR        keep fetched bricks in DIR across runs and processes, for the\n"
     "                          object's current version (its ETag)\n"
@@ -196,6 +198,8 @@ bool takeRemoteOption(const std::string& flag, Args& args, RemoteOptions& option
         options.caFile = args.value(flag);
     } else if (flag == "--remote-timeout") {
         options.stallTimeoutMs = 1000 * parseInt(flag, args.value(flag), 1, 3600);
+    } else if (flag == "--remote-deadline") {
+        options.deadlineMs = 1000 * parseInt(flag, args.value(flag), 1, 86400);
     } else if (flag == "--connections") {
         options.connections = int(parseInt(flag, args.value(flag), 1, 256));
     } else if (flag == "--disk-cache") {

@@ -69,7 +69,7 @@ bool takeStoreWriteOption(const std::string& flag, Args& args, StoreWriteOptions
 extern const char* const kStoreWriteOptionsHelp;
 
 // The options every command that reads a store takes for a remote one (http://, https://,
-// s3://): --s3-endpoint, --s3-addressing, --no-sign-request, --ca-file, --remote-timeout,
+// s3://): --s3-endpoint, --s3-addressing, --no-sign-request, --ca-file, --remote-timeout, --remote-deadline,
 // --connections. Consumes `flag` (and its value) and returns true if it is one.
 bool takeRemoteOption(const std::string& flag, Args& args, RemoteOptions& options);
 // Help lines for those options.

@@ -132,6 +132,12 @@ void RangeDiskCache::write(uint64_t offset, size_t n, const void* src) const {
     if ((mTotal += n + sizeof(crc)) > mMaxBytes) sweep();
 }
 
+void RangeDiskCache::drop(uint64_t offset, size_t n) const {
+    if (::unlink(entry(offset, n).c_str()) == 0) mTotal -= std::min<uint64_t>(mTotal, n + sizeof(uint32_t));
+    --mHits;
+    mHitBytes -= n;
+}
+
 void RangeDiskCache::sweep() const {
     std::unique_lock lock(mSweepLock, std::try_to_lock);
     if (!lock) return;  // another thread is sweeping

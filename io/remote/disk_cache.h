@@ -28,8 +28,11 @@ public:
 
     // The range from the cache into dst; false (a miss) when it holds no whole, intact entry.
     bool read(uint64_t offset, size_t n, void* dst) const;
-    // Keeps the range. A failed write (a full disk) is a later miss, not an error.
+    // Keeps the range. A failed write (a full disk) is a later miss, not an error. Callers keep
+    // only what they verified (RemoteFile's RangeCheck).
     void write(uint64_t offset, size_t n, const void* src) const;
+    // Removes the range's entry, found damaged by its reader after read() took it (a hit no more).
+    void drop(uint64_t offset, size_t n) const;
 
     uint64_t hits() const { return mHits.load(); }
     uint64_t hitBytes() const { return mHitBytes.load(); }

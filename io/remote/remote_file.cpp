@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <mutex>
 #include <optional>
@@ -48,8 +49,12 @@ struct Transfer {
     size_t capacity = 0;
     size_t got = 0;
     bool overflow = false;
+    // Opening: a 200 (the whole object where a range was asked) is taken when it fits.
+    bool opening = false, wholeObject = false;
     long status = 0;
-    std::string contentRange, etag, lastModified, errorBody;
+    std::string contentRange, etag, lastModified, contentEncoding, retryAfter, bucketRegion, errorBody;
+    size_t headerBytes = 0;  // the response's headers so far
+    bool hugeHeader = false;
     // A straggler: no answer `session->stragglerMs()` after `start` (asked while waiting, so that
     // a request sent before the session knew its usual wait is judged too); ended, to be tried
     // again. No session: no deadline.
@@ -60,6 +65,9 @@ struct Transfer {
     bool answered = false, straggler = false;
 };
 
+// A response's headers are refused past this: no answer of an object store comes near it.
+constexpr size_t kMaxHeaderBytes = 64 * 1024;
+
 size_t onHeader(char* data, size_t size, size_t count, void* user) {
     auto& t = *static_cast<Transfer*>(user);
     const std::string_view line(data, size * count);
@@ -68,7 +76,16 @@ size_t onHeader(char* data, size_t size, size_t count, void* user) {
         t.contentRange.clear();
         t.etag.clear();
         t.lastModified.clear();
+        t.contentEncoding.clear();
+        t.retryAfter.clear();
+        t.bucketRegion.clear();
+        t.headerBytes = line.size();
         return line.size();
+    }
+    t.headerBytes += line.size();
+    if (t.headerBytes > kMaxHeaderBytes) {
+        t.hugeHeader = true;
+        return 0;  // ends the transfer
     }
     const size_t colon = line.find(':');
     if (colon == std::string_view::npos) return line.size();
@@ -81,6 +98,9 @@ size_t onHeader(char* data, size_t size, size_t count, void* user) {
     if (name == "content-range") t.contentRange = value;
     else if (name == "etag") t.etag = value;
     else if (name == "last-modified") t.lastModified = value;
+    else if (name == "content-encoding") t.contentEncoding = value;
+    else if (name == "retry-after") t.retryAfter = value;
+    else if (name == "x-amz-bucket-region") t.bucketRegion = value;
     return line.size();
 }
 
@@ -105,7 +125,8 @@ size_t onBody(char* data, size_t size, size_t count, void* user) {
     auto& t = *static_cast<Transfer*>(user);
     const size_t n = size * count;
     curl_easy_getinfo(t.curl, CURLINFO_RESPONSE_CODE, &t.status);
-    if (t.status != 206) {
+    if (t.status == 200 && t.opening) t.wholeObject = true;  // ranges ignored: the whole object
+    if (t.status != 206 && !t.wholeObject) {
         // An error's body says why (S3's XML); a whole object where a range was asked is refused
         // by the caller from the status.
         if (t.errorBody.size() < 4096) t.errorBody.append(data, std::min(n, 4096 - t.errorBody.size()));
@@ -175,6 +196,45 @@ bool retriedCurlError(CURLcode rc) {
     }
 }
 
+// Where a URL's requests go: scheme, host and port (the default port when none is given);
+// nullopt when it does not parse.
+std::optional<std::string> originOf(const std::string& url, bool* hasUser = nullptr) {
+    CURLU* u = curl_url();
+    if (!u) throw std::bad_alloc();
+    std::optional<std::string> origin;
+    if (curl_url_set(u, CURLUPART_URL, url.c_str(), 0) == CURLUE_OK) {
+        char *scheme = nullptr, *host = nullptr, *port = nullptr, *user = nullptr;
+        if (curl_url_get(u, CURLUPART_SCHEME, &scheme, 0) == CURLUE_OK &&
+            curl_url_get(u, CURLUPART_HOST, &host, 0) == CURLUE_OK &&
+            curl_url_get(u, CURLUPART_PORT, &port, CURLU_DEFAULT_PORT) == CURLUE_OK) {
+            std::string text = std::string(scheme) + "://" + host + ":" + port;
+            std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+            origin = text;
+        }
+        if (hasUser) *hasUser = curl_url_get(u, CURLUPART_USER, &user, 0) == CURLUE_OK;
+        curl_free(scheme);
+        curl_free(host);
+        curl_free(port);
+        curl_free(user);
+    }
+    curl_url_cleanup(u);
+    return origin;
+}
+
+// Retry-After (seconds, or an HTTP date) in milliseconds from now; 0 when absent or past.
+int64_t retryAfterMs(const std::string& value) {
+    if (value.empty()) return 0;
+    if (std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); }))
+        return value.size() > 9 ? INT64_MAX / 4 : int64_t(std::stoll(value)) * 1000;
+    const time_t at = curl_getdate(value.c_str(), nullptr);
+    const time_t now = std::time(nullptr);
+    return at > now ? int64_t(at - now) * 1000 : 0;
+}
+
+bool isRedirect(long status) {
+    return status == 301 || status == 302 || status == 303 || status == 307 || status == 308;
+}
+
 }  // namespace
 
 struct RemoteFile::Impl {
@@ -184,6 +244,8 @@ struct RemoteFile::Impl {
     std::string sigv4, userPassword;
     curl_slist* headers = nullptr;  // fixed headers: S3's payload hash and session token
     std::string condition;          // "If-Match: ..." or "If-Unmodified-Since: ...", once pinned
+    std::string pinnedEtag, pinnedLastModified;  // what every answer must still say
+    bool credentialed = false;      // signed, or a URL with userinfo: redirects stay at its origin
     std::atomic<uint64_t> failures{0};  // reads that failed for good
     std::mutex failureLock;
     std::string failure;  // the last one's message, which the reads it ended repeat
@@ -215,6 +277,9 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
         d.url = location;
         mScheme = location.rfind("https://", 0) == 0 ? "https" : "http";
     }
+    bool hasUser = false;
+    originOf(d.url, &hasUser);
+    d.credentialed = !d.sigv4.empty() || hasUser;
 
     // The head: its Content-Range gives the size, its ETag the version every later read pins.
     mHead.resize(std::max<size_t>(headBytes, 1));
@@ -224,9 +289,11 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
     if (head.etag.size() > 2 && head.etag.rfind("W/", 0) != 0) {
         mVersion = head.etag;
         d.condition = "If-Match: " + head.etag;
+        d.pinnedEtag = head.etag;
     } else if (!head.lastModified.empty()) {
         mVersion = "Last-Modified: " + head.lastModified;
         d.condition = "If-Unmodified-Since: " + head.lastModified;
+        d.pinnedLastModified = head.lastModified;
     }
     const RemoteOptions& options = d.session->options();
     if (!options.diskCacheDir.empty()) {
@@ -246,7 +313,7 @@ uint64_t RemoteFile::stragglers() const { return mImpl->session->stragglers.load
 uint64_t RemoteFile::diskCacheHits() const { return mDiskCache ? mDiskCache->hits() : 0; }
 uint64_t RemoteFile::diskCacheBytes() const { return mDiskCache ? mDiskCache->hitBytes() : 0; }
 
-void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
+void RemoteFile::read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact) const {
     if (n == 0) return;
     if (offset > mSize || n > mSize - offset)
         throwIoError(mName, "has " + std::to_string(mSize) + " bytes: no range " + std::to_string(offset) +
@@ -255,15 +322,21 @@ void RemoteFile::read(uint64_t offset, size_t n, void* dst) const {
         std::memcpy(dst, mHead.data() + offset, n);
         return;
     }
-    if (mDiskCache && mDiskCache->read(offset, n, dst)) return;
+    if (mDiskCache && mDiskCache->read(offset, n, dst)) {
+        if (!intact || intact(0)) return;
+        mDiskCache->drop(offset, n);  // kept damaged (by an older vdiso): fetched anew
+    }
     fetch(offset, n, dst, false);
-    if (mDiskCache) mDiskCache->write(offset, n, dst);
+    if (mDiskCache && (!intact || intact(0))) mDiskCache->write(offset, n, dst);
 }
 
 RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening) const {
     Impl& d = *mImpl;
     const RemoteOptions& options = d.session->options();
     const std::string range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point deadline = Clock::now() + std::chrono::milliseconds(std::max<int64_t>(1, options.deadlineMs));
+    const std::string deadlineText = std::to_string(std::max<int64_t>(1, options.deadlineMs / 1000)) + " s";
     // A failure for good counts once, and ends the object's other transfers (onProgress).
     const uint64_t failuresAtStart = d.failures.load();
     auto fail = [&](const std::string& what) {
@@ -276,16 +349,28 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         std::lock_guard lock(d.failureLock);
         return IoError(d.failure);
     };
+    std::string url = d.url;  // where this read goes: the location, or where it was redirected
+    int redirects = 0;
     std::string lastProblem;
-    for (int attempt = 0; attempt < options.attempts; ++attempt) {
-        if (attempt > 0) {
-            const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(100 << std::min(attempt - 1, 6));
-            while (std::chrono::steady_clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested())
+    int64_t pauseMs = 0;  // before the next try
+    for (int attempt = 0; attempt < options.attempts;) {
+        if (pauseMs > 0) {
+            if (Clock::now() + std::chrono::milliseconds(pauseMs) > deadline)
+                throw fail(lastProblem + "; waiting " + std::to_string(pauseMs) + " ms to try again would pass the " +
+                           deadlineText + " a read may take (--remote-deadline)");
+            const auto until = Clock::now() + std::chrono::milliseconds(pauseMs);
+            while (Clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested())
                 std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            pauseMs = 0;
         }
         throwIfInterrupted(mName);
         if (d.failures.load() != failuresAtStart)
             throw abandoned();
+        const int64_t remainingMs =
+            std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+        if (remainingMs <= 0)
+            throw fail("no whole answer to range " + range + " within " + deadlineText +
+                       " (--remote-deadline)" + (lastProblem.empty() ? std::string() : "; last: " + lastProblem));
         CURL* curl = d.session->take();
         Transfer t;
         t.curl = curl;
@@ -293,22 +378,24 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         t.failuresAtStart = failuresAtStart;
         t.dst = static_cast<unsigned char*>(dst);
         t.capacity = n;
+        t.opening = opening;
         // Not on the open's request; nor beyond the stall timeout, which ends a transfer anyway.
         if (!opening) t.session = d.session.get();
         t.stallMs = options.stallTimeoutMs;
         curl_slist* headers = nullptr;
         for (const curl_slist* h = d.headers; h; h = h->next) headers = curl_slist_append(headers, h->data);
         if (!d.condition.empty()) headers = curl_slist_append(headers, d.condition.c_str());
-        curl_easy_setopt(curl, CURLOPT_URL, d.url.c_str());
+        curl_easy_setopt(curl, CURLOPT_URL, url.c_str());
         curl_easy_setopt(curl, CURLOPT_RANGE, range.c_str());
         curl_easy_setopt(curl, CURLOPT_HTTPHEADER, headers);
         curl_easy_setopt(curl, CURLOPT_PROTOCOLS_STR, "http,https");
-        curl_easy_setopt(curl, CURLOPT_REDIR_PROTOCOLS_STR, "http,https");
-        curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, long(options.followRedirects));
-        curl_easy_setopt(curl, CURLOPT_MAXREDIRS, 8L);
+        // Redirects are followed here, not by libcurl: it drops Authorization on another host but
+        // sends every other header, S3's session token among them, wherever it is sent.
+        curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, 0L);
         curl_easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
         curl_easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
-        curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(options.connectTimeoutMs));
+        curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(std::min(options.connectTimeoutMs, remainingMs)));
+        curl_easy_setopt(curl, CURLOPT_TIMEOUT_MS, long(remainingMs));
         curl_easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
         curl_easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, options.stallTimeoutMs / 1000)));
         curl_easy_setopt(curl, CURLOPT_HEADERFUNCTION, onHeader);
@@ -330,14 +417,26 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         curl_easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
         curl_off_t firstByteUs = 0;
         curl_easy_getinfo(curl, CURLINFO_STARTTRANSFER_TIME_T, &firstByteUs);
+        std::string redirectTo;
+        if (const char* to = nullptr; curl_easy_getinfo(curl, CURLINFO_REDIRECT_URL, &to) == CURLE_OK && to)
+            redirectTo = to;
         curl_slist_free_all(headers);
         d.session->give(curl);
         ++d.session->requests;
         d.session->bytesFetched += t.got;
 
-        if (t.status == 200)
-            throw fail("is served without byte ranges (HTTP 200 to a Range request): vdiso "
-                                "reads remote stores by ranges, so the server must honour them");
+        // libcurl refuses a header line longer than it holds (100 KiB) as "out of memory".
+        if (t.hugeHeader || (rc == CURLE_OUT_OF_MEMORY && t.got == 0))
+            throw fail("answered with more than " + std::to_string(kMaxHeaderBytes / 1024) +
+                       " KiB of headers: refused (the server is broken or hostile)");
+        if (!t.contentEncoding.empty() && t.contentEncoding != "identity")
+            throw fail("answered range " + range + " with Content-Encoding '" + t.contentEncoding +
+                       "', which was not asked for: a range must be the object's own bytes");
+        if (t.status == 200 && (!t.wholeObject || t.overflow))
+            throw fail(std::string("is served without byte ranges (HTTP 200 to a Range request)") +
+                       (opening ? " and is larger than the " + std::to_string(n) + " bytes it may be read whole in"
+                                : std::string()) +
+                       ": vdiso reads remote stores by ranges, so the server must honour them");
         if (t.overflow)
             throw fail("sent more than the " + std::to_string(n) + " bytes of range " + range +
                                     " it announced");
@@ -346,6 +445,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
             lastProblem = "no answer to range " + range + " in " + std::to_string(t.stragglerMs) +
                           " ms, " + std::to_string(RemoteSession::kStragglerFactor) +
                           " times the usual wait (a straggler)";
+            ++attempt;
             continue;
         }
         if (rc == CURLE_ABORTED_BY_CALLBACK) {
@@ -354,16 +454,47 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         }
         if (rc != CURLE_OK) {
             const std::string what = curlError[0] ? curlError : curl_easy_strerror(rc);
+            // libcurl's whole-transfer timeout (the deadline's remainder) rather than its stall one.
+            if (rc == CURLE_OPERATION_TIMEDOUT && Clock::now() + std::chrono::milliseconds(100) >= deadline)
+                throw fail("no whole answer to range " + range + " within " + deadlineText +
+                           " (--remote-deadline): the server sends too slowly or not at all");
             if (retriedCurlError(rc)) {
                 lastProblem = rc == CURLE_OPERATION_TIMEDOUT
                                   ? "no answer for " + std::to_string(std::max<int64_t>(1, options.stallTimeoutMs / 1000)) +
                                         " s (" + what + ")"
                                   : what;
+                pauseMs = int64_t(100) << std::min(attempt, 6);
+                ++attempt;
                 continue;
             }
-            if (rc == CURLE_TOO_MANY_REDIRECTS)
-                throw fail("redirects too often (a loop?): " + what);
             throw fail(what);
+        }
+        if (isRedirect(t.status)) {
+            const std::string said = "HTTP " + std::to_string(t.status);
+            if (!options.followRedirects || redirectTo.empty())
+                throw fail("answered " + said + (redirectTo.empty() ? " without a Location" : " to " + displayLocation(redirectTo)) +
+                           ", which is not followed");
+            if (++redirects > 8) throw fail("redirects too often (a loop?): more than 8 redirects, the last to " + displayLocation(redirectTo));
+            const std::optional<std::string> from = originOf(url), to = originOf(redirectTo);
+            if (!to || (to->rfind("http://", 0) != 0 && to->rfind("https://", 0) != 0))
+                throw fail("was redirected (" + said + ") to " + displayLocation(redirectTo) +
+                           ", which is not an http or https URL");
+            // Credentials go only where they were meant for: S3 never sends a signed request
+            // elsewhere on its own terms (its SDKs refuse, or sign anew for the region it names).
+            if (d.credentialed && from != to)
+                throw fail("was redirected (" + said + ") from " + displayLocation(url) + " to " +
+                           displayLocation(redirectTo) + ": the request's credentials are for " + *from +
+                           " only, so the redirect is not followed" +
+                           (t.bucketRegion.empty() ? std::string()
+                                                   : " (S3 says the bucket is in region " + t.bucketRegion +
+                                                         ": set AWS_REGION or --s3-endpoint for it)"));
+            url = redirectTo;
+            continue;
+        }
+        if (t.status == 200 && t.wholeObject) {  // opening, a small object sent whole
+            if (t.got > n)
+                throw fail("sent more than the " + std::to_string(n) + " bytes it may be read whole in");
+            return Answer{t.got, t.got, t.etag, t.lastModified};
         }
         if (t.status == 206) {
             d.session->noteFirstByteMs(double(firstByteUs) / 1000.0);
@@ -376,11 +507,19 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
             if (t.got != last - offset + 1) {
                 lastProblem = "the body of range " + range + " ended after " + std::to_string(t.got) +
                               " of " + std::to_string(last - offset + 1) + " bytes";
+                pauseMs = int64_t(100) << std::min(attempt, 6);
+                ++attempt;
                 continue;
             }
             if (!opening && (*r)[2] != mSize)
                 throw fail("now has " + std::to_string((*r)[2]) + " bytes where it had " +
                                         std::to_string(mSize) + " when opened: it was replaced while being read");
+            // A server that ignores If-Match still names the version it sent.
+            if (!opening && ((!d.pinnedEtag.empty() && !t.etag.empty() && t.etag != d.pinnedEtag) ||
+                             (!d.pinnedLastModified.empty() && !t.lastModified.empty() &&
+                              t.lastModified != d.pinnedLastModified)))
+                throw fail("was replaced since it was opened: range " + range + " came as version " +
+                           (t.etag.empty() ? "Last-Modified: " + t.lastModified : t.etag) + ", opened as " + mVersion);
             return Answer{(*r)[2], t.got, t.etag, t.lastModified};
         }
         const std::string said = "HTTP " + std::to_string(t.status) + reasonOf(t.status) + s3ErrorText(t.errorBody);
@@ -390,6 +529,11 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         if (t.status == 416 && opening) throw fail("is empty (" + said + ")");
         if (t.status >= 500 || t.status == 429) {
             lastProblem = said;
+            // The server's own wait, if it names one and it is longer than ours.
+            const int64_t asked = retryAfterMs(t.retryAfter);
+            pauseMs = std::max(asked, int64_t(100) << std::min(attempt, 6));
+            if (asked > 0) lastProblem += " (Retry-After: " + t.retryAfter + ")";
+            ++attempt;
             continue;
         }
         if (t.status == 404) {
@@ -401,18 +545,36 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
     throw fail(lastProblem + " (tried " + std::to_string(options.attempts) + " times)");
 }
 
-void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces) const {
-    if (!mDiskCache || pieces.size() < 2) return read(offset, n, dst);
+void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
+                              const RangeCheck& intact) const {
+    auto intactPiece = [&](size_t k) { return !intact || intact(k); };
+    // The range as one piece, intact when each of its pieces is.
+    const RangeCheck allIntact = intact ? RangeCheck([&](size_t) {
+        for (size_t k = 0; k < pieces.size(); ++k)
+            if (!intact(k)) return false;
+        return true;
+    }) : RangeCheck();
+    if (!mDiskCache || pieces.size() < 2) return read(offset, n, dst, allIntact);
     bool held = true;
-    for (size_t k = 0; k < pieces.size() && held; ++k) held = mDiskCache->read(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
+    for (size_t k = 0; k < pieces.size() && held; ++k) {
+        held = mDiskCache->read(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
+        if (held && !intactPiece(k)) {
+            mDiskCache->drop(pieces[k].offset, pieces[k].bytes);
+            held = false;
+        }
+    }
     if (held) return;
-    if (offset > mSize || n > mSize - offset || offset < mHead.size()) return read(offset, n, dst);
+    if (offset > mSize || n > mSize - offset || offset < mHead.size()) return read(offset, n, dst, allIntact);
     fetch(offset, n, dst, false);
-    for (const ByteRange& p : pieces) mDiskCache->write(p.offset, p.bytes, p.dst);
+    for (size_t k = 0; k < pieces.size(); ++k)
+        if (intactPiece(k)) mDiskCache->write(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
 }
 
-void RemoteFile::readMany(std::span<const ByteRange> ranges) const {
-    mImpl->session->forEach(ranges.size(), [&](size_t i) { read(ranges[i].offset, ranges[i].bytes, ranges[i].dst); });
+void RemoteFile::readMany(std::span<const ByteRange> ranges, const RangeCheck& intact) const {
+    mImpl->session->forEach(ranges.size(), [&](size_t i) {
+        read(ranges[i].offset, ranges[i].bytes, ranges[i].dst,
+             intact ? RangeCheck([&](size_t) { return intact(i); }) : RangeCheck());
+    });
 }
 
 }  // namespace vdiso

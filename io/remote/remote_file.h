@@ -21,6 +21,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -52,6 +53,11 @@ struct ByteRange {
     void* dst = nullptr;
 };
 
+// Whether the k-th range of a read arrived intact (the store's checksum of it). With a disk cache,
+// a range is kept only once it passes, and a kept range that fails is dropped and fetched again:
+// what arrived corrupt once is never served twice. Empty: every range counts as intact.
+using RangeCheck = std::function<bool(size_t k)>;
+
 class RemoteFile {
 public:
     // Throws IoError naming the location when it cannot be reached, is refused, is empty or is
@@ -72,12 +78,15 @@ public:
     const char* scheme() const { return mScheme; }
 
     // Exactly n bytes at `offset` into dst. Throws IoError naming the URL and what is wrong.
-    void read(uint64_t offset, size_t n, void* dst) const;
+    // `intact(0)` checks them (RangeCheck).
+    void read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact = {}) const;
     // The ranges at once, as many in flight as the pool allows; throws the first error.
-    void readMany(std::span<const ByteRange> ranges) const;
+    void readMany(std::span<const ByteRange> ranges, const RangeCheck& intact = {}) const;
     // n bytes at `offset` in one GET, of which `pieces` (within dst) are wanted: with a disk
-    // cache, each piece is kept and looked up apart, and the GET is sent only when one is missing.
-    void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces) const;
+    // cache, each piece is kept and looked up apart, and the GET is sent only when one is missing
+    // (or found damaged: `intact(k)` checks piece k).
+    void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
+                      const RangeCheck& intact = {}) const;
 
     // Requests sent (tries included) and object bytes received by the session.
     uint64_t requests() const;

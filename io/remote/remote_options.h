@@ -27,11 +27,15 @@ struct RemoteOptions {
     // Milliseconds to connect, and without a byte received before a request is a straggler.
     int64_t connectTimeoutMs = 10000;
     int64_t stallTimeoutMs = 15000;
+    // Milliseconds one read may take in all, its tries, pauses and redirects included: a server
+    // that sends a byte now and then never trips the stall timeout, and is ended by this.
+    int64_t deadlineMs = 60000;
     // A folder keeping fetched ranges across runs and processes (io/remote/disk_cache.h); empty:
     // none. At most diskCacheBytes are kept.
     std::string diskCacheDir;
     uint64_t diskCacheBytes = uint64_t(10) << 30;
-    // Follow 3xx answers (at most 8). Off where the answers are untrusted test input (fuzz).
+    // Follow 3xx answers (at most 8; with credentials only to the same scheme, host and port).
+    // Off where the answers are untrusted test input (fuzz).
     bool followRedirects = true;
 };
 

@@ -213,7 +213,10 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(i
         const BrickEntry& e = mIndex[size_t(first + k)];
         pieces.push_back({e.offset, e.storedBytes, dst + (e.offset - firstEntry.offset)});
     }
-    mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data");
+    // A remote source's disk cache keeps a brick only once its checksum passes.
+    mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data", [&](size_t k) {
+        return store_format::crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(first) + k].checksum;
+    });
     std::vector<std::span<const unsigned char>> stored;
     stored.reserve(size_t(count));
     for (int k = 0; k < count; ++k) {

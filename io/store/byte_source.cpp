@@ -11,7 +11,7 @@
 
 namespace vdiso {
 
-void ByteSource::readMany(std::span<const ByteRange> ranges, const char* what) const {
+void ByteSource::readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck&) const {
     for (const ByteRange& r : ranges) read(r.offset, r.bytes, r.dst, what);
 }
 
@@ -48,7 +48,7 @@ public:
         return mDirectFd >= 0 ? "direct" : "fadvise";
     }
 
-    void read(uint64_t offset, size_t n, void* dst, const char* what) const override {
+    void read(uint64_t offset, size_t n, void* dst, const char* what, const RangeCheck& = {}) const override {
         auto* p = static_cast<char*>(dst);
         // O_DIRECT reads whole aligned blocks; the padding after a brick (or the index) fills
         // the last one, and the end of the file may cut it.
@@ -87,11 +87,15 @@ public:
     uint64_t size() const override { return mFile.size(); }
     const char* method() const override { return mFile.scheme(); }
     const RemoteFile* remote() const override { return &mFile; }
-    void read(uint64_t offset, size_t n, void* dst, const char*) const override { mFile.read(offset, n, dst); }
-    void readMany(std::span<const ByteRange> ranges, const char*) const override { mFile.readMany(ranges); }
-    void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
-                      const char*) const override {
-        mFile.readCovering(offset, n, dst, pieces);
+    void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck& intact) const override {
+        mFile.read(offset, n, dst, intact);
+    }
+    void readMany(std::span<const ByteRange> ranges, const char*, const RangeCheck& intact) const override {
+        mFile.readMany(ranges, intact);
+    }
+    void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces, const char*,
+                      const RangeCheck& intact) const override {
+        mFile.readCovering(offset, n, dst, pieces, intact);
     }
 
 private:

@@ -31,16 +31,19 @@ public:
     virtual const std::string& name() const = 0;
     virtual uint64_t size() const = 0;
     // Exactly n bytes at `offset` into dst (see kByteSourceAlignment). Throws IoError naming the
-    // source, `what` was being read and where.
-    virtual void read(uint64_t offset, size_t n, void* dst, const char* what) const = 0;
-    // The ranges at once where the source can (remote: concurrently), else in turn.
-    virtual void readMany(std::span<const ByteRange> ranges, const char* what) const;
+    // source, `what` was being read and where. `intact(0)` as for readMany below.
+    virtual void read(uint64_t offset, size_t n, void* dst, const char* what, const RangeCheck& intact = {}) const = 0;
+    // The ranges at once where the source can (remote: concurrently), else in turn. `intact(k)`
+    // says whether range k arrived whole and right (its checksum): a remote source's disk cache
+    // keeps only such ranges (io/remote/remote_file.h, RangeCheck); the caller still checks.
+    virtual void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact = {}) const;
     // n bytes at `offset` into dst, as read() does, in one request; only `pieces` of them (within
     // dst, in order) are wanted, and a remote source's disk cache keeps and finds each apart,
-    // so a piece read in one run is found in the next however it is read there.
+    // so a piece read in one run is found in the next however it is read there; `intact` as above.
     virtual void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
-                              const char* what) const {
+                              const char* what, const RangeCheck& intact = {}) const {
         (void)pieces;
+        (void)intact;
         read(offset, n, dst, what);
     }
     // "buffered", "direct", "fadvise" (local), "http", "https", "s3" (remote).

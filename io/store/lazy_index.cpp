@@ -13,7 +13,15 @@ LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedB
     const uint64_t directoryBytes = store_format::indexDirectoryBytes(rawBytes);
     if (storedBytes < directoryBytes) throwIoError(source.name(), "index is missing or corrupt (too short)");
     std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
-    source.read(offset, directory.size(), directory.data(), "index directory");
+    // A remote disk cache keeps the directory once it decodes (its checksum passes).
+    source.read(offset, directory.size(), directory.data(), "index directory", [&](size_t) {
+        try {
+            store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+            return true;
+        } catch (const IoError&) {
+            return false;
+        }
+    });
     mDirectory = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
     // Untouched until a part lands: the pages of parts never asked for are never faulted in.
     mRaw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
@@ -76,13 +84,19 @@ bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const 
                 ranges[k] = {mOffset + mDirectory.offsets[i], n, stored[k].get()};
             }
             std::exception_ptr failure;
-            std::vector<char> good(mine.size(), 0);
+            std::vector<char> good(mine.size(), 0), unpacked(mine.size(), 0);
+            auto unpack = [&](size_t k) {
+                const uint64_t i = mine[k];
+                good[k] = store_format::unpackIndexPart(mDirectory, i, stored[k].get(),
+                                                       mRaw.get() + i * store_format::kIndexPartBytes);
+                unpacked[k] = 1;
+                return good[k] != 0;
+            };
             try {
-                mSource.readMany(ranges, "index");
+                // A remote disk cache keeps a part once it unpacks (its checksum passes).
+                mSource.readMany(ranges, "index", unpack);
                 tbb::parallel_for(size_t(0), mine.size(), [&](size_t k) {
-                    const uint64_t i = mine[k];
-                    good[k] = store_format::unpackIndexPart(mDirectory, i, stored[k].get(),
-                                                           mRaw.get() + i * store_format::kIndexPartBytes);
+                    if (!unpacked[k]) unpack(k);
                 });
             } catch (...) {
                 failure = std::current_exception();

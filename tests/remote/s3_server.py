@@ -148,7 +148,7 @@ class Faults:
     (-1 = forever). The first live matching rule wins."""
 
     ACTIONS = {"none", "delay", "status", "truncate", "drop", "hang",
-               "redirect", "bad_content_range", "ignore_range", "throttle"}
+               "redirect", "bad_content_range", "ignore_range", "throttle", "corrupt", "replaced"}
 
     def __init__(self):
         self.lock = threading.Lock()
@@ -740,12 +740,18 @@ class Handler(BaseHTTPRequestHandler):
             size = st.st_size
             etag = self.server.etags.etag(full, st)
             mtime = int(st.st_mtime)
+            fault = self.fault or {}
+            action = fault.get("action")
+            if action == "replaced":  # another version, and If-Match ignored (a broken server)
+                etag = fault.get("etag", '"replaced-version"')
             base_headers = [("ETag", etag), ("Last-Modified", http_date(mtime)),
                             ("Accept-Ranges", "bytes"),
                             ("Content-Type", "binary/octet-stream")]
-            self.check_conditions(etag, mtime, base_headers)
-            fault = self.fault or {}
-            action = fault.get("action")
+            base_headers += list((fault.get("headers") or {}).items())
+            if fault.get("header_bytes"):
+                base_headers.append(("X-Padding", "x" * int(fault["header_bytes"])))
+            if action != "replaced":
+                self.check_conditions(etag, mtime, base_headers)
             start, end, status = 0, size - 1, 200
             rng = self.headers.get("Range")
             if rng is not None and action != "ignore_range":
@@ -785,6 +791,8 @@ class Handler(BaseHTTPRequestHandler):
                 chunk = f.read(min(CHUNK if not rate else max(1, int(rate / 10)), remaining))
                 if not chunk:
                     break
+                if action == "corrupt" and remaining == limit:  # the answer's first byte flipped
+                    chunk = bytes([chunk[0] ^ 0xFF]) + chunk[1:]
                 if self.server.link:
                     self.server.link.take(len(chunk))
                 self.wfile.write(chunk)
