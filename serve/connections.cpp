@@ -34,6 +34,7 @@ namespace {
 constexpr const char* kServerName = "vdiso";
 constexpr auto kHttpTimeout = std::chrono::seconds(30);
 constexpr size_t kReadPiece = 64 * 1024;  // WebSocket reads in pieces, so size is checked as it comes
+constexpr int kSendBuffer = 512 * 1024;    // SO_SNDBUF (Linux doubles it): 1 MB in the kernel a viewer
 
 }  // namespace
 
@@ -57,6 +58,10 @@ public:
         // the client's delayed ACK, 40 ms on Linux.
         beast::error_code ignored;
         beast::get_lowest_layer(mWs).socket().set_option(tcp::no_delay(true), ignored);
+        // The kernel's share of a client's queue is bounded (Linux grows a send buffer to 4 MB
+        // on its own): a client that stops reading blocks a write within kSendBuffer bytes,
+        // and from there the write timeout counts.
+        beast::get_lowest_layer(mWs).socket().set_option(net::socket_base::send_buffer_size(kSendBuffer), ignored);
         mWs.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
         mWs.set_option(websocket::stream_base::decorator(
             [](websocket::response_type& r) { r.set(http::field::server, kServerName); }));

@@ -1,6 +1,7 @@
 #include "serve/frame_pool.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace vdiso::serve {
 
@@ -27,18 +28,24 @@ FramePool::~FramePool() {
     for (std::thread& t : mThreads) t.join();
 }
 
+void FramePool::countFirstLocked() {
+    mFirstWaiting = size_t(std::count_if(mQueue.begin(), mQueue.end(), [](const Entry& e) { return e.first; }));
+}
+
 void FramePool::enqueueLocked(Task& task, State& state, bool first, Clock::time_point notBefore) {
     if (state.queued) {
         if (!first) return;
-        const auto later = std::find_if(mLater.begin(), mLater.end(), [&](const Entry& e) { return e.task == &task; });
-        if (later == mLater.end()) return;  // queued first already
-        mFirst.push_back(*later);
-        mLater.erase(later);
-        mFirstWaiting = mFirst.size();
+        const auto queued = std::find_if(mQueue.begin(), mQueue.end(), [&](const Entry& e) { return e.task == &task; });
+        if (queued == mQueue.end() || queued->first) return;  // queued first already
+        queued->first = true;
+        queued->order = mOrder++;
+        countFirstLocked();
         return;
     }
-    (first ? mFirst : mLater).push_back({&task, notBefore});
-    mFirstWaiting = mFirst.size();
+    // Back from idle: at most kIdleCredit behind the least charged (it cannot bank its idle time).
+    if (!state.running) state.charged = std::max(state.charged, mLeastCharged - kIdleCredit);
+    mQueue.push_back({&task, notBefore, first, mOrder++});
+    countFirstLocked();
     state.queued = true;
 }
 
@@ -64,9 +71,8 @@ void FramePool::remove(Task& task) {
     state.removed = true;
     state.again = false;
     if (!state.queued) return;
-    for (std::deque<Entry>* queue : {&mFirst, &mLater})
-        std::erase_if(*queue, [&](const Entry& e) { return e.task == &task; });
-    mFirstWaiting = mFirst.size();
+    std::erase_if(mQueue, [&](const Entry& e) { return e.task == &task; });
+    countFirstLocked();
     state.queued = false;
 }
 
@@ -93,51 +99,75 @@ uint64_t FramePool::passes() const {
 
 size_t FramePool::waiting() const {
     std::lock_guard lock(mMutex);
-    return mFirst.size() + mLater.size();
+    return mQueue.size();
+}
+
+double FramePool::charged(Task& task) {
+    std::lock_guard lock(mMutex);
+    const auto found = mStates.find(&task);
+    return found == mStates.end() ? 0.0 : found->second.charged;
 }
 
 namespace {
 thread_local bool tNested = false;
+thread_local FramePool::Task* tRunning = nullptr;  // the outer pass this worker runs
+thread_local double tNestedSeconds = 0;             // of passes run nested on this thread
 }  // namespace
 
 bool FramePool::nested() { return tNested; }
 
-FramePool::Task* FramePool::takeDueLocked(bool firstOnly, Clock::time_point& soonest) {
+FramePool::Task* FramePool::takeDueLocked(bool firstOnly, double below, Clock::time_point& soonest) {
     const Clock::time_point now = Clock::now();
     soonest = Clock::time_point::max();
-    for (std::deque<Entry>* queue : {&mFirst, &mLater}) {
-        if (firstOnly && queue == &mLater) break;
-        for (auto e = queue->begin(); e != queue->end(); ++e) {
-            if (e->notBefore <= now) {
-                Task* task = e->task;
-                queue->erase(e);
-                mFirstWaiting = mFirst.size();
-                State& state = mStates[task];
-                state.queued = false;
-                state.running = true;
-                ++mPasses;
-                return task;
-            }
-            soonest = std::min(soonest, e->notBefore);
+    auto key = [&](const Entry& e) { return mStates[e.task].charged - (e.first ? kFirstPassCredit : 0.0); };
+    double least = std::numeric_limits<double>::infinity();
+    for (const Entry& e : mQueue) {
+        if (firstOnly && !e.first) continue;
+        if (e.notBefore > now) {
+            soonest = std::min(soonest, e.notBefore);
+            continue;
         }
+        least = std::min(least, key(e));
     }
-    return nullptr;
+    if (least == std::numeric_limits<double>::infinity() || (firstOnly && least + kSlice >= below)) return nullptr;
+    // Within a slice of the least charged, in the order posted: tasks alike take turns.
+    auto pick = mQueue.end();
+    for (auto e = mQueue.begin(); e != mQueue.end(); ++e)
+        if ((!firstOnly || e->first) && e->notBefore <= now && key(*e) <= least + kSlice &&
+            (pick == mQueue.end() || e->order < pick->order))
+            pick = e;
+    Task* task = pick->task;
+    mQueue.erase(pick);
+    countFirstLocked();
+    State& state = mStates[task];
+    state.queued = false;
+    state.running = true;
+    state.runningSince = now;
+    mLeastCharged = std::max(mLeastCharged, state.charged);
+    ++mPasses;
+    return task;
 }
 
-void FramePool::runLocked(Task* task, std::unique_lock<std::mutex>& lock) {
+double FramePool::runLocked(Task* task, std::unique_lock<std::mutex>& lock) {
+    const Clock::time_point start = Clock::now();
+    const double nestedBefore = tNestedSeconds;
     lock.unlock();
     try {
         task->runPass();
     } catch (...) {  // a task answers its own errors; none may end a worker
     }
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     lock.lock();
     State& after = mStates[task];
     after.running = false;
+    // Nested passes ran on this pass's time but are charged to their own tasks.
+    after.charged += std::max(0.0, seconds - (tNestedSeconds - nestedBefore));
     if (after.again && !after.removed) {
         after.again = false;
         enqueueLocked(*task, after, after.againFirst, after.againNotBefore);
     }
     mChanged.notify_all();
+    return seconds;
 }
 
 int FramePool::runFirstPassesHere() {
@@ -145,12 +175,20 @@ int FramePool::runFirstPassesHere() {
     std::unique_lock lock(mMutex);
     int ran = 0;
     while (!mStopping && mNested < workers()) {
+        // Only tasks charged less than the host so far: a busy viewer's passes do not take
+        // another's time this way.
+        double host = std::numeric_limits<double>::infinity();
+        if (tRunning) {
+            const State& running = mStates[tRunning];
+            host = running.charged + std::chrono::duration<double>(Clock::now() - running.runningSince).count() -
+                   tNestedSeconds;
+        }
         Clock::time_point soonest;
-        Task* task = takeDueLocked(true, soonest);
+        Task* task = takeDueLocked(true, host, soonest);
         if (!task) break;
         ++mNested;
         tNested = true;
-        runLocked(task, lock);
+        tNestedSeconds += runLocked(task, lock);
         tNested = false;
         --mNested;
         ++ran;
@@ -161,9 +199,9 @@ int FramePool::runFirstPassesHere() {
 void FramePool::work() {
     std::unique_lock lock(mMutex);
     while (!mStopping) {
-        // The first due entry, first passes before later ones; else the soonest one not yet due.
+        // The due entry the fairness rule picks; else wait for the soonest one not yet due.
         Clock::time_point soonest;
-        Task* task = takeDueLocked(false, soonest);
+        Task* task = takeDueLocked(false, 0, soonest);
         if (!task) {
             if (soonest == Clock::time_point::max())
                 mChanged.wait(lock);
@@ -171,7 +209,10 @@ void FramePool::work() {
                 mChanged.wait_until(lock, soonest);
             continue;
         }
+        tRunning = task;
+        tNestedSeconds = 0;
         runLocked(task, lock);
+        tRunning = nullptr;
     }
 }
 

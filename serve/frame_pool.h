@@ -1,22 +1,25 @@
 // The server's extraction workers: a fixed number of threads that run every viewer's frames,
 // one pass (a VIEW's coarse or final frame) at a time, so the threads do not grow with the
-// viewers. Passes go in turn: every first pass (a VIEW's first picture: someone joining or
-// turning the volume) before any later one, each kind in the order it was posted; a task that
-// has another pass due posts it again and goes to the back, so a heavy viewer and a light one
-// get their passes in turn. A task is queued at most once: a newer VIEW replaces the pending
-// one inside the task, so a superseded frame never runs at all.
+// viewers. A task is queued at most once: a newer VIEW replaces the pending one inside the
+// task, so a superseded frame never runs at all.
+//
+// Fair by viewer, not by pass: each task is charged the seconds its passes run, and the next
+// pass is the due one of the task charged least (within kSlice, the one posted first; a first
+// pass, someone joining or turning the volume, counts kFirstPassCredit less). A task idle for a
+// while comes back at most kIdleCredit behind the least charged, so a viewer that sends VIEWs
+// without end takes its share of the workers and no more: N such viewers cannot keep another
+// from its frames, whatever they send.
 //
 // A first pass need not wait for a long later one to end: a later pass calls
-// runFirstPassesHere() between its bricks, which runs the waiting first passes on its own
-// thread, nested, while its other strips go on (at most one nested pass a worker at once).
-// Someone joining a busy server sees the volume within a coarse pass's time, not a final one's.
+// runFirstPassesHere() between its bricks, which runs the waiting first passes of tasks charged
+// less than it on its own thread, nested, while its other strips go on (at most one nested pass
+// a worker at once). Someone joining a busy server sees the volume within a coarse pass's time.
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <mutex>
 #include <thread>
 #include <unordered_map>
@@ -57,9 +60,14 @@ public:
 
     // Whether a first pass waits (cheap: for a later pass to ask between its bricks).
     bool firstPassWaits() const { return mFirstWaiting.load(std::memory_order_relaxed) > 0; }
-    // Runs the due first passes on this thread, one after another, while any waits and fewer
-    // than workers() run so; returns how many ran.
+    // Runs due first passes of tasks charged less than this thread's pass on this thread, one
+    // after another, while any waits and fewer than workers() run so; returns how many ran.
     int runFirstPassesHere();
+
+    // The fairness rule's constants, in seconds of passes run (see the top of this file).
+    static constexpr double kSlice = 0.005, kFirstPassCredit = 0.02, kIdleCredit = 0.1;
+    // Seconds of passes `task` was charged so far.
+    double charged(Task& task);
     // Whether this thread is running a nested first pass (it then uses no threads of its own).
     static bool nested();
 
@@ -72,23 +80,32 @@ private:
         bool queued = false, running = false, removed = false;
         bool again = false, againFirst = false;  // posted while running
         Clock::time_point againNotBefore;
+        double charged = 0;  // seconds its passes ran (nested passes charged to their own task)
+        Clock::time_point runningSince;
     };
     struct Entry {
         Task* task;
         Clock::time_point notBefore;
+        bool first;
+        uint64_t order;  // when posted (a first pass posted over a later one: then)
     };
     void work();
     void enqueueLocked(Task& task, State& state, bool first, Clock::time_point notBefore);
-    // The first due entry (first passes before later ones, unless `firstOnly`), taken out of
-    // the queue and marked running; else nullptr and the soonest time one becomes due.
-    Task* takeDueLocked(bool firstOnly, Clock::time_point& soonest);
-    // Runs `task`'s pass (the lock released meanwhile) and queues its next one if posted.
-    void runLocked(Task* task, std::unique_lock<std::mutex>& lock);
+    // The due entry the fairness rule picks (only first passes of tasks charged less than
+    // `below`, if `firstOnly`), taken out of the queue and marked running; else nullptr and the
+    // soonest time one becomes due.
+    Task* takeDueLocked(bool firstOnly, double below, Clock::time_point& soonest);
+    // Runs `task`'s pass (the lock released meanwhile), charges it, and queues its next one if
+    // posted. Returns the seconds it ran.
+    double runLocked(Task* task, std::unique_lock<std::mutex>& lock);
+    void countFirstLocked();
 
     mutable std::mutex mMutex;
     std::condition_variable mChanged;  // a pass queued or ended, or stopping
-    std::deque<Entry> mFirst, mLater;
-    std::atomic<size_t> mFirstWaiting{0};  // mFirst.size(), read without the lock
+    std::vector<Entry> mQueue;
+    uint64_t mOrder = 0;
+    double mLeastCharged = 0;  // the charge of the last task taken, never going back
+    std::atomic<size_t> mFirstWaiting{0};  // first passes queued, read without the lock
     int mNested = 0;                       // nested first passes running
     std::unordered_map<Task*, State> mStates;
     uint64_t mPasses = 0;

@@ -14,16 +14,27 @@ OutMessage OutMessage::control(const std::string& json) {
 
 Outbox::Outbox(size_t byteLimit, std::function<void()> wake) : mLimit(byteLimit), mWake(std::move(wake)) {}
 
+namespace {
+size_t accounted(const OutMessage& m) { return m.bytes->size() + Outbox::kMessageOverhead; }
+}  // namespace
+
 bool Outbox::push(OutMessage m, bool waitForRoom) {
     {
         std::unique_lock lock(mMutex);
         auto superseded = [&] { return m.frame != OutMessage::kControl && mHasFrame && m.frame < mNewestFrame; };
-        // Control messages are small and never wait; frame messages wait for room.
-        if (m.frame != OutMessage::kControl && waitForRoom &&
-            !mDrained.wait_for(lock, kPushPatience, [&] { return mClosed || superseded() || mBytes <= mLimit; }))
-            return false;
+        auto room = [&] { return mClosed || superseded() || mBytes <= mLimit; };
+        // Control messages are small and never wait; frame messages wait for room while the
+        // writer takes messages.
+        if (m.frame != OutMessage::kControl && waitForRoom) {
+            while (!room()) {
+                const uint64_t pops = mPops;
+                if (!mDrained.wait_for(lock, kPushPatience, [&] { return room() || mPops != pops; })) return false;
+            }
+        }
         if (mClosed || superseded()) return false;
-        mBytes += m.bytes->size();
+        if (mQueue.empty()) mLastTaken = std::chrono::steady_clock::now();
+        mBytes += accounted(m);
+        if (m.frame == OutMessage::kControl) mControlBytes += accounted(m);
         mQueue.push_back(std::move(m));
     }
     mWake();
@@ -38,7 +49,7 @@ void Outbox::beginFrame(uint32_t frame) {
         std::erase_if(mQueue, [&](const OutMessage& m) {
             const bool drop = m.frame != OutMessage::kControl && m.frame < mNewestFrame;
             if (drop) {
-                mBytes -= m.bytes->size();
+                mBytes -= accounted(m);
                 if (std::find(mIncompleteFrames.begin(), mIncompleteFrames.end(), m.frame) == mIncompleteFrames.end())
                     mIncompleteFrames.push_back(m.frame);
                 if (mIncompleteFrames.size() > 64) mIncompleteFrames.erase(mIncompleteFrames.begin());
@@ -56,7 +67,10 @@ std::optional<OutMessage> Outbox::pop() {
         if (mQueue.empty()) return std::nullopt;
         m = std::move(mQueue.front());
         mQueue.pop_front();
-        mBytes -= m->bytes->size();
+        mBytes -= accounted(*m);
+        if (m->frame == OutMessage::kControl) mControlBytes -= accounted(*m);
+        ++mPops;
+        mLastTaken = std::chrono::steady_clock::now();
         if (m->ends != OutMessage::kControl) {
             const auto dropped = std::find(mIncompleteFrames.begin(), mIncompleteFrames.end(), m->ends);
             if (dropped != mIncompleteFrames.end()) {
@@ -75,6 +89,7 @@ void Outbox::close() {
         mClosed = true;
         mQueue.clear();
         mBytes = 0;
+        mControlBytes = 0;
     }
     mDrained.notify_all();
 }
@@ -87,6 +102,16 @@ bool Outbox::closed() const {
 size_t Outbox::queuedBytes() const {
     std::lock_guard lock(mMutex);
     return mBytes;
+}
+
+bool Outbox::stalled() const {
+    std::lock_guard lock(mMutex);
+    return !mQueue.empty() && std::chrono::steady_clock::now() - mLastTaken > kPushPatience;
+}
+
+bool Outbox::backlogged() const {
+    std::lock_guard lock(mMutex);
+    return mBytes > mLimit || mControlBytes > kControlLimit;
 }
 
 }  // namespace vdiso::serve

@@ -7,7 +7,9 @@
 // f: a slow client gets the newest frame, not a backlog of superseded ones. push() blocks while
 // the queue holds more than its byte limit, until the writer drains it, the frame is
 // superseded or the outbox is closed: so a slow client costs at most the limit (plus one
-// message) of memory, never more. Thread-safe.
+// message) of memory, never more. A message counts its bytes and kMessageOverhead (what
+// holding it costs beside them), so a flood of small replies is bounded as truly as big chunks.
+// Thread-safe.
 #pragma once
 
 #include <chrono>
@@ -45,11 +47,16 @@ public:
     Outbox(size_t byteLimit, std::function<void()> wake);
 
     // Queues `m`; a frame message first waits while the queue is over its limit, unless
-    // `waitForRoom` is false (small messages queued under a lock the writer may need), and at
-    // most kPushPatience. Returns false, queuing nothing, when the outbox is closed, m's frame
-    // is older than the newest begun, or the wait ran out (a client that stopped reading: the
-    // frame is abandoned rather than holding its pinned bricks and its frame slot).
-    static constexpr std::chrono::seconds kPushPatience{5};
+    // `waitForRoom` is false (small messages queued under a lock the writer may need), for as
+    // long as the writer takes messages, and at most kPushPatience after the last it took.
+    // Returns false, queuing nothing, when the outbox is closed, m's frame is older than the
+    // newest begun, or the wait ran out (a client that stopped reading: the frame is abandoned
+    // rather than holding its pinned bricks and a worker).
+    static constexpr std::chrono::milliseconds kPushPatience{500};
+    static constexpr size_t kMessageOverhead = 192;
+    // Control messages (errors, acks) queued beyond this make the outbox backlogged whatever
+    // the limit: a client flooding bad messages without reading the replies is stopped early.
+    static constexpr size_t kControlLimit = size_t(1) << 20;
     bool push(OutMessage m, bool waitForRoom = true);
     // Drops queued messages of frames before `frame`, and wakes a push blocked for them.
     void beginFrame(uint32_t frame);
@@ -59,9 +66,13 @@ public:
     void close();
     bool closed() const;
     size_t queuedBytes() const;
-    // More is queued than the limit: the connection stops reading the client's messages until
-    // it drains (control messages, which never wait, stay bounded so).
-    bool backlogged() const { return queuedBytes() > mLimit; }
+    // More is queued than the limit (or kControlLimit of control messages): the connection
+    // stops reading the client's messages, and its viewer's frames wait, until it drains
+    // (control messages, which never wait, stay bounded so).
+    bool backlogged() const;
+    // Messages have waited kPushPatience and the writer took none of them meanwhile: the client
+    // is not reading (its socket is full). Its viewer's passes wait until it drains.
+    bool stalled() const;
 
 private:
     const size_t mLimit;
@@ -69,7 +80,9 @@ private:
     mutable std::mutex mMutex;
     std::condition_variable mDrained;
     std::deque<OutMessage> mQueue;
-    size_t mBytes = 0;
+    size_t mBytes = 0, mControlBytes = 0;  // with kMessageOverhead each
+    uint64_t mPops = 0;
+    std::chrono::steady_clock::time_point mLastTaken;  // the last pop, or the first push into an empty queue
     bool mClosed = false;
     bool mHasFrame = false;
     uint32_t mNewestFrame = 0;

@@ -133,6 +133,13 @@ void ViewerSession::onMessage(std::span<const uint8_t> bytes, bool text) {
 
 std::optional<OutMessage> ViewerSession::nextToWrite() {
     std::optional<OutMessage> m = mOut->outbox.pop();
+    if (m) {
+        std::lock_guard lock(mMutex);
+        if (mWaitsForDrain && !mClosing && !mOut->outbox.backlogged() && !mOut->outbox.stalled()) {
+            mWaitsForDrain = false;
+            mPool.post(*this, mPending.has_value() || !mCatchUps.empty());
+        }
+    }
     if (m && m->cacheable) {
         std::lock_guard lock(mOut->client.mutex);
         const ClientChunks::Key key{m->store, m->iso, m->brick};
@@ -150,6 +157,10 @@ void ViewerSession::runPass() {
     {
         std::lock_guard lock(mMutex);
         if (mClosing) return;
+        if (mOut->outbox.backlogged() || mOut->outbox.stalled()) {  // not reading: no worker until it does
+            mWaitsForDrain = true;
+            return;
+        }
         arrival = mPendingArrival;
         if (mPending) {
             first = true;

@@ -7,7 +7,9 @@
 // (serve/frame_pool.h), whose workers run its passes in turn with every other viewer's: frames
 // are never queued, and a session has no thread of its own. Every malformed or invalid message
 // is answered with an error message; the session goes on. close() stops the running pass at
-// its next brick and drops whatever is queued; the destructor waits for that pass. In follow
+// its next brick and drops whatever is queued; the destructor waits for that pass. A client that
+// does not read loses its passes until it does: a pass due while its outbox is backlogged runs
+// once the outbox drains, so it takes no worker meanwhile. In follow
 // mode (serve/session_directory.h) a leader's frames are written into its followers' outputs
 // too, and a follower's VIEWs are refused.
 #pragma once
@@ -107,6 +109,9 @@ private:
     std::chrono::steady_clock::time_point mLastStart;  // of the last frame (kMinFrameInterval)
     std::vector<std::pair<std::shared_ptr<ViewerOutput>, ViewMessage>> mCatchUps;  // new followers
     bool mClosing = false;
+    // A pass came while the outbox was backlogged (the client not reading): it waits, queued
+    // nowhere, until the writer takes a message and the outbox drains (nextToWrite).
+    bool mWaitsForDrain = false;
     std::atomic<bool> mSuperseded{false};
 };
 

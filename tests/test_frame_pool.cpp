@@ -3,6 +3,7 @@
 // runs again after; a removed task does not run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -133,6 +134,41 @@ TEST(FramePool, AWaitingFirstPassRunsInsideALaterOne) {
     EXPECT_TRUE(firstWasNested.load());
     EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
     EXPECT_FALSE(pool.firstPassWaits());
+}
+
+// Two tasks that always have a first pass due (a client sending VIEWs without end) and a light
+// one posting a later pass: the light one runs within a pass or two of each, not never (first
+// passes used to go before every later one), and the heavy ones are charged for their time.
+TEST(FramePool, AFloodOfFirstPassesDoesNotStarveALaterOne) {
+    FramePool pool(1);
+    std::mutex mutex;
+    std::vector<int> order;
+    std::atomic<bool> stop{false};
+    Recorded a(0, mutex, order), b(1, mutex, order), light(2, mutex, order);
+    for (Recorded* heavy : {&a, &b})
+        heavy->during = [&pool, heavy, &stop] {
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+            if (!stop) pool.post(*heavy, true);
+        };
+    pool.post(a, true);
+    pool.post(b, true);
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the heavy ones charged ~0.1 s each
+    size_t postedAt;
+    {
+        std::lock_guard lock(mutex);
+        postedAt = order.size();
+    }
+    pool.post(light, false);
+    const auto giveUp = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (!pool.idle(light) && std::chrono::steady_clock::now() < giveUp) std::this_thread::yield();
+    EXPECT_TRUE(pool.idle(light)) << "the light task's pass never ran";
+    stop = true;
+    while (!pool.idle(a) || !pool.idle(b)) std::this_thread::yield();
+    std::lock_guard lock(mutex);
+    const auto ran = std::find(order.begin() + ptrdiff_t(postedAt), order.end(), 2);
+    ASSERT_NE(ran, order.end());
+    EXPECT_LE(ran - (order.begin() + ptrdiff_t(postedAt)), 2) << "heavy passes ran before the light one";
+    EXPECT_GT(pool.charged(a), 0.05);
 }
 
 }  // namespace

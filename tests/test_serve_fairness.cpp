@@ -1,0 +1,189 @@
+// vdiso serve under clients that flood it: a viewer's share of the workers is bounded whatever
+// it sends (serve/frame_pool.h), a client that does not read gives up its passes, a stuck client
+// is dropped at the write timeout however many there are, and a connection flooding bad
+// messages costs about what the README says.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <future>
+#include <thread>
+#include <vector>
+
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "serve/outbox.h"
+#include "tests/serve_test_util.h"
+
+namespace vdiso::serve {
+namespace {
+
+using test::maskedFrame;
+using test::presetFor;
+using test::ServerFixture;
+using test::unreadingClient;
+using test::viewOf;
+using Clock = std::chrono::steady_clock;
+
+// A client sending VIEWs without end (every `gap`, each another camera and isovalue, so each
+// frame's chunks are new), reading what comes back or not; stops when told or dropped.
+class Flooder {
+public:
+    Flooder(const ServerFixture& fixture, bool reads, int id) : mFd(unreadingClient(fixture, !reads)) {
+        if (mFd < 0) return;
+        if (reads)
+            mReader = std::thread([this] {
+                char buffer[65536];
+                while (!mStop && recv(mFd, buffer, sizeof buffer, 0) > 0) {
+                }
+            });
+        // The cameras made first: the flood costs the client nothing.
+        std::vector<Camera> cameras;
+        for (int k = 0; k < 16; ++k) cameras.push_back(presetFor(fixture.storePath, ViewPreset::Closeup, 1024, 22.5 * k + 40 * id));
+        mWriter = std::thread([this, cameras] {
+            for (uint32_t seq = 1; !mStop; ++seq) {
+                const std::string view =
+                    maskedFrame(0x2, encodeView(viewOf(cameras[seq % 16], seq, kHeadSkinIso + 0.5 * (seq % 16))));
+                if (send(mFd, view.data(), view.size(), MSG_NOSIGNAL | MSG_DONTWAIT) < 0 && errno != EAGAIN) break;
+                std::this_thread::sleep_for(std::chrono::milliseconds(2));
+            }
+        });
+    }
+    ~Flooder() {
+        mStop = true;
+        if (mFd >= 0) shutdown(mFd, SHUT_RDWR);
+        if (mWriter.joinable()) mWriter.join();
+        if (mReader.joinable()) mReader.join();
+        if (mFd >= 0) close(mFd);
+    }
+    bool connected() const { return mFd >= 0; }
+
+private:
+    int mFd;
+    std::atomic<bool> mStop{false};
+    std::thread mWriter, mReader;
+};
+
+// Ordinary viewers, each turning its camera a step a frame for `window`, one frame at a time:
+// the seconds each frame took (from its VIEW to its final frameEnd), all viewers together.
+std::vector<double> ordinaryFrames(ServerFixture& fixture, int viewers, std::chrono::milliseconds window) {
+    std::vector<std::unique_ptr<ViewerClient>> clients;
+    for (int k = 0; k < viewers; ++k) clients.push_back(fixture.client());
+    std::vector<std::vector<Camera>> cameras(static_cast<size_t>(viewers));
+    for (int k = 0; k < viewers; ++k)
+        for (int step = 0; step < 36; ++step)
+            cameras[size_t(k)].push_back(presetFor(fixture.storePath, ViewPreset::Normal, 256, 10.0 * step + 90 * k));
+    std::vector<std::future<std::vector<double>>> runs;
+    const Clock::time_point until = Clock::now() + window;
+    for (int k = 0; k < viewers; ++k)
+        runs.push_back(std::async(std::launch::async, [&, k] {
+            std::vector<double> seconds;
+            try {
+                for (uint32_t seq = 1; Clock::now() < until; ++seq) {
+                    const ClientFrame f = clients[size_t(k)]->requestFrame(viewOf(cameras[size_t(k)][seq % 36], seq));
+                    if (f.status == "complete") seconds.push_back(f.completeSeconds);
+                }
+            } catch (const std::exception&) {  // interrupted: a frame that never came
+            }
+            return seconds;
+        }));
+    // A viewer starved of its frame is ended at the window's end (and counts no frame).
+    std::this_thread::sleep_until(until + std::chrono::seconds(5));
+    for (auto& c : clients) c->interrupt();
+    std::vector<double> all;
+    for (auto& r : runs) {
+        const std::vector<double> s = r.get();
+        all.insert(all.end(), s.begin(), s.end());
+    }
+    return all;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return INFINITY;
+    std::nth_element(v.begin(), v.begin() + ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+// 4 clients flooding VIEWs (2 reading their frames, 2 not) and 4 ordinary viewers: the ordinary
+// viewers' frames take at most twice their time alone (with first passes always ahead, and a
+// pass a flooder's VIEW, they used to get none in a minute).
+TEST(ServeFairness, FloodingClientsDoNotStarveOrdinaryViewers) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160});
+    const auto window = std::chrono::milliseconds(4000);
+    const std::vector<double> alone = ordinaryFrames(fixture, 4, window);
+    ASSERT_GE(alone.size(), 8u);
+    std::vector<std::unique_ptr<Flooder>> flooders;
+    for (int k = 0; k < 4; ++k) {
+        flooders.push_back(std::make_unique<Flooder>(fixture, k % 2 == 0, k));
+        ASSERT_TRUE(flooders.back()->connected());
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the flood under way
+    const std::vector<double> flooded = ordinaryFrames(fixture, 4, window);
+    flooders.clear();
+    std::printf("ordinary viewers' median frame: %.3f s alone (%zu frames), %.3f s among flooders (%zu frames)\n",
+                median(alone), alone.size(), median(flooded), flooded.size());
+    EXPECT_GE(flooded.size(), 4u) << "ordinary viewers starved";
+    EXPECT_LE(median(flooded), 2.0 * median(alone))
+        << "median frame " << median(flooded) << " s among flooders, " << median(alone) << " s alone ("
+        << flooded.size() << " and " << alone.size() << " frames)";
+}
+
+// 4 clients that never read, each sending VIEWs whose frames outgrow the socket buffers: every
+// one is dropped within the write timeout of its socket filling (which takes a frame or two),
+// not tens of seconds later; an ordinary viewer is served meanwhile.
+TEST(ServeFairness, EveryStuckClientIsDroppedAtTheBound) {
+    const double timeout = 2.0;
+    ServerFixture fixture(uint64_t(256) << 20, 1, {160, 160, 160}, 0, timeout);
+    std::vector<std::unique_ptr<Flooder>> stuck;
+    const Clock::time_point start = Clock::now();
+    for (int k = 0; k < 4; ++k) stuck.push_back(std::make_unique<Flooder>(fixture, false, k));
+    auto other = fixture.client();
+    EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160), 1)).status, "complete");
+    while (fixture.server->counters().viewersDropped < 4 && Clock::now() - start < std::chrono::seconds(30))
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    std::printf("4 stuck clients dropped %.2f s after they connected (write timeout %.0f s)\n", seconds, timeout);
+    EXPECT_EQ(fixture.server->counters().viewersDropped, 4u);
+    EXPECT_LT(seconds, timeout + 4.0) << "the last stuck client was dropped after " << seconds << " s";
+    stuck.clear();
+    EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160, 20), 2)).status, "complete");
+}
+
+size_t residentBytes() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("VmRSS:", 0) == 0) return size_t(std::stoull(line.substr(6))) << 10;
+    return 0;
+}
+
+// A connection writing small bad messages as fast as it can and reading none of the replies:
+// the server stops reading it once Outbox::kControlLimit of replies wait, so it costs the
+// server about that, not the outbox's 32 MB limit (twice over, counted without overhead).
+TEST(ServeFairness, AFloodOfBadMessagesCostsAboutTheControlLimit) {
+    ServerFixture fixture(uint64_t(256) << 20, 1, {72, 72, 72}, 0, 30.0);
+    const int fd = unreadingClient(fixture);
+    ASSERT_GE(fd, 0);
+    std::string burst;
+    for (int k = 0; k < 64; ++k) burst += maskedFrame(0x2, {42, 1, 0, 0, 0, 0, 0, 0});
+    const size_t before = residentBytes();
+    uint64_t sent = 0;
+    for (const Clock::time_point until = Clock::now() + std::chrono::seconds(3); Clock::now() < until;) {
+        const ssize_t n = send(fd, burst.data(), burst.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n > 0) sent += uint64_t(n);
+        else std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const size_t grown = residentBytes() - std::min(before, residentBytes());
+    std::printf("a flood of %llu bytes of bad messages grew the server by %.1f MB\n", (unsigned long long)sent,
+                double(grown) / double(1 << 20));
+    EXPECT_GT(sent, uint64_t(1) << 16);
+    EXPECT_LT(grown, size_t(12) << 20) << "the flood cost " << (grown >> 20) << " MB";
+    close(fd);
+}
+
+}  // namespace
+}  // namespace vdiso::serve
