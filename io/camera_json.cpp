@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/error.h"
+#include "io/json.h"
 #include "io/text_file.h"
 
 namespace vdiso {
@@ -79,6 +80,10 @@ public:
 
         const glm::dvec3 view = camera.target - camera.eye;
         if (!(glm::length(view) > 0.0)) fail("'eye' and 'target' must differ");
+        // Farther, the projection's arithmetic overflows (a far eye is not an up problem).
+        if (!(glm::length(view) <= kMaxEyeDistance))
+            fail("'eye' is too far from 'target' (" + jsonNumber(glm::length(view)) + "; at most " +
+                 jsonNumber(kMaxEyeDistance) + ")");
         if (!(glm::length(glm::cross(view, camera.up)) > 1e-9 * glm::length(view) *
                                                              glm::length(camera.up)))
             fail("'up' must not be zero nor parallel to the view direction");

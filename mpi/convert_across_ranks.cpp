@@ -436,7 +436,7 @@ RanksConvertResult convertAcrossRanks(const Communicator& comm, const SliceReade
                 throw std::logic_error("vdiso-mpi convert: " + std::to_string(bricks.size()) + " of " +
                                        std::to_string(total) + " bricks written");
             const StoreTail tail = finishStore(info, options.store, int(levels.size()), levels[0].layout.brickCount(),
-                                               entries, subBlocks, fine, fileEnd);
+                                               entries, subBlocks, fine, fileEnd, source->name());
             writeAllAt(file.fd, tail.index.data(), tail.index.size(), fileEnd, output.temporary());
             writeAllAt(file.fd, tail.headerBytes.data(), tail.headerBytes.size(), 0, output.temporary());
             StoreWriteSummary& s = result.summary;

@@ -361,7 +361,7 @@ void BrickGroupWriter::finish() {
 StoreTail finishStore(const VolumeInfo& volume, const StoreWriteOptions& options, int levelCount,
                       int64_t level0Bricks, const std::vector<BrickEntry>& entries,
                       const std::vector<SubBlockCode>& subBlocks, const std::vector<uint64_t>& fine,
-                      uint64_t indexOffset) {
+                      uint64_t indexOffset, const std::string& inputName) {
     if (fine.size() != size_t(kFineBins))
         throw std::invalid_argument("finishStore: the fine histogram has " + std::to_string(fine.size()) +
                                     " bins, not " + std::to_string(kFineBins));
@@ -397,7 +397,9 @@ StoreTail finishStore(const VolumeInfo& volume, const StoreWriteOptions& options
         if (!std::isfinite(header.valueMax)) histogram.hi = fineKeyValue(type, key, 2);
         anyFinite = true;
     }
-    if (!anyFinite) histogram.lo = histogram.hi = 0.0;
+    if (!anyFinite)
+        throwIoError(inputName, "has no finite sample (every one is NaN or infinite): there is no isosurface "
+                                "to extract from it");
     const double binScale =
         histogram.hi > histogram.lo ? kHistogramBins / (histogram.hi - histogram.lo) : 0.0;
     for (uint32_t key = 0; key < uint32_t(kFineBins); ++key) {

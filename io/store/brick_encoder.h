@@ -189,9 +189,11 @@ struct StoreTail {
     std::vector<unsigned char> index;                          // to go at header.indexOffset
     uint64_t level0Bytes = 0;                                  // stored bytes of level 0's bricks
 };
+// Throws IoError naming `inputName` when the volume has no finite sample (every one NaN or
+// infinite): no isovalue lies in its range, and the store would claim a range it does not have.
 StoreTail finishStore(const VolumeInfo& volume, const StoreWriteOptions& options, int levelCount,
                       int64_t level0Bricks, const std::vector<BrickEntry>& entries,
                       const std::vector<SubBlockCode>& subBlocks, const std::vector<uint64_t>& fine,
-                      uint64_t indexOffset);
+                      uint64_t indexOffset, const std::string& inputName);
 
 }  // namespace vdiso

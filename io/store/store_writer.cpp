@@ -128,7 +128,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     source.finish();
 
     const StoreTail tail = finishStore(info, options, levelCount, layout.brickCount(), entries, subBlocks,
-                                       encoder.fineHistogram(), fileEnd);
+                                       encoder.fineHistogram(), fileEnd, source.name());
     out.writeAt(tail.index.data(), tail.index.size(), fileEnd);
     out.writeAt(tail.headerBytes.data(), tail.headerBytes.size(), 0);
     out.commit();

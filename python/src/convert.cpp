@@ -76,9 +76,9 @@ private:
     int64_t mNext = 0;
 };
 
-StoreWriteOptions storeOptions(int brick, const std::string& levels, const std::string& compress, bool overwrite) {
+StoreWriteOptions storeOptions(int64_t brick, const std::string& levels, const std::string& compress, bool overwrite) {
     StoreWriteOptions o;
-    o.brickSize = brick;
+    o.brickSize = int(checkedInt("brick", brick, 2, 512));
     o.overwrite = overwrite;
     const std::optional<Compression> codec = parseCompression(compress);
     if (!codec) throw SettingsError("compress", "expects 'lz4', 'zstd' or 'none', not '" + compress + "'");
@@ -103,7 +103,7 @@ pyb::dict summaryOf(const StoreWriteSummary& s) {
 }
 
 pyb::dict convertFiles(const std::vector<std::string>& inputs, const std::string& output,
-                       std::optional<std::array<double, 3>> spacing, int brick, const std::string& levels,
+                       std::optional<std::array<double, 3>> spacing, int64_t brick, const std::string& levels,
                        const std::string& compress, bool overwrite, pyb::object progress) {
     InputOptions input;
     // NumPy's axis order (z, y, x), as marching_cubes takes it.
@@ -122,7 +122,7 @@ pyb::dict convertFiles(const std::vector<std::string>& inputs, const std::string
 
 pyb::dict convertArray(pyb::object source, const std::string& name, const std::vector<int64_t>& shape,
                        const pyb::dtype& dtype, const std::string& output, std::array<double, 3> spacing,
-                       std::array<double, 3> origin, int brick, const std::string& levels,
+                       std::array<double, 3> origin, int64_t brick, const std::string& levels,
                        const std::string& compress, bool overwrite, pyb::object progress) {
     if (shape.size() != 3)
         throw std::invalid_argument(name + ": expects a 3-D array, not one of " + std::to_string(shape.size()) +

@@ -42,16 +42,17 @@ void cellMaxima(const StridedSamples& s, const TriangleMesh& mesh, const glm::dv
     }
 }
 
-pyb::tuple marchingCubes(const pyb::array& volume, double level, std::array<double, 3> spacing,
-                         std::optional<int> threads) {
+pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLevel, std::array<double, 3> spacing,
+                         std::optional<int64_t> threads) {
+    // Every check on the arguments and the array's size comes before any pass over its samples.
     const StridedSamples samples = stridedSamplesOf(volume, "volume");
-    if (!std::isfinite(level)) throw std::invalid_argument("level: expects a finite isovalue, not " + std::to_string(level));
+    if (givenLevel && !std::isfinite(*givenLevel))
+        throw std::invalid_argument("level: expects a finite isovalue, not " + std::to_string(*givenLevel));
     for (double s : spacing)
         if (!(s > 0 && std::isfinite(s)))
             throw std::invalid_argument("spacing: expects three positive finite numbers, not " + std::to_string(s));
-    if (threads && (*threads < 1 || *threads > 256))
-        throw std::invalid_argument("threads: expects 1 to 256, not " + std::to_string(*threads));
-    const int threadCount = threads ? *threads : machineThreads();
+    const int threadCount = threads ? int(checkedInt("threads", *threads, 1, 256)) : machineThreads();
+    double level = givenLevel.value_or(0.0);
     // The kernel's x, y, z are NumPy's axes 2, 1, 0.
     const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
     TriangleMesh mesh;
@@ -62,6 +63,12 @@ pyb::tuple marchingCubes(const pyb::array& volume, double level, std::array<doub
         for (const BrickRange& r : source.brickRanges()) {
             lo = std::min(lo, r.minValue);
             hi = std::max(hi, r.maxValue);
+        }
+        // No level: the middle of the values (NaN left out), as scikit-image takes it.
+        if (!givenLevel) {
+            if (!(std::isfinite(lo) && std::isfinite(hi)))
+                throw std::invalid_argument("volume: has no finite sample, so no level lies in its values");
+            level = 0.5 * (double(lo) + double(hi));
         }
         if (!(level >= lo && level <= hi))
             throw std::invalid_argument("level: " + std::to_string(level) + " is outside the volume's values (" +
@@ -106,7 +113,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, double level, std::array<doub
 }  // namespace
 
 void bindMarchingCubes(pyb::module_& m) {
-    m.def("marching_cubes", &marchingCubes, pyb::arg("volume"), pyb::arg("level"),
+    m.def("marching_cubes", &marchingCubes, pyb::arg("volume"), pyb::arg("level") = pyb::none(),
           pyb::arg("spacing") = std::array<double, 3>{1.0, 1.0, 1.0}, pyb::kw_only(),
           pyb::arg("threads") = pyb::none(),
           "The isosurface of a 3-D array (see vdiso.marching_cubes).");

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 
 #include "app/extract_settings.h"
+#include "core/settings_error.h"
 #include "bindings.h"
 #include "cache/brick_cache.h"
 #include "core/interrupt.h"
@@ -14,6 +15,13 @@
 namespace vdiso::py {
 
 namespace pyb = pybind11;
+
+int64_t checkedInt(const char* name, int64_t value, int64_t lo, int64_t hi) {
+    if (value < lo || value > hi)
+        throw SettingsError(name, "expects " + std::to_string(lo) + " to " + std::to_string(hi) + ", not " +
+                                      std::to_string(value));
+    return value;
+}
 
 void bindErrors(pyb::module_& m) {
     static pyb::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);

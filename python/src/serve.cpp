@@ -44,20 +44,19 @@ private:
 
 void bindServe(pyb::module_& m) {
     pyb::class_<Server>(m, "_Server")
-        .def(pyb::init([](const std::vector<std::string>& stores, std::optional<double> iso, int port,
-                          const std::string& host, uint64_t cacheMb, int threads, double lodError,
-                          const std::string& webRoot, int maxViewers) {
-                 if (port < 0 || port > 65535) throw SettingsError("port", "expects 0 to 65535, not " + std::to_string(port));
+        .def(pyb::init([](const std::vector<std::string>& stores, std::optional<double> iso, int64_t port,
+                          const std::string& host, int64_t cacheMb, int64_t threads, double lodError,
+                          const std::string& webRoot, int64_t maxViewers) {
                  serve::ServeOptions o;
                  o.stores = stores;
                  o.iso = iso;
-                 o.port = uint16_t(port);
+                 o.port = uint16_t(checkedInt("port", port, 0, 65535));
                  o.host = host;
-                 o.cacheBytes = cacheMb << 20;
-                 o.threads = threads;
+                 o.cacheBytes = uint64_t(checkedInt("cache_mb", cacheMb, 1, int64_t(1) << 30)) << 20;
+                 o.threads = int(checkedInt("threads", threads, 1, 64));
                  o.lodError = lodError;
                  o.webRoot = webRoot;
-                 o.maxViewers = maxViewers;
+                 o.maxViewers = int(checkedInt("max_viewers", maxViewers, 0, 100000));  // 0: by memory
                  return std::make_unique<Server>(o);
              }),
              "stores"_a, "iso"_a, "port"_a, "host"_a, "cache_mb"_a, "threads"_a, "lod_error"_a, "web_root"_a, "max_viewers"_a = 0)

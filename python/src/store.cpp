@@ -128,18 +128,18 @@ private:
     std::mutex mFrameLock;
 };
 
-ExtractSettings settingsOf(const std::string& method, double iso, double lodError, int threads, uint64_t cacheMb,
-                           bool largest, uint64_t minPiece, int smooth, double decimate, bool volumeSpace) {
+ExtractSettings settingsOf(const std::string& method, double iso, double lodError, int64_t threads, int64_t cacheMb,
+                           bool largest, int64_t minPiece, int64_t smooth, double decimate, bool volumeSpace) {
     ExtractSettings s;
     s.method = method;
     s.iso = iso;
     s.lodError = lodError;
     s.lodErrorGiven = lodError != 1.0;
-    s.threads = threads;
-    s.cacheMb = cacheMb;
+    s.threads = int(checkedInt("threads", threads, 0, 256));  // 0: every core
+    s.cacheMb = uint64_t(checkedInt("cache_mb", cacheMb, 1, int64_t(1) << 30));
     s.post.largestPiece = largest;
-    s.post.minPieceTriangles = minPiece;
-    s.post.smoothIterations = smooth;
+    s.post.minPieceTriangles = uint64_t(checkedInt("min_piece", minPiece, 0, int64_t(1) << 40));
+    s.post.smoothIterations = int(checkedInt("smooth", smooth, 0, 1000));
     s.post.decimateRatio = decimate;
     if (volumeSpace) s.physicalMeshes = false;
     return s;
@@ -221,8 +221,8 @@ void bindStore(pyb::module_& m) {
              "iso"_a = pyb::none());
 
     pyb::class_<Session>(m, "_Session")
-        .def(pyb::init([](const Store& store, const std::string& method, double iso, double lodError, int threads,
-                          uint64_t cacheMb, bool largest, uint64_t minPiece, int smooth, double decimate,
+        .def(pyb::init([](const Store& store, const std::string& method, double iso, double lodError, int64_t threads,
+                          int64_t cacheMb, bool largest, int64_t minPiece, int64_t smooth, double decimate,
                           bool volumeSpace) {
                  ExtractSettings s = settingsOf(method, iso, lodError, threads, cacheMb, largest, minPiece, smooth,
                                                 decimate, volumeSpace);

@@ -122,3 +122,37 @@ def test_bad_spacing_and_threads_are_value_errors():
 def test_help_reads_well():
     assert "marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)" in vdiso.marching_cubes.__doc__
     assert "extract(iso, *, method=" in vdiso.Store.extract.__doc__
+
+
+def test_bad_arguments_are_named_in_the_librarys_words():
+    # Integers beyond what C++ holds, of the wrong type, and negative: a ValueError or a
+    # TypeError naming the argument, never pybind11's signature dump.
+    with pytest.raises(ValueError, match="threads expects 1 to 256, not 2147483648"):
+        vdiso.marching_cubes(blob(), 30.0, threads=2 ** 31)
+    with pytest.raises(ValueError, match="threads"):
+        vdiso.marching_cubes(blob(), 30.0, threads=2 ** 70)
+    with pytest.raises(TypeError, match="threads: expects an integer, not str"):
+        vdiso.marching_cubes(blob(), 30.0, threads="2")
+    with pytest.raises(TypeError, match="level: expects a number"):
+        vdiso.marching_cubes(blob(), "high")
+
+
+def test_no_level_checks_the_array_before_reading_it():
+    # A zero-stride view of 2^50 samples, beyond what a volume may hold: refused for its size at
+    # once, not after minutes of np.nanmin over it.
+    import time
+    huge = np.lib.stride_tricks.as_strided(np.zeros(1, np.float32), shape=(2 ** 16, 2 ** 17, 2 ** 17),
+                                           strides=(0, 0, 0))
+    start = time.monotonic()
+    with pytest.raises(ValueError, match="at most 2\\^48 samples"):
+        vdiso.marching_cubes(huge)
+    assert time.monotonic() - start < 5
+    # The level the library takes without one: the middle of the values, NaN left out.
+    v = blob().astype(np.float32)
+    v[0, 0, 0] = np.nan
+    verts, faces, _, _ = vdiso.marching_cubes(v)
+    verts2, faces2, _, _ = vdiso.marching_cubes(v, 0.5 * (float(np.nanmin(v)) + float(np.nanmax(v))))
+    np.testing.assert_array_equal(verts, verts2)
+    np.testing.assert_array_equal(faces, faces2)
+    with pytest.raises(ValueError, match="no finite sample"):
+        vdiso.marching_cubes(np.full((4, 4, 4), np.nan, np.float32))

@@ -127,6 +127,28 @@ def test_refusals(tmp_path, volume_and_cli_store):
         vdiso.convert(v, tmp_path / "a.vdiso", compress="gzip")
     with pytest.raises(ValueError, match="source"):
         vdiso.convert(42, tmp_path / "a.vdiso")
+    # Every bad argument named in the library's words: no pybind11 signature dump.
+    for kwargs, message in [({"threads": 2 ** 31}, "threads expects 0 to 256"),
+                            ({"cache_mb": -1}, "cache_mb expects 1 to"),
+                            ({"min_piece": -5}, "min_piece expects 0 to"),
+                            ({"smooth": 2 ** 40}, "smooth expects 0 to 1000")]:
+        with pytest.raises(ValueError, match=message):
+            store.extract(500, **kwargs)
+    with pytest.raises(TypeError, match="threads: expects an integer, not float"):
+        store.extract(500, threads=1.5)
+    with pytest.raises(ValueError, match="brick expects 2 to 512"):
+        vdiso.convert(v, tmp_path / "b.vdiso", brick=2 ** 33)
+    # A NaN camera is named as one; an eye beyond the arithmetic's reach as too far.
+    camera = {"eye": [float("nan"), 0, 0], "target": [0, 0, 0], "up": [0, 0, 1], "fov": 30}
+    with pytest.raises(ValueError, match="camera: .*finite"):
+        store.extract(500, method="sage", camera=camera)
+    camera["eye"] = [1e300, 0, 0]
+    with pytest.raises(ValueError, match="too far from 'target'"):
+        store.extract(500, method="sage", camera=camera)
+    # A volume with no finite sample has no isosurface: refused at conversion, nothing written.
+    with pytest.raises(OSError, match="no finite sample"):
+        vdiso.convert(np.full((8, 8, 8), np.nan, np.float32), tmp_path / "nan.vdiso")
+    assert not (tmp_path / "nan.vdiso").exists()
 
     class Liar:
         """Says one shape and slices into another."""
@@ -206,6 +228,10 @@ def test_serve_shows_the_viewer_and_stops(volume_and_cli_store):
         vdiso.serve(str(cli), lod_error=-1)
     with pytest.raises(ValueError, match="port expects"):
         vdiso.serve(str(cli), port=70000)
+    with pytest.raises(ValueError, match="cache_mb expects"):
+        vdiso.serve(str(cli), cache_mb=-1)
+    with pytest.raises(ValueError, match="threads expects"):
+        vdiso.serve(str(cli), threads=2 ** 31)
 
 
 @pytest.fixture

@@ -8,11 +8,13 @@
     image = store.render(600)                                             # (H, W, 3) uint8
 
 Long calls release the GIL, stop on Ctrl-C (KeyboardInterrupt, nothing written) and take
-progress=callable(done, total). Errors: ValueError for a bad argument (naming it), OSError for
-I/O (naming the file or URL), FileExistsError for an output that exists, vdiso.Error for the rest.
+progress=callable(done, total). Errors: ValueError for a bad argument (naming it), TypeError for
+an argument of the wrong type (naming it), OSError for I/O (naming the file or URL),
+FileExistsError for an output that exists, vdiso.Error for the rest.
 """
 
 import json as _json
+import operator as _operator
 import os as _os
 import errno as _errno
 
@@ -33,18 +35,41 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)
     values (V,) float32 (the largest sample of the cell each vertex lies in). `volume`: any 3-D
     array of uint8, int8, uint16, int16, uint32, int32, float32 or float64, C- or F-ordered or
     strided, read in place (never copied to float). `level` None: the middle of the array's
-    range; a level outside the values is a ValueError (as scikit-image), a level with no
+    range (NaN left out), found by the library after its checks of the array; a level outside
+    the values is a ValueError (as scikit-image), a level with no
     surface gives empty arrays (scikit-image raises RuntimeError). The triangles of
     `vdiso extract --method octree`, on `threads` threads (None: all cores).
     """
     import numpy as np
     if not isinstance(volume, np.ndarray):
         volume = np.asarray(volume)
-    if level is None:
-        if volume.size == 0:
-            raise ValueError("volume: an empty array has no isosurface")
-        level = 0.5 * (float(np.nanmin(volume)) + float(np.nanmax(volume)))
-    return _vdiso.marching_cubes(volume, float(level), tuple(float(s) for s in spacing), threads=threads)
+    if level is None and volume.size == 0:
+        raise ValueError("volume: an empty array has no isosurface")
+    # level None: the library takes the middle of the values, after its checks of the array.
+    return _vdiso.marching_cubes(volume, None if level is None else _float(level, "level"),
+                                 tuple(_float(s, "spacing") for s in spacing),
+                                 threads=None if threads is None else _int(threads, "threads"))
+
+
+def _int(value, name):
+    """`value` as a Python int for the library, which checks its range and names `name`."""
+    if isinstance(value, bool):
+        raise TypeError(f"{name}: expects an integer, not bool")
+    try:
+        v = _operator.index(value)
+    except TypeError:
+        raise TypeError(f"{name}: expects an integer, not {type(value).__name__}") from None
+    if not -2 ** 63 <= v < 2 ** 63:
+        raise ValueError(f"{name}: expects a value the library can hold, not {v}")
+    return v
+
+
+def _float(value, name):
+    """`value` as a float, or a TypeError naming `name`."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expects a number, not {type(value).__name__}") from None
 
 
 class Camera:
@@ -68,7 +93,12 @@ def _camera_json(camera):
         camera = camera.to_dict()
     if not isinstance(camera, dict):
         raise ValueError(f"camera: expects a dict with eye, target, up, fov or a vdiso.Camera, not {type(camera).__name__}")
-    return _json.dumps(camera)
+    try:
+        return _json.dumps(camera, allow_nan=False)
+    except ValueError:
+        raise ValueError("camera: eye, target, up and fov must be finite numbers (a NaN or infinity was given)") from None
+    except TypeError as e:
+        raise TypeError(f"camera: {e}") from None
 
 
 def _size(size):
@@ -122,9 +152,11 @@ class Store:
 
     def _session(self, iso, method="octree", lod_error=1.0, threads=None, cache_mb=None, largest=False,
                  min_piece=0, smooth=0, decimate=None, volume_space=False):
-        return _vdiso._Session(self._store, method, float(iso), float(lod_error), int(threads or 0),
-                               int(cache_mb or 1024), bool(largest), int(min_piece), int(smooth),
-                               1.0 if decimate is None else float(decimate), bool(volume_space))
+        return _vdiso._Session(self._store, method, _float(iso, "iso"), _float(lod_error, "lod_error"),
+                               _int(0 if threads is None else threads, "threads"),
+                               _int(1024 if cache_mb is None else cache_mb, "cache_mb"), bool(largest),
+                               _int(min_piece, "min_piece"), _int(smooth, "smooth"),
+                               1.0 if decimate is None else _float(decimate, "decimate"), bool(volume_space))
 
     def extract(self, iso, *, method="octree", camera=None, view=None, size=(1024, 1024), lod_error=1.0,
                 threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None):
@@ -191,7 +223,8 @@ def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto",
         inputs = [source] if not isinstance(source, (list, tuple)) else list(source)
         inputs = [_local_input(p, "source") for p in inputs]
         spacing = None if spacing is None else tuple(float(s) for s in spacing)
-        return _vdiso._convert_files(inputs, path, spacing, int(brick), levels, compress, bool(overwrite), progress)
+        return _vdiso._convert_files(inputs, path, spacing, _int(brick, "brick"), levels, compress, bool(overwrite),
+                                     progress)
     import numpy as np
     for attr in ("shape", "dtype", "__getitem__"):
         if not hasattr(source, attr):
@@ -201,8 +234,8 @@ def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto",
     shape = [int(n) for n in source.shape]
     spacing = (1.0, 1.0, 1.0) if spacing is None else tuple(float(s) for s in spacing)
     origin = (0.0, 0.0, 0.0) if origin is None else tuple(float(s) for s in origin)
-    return _vdiso._convert_array(source, name, shape, np.dtype(source.dtype), path, spacing, origin, int(brick),
-                                 levels, compress, bool(overwrite), progress)
+    return _vdiso._convert_array(source, name, shape, np.dtype(source.dtype), path, spacing, origin,
+                                 _int(brick, "brick"), levels, compress, bool(overwrite), progress)
 
 
 class Server:
@@ -214,9 +247,11 @@ class Server:
         if isinstance(stores, (str, bytes, _os.PathLike)):
             stores = [stores]
         stores = [_local_input(s, "store") for s in stores]
-        self._server = _vdiso._Server(stores, None if iso is None else float(iso), int(port), str(host),
-                                      int(cache_mb), int(threads or _os.cpu_count() or 1), float(lod_error),
-                                      web_root or _vdiso._web_root, int(max_viewers or 0))
+        self._server = _vdiso._Server(stores, None if iso is None else _float(iso, "iso"), _int(port, "port"),
+                                      str(host), _int(cache_mb, "cache_mb"),
+                                      _int(min(64, _os.cpu_count() or 1) if threads is None else threads, "threads"),
+                                      _float(lod_error, "lod_error"), web_root or _vdiso._web_root,
+                                      _int(0 if max_viewers is None else max_viewers, "max_viewers"))
 
     url = property(lambda self: self._server.url, doc="http://HOST:PORT/?token=... (the token is the key)")
     port = property(lambda self: self._server.port)
