@@ -70,6 +70,7 @@ void Server::Impl::joinRetired(bool all) {
 
 void Server::Impl::shutdown() {
     if (stopping.exchange(true)) return;
+    *stopReads = true;  // remote reads in flight end now, and their frames with them
     beast::error_code ignored;
     acceptor.close(ignored);
     acceptTimer.cancel();
@@ -98,8 +99,8 @@ Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(optio
     if (options.handleSignals) {
         s.signals.add(SIGINT);
         s.signals.add(SIGTERM);
-        // Ctrl-C is the process's interrupt too (core/interrupt.h): every read in flight, local
-        // or remote, stops within a second, so the passes end and the server exits at once.
+        // Ctrl-C is the process's interrupt too (core/interrupt.h): every loop of the libraries
+        // stops within a second, as in the other commands.
         s.signals.async_wait([this](beast::error_code e, int) {
             if (e) return;
             requestInterrupt();

@@ -39,6 +39,8 @@ void joinSession(WsSession& session);
 
 struct Server::Impl {
     ServeOptions options;
+    // Set when the server stops: the stores' remote reads in flight end at once (RemoteOptions::stop).
+    std::shared_ptr<std::atomic<bool>> stopReads = std::make_shared<std::atomic<bool>>(false);
     StoreCatalog stores;
     WebFiles web;
     SessionSettings settings;
@@ -63,10 +65,15 @@ struct Server::Impl {
     net::steady_timer acceptTimer{ioc};
 
     explicit Impl(const ServeOptions& o)
-        : options(withDefaults((checkServeOptions(o), o))), stores(o.stores, o.cacheBytes, o.chunkCacheBytes, o.iso, o.remote), web(o.webRoot),
+        : options(withDefaults((checkServeOptions(o), o))),
+          stores(o.stores, o.cacheBytes, o.chunkCacheBytes, o.iso, withStop(o.remote, stopReads)), web(o.webRoot),
           settings(sessionSettings(o, stores)), pool(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 
+    static RemoteOptions withStop(RemoteOptions remote, std::shared_ptr<std::atomic<bool>> stop) {
+        remote.stop = std::move(stop);
+        return remote;
+    }
     void accept();
     void shutdown();
     size_t openSessions() {

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,13 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/interrupt.h"
 #include "io/error.h"
 #include "io/remote/remote_file.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_format.h"
 #include "serve/protocol.h"
+#include "serve/server.h"
 #include "serve/viewer_client.h"
 #include "tests/loopback_servers.h"
 #include "tests/serve_test_util.h"
@@ -254,6 +257,37 @@ TEST_F(RemoteHostile, ServeOnADrippingStoreEndsFramesAndStopsOnCtrlC) {
     const int status = serve.wait();
     EXPECT_LT(secondsSince(interrupted), 2.0);
     EXPECT_TRUE(WIFEXITED(status)) << status;
+}
+
+// The same server in this process (as vdiso.serve runs it from Python): stop() returns within
+// 2 s while a frame's reads drip, with no interrupt of the process.
+TEST_F(RemoteHostile, AServerInProcessStopsPromptlyWhileItsReadsDrip) {
+    LoopbackServer server = s3({"--public", "bkt"});
+    const int port = server.port();
+    test::writeWebRoot(mDir);
+    serve::ServeOptions o;
+    o.stores = {"s3://bkt/head.vdiso"};
+    o.remote.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
+    o.remote.anonymous = true;
+    o.port = 0;
+    o.webRoot = file("web");
+    o.iso = 600.5;
+    serve::Server serving(o);
+    std::thread running([&] { serving.run(); });
+    control(port, R"([{"op":"fault","action":"throttle","bps":2,"count":-1}])");
+    const BrickStoreReader local(file("bkt/head.vdiso"));
+    const VolumeInfo& v = local.volume();
+    Camera camera = orbitCameras(ViewPreset::Normal, v.origin, v.worldMax(), 128, 128, 36)[0];
+    fitClipPlanes(camera, v.origin, v.worldMax());
+    serve::ViewerClient viewer("127.0.0.1", serving.port(), serving.token());
+    viewer.sendView(serve::viewMessage(camera, 1, 0, 600.5));
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    const Clock::time_point stopping = Clock::now();
+    serving.stop();
+    running.join();
+    EXPECT_LT(secondsSince(stopping), 2.0);
+    EXPECT_FALSE(interruptRequested());
+    viewer.interrupt();  // the stopped server's socket stays open until it is destroyed
 }
 
 }  // namespace

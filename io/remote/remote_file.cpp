@@ -44,6 +44,7 @@ namespace {
 struct Transfer {
     CURL* curl = nullptr;
     const std::atomic<uint64_t>* failures = nullptr;  // the object's permanent failures so far
+    const std::atomic<bool>* stop = nullptr;          // RemoteOptions::stop
     uint64_t failuresAtStart = 0;
     unsigned char* dst = nullptr;
     size_t capacity = 0;
@@ -104,7 +105,8 @@ size_t onHeader(char* data, size_t size, size_t count, void* user) {
     return line.size();
 }
 
-// Ends a transfer on Ctrl-C, and when another read of the object failed for good meanwhile:
+// Ends a transfer on Ctrl-C, when its owner stops (RemoteOptions::stop), and when another read
+// of the object failed for good meanwhile:
 // the frame that wanted both is lost, so its other requests stop instead of running their tries.
 // Ends a straggler too (libcurl calls this about once a second while nothing arrives).
 int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
@@ -118,7 +120,7 @@ int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
             return 1;
         }
     }
-    return interruptRequested() || t.failures->load() != t.failuresAtStart;
+    return interruptRequested() || t.failures->load() != t.failuresAtStart || (t.stop && t.stop->load());
 }
 
 size_t onBody(char* data, size_t size, size_t count, void* user) {
@@ -349,6 +351,8 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         std::lock_guard lock(d.failureLock);
         return IoError(d.failure);
     };
+    auto stopping = [&] { return options.stop && options.stop->load(); };
+    auto stopped = [&] { return IoError(mName + ": read ended: the server is stopping"); };
     std::string url = d.url;  // where this read goes: the location, or where it was redirected
     int redirects = 0;
     std::string lastProblem;
@@ -359,11 +363,12 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
                 throw fail(lastProblem + "; waiting " + std::to_string(pauseMs) + " ms to try again would pass the " +
                            deadlineText + " a read may take (--remote-deadline)");
             const auto until = Clock::now() + std::chrono::milliseconds(pauseMs);
-            while (Clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested())
+            while (Clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested() && !stopping())
                 std::this_thread::sleep_for(std::chrono::milliseconds(10));
             pauseMs = 0;
         }
         throwIfInterrupted(mName);
+        if (stopping()) throw stopped();
         if (d.failures.load() != failuresAtStart)
             throw abandoned();
         const int64_t remainingMs =
@@ -376,6 +381,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         t.curl = curl;
         t.failures = &d.failures;
         t.failuresAtStart = failuresAtStart;
+        t.stop = options.stop.get();
         t.dst = static_cast<unsigned char*>(dst);
         t.capacity = n;
         t.opening = opening;
@@ -450,6 +456,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         }
         if (rc == CURLE_ABORTED_BY_CALLBACK) {
             throwIfInterrupted(mName);
+            if (stopping()) throw stopped();
             throw abandoned();
         }
         if (rc != CURLE_OK) {

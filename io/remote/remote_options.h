@@ -2,7 +2,9 @@
 // flags and the environment, and passes down with the URL.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 namespace vdiso {
@@ -34,6 +36,10 @@ struct RemoteOptions {
     // none. At most diskCacheBytes are kept.
     std::string diskCacheDir;
     uint64_t diskCacheBytes = uint64_t(10) << 30;
+    // Once set to true, every read in flight ends within a second (libcurl asks about once a
+    // second) and later ones fail at once: a server stopping. Null: reads end only by themselves
+    // or by the process's interrupt (core/interrupt.h).
+    std::shared_ptr<const std::atomic<bool>> stop;
     // Follow 3xx answers (at most 8; with credentials only to the same scheme, host and port).
     // Off where the answers are untrusted test input (fuzz).
     bool followRedirects = true;
