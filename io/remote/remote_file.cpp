@@ -223,14 +223,16 @@ std::optional<std::string> originOf(const std::string& url, bool* hasUser = null
     return origin;
 }
 
-// Retry-After (seconds, or an HTTP date) in milliseconds from now; 0 when absent or past.
+// Retry-After (seconds, or an HTTP date) in milliseconds from now, at most a day (any wait
+// that long is past every deadline); 0 when absent or past.
 int64_t retryAfterMs(const std::string& value) {
+    constexpr int64_t kDayMs = int64_t(86400) * 1000;
     if (value.empty()) return 0;
     if (std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); }))
-        return value.size() > 9 ? INT64_MAX / 4 : int64_t(std::stoll(value)) * 1000;
+        return value.size() > 8 ? kDayMs : std::min(kDayMs, int64_t(std::stoll(value)) * 1000);
     const time_t at = curl_getdate(value.c_str(), nullptr);
     const time_t now = std::time(nullptr);
-    return at > now ? int64_t(at - now) * 1000 : 0;
+    return at > now ? std::min<int64_t>(int64_t(at - now), 86400) * 1000 : 0;
 }
 
 bool isRedirect(long status) {
