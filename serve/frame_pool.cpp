@@ -110,8 +110,6 @@ double FramePool::charged(Task& task) {
 
 namespace {
 thread_local bool tNested = false;
-thread_local FramePool::Task* tRunning = nullptr;  // the outer pass this worker runs
-thread_local double tNestedSeconds = 0;             // of passes run nested on this thread
 }  // namespace
 
 bool FramePool::nested() { return tNested; }
@@ -150,7 +148,7 @@ FramePool::Task* FramePool::takeDueLocked(bool firstOnly, double below, Clock::t
 
 double FramePool::runLocked(Task* task, std::unique_lock<std::mutex>& lock) {
     const Clock::time_point start = Clock::now();
-    const double nestedBefore = tNestedSeconds;
+    mStates[task].nestedSeconds = 0;
     lock.unlock();
     try {
         task->runPass();
@@ -161,7 +159,7 @@ double FramePool::runLocked(Task* task, std::unique_lock<std::mutex>& lock) {
     State& after = mStates[task];
     after.running = false;
     // Nested passes ran on this pass's time but are charged to their own tasks.
-    after.charged += std::max(0.0, seconds - (tNestedSeconds - nestedBefore));
+    after.charged += std::max(0.0, seconds - after.nestedSeconds);
     if (after.again && !after.removed) {
         after.again = false;
         enqueueLocked(*task, after, after.againFirst, after.againNotBefore);
@@ -170,25 +168,23 @@ double FramePool::runLocked(Task* task, std::unique_lock<std::mutex>& lock) {
     return seconds;
 }
 
-int FramePool::runFirstPassesHere() {
+int FramePool::runFirstPassesHere(Task& host) {
     if (tNested) return 0;
     std::unique_lock lock(mMutex);
     int ran = 0;
     while (!mStopping && mNested < workers()) {
         // Only tasks charged less than the host so far: a busy viewer's passes do not take
         // another's time this way.
-        double host = std::numeric_limits<double>::infinity();
-        if (tRunning) {
-            const State& running = mStates[tRunning];
-            host = running.charged + std::chrono::duration<double>(Clock::now() - running.runningSince).count() -
-                   tNestedSeconds;
-        }
+        State& running = mStates[&host];
+        const double hostCharged = running.charged - running.nestedSeconds +
+                                   std::chrono::duration<double>(Clock::now() - running.runningSince).count();
         Clock::time_point soonest;
-        Task* task = takeDueLocked(true, host, soonest);
+        Task* task = takeDueLocked(true, hostCharged, soonest);
         if (!task) break;
         ++mNested;
         tNested = true;
-        tNestedSeconds += runLocked(task, lock);
+        const double seconds = runLocked(task, lock);
+        mStates[&host].nestedSeconds += seconds;
         tNested = false;
         --mNested;
         ++ran;
@@ -209,10 +205,7 @@ void FramePool::work() {
                 mChanged.wait_until(lock, soonest);
             continue;
         }
-        tRunning = task;
-        tNestedSeconds = 0;
         runLocked(task, lock);
-        tRunning = nullptr;
     }
 }
 

@@ -11,7 +11,7 @@
 // from its frames, whatever they send.
 //
 // A first pass need not wait for a long later one to end: a later pass calls
-// runFirstPassesHere() between its bricks, which runs the waiting first passes of tasks charged
+// runFirstPassesHere(itself) between its bricks, which runs the waiting first passes of tasks charged
 // less than it on its own thread, nested, while its other strips go on (at most one nested pass
 // a worker at once). Someone joining a busy server sees the volume within a coarse pass's time.
 #pragma once
@@ -60,9 +60,10 @@ public:
 
     // Whether a first pass waits (cheap: for a later pass to ask between its bricks).
     bool firstPassWaits() const { return mFirstWaiting.load(std::memory_order_relaxed) > 0; }
-    // Runs due first passes of tasks charged less than this thread's pass on this thread, one
-    // after another, while any waits and fewer than workers() run so; returns how many ran.
-    int runFirstPassesHere();
+    // From a pass of `host` (any of its strips' threads): runs due first passes of tasks charged
+    // less than `host` so far on this thread, one after another, while any waits and fewer than
+    // workers() run so; returns how many ran. Their time is charged to them, not to `host`.
+    int runFirstPassesHere(Task& host);
 
     // The fairness rule's constants, in seconds of passes run (see the top of this file).
     static constexpr double kSlice = 0.005, kFirstPassCredit = 0.02, kIdleCredit = 0.1;
@@ -82,6 +83,7 @@ private:
         Clock::time_point againNotBefore;
         double charged = 0;  // seconds its passes ran (nested passes charged to their own task)
         Clock::time_point runningSince;
+        double nestedSeconds = 0;  // of other tasks' passes nested in its running one
     };
     struct Entry {
         Task* task;

@@ -225,9 +225,10 @@ namespace {
 // (FramePool::runFirstPassesHere), so that a joining viewer does not wait for this whole pass.
 class YieldToFirstPasses final : public ViewStream {
 public:
-    YieldToFirstPasses(ViewStream& inner, FramePool& pool) : mInner(inner), mPool(pool) {}
+    YieldToFirstPasses(ViewStream& inner, FramePool& pool, FramePool::Task& host)
+        : mInner(inner), mPool(pool), mHost(host) {}
     bool beginBrick(int64_t brick, int level, double cellPixels, Use& use) override {
-        if (mPool.firstPassWaits()) mPool.runFirstPassesHere();
+        if (mPool.firstPassWaits()) mPool.runFirstPassesHere(mHost);
         return mInner.beginBrick(brick, level, cellPixels, use);
     }
     void endBrick(int64_t brick, Use use, const TriangleMesh& mesh, const PointSet& points,
@@ -238,6 +239,7 @@ public:
 private:
     ViewStream& mInner;
     FramePool& mPool;
+    FramePool::Task& mHost;
 };
 
 std::string frameBegin(const ViewMessage& view, double lodError, bool final) {
@@ -303,7 +305,7 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
     options.prefetchReaders = mSettings.prefetchReaders;
     options.prefetchNear = mSettings.prefetchNear;
     ViewStream& stream = streams.size() == 1 ? static_cast<ViewStream&>(*streams[0]) : fanOut;
-    YieldToFirstPasses yielding(stream, mPool);
+    YieldToFirstPasses yielding(stream, mPool, *this);
     options.stream = yields ? &yielding : &stream;
     if (FramePool::nested()) {  // a first pass inside another's: one strip, no read-ahead threads
         options.threads = 1;

@@ -121,7 +121,7 @@ TEST(FramePool, AWaitingFirstPassRunsInsideALaterOne) {
         laterRunning = true;
         while (!firstPosted) std::this_thread::yield();
         EXPECT_TRUE(pool.firstPassWaits());
-        ranInside = pool.runFirstPassesHere();  // between two of its bricks
+        ranInside = pool.runFirstPassesHere(later);  // between two of its bricks
         std::lock_guard lock(mutex);
         order.push_back(2);  // the later pass goes on after it
     };
