@@ -143,12 +143,14 @@ TEST(ServeFairness, EveryStuckClientIsDroppedAtTheBound) {
     for (int k = 0; k < 4; ++k) stuck.push_back(std::make_unique<Flooder>(fixture, false, k));
     auto other = fixture.client();
     EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160), 1)).status, "complete");
-    while (fixture.server->counters().viewersDropped < 4 && Clock::now() - start < std::chrono::seconds(30))
+    while (fixture.server->counters().viewersDropped < 4 && Clock::now() - start < std::chrono::seconds(60))
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     std::printf("4 stuck clients dropped %.2f s after they connected (write timeout %.0f s)\n", seconds, timeout);
     EXPECT_EQ(fixture.server->counters().viewersDropped, 4u);
-    EXPECT_LT(seconds, timeout + 4.0) << "the last stuck client was dropped after " << seconds << " s";
+    // Under ASan the frames that fill the sockets take ten times as long: there, only that all go.
+    if (!VDISO_UNDER_ASAN)
+        EXPECT_LT(seconds, timeout + 4.0) << "the last stuck client was dropped after " << seconds << " s";
     stuck.clear();
     EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160, 20), 2)).status, "complete");
 }
@@ -165,6 +167,7 @@ size_t residentBytes() {
 // the server stops reading it once Outbox::kControlLimit of replies wait, so it costs the
 // server about that, not the outbox's 32 MB limit (twice over, counted without overhead).
 TEST(ServeFairness, AFloodOfBadMessagesCostsAboutTheControlLimit) {
+    if (VDISO_UNDER_ASAN) GTEST_SKIP() << "ASan's quarantine keeps freed memory resident: the growth means nothing there";
     ServerFixture fixture(uint64_t(256) << 20, 1, {72, 72, 72}, 0, 30.0);
     const int fd = unreadingClient(fixture);
     ASSERT_GE(fd, 0);
