@@ -149,8 +149,9 @@ TEST(ServeFollow, AFollowerThatDoesNotReadDoesNotHoldUpTheLeader) {
         EXPECT_EQ(f.status, "complete") << seq;
         // A frame held up by the stuck follower would wait out the outbox's patience for room
         // (under ASan a frame alone takes longer than that: only the status is checked there).
-        if (!VDISO_UNDER_ASAN)
+        if (!VDISO_UNDER_ASAN) {
             EXPECT_LT(f.completeSeconds, std::chrono::duration<double>(Outbox::kPushPatience).count()) << seq;
+        }
         // The chunks came with its coarse frame; the final one names them.
         for (const std::vector<uint32_t>* list : {&f.chunks, &f.refs})
             for (const uint32_t brick : *list) bytes += leader->chunkBytes(0, f.iso, brick);

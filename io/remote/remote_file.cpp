@@ -18,6 +18,7 @@
 #include "core/interrupt.h"
 #include "io/error.h"
 #include "io/remote/disk_cache.h"
+#include "io/remote/http_answer.h"
 #include "io/remote/s3_location.h"
 
 namespace vdiso {
@@ -143,47 +144,6 @@ size_t onBody(char* data, size_t size, size_t count, void* user) {
     return n;
 }
 
-// "<Code>NoSuchKey</Code>" and the message of S3's XML error body, if there is one.
-std::string s3ErrorText(const std::string& body) {
-    auto element = [&](const char* name) -> std::string {
-        const std::string open = std::string("<") + name + ">", close = std::string("</") + name + ">";
-        const size_t a = body.find(open);
-        if (a == std::string::npos) return {};
-        const size_t b = body.find(close, a);
-        return b == std::string::npos ? std::string() : body.substr(a + open.size(), b - a - open.size());
-    };
-    const std::string code = element("Code"), message = element("Message");
-    if (code.empty()) return {};
-    return ": " + code + (message.empty() ? std::string() : " (" + message + ")");
-}
-
-// "bytes A-B/TOTAL" into its numbers; nullopt when it is not that.
-std::optional<std::array<uint64_t, 3>> parseContentRange(const std::string& text) {
-    std::array<uint64_t, 3> v{};
-    if (std::sscanf(text.c_str(), "bytes %lu-%lu/%lu", &v[0], &v[1], &v[2]) != 3 || v[1] < v[0] ||
-        v[1] >= v[2])
-        return std::nullopt;
-    return v;
-}
-
-const char* reasonOf(long status) {
-    switch (status) {
-        case 400: return " (Bad Request)";
-        case 401: return " (Unauthorized)";
-        case 403: return " (Forbidden)";
-        case 404: return " (Not Found)";
-        case 405: return " (Method Not Allowed)";
-        case 412: return " (Precondition Failed)";
-        case 416: return " (Range Not Satisfiable)";
-        case 429: return " (Too Many Requests)";
-        case 500: return " (Internal Server Error)";
-        case 502: return " (Bad Gateway)";
-        case 503: return " (Service Unavailable)";
-        case 504: return " (Gateway Timeout)";
-    }
-    return "";
-}
-
 bool retriedCurlError(CURLcode rc) {
     switch (rc) {
         case CURLE_COULDNT_CONNECT:
@@ -196,47 +156,6 @@ bool retriedCurlError(CURLcode rc) {
         case CURLE_HTTP2_STREAM: return true;
         default: return false;
     }
-}
-
-// Where a URL's requests go: scheme, host and port (the default port when none is given);
-// nullopt when it does not parse.
-std::optional<std::string> originOf(const std::string& url, bool* hasUser = nullptr) {
-    CURLU* u = curl_url();
-    if (!u) throw std::bad_alloc();
-    std::optional<std::string> origin;
-    if (curl_url_set(u, CURLUPART_URL, url.c_str(), 0) == CURLUE_OK) {
-        char *scheme = nullptr, *host = nullptr, *port = nullptr, *user = nullptr;
-        if (curl_url_get(u, CURLUPART_SCHEME, &scheme, 0) == CURLUE_OK &&
-            curl_url_get(u, CURLUPART_HOST, &host, 0) == CURLUE_OK &&
-            curl_url_get(u, CURLUPART_PORT, &port, CURLU_DEFAULT_PORT) == CURLUE_OK) {
-            std::string text = std::string(scheme) + "://" + host + ":" + port;
-            std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-            origin = text;
-        }
-        if (hasUser) *hasUser = curl_url_get(u, CURLUPART_USER, &user, 0) == CURLUE_OK;
-        curl_free(scheme);
-        curl_free(host);
-        curl_free(port);
-        curl_free(user);
-    }
-    curl_url_cleanup(u);
-    return origin;
-}
-
-// Retry-After (seconds, or an HTTP date) in milliseconds from now, at most a day (any wait
-// that long is past every deadline); 0 when absent or past.
-int64_t retryAfterMs(const std::string& value) {
-    constexpr int64_t kDayMs = int64_t(86400) * 1000;
-    if (value.empty()) return 0;
-    if (std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); }))
-        return value.size() > 8 ? kDayMs : std::min(kDayMs, int64_t(std::stoll(value)) * 1000);
-    const time_t at = curl_getdate(value.c_str(), nullptr);
-    const time_t now = std::time(nullptr);
-    return at > now ? std::min<int64_t>(int64_t(at - now), 86400) * 1000 : 0;
-}
-
-bool isRedirect(long status) {
-    return status == 301 || status == 302 || status == 303 || status == 307 || status == 308;
 }
 
 }  // namespace
@@ -282,7 +201,7 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
         mScheme = location.rfind("https://", 0) == 0 ? "https" : "http";
     }
     bool hasUser = false;
-    originOf(d.url, &hasUser);
+    http_answer::originOf(d.url, &hasUser);
     d.credentialed = !d.sigv4.empty() || hasUser;
 
     // The head: its Content-Range gives the size, its ETag the version every later read pins.
@@ -339,7 +258,8 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
     const RemoteOptions& options = d.session->options();
     const std::string range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
     using Clock = std::chrono::steady_clock;
-    const Clock::time_point deadline = Clock::now() + std::chrono::milliseconds(std::max<int64_t>(1, options.deadlineMs));
+    const Clock::time_point deadline =
+        Clock::now() + std::chrono::milliseconds(std::max<int64_t>(1, options.deadlineMs));
     const std::string deadlineText = std::to_string(std::max<int64_t>(1, options.deadlineMs / 1000)) + " s";
     // A failure for good counts once, and ends the object's other transfers (onProgress).
     const uint64_t failuresAtStart = d.failures.load();
@@ -478,13 +398,17 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
             }
             throw fail(what);
         }
-        if (isRedirect(t.status)) {
+        if (http_answer::isRedirect(t.status)) {
             const std::string said = "HTTP " + std::to_string(t.status);
             if (!options.followRedirects || redirectTo.empty())
-                throw fail("answered " + said + (redirectTo.empty() ? " without a Location" : " to " + displayLocation(redirectTo)) +
+                throw fail("answered " + said +
+                           (redirectTo.empty() ? " without a Location" : " to " + displayLocation(redirectTo)) +
                            ", which is not followed");
-            if (++redirects > 8) throw fail("redirects too often (a loop?): more than 8 redirects, the last to " + displayLocation(redirectTo));
-            const std::optional<std::string> from = originOf(url), to = originOf(redirectTo);
+            if (++redirects > 8)
+                throw fail("redirects too often (a loop?): more than 8 redirects, the last to " +
+                           displayLocation(redirectTo));
+            const std::optional<std::string> from = http_answer::originOf(url);
+            const std::optional<std::string> to = http_answer::originOf(redirectTo);
             if (!to || (to->rfind("http://", 0) != 0 && to->rfind("https://", 0) != 0))
                 throw fail("was redirected (" + said + ") to " + displayLocation(redirectTo) +
                            ", which is not an http or https URL");
@@ -507,7 +431,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         }
         if (t.status == 206) {
             d.session->noteFirstByteMs(double(firstByteUs) / 1000.0);
-            const auto r = parseContentRange(t.contentRange);
+            const auto r = http_answer::parseContentRange(t.contentRange);
             // Opening asks for the head, which may be longer than a small object.
             const uint64_t last = opening && r ? std::min<uint64_t>(offset + n, (*r)[2]) - 1 : offset + n - 1;
             if (!r || (*r)[0] != offset || (*r)[1] != last)
@@ -531,7 +455,8 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
                            (t.etag.empty() ? "Last-Modified: " + t.lastModified : t.etag) + ", opened as " + mVersion);
             return Answer{(*r)[2], t.got, t.etag, t.lastModified};
         }
-        const std::string said = "HTTP " + std::to_string(t.status) + reasonOf(t.status) + s3ErrorText(t.errorBody);
+        const std::string said = "HTTP " + std::to_string(t.status) + http_answer::statusReason(t.status) +
+                                 http_answer::s3ErrorText(t.errorBody);
         if (t.status == 412)
             throw fail("was replaced while being read (version " + mVersion + " no longer matches: " +
                                     said + ")");
@@ -539,7 +464,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         if (t.status >= 500 || t.status == 429) {
             lastProblem = said;
             // The server's own wait, if it names one and it is longer than ours.
-            const int64_t asked = retryAfterMs(t.retryAfter);
+            const int64_t asked = http_answer::retryAfterMs(t.retryAfter);
             pauseMs = std::max(asked, int64_t(100) << std::min(attempt, 6));
             if (asked > 0) lastProblem += " (Retry-After: " + t.retryAfter + ")";
             ++attempt;
