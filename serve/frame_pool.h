@@ -66,7 +66,7 @@ public:
     int runFirstPassesHere(Task& host);
 
     // The fairness rule's constants, in seconds of passes run (see the top of this file).
-    static constexpr double kSlice = 0.005, kFirstPassCredit = 0.02, kIdleCredit = 0.1;
+    static constexpr double kSlice = 0.02, kFirstPassCredit = 0.05, kIdleCredit = 0.15;
     // Seconds of passes `task` was charged so far.
     double charged(Task& task);
     // Whether this thread is running a nested first pass (it then uses no threads of its own).
