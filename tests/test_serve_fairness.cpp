@@ -147,9 +147,13 @@ TEST(ServeFairness, FloodingClientsDoNotStarveOrdinaryViewers) {
     std::printf("ordinary viewers' median frame: %.3f s alone (%zu frames), %.3f s among flooders (%zu frames)\n",
                 median(alone), alone.size(), median(flooded), flooded.size());
     EXPECT_GE(flooded.size(), 4u) << "ordinary viewers starved";
-    EXPECT_LE(median(flooded), 2.0 * median(alone))
-        << "median frame " << median(flooded) << " s among flooders, " << median(alone) << " s alone ("
-        << flooded.size() << " and " << alone.size() << " frames)";
+    // Under ASan a flooder's pass, which a viewer may wait for, takes ten times as long as in a
+    // build that is measured (1.6-1.8x there): only the starvation is checked.
+    if (!VDISO_UNDER_ASAN) {
+        EXPECT_LE(median(flooded), 2.0 * median(alone))
+            << "median frame " << median(flooded) << " s among flooders, " << median(alone) << " s alone ("
+            << flooded.size() << " and " << alone.size() << " frames)";
+    }
 }
 
 // 4 clients that never read, each sending VIEWs whose frames outgrow the socket buffers: every
