@@ -157,7 +157,7 @@ TEST(ServeFairness, FloodingClientsDoNotStarveOrdinaryViewers) {
 }
 
 // 4 clients that never read, each sending VIEWs whose frames outgrow the socket buffers: every
-// one is dropped within the write timeout of its socket filling (which takes a frame or two),
+// one is dropped within the write timeout of its socket filling (a few frames, seconds at most),
 // not tens of seconds later; an ordinary viewer is served meanwhile.
 TEST(ServeFairness, EveryStuckClientIsDroppedAtTheBound) {
     const double timeout = 2.0;
@@ -174,7 +174,7 @@ TEST(ServeFairness, EveryStuckClientIsDroppedAtTheBound) {
     EXPECT_EQ(fixture.server->counters().viewersDropped, 4u);
     // Under ASan the frames that fill the sockets take ten times as long: there, only that all go.
     if (!VDISO_UNDER_ASAN) {
-        EXPECT_LT(seconds, timeout + 4.0) << "the last stuck client was dropped after " << seconds << " s";
+        EXPECT_LT(seconds, timeout + 8.0) << "the last stuck client was dropped after " << seconds << " s";
     }
     stuck.clear();
     EXPECT_EQ(other->requestFrame(viewOf(presetFor(fixture.storePath, ViewPreset::Normal, 160, 20), 2)).status, "complete");
