@@ -82,7 +82,7 @@ public:
     // The server is stopping: the session's work stops now (at its next brick) and its
     // worker is joined; the socket closes with the I/O context.
     void stop() {
-        if (mViewer) mViewer->close();
+        if (mViewer) close();
     }
     void join() {
         if (mViewer) mViewer->join();
@@ -121,8 +121,10 @@ private:
     }
 
     void onRead(beast::error_code error, size_t bytes) {
-        if (error) {  // closed by the client, or broken: its work stops now
-            mViewer->close();
+        // Closed by the client, or broken: its work stops now. A read that completes after a
+        // write failed (bytes the socket held) is dropped: the viewer is closed already.
+        if (error || mClosed) {
+            close();
             return;
         }
         mMessageBytes += bytes;
@@ -145,9 +147,15 @@ private:
             readPiece();
     }
 
+    // The viewer's work stops and nothing more is read or written for it (on this strand).
+    void close() {
+        mClosed = true;
+        mViewer->close();
+    }
+
     // Writes the next queued message unless one is being written.
     void pump() {
-        if (mWriting) return;
+        if (mWriting || mClosed) return;
         mCurrent = mViewer->nextToWrite();
         if (!mCurrent) return;
         mWriting = true;
@@ -170,8 +178,8 @@ private:
         mWriting = false;
         mWriteTimer.cancel();
         mCurrent.reset();
-        if (error) {
-            mViewer->close();
+        if (error || mClosed) {
+            close();
             return;
         }
         if (mReadPaused && !mViewer->backlogged()) {
@@ -190,6 +198,7 @@ private:
     std::optional<OutMessage> mCurrent;
     bool mWriting = false;
     bool mReadPaused = false;
+    bool mClosed = false;  // the viewer closed: a late read or write completion does nothing
     net::steady_timer mWriteTimer{mWs.get_executor()};
 };
 

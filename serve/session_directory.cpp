@@ -52,7 +52,9 @@ void SessionDirectory::follow(const std::string& id, const std::string& leader) 
 
 void SessionDirectory::acceptView(const std::string& id, const ViewMessage& view) {
     std::lock_guard lock(mMutex);
-    Group& group = *mEntries.at(id).group;
+    const auto self = mEntries.find(id);
+    if (self == mEntries.end()) throw ProtocolError("VIEW: this viewer's session has closed");
+    Group& group = *self->second.group;
     if (group.members.front() != id)
         throw ProtocolError("VIEW: this viewer follows session " + group.members.front() +
                             ", whose VIEWs alone are drawn (its viewer may hand over control)");
@@ -64,7 +66,9 @@ void SessionDirectory::acceptView(const std::string& id, const ViewMessage& view
 
 void SessionDirectory::handOver(const std::string& id, const std::string& to) {
     std::lock_guard lock(mMutex);
-    Group& group = *mEntries.at(id).group;
+    const auto self = mEntries.find(id);
+    if (self == mEntries.end()) throw ProtocolError("HANDOVER: this viewer's session has closed");
+    Group& group = *self->second.group;
     if (group.members.front() != id) throw ProtocolError("HANDOVER: this viewer does not lead; it follows session " + group.members.front());
     if (group.members.size() < 2) throw ProtocolError("HANDOVER: no viewer follows this one");
     const std::string next = to.empty() ? group.members[1] : to;
@@ -72,7 +76,7 @@ void SessionDirectory::handOver(const std::string& id, const std::string& to) {
     if (at == group.members.end()) throw ProtocolError("HANDOVER: session " + next + " does not follow this viewer");
     group.members.erase(at);
     group.members.insert(group.members.begin(), next);
-    mEntries.at(id).session->stopLeading();
+    self->second.session->stopLeading();
     tellRolesLocked(group);
 }
 

@@ -14,6 +14,7 @@
 #include "serve/chunk_codec.h"
 #include "serve/outbox.h"
 #include "serve/protocol.h"
+#include "serve/session_directory.h"
 #include "tests/extract_test_util.h"
 #include "tests/test_util.h"
 
@@ -262,3 +263,31 @@ TEST(ServeOutbox, AFrameEndSaysSupersededWhenItsMessagesWereDropped) {
 
 }  // namespace
 }  // namespace vdiso
+
+namespace vdiso::serve {
+namespace {
+
+struct NoSession final : FollowedSession {
+    void catchUp(std::shared_ptr<ViewerOutput>, const ViewMessage&) override {}
+    void stopLeading() override {}
+};
+
+// A message read after its viewer closed (bytes the socket still held when a write failed) is
+// refused as a protocol error, which the session answers; it used to throw std::out_of_range
+// from the directory on the I/O thread and end the server.
+TEST(ServeDirectory, AMessageOfAClosedSessionIsAProtocolError) {
+    SessionDirectory directory;
+    NoSession session;
+    const std::string id = directory.add(session, std::make_shared<ViewerOutput>(size_t(1) << 20, [] {}));
+    ViewMessage view;
+    view.seq = 1;
+    directory.acceptView(id, view);
+    directory.remove(id);
+    view.seq = 2;
+    EXPECT_THROW(directory.acceptView(id, view), ProtocolError);
+    EXPECT_THROW(directory.handOver(id, ""), ProtocolError);
+    EXPECT_TRUE(directory.outputsOf(id).empty());
+}
+
+}  // namespace
+}  // namespace vdiso::serve
