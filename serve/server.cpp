@@ -5,7 +5,6 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/strand.hpp>
 
-#include "core/interrupt.h"
 #include "io/error.h"
 #include "serve/server_impl.h"
 
@@ -99,12 +98,8 @@ Server::Server(const ServeOptions& options) : mImpl(std::make_unique<Impl>(optio
     if (options.handleSignals) {
         s.signals.add(SIGINT);
         s.signals.add(SIGTERM);
-        // Ctrl-C is the process's interrupt too (core/interrupt.h): every loop of the libraries
-        // stops within a second, as in the other commands.
         s.signals.async_wait([this](beast::error_code e, int) {
-            if (e) return;
-            requestInterrupt();
-            mImpl->shutdown();
+            if (!e) mImpl->shutdown();
         });
     }
     s.port = s.acceptor.local_endpoint(error).port();

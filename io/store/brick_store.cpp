@@ -213,16 +213,20 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(i
         const BrickEntry& e = mIndex[size_t(first + k)];
         pieces.push_back({e.offset, e.storedBytes, dst + (e.offset - firstEntry.offset)});
     }
-    // A remote source's disk cache keeps a brick only once its checksum passes.
-    mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data", [&](size_t k) {
-        return store_format::crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(first) + k].checksum;
-    });
+    // A remote source's disk cache keeps a brick only once its checksum passes; what its last
+    // check of a piece found (the bytes as read) is not computed again below.
+    std::vector<int8_t> intact(size_t(count), -1);  // -1: not checked by the source
+    auto check = [&](size_t k) {
+        intact[k] = store_format::crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(first) + k].checksum;
+        return intact[k] == 1;
+    };
+    mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data", check);
     std::vector<std::span<const unsigned char>> stored;
     stored.reserve(size_t(count));
     for (int k = 0; k < count; ++k) {
         const BrickEntry& e = mIndex[size_t(first + k)];
         stored.emplace_back(buffer.data + (e.offset - firstEntry.offset), e.storedBytes);
-        if (store_format::crc32Of(stored.back().data(), e.storedBytes) != e.checksum)
+        if (intact[size_t(k)] == 0 || (intact[size_t(k)] < 0 && !check(size_t(k))))
             failBrick(first + k, "checksum mismatch (the brick is corrupt)");
     }
     return stored;

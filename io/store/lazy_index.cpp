@@ -1,6 +1,7 @@
 #include "io/store/lazy_index.h"
 
 #include <algorithm>
+#include <optional>
 
 #include <tbb/parallel_for.h>
 
@@ -13,16 +14,19 @@ LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedB
     const uint64_t directoryBytes = store_format::indexDirectoryBytes(rawBytes);
     if (storedBytes < directoryBytes) throwIoError(source.name(), "index is missing or corrupt (too short)");
     std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
-    // A remote disk cache keeps the directory once it decodes (its checksum passes).
+    // A remote disk cache keeps the directory once it decodes (its checksum passes); what the
+    // check decoded last is the directory as read.
+    std::optional<store_format::IndexDirectory> decoded;
     source.read(offset, directory.size(), directory.data(), "index directory", [&](size_t) {
         try {
-            store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
-            return true;
+            decoded = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
         } catch (const IoError&) {
-            return false;
+            decoded.reset();
         }
+        return decoded.has_value();
     });
-    mDirectory = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+    mDirectory = decoded ? std::move(*decoded)
+                         : store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
     // Untouched until a part lands: the pages of parts never asked for are never faulted in.
     mRaw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
     mReady = std::make_unique<std::atomic<bool>[]>(size_t(mDirectory.parts()));
