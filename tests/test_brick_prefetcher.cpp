@@ -2,6 +2,7 @@
 // together (neighbours in a store's file) are gathered from the next items into one read.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <mutex>
 #include <string>
@@ -23,8 +24,14 @@ public:
     std::span<const BrickRange> brickRanges() const override { return mInner.brickRanges(); }
     BrickHandle acquire(int64_t id) override {
         record("brick " + std::to_string(id));
+        if (id == mHeld)  // the reader waits here until the test has pushed what it gathers from
+            while (!mRelease) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         return mInner.acquire(id);
     }
+    // Reading brick `id` waits until release(): the items pushed meanwhile are all there when
+    // the reader gathers its next run, however the threads are scheduled.
+    void hold(int64_t id) { mHeld = id; }
+    void releaseHeld() { mRelease = true; }
     bool readsWithNext(int64_t id) const override { return id % 4 != 3; }
     std::vector<BrickHandle> acquireRun(int64_t first, int count) override {
         record("run " + std::to_string(first) + "+" + std::to_string(count));
@@ -48,6 +55,8 @@ private:
     BrickSource& mInner;
     mutable std::mutex mMutex;
     std::vector<std::string> mReads;
+    std::atomic<int64_t> mHeld{-1};
+    std::atomic<bool> mRelease{false};
 };
 
 TEST(BrickPrefetcher, ReadsNeighboursInTheFileTogether) {
@@ -55,14 +64,17 @@ TEST(BrickPrefetcher, ReadsNeighboursInTheFileTogether) {
     RowSource source(memory);
     {
         BrickPrefetcher prefetcher(source, 16, 1);
-        // Item 0 is the extraction's own. Then 5 gathers 4, 6 and 7 (7 does not read with 8);
-        // 9 gathers 8 and 10 but not 12, which is item 5's alone; 2 stands alone.
-        for (const int64_t id : {0, 5, 4, 9, 6, 7, 8, 12, 10, 2}) prefetcher.push(id);
+        // Item 0 is the extraction's own; item 1 (brick 30, no neighbour here) holds the reader
+        // until every item is pushed. Then 5 gathers 4, 6 and 7 (7 does not read with 8); 9
+        // gathers 8 and 10 but not 12, which is item 6's alone; 2 stands alone.
+        source.hold(30);
+        for (const int64_t id : {0, 30, 5, 4, 9, 6, 7, 8, 12, 10, 2}) prefetcher.push(id);
         prefetcher.close();
-        for (int k = 0; k < 200 && source.reads().size() < 4; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        prefetcher.consumed(10);
+        source.releaseHeld();
+        for (int k = 0; k < 200 && source.reads().size() < 5; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        prefetcher.consumed(11);
     }
-    EXPECT_EQ(source.reads(), (std::vector<std::string>{"run 4+4", "run 8+3", "brick 12", "brick 2"}));
+    EXPECT_EQ(source.reads(), (std::vector<std::string>{"brick 30", "run 4+4", "run 8+3", "brick 12", "brick 2"}));
     EXPECT_EQ(memory.pinned(), 0);
 }
 
