@@ -61,7 +61,7 @@ MemoryBrickSource::MemoryBrickSource(const Dims3& dims, ScalarType type, int bri
 BrickHandle MemoryBrickSource::acquire(int64_t id) {
     ++mAcquired;
     ++mPinned;
-    return BrickHandle(this, id, mBricks[size_t(id)].data());
+    return BrickHandle(this, id, mBricks.at(size_t(id)).data());  // at(): a test asking for a brick that is not there fails
 }
 
 std::unique_ptr<MemoryBrickSource> synthBrickSource(const SynthParams& params, int brickSize) {

@@ -60,21 +60,22 @@ private:
 };
 
 TEST(BrickPrefetcher, ReadsNeighboursInTheFileTogether) {
+    // 16 bricks in a row: 128 cells of 8 along x.
     test::MemoryBrickSource memory({129, 9, 9}, ScalarType::U16, 8, [](int64_t x, int64_t, int64_t) { return double(x); });
     RowSource source(memory);
     {
         BrickPrefetcher prefetcher(source, 16, 1);
-        // Item 0 is the extraction's own; item 1 (brick 30, no neighbour here) holds the reader
+        // Item 0 is the extraction's own; item 1 (brick 15, last of its row: no neighbour) holds the reader
         // until every item is pushed. Then 5 gathers 4, 6 and 7 (7 does not read with 8); 9
         // gathers 8 and 10 but not 12, which is item 6's alone; 2 stands alone.
-        source.hold(30);
-        for (const int64_t id : {0, 30, 5, 4, 9, 6, 7, 8, 12, 10, 2}) prefetcher.push(id);
+        source.hold(15);
+        for (const int64_t id : {0, 15, 5, 4, 9, 6, 7, 8, 12, 10, 2}) prefetcher.push(id);
         prefetcher.close();
         source.releaseHeld();
         for (int k = 0; k < 200 && source.reads().size() < 5; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
         prefetcher.consumed(11);
     }
-    EXPECT_EQ(source.reads(), (std::vector<std::string>{"brick 30", "run 4+4", "run 8+3", "brick 12", "brick 2"}));
+    EXPECT_EQ(source.reads(), (std::vector<std::string>{"brick 15", "run 4+4", "run 8+3", "brick 12", "brick 2"}));
     EXPECT_EQ(memory.pinned(), 0);
 }
 
