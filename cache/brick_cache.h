@@ -55,6 +55,7 @@ public:
     bool readsWithNext(int64_t id) const override { return mStore.nextInFile(id); }
     std::vector<BrickHandle> acquireRun(int64_t first, int count) override;
     bool isResident(int64_t id) const override;
+    int64_t brickCapacity() const override { return int64_t(mSlotCount); }
 
     CacheCounters counters() const;
     uint64_t budgetBytes() const { return mSlotCount * mBrickBytes; }

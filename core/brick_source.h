@@ -78,6 +78,9 @@ public:
     // Whether acquire(id) would find the brick in memory now (a hint: it may be gone by then).
     // Readers ahead skip such bricks. False when the source cannot tell.
     virtual bool isResident(int64_t) const { return false; }
+    // How many bricks the source keeps in memory (its cache): a brick acquired again after
+    // fewer others is not read again. By default all of them (a source in memory).
+    virtual int64_t brickCapacity() const { return INT64_MAX; }
 
 protected:
     friend class BrickHandle;

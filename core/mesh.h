@@ -68,6 +68,13 @@ struct TriangleMesh {
     size_t vertexCount() const { return positions.size(); }  // vertices held
     size_t triangleCount() const { return indices.size() / 3; }
     uint32_t nextVertex() const { return firstVertex + uint32_t(positions.size()); }
+    // What the extraction kernel writes through (core/kernel/brick_kernel.h), as it writes
+    // into a PlacedMesh (core/kernel/placed_mesh.h).
+    void addVertex(const glm::vec3& position, const glm::vec3& normal) {
+        positions.push_back(position);
+        normals.push_back(normal);
+    }
+    void addTriangle(uint32_t a, uint32_t b, uint32_t c) { indices.insert(indices.end(), {a, b, c}); }
     void clear() {
         positions.clear();
         normals.clear();

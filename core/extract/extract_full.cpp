@@ -13,6 +13,8 @@
 #include <tbb/task_arena.h>
 
 #include "core/extract/brick_prefetcher.h"
+#include "core/extract/extract_in_place.h"
+#include "core/extract/part_border.h"
 #include "core/kernel/edge_vertex_map.h"
 #include "core/kernel/iso.h"
 #include "core/trees/minmax_tree.h"
@@ -32,48 +34,6 @@ constexpr size_t kChunksPerThread = 8;
 constexpr size_t kStreamedChunkBricks = 64;
 constexpr size_t kStreamedChunksPerThread = 2;
 
-
-// The part of the volume given by FullExtractOptions::bricks, and the test of whether an edge
-// also has a cell in a brick outside it (then another part makes its vertex too).
-class PartBorder {
-public:
-    PartBorder(const VolumeInfo& volume, const BrickLayout& layout, std::span<const int64_t> part)
-        : mDims(volume.dims), mLayout(layout), mInPart(size_t(layout.brickCount()), part.empty()) {
-        for (int64_t id : part) {
-            if (id < 0 || id >= layout.brickCount())
-                throw std::invalid_argument("FullExtractOptions::bricks: brick " + std::to_string(id) +
-                                            " is not in the volume");
-            mInPart[size_t(id)] = 1;
-        }
-    }
-    bool holds(int64_t id) const { return mInPart[size_t(id)] != 0; }
-    bool crossesEdge(uint64_t key) const {
-        int64_t bricks[4];
-        const int n = bricksOnEdge(mDims, mLayout, key, bricks);
-        for (int i = 0; i < n; ++i)
-            if (!holds(bricks[i])) return true;
-        return false;
-    }
-    // The bricks outside the part.
-    std::vector<int64_t> outside() const {
-        std::vector<int64_t> ids;
-        for (size_t id = 0; id < mInPart.size(); ++id)
-            if (!mInPart[id]) ids.push_back(int64_t(id));
-        return ids;
-    }
-    // Copies the entries of `seams` on the part's border to `out` (numbers mapped by `number`).
-    template <class Number>
-    void collect(const EdgeVertexMap& seams, EdgeVertexMap& out, Number&& number) const {
-        seams.forEach([&](uint64_t key, uint32_t v) {
-            if (crossesEdge(key) && out.find(key) == UINT32_MAX) out.insert(key, number(v));
-        });
-    }
-
-private:
-    Dims3 mDims;
-    BrickLayout mLayout;
-    std::vector<uint8_t> mInPart;
-};
 
 // Where one brick's output ends in its chunk's mesh (vertex and index counts after it).
 struct BrickEnd {
@@ -126,69 +86,9 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams, 
     });
 }
 
-// Appends the chunks' meshes to `out`, in parallel, giving the mesh mergeChunk gives chunk by
-// chunk: a brick-face vertex belongs to the first chunk holding a brick with a cell on its
-// edge (each such brick makes it), and later chunks refer to that one; each chunk's own
-// vertices follow the earlier chunks', written into place after a prefix sum of their counts
-// (Flying Edges' way). Only the chunks' seam entries are looked up; no pass over the mesh is
-// serial. `chunkOfBrick`: the chunk extracting each brick, -1 for none. Frees the chunks.
-// With `border`, the chunks' vertices on the part's border go to `borderOut` (numbered as in out).
-void mergeChunksParallel(std::vector<ChunkOutput>& chunks, const std::vector<int32_t>& chunkOfBrick,
-                         const VolumeInfo& volume, const BrickLayout& layout, TriangleMesh& out,
-                         const PartBorder* border, EdgeVertexMap* borderOut) {
-    constexpr uint32_t kWelded = UINT32_MAX;
-    struct Weld {
-        uint32_t vertex, ownerChunk, ownerVertex;
-    };
-    const size_t count = chunks.size();
-    std::vector<std::vector<uint32_t>> final(count);  // chunk vertex -> out vertex number
-    std::vector<std::vector<Weld>> welds(count);
-    tbb::parallel_for(size_t(0), count, [&](size_t c) {
-        final[c].assign(chunks[c].mesh.vertexCount(), 0);
-        chunks[c].seams.forEach([&](uint64_t key, uint32_t v) {
-            const int32_t owner = edgeOwner(volume.dims, layout, key, chunkOfBrick, int32_t(c));
-            if (owner == int32_t(c)) return;
-            const uint32_t w = chunks[size_t(owner)].seams.find(key);
-            if (w == UINT32_MAX) return;  // cannot happen (see bricksOnEdge); then it stays unwelded
-            final[c][v] = kWelded;
-            welds[c].push_back({v, uint32_t(owner), w});
-        });
-    });
-    std::vector<size_t> vertexBase(count + 1), indexBase(count + 1);
-    vertexBase[0] = out.positions.size();
-    indexBase[0] = out.indices.size();
-    for (size_t c = 0; c < count; ++c) {
-        vertexBase[c + 1] = vertexBase[c] + chunks[c].mesh.vertexCount() - welds[c].size();
-        indexBase[c + 1] = indexBase[c] + chunks[c].mesh.indices.size();
-    }
-    const uint32_t firstNumber = out.nextVertex() - uint32_t(out.positions.size());
-    out.positions.resize(vertexBase[count]);
-    out.normals.resize(vertexBase[count]);
-    out.indices.resize(indexBase[count]);
-    tbb::parallel_for(size_t(0), count, [&](size_t c) {
-        const TriangleMesh& m = chunks[c].mesh;
-        size_t next = vertexBase[c];
-        for (size_t v = 0; v < final[c].size(); ++v) {
-            if (final[c][v] == kWelded) continue;
-            final[c][v] = firstNumber + uint32_t(next);
-            out.positions[next] = m.positions[v];
-            out.normals[next] = m.normals[v];
-            ++next;
-        }
-    });
-    tbb::parallel_for(size_t(0), count, [&](size_t c) {
-        for (const Weld& w : welds[c]) final[c][w.vertex] = final[w.ownerChunk][w.ownerVertex];
-    });
-    if (border && borderOut)
-        for (size_t c = 0; c < count; ++c)
-            border->collect(chunks[c].seams, *borderOut, [&](uint32_t v) { return final[c][v]; });
-    tbb::parallel_for(size_t(0), count, [&](size_t c) {
-        const MeshArray<uint32_t>& indices = chunks[c].mesh.indices;
-        uint32_t* to = out.indices.data() + indexBase[c];
-        for (size_t i = 0; i < indices.size(); ++i) to[i] = final[c][indices[i]];
-    });
-    tbb::parallel_for(size_t(0), count, [&](size_t c) { chunks[c] = ChunkOutput(); });
-}
+// A mesh held whole is written in place (core/extract/extract_in_place.h); streamed output goes
+// through extractItems.
+bool writesInPlace(const FullExtractOptions& options) { return !options.sink && !options.brickSink; }
 
 int64_t brickOf(int64_t id) { return id; }
 
@@ -199,8 +99,9 @@ struct BrickWork {
 };
 int64_t brickOf(const BrickWork& w) { return w.id; }
 
-// Runs extractItem(extractor, item, samples, mesh, seams) over `items`, on `threads` threads,
-// into `mesh`, acquiring each item's brick first (the time waited for it is counted).
+// Streams the surface of `items` to options.sink or options.brickSink (the in-memory output is
+// extractInPlace's): runs extractItem(extractor, item, samples, mesh, seams) over them on
+// `threads` threads, acquiring each item's brick first (the time waited for it is counted).
 template <class Item, class ExtractItem>
 KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             const FullExtractOptions& options, TriangleMesh& mesh,
@@ -233,9 +134,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     // that reserved up front saves the copies and fresh page faults of regrowth (reserved pages
     // that are never touched cost nothing; process wall A/B 0.94-0.98 against B^2).
     const size_t perBrick = 2 * size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
-    const size_t expectVertices = options.sink        ? options.streamPieceVertices + perBrick * 4
-                                  : brickSink != nullptr ? perBrick * 4
-                                                         : items.size() * perBrick;
+    const size_t expectVertices = options.sink ? options.streamPieceVertices + perBrick * 4 : perBrick * 4;
     mesh.indices.reserve(mesh.indices.size() + expectVertices * 6);
     mesh.positions.reserve(mesh.positions.size() + expectVertices);
     mesh.normals.reserve(mesh.positions.capacity());
@@ -283,20 +182,19 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         finish();
         return extractor.counters();
     }
-    // Streamed, chunks of a bounded number of bricks are extracted a round at a time and
-    // merged: memory holds a round's surface, not all of it. (Vertices are numbered as one
-    // thread would number them whatever the chunks: see mergeChunk.)
-    const bool streamed = options.sink || brickSink;
+    // Chunks of a bounded number of bricks are extracted a round at a time and merged: memory
+    // holds a round's surface, not all of it. (Vertices are numbered as one thread would number
+    // them whatever the chunks: see mergeChunk.)
     const size_t chunkCount =
         std::max(std::min(items.size(), size_t(options.threads) * kChunksPerThread),
-                 streamed ? (items.size() + kStreamedChunkBricks - 1) / kStreamedChunkBricks : 0);
-    const size_t round = streamed ? size_t(options.threads) * kStreamedChunksPerThread : chunkCount;
+                 (items.size() + kStreamedChunkBricks - 1) / kStreamedChunkBricks);
+    const size_t round = size_t(options.threads) * kStreamedChunksPerThread;
     std::vector<ChunkOutput> chunks(chunkCount);
     std::atomic<size_t> done{0};
     std::mutex progressMutex;
     tbb::task_arena arena(options.threads);
     KernelCounters total;
-    EdgeVertexMap seams;  // streamed: the brick-face vertices of the chunks merged so far
+    EdgeVertexMap seams;  // the brick-face vertices of the chunks merged so far
     for (size_t first = 0; first < chunkCount; first += round) {
         const size_t last = std::min(chunkCount, first + round);
         arena.execute([&] {
@@ -326,7 +224,6 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             total.metaCellsActive += chunks[c].counters.metaCellsActive;
             total.cellsVisited += chunks[c].counters.cellsVisited;
             total.cellsActive += chunks[c].counters.cellsActive;
-            if (!streamed) continue;
             const size_t begin = items.size() * c / chunkCount;
             mergeChunk(chunks[c], mesh, seams, [&](size_t k) { handOverBrick(bricks[begin + k]); });
             chunks[c] = ChunkOutput();  // free the chunk's memory as soon as it is merged
@@ -335,17 +232,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             stream(false);
         }
     }
-    if (!streamed) {
-        std::vector<int32_t> chunkOfBrick(size_t(source.layout().brickCount()), -1);
-        for (size_t c = 0; c < chunkCount; ++c)
-            for (size_t i = items.size() * c / chunkCount; i < items.size() * (c + 1) / chunkCount; ++i)
-                chunkOfBrick[size_t(bricks[i])] = int32_t(c);
-        arena.execute([&] {
-            mergeChunksParallel(chunks, chunkOfBrick, source.volume(), source.layout(), mesh, &border, borderOut);
-        });
-    } else if (borderOut) {
-        border.collect(seams, *borderOut, identity);
-    }
+    if (borderOut) border.collect(seams, *borderOut, identity);
     finish();
     report(items.size());
     return total;
@@ -372,10 +259,17 @@ ExtractStats extractOctree(BrickSource& source, const FullExtractOptions& option
         const PartBorder part(source.volume(), source.layout(), options.bricks);
         std::erase_if(bricks, [&](int64_t id) { return !part.holds(id); });
     }
-    const KernelCounters counters = extractItems(
-        bricks, source, options, mesh, stats, progress, 0.0,
-        [&](BrickExtractor& extractor, int64_t id, const void* samples, TriangleMesh& out,
-            EdgeVertexMap& seams) { extractor.extractBrick(id, samples, options.iso, out, seams); });
+    KernelCounters counters;
+    if (writesInPlace(options)) {
+        std::vector<BrickItem> items;
+        items.reserve(bricks.size());
+        for (int64_t id : bricks) items.push_back({id, {}});
+        counters = extractInPlace(items, source, options, mesh, stats, progress, 0.0);
+    } else {
+        counters = extractItems(bricks, source, options, mesh, stats, progress, 0.0,
+                                [&](BrickExtractor& extractor, int64_t id, const void* samples, TriangleMesh& out,
+                                    EdgeVertexMap& seams) { extractor.extractBrick(id, samples, options.iso, out, seams); });
+    }
     stats.bricksActive = int64_t(bricks.size());
     stats.metaCellsActive = counters.metaCellsActive;
     stats.cellsActive = counters.cellsActive;
@@ -428,14 +322,22 @@ ExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options
         const PartBorder part(source.volume(), layout, options.bricks);
         std::erase_if(work, [&](const BrickWork& w) { return !part.holds(w.id); });
     }
-    const KernelCounters counters = extractItems(
-        work, source, options, mesh, stats, progress, 0.5,
-        [&](BrickExtractor& extractor, const BrickWork& w, const void* samples, TriangleMesh& out,
-            EdgeVertexMap& seams) {
-            extractor.extractMetaCells(
-                w.id, samples, options.iso,
-                std::span<const uint32_t>(local.data() + w.begin, w.end - w.begin), out, seams);
-        });
+    auto metaCellsOf = [&](const BrickWork& w) {
+        return std::span<const uint32_t>(local.data() + w.begin, w.end - w.begin);
+    };
+    KernelCounters counters;
+    if (writesInPlace(options)) {
+        std::vector<BrickItem> items;
+        items.reserve(work.size());
+        for (const BrickWork& w : work) items.push_back({w.id, metaCellsOf(w)});
+        counters = extractInPlace(items, source, options, mesh, stats, progress, 0.5);
+    } else {
+        counters = extractItems(work, source, options, mesh, stats, progress, 0.5,
+                                [&](BrickExtractor& extractor, const BrickWork& w, const void* samples,
+                                    TriangleMesh& out, EdgeVertexMap& seams) {
+                                    extractor.extractMetaCells(w.id, samples, options.iso, metaCellsOf(w), out, seams);
+                                });
+    }
     stats.bricksActive = int64_t(work.size());
     stats.metaCellsActive = counters.metaCellsActive;
     stats.cellsActive = counters.cellsActive;

@@ -40,11 +40,11 @@ public:
 struct FullExtractOptions {
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
-    // Threads extracting bricks. 1 runs on the calling thread alone. More split the active
-    // bricks into contiguous chunks, each with its own mesh, merged in order with vertices on
-    // chunk borders welded: in parallel, written into place after a prefix sum of the chunks'
-    // counts (streamed, chunks of a few dozen bricks a round at a time, merged chunk by chunk, to
-    // keep memory bounded). The mesh is the same, vertex numbers included, for any thread count.
+    // Threads extracting bricks. 1 runs on the calling thread alone. Into a mesh held whole,
+    // the bricks are counted, then written in place, chunks of about equal triangles in
+    // parallel (core/extract/extract_in_place.h); streamed, contiguous chunks of a few dozen
+    // bricks a round at a time are extracted into chunk meshes and merged chunk by chunk, to
+    // keep memory bounded. The mesh is the same, vertex numbers included, for any thread count.
     int threads = 1;
     // When set, the surface is streamed: every streamPieceVertices vertices, what the mesh holds is
     // handed to the sink and dropped (drainInto), and at the end the mesh is empty. Memory then

@@ -98,6 +98,7 @@ BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layo
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);
     mEdgeVertex.resize(corners * corners * corners * 3);
+    mEdgeSeen.resize((mEdgeVertex.size() + 63) / 64);
 }
 
 void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out) {
@@ -126,36 +127,73 @@ const std::vector<BrickRange>& BrickExtractor::currentRanges() {
     return mRanges;
 }
 
-void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
-                                  EdgeVertexMap& seams) {
-    forgetBrickVertices();
+// The meta-cells of the current brick that a full extraction visits: the listed ones, or
+// with none listed every one whose range holds iso (mRanges, computed here).
+template <class F>
+void BrickExtractor::forEachActiveMetaCell(int64_t id, const void* samples, double iso,
+                                           std::span<const uint32_t> metaCells, F&& f) {
+    if (!metaCells.empty()) {
+        for (uint32_t m : metaCells) f(int(m));
+        return;
+    }
     mRangesCurrent = false;
     metaCellRanges(id, samples, mRanges);
+    for (int m = 0; m < metaCellsPerBrick(); ++m) {
+        const BrickRange r = mRanges[size_t(m)];
+        ++mCounters.metaCellsTested;
+        if (rangeHoldsIso(r.minValue, r.maxValue, iso)) f(m);
+    }
+}
+
+template <class Mesh>
+void BrickExtractor::extractInto(int64_t id, const void* samples, double iso,
+                                 std::span<const uint32_t> metaCells, Mesh& mesh, EdgeVertexMap& seams) {
+    forgetBrickVertices();
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
-        BrickKernel<T> k(*this, id, samples, iso, mesh, seams);
+        BrickKernel<T, Mesh> k(*this, id, samples, iso, mesh, seams);
         AllCells all;
-        for (int m = 0; m < metaCellsPerBrick(); ++m) {
-            const BrickRange r = mRanges[size_t(m)];
-            ++mCounters.metaCellsTested;
-            if (!rangeHoldsIso(r.minValue, r.maxValue, iso)) continue;
-            k.extractMetaCell(m, all);
-        }
+        forEachActiveMetaCell(id, samples, iso, metaCells, [&](int m) { k.extractMetaCell(m, all); });
     });
+}
+
+BrickCount BrickExtractor::countInPlace(int64_t id, const void* samples, double iso,
+                                        std::span<const uint32_t> metaCells,
+                                        const EdgeOwnership& ownership) {
+    BrickCount count;
+    const KernelCounters counters = mCounters;  // the emission counts what it visits
+    std::fill(mEdgeSeen.begin(), mEdgeSeen.end(), uint64_t(0));
+    // The kernel's output, which the count does not touch; a first vertex already set, so that
+    // making the kernel leaves the vertex slots alone.
+    thread_local TriangleMesh none;
+    thread_local EdgeVertexMap noSeams;
+    mBrickFirstVertex = 0;
+    visitScalarType(mVolume.type, [&](auto zero) {
+        using T = decltype(zero);
+        const BrickKernel<T> k(*this, id, samples, iso, none, noSeams);
+        forEachActiveMetaCell(id, samples, iso, metaCells,
+                              [&](int m) { k.countMetaCell(m, mEdgeSeen.data(), ownership, count); });
+    });
+    forgetBrickVertices();
+    mCounters = counters;
+    return count;
+}
+
+void BrickExtractor::extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
+                                  EdgeVertexMap& seams) {
+    extractInto(id, samples, iso, {}, mesh, seams);
 }
 
 void BrickExtractor::extractMetaCells(int64_t id, const void* samples, double iso,
                                       std::span<const uint32_t> metaCells, TriangleMesh& mesh,
                                       EdgeVertexMap& seams) {
-    forgetBrickVertices();
-    visitScalarType(mVolume.type, [&](auto zero) {
-        using T = decltype(zero);
-        BrickKernel<T> k(*this, id, samples, iso, mesh, seams);
-        AllCells all;
-        for (uint32_t m : metaCells) {
-            k.extractMetaCell(int(m), all);
-        }
-    });
+    if (!metaCells.empty()) extractInto(id, samples, iso, metaCells, mesh, seams);
+}
+
+void BrickExtractor::extractInPlace(int64_t id, const void* samples, double iso,
+                                    std::span<const uint32_t> metaCells, PlacedMesh& mesh,
+                                    EdgeVertexMap& seams) {
+    extractInto(id, samples, iso, metaCells, mesh, seams);
 }
 
 }  // namespace vdiso

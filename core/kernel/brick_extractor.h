@@ -34,6 +34,16 @@ struct KernelCounters {
     int64_t metaCellsTested = 0, metaCellsActive = 0, cellsVisited = 0, cellsActive = 0;
 };
 
+// What one brick writes into a PlacedMesh: the vertices it owns and its triangles.
+struct BrickCount {
+    uint64_t vertices = 0, triangles = 0;
+};
+
+struct PlacedMesh;
+class EdgeOwnership;
+template <class T, class Mesh = TriangleMesh>
+struct BrickKernel;  // core/kernel/brick_kernel.h
+
 class BrickExtractor {
 public:
     BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout, int metaCellSize);
@@ -56,6 +66,14 @@ public:
                           std::span<const uint32_t> metaCells, TriangleMesh& mesh,
                           EdgeVertexMap& seams);
 
+    // Written in place (core/kernel/placed_mesh.h): the same, but brick `id` makes only the
+    // vertices it owns (mesh.ownership); `metaCells` empty: every one whose range holds iso.
+    void extractInPlace(int64_t id, const void* samples, double iso,
+                        std::span<const uint32_t> metaCells, PlacedMesh& mesh, EdgeVertexMap& seams);
+    // What extractInPlace writes, by classification alone (the count before the emission).
+    BrickCount countInPlace(int64_t id, const void* samples, double iso,
+                            std::span<const uint32_t> metaCells, const EdgeOwnership& ownership);
+
     // One meta-cell at a time, for traversals that decide per meta-cell (SAGE): beginBrick
     // makes `samples` the current brick (its vertices are shared across its meta-cells); a
     // BrickKernel (core/kernel/brick_kernel.h) made after it then extracts meta-cells one by one
@@ -69,7 +87,7 @@ public:
     const KernelCounters& counters() const { return mCounters; }
 
 private:
-    template <class T>
+    template <class T, class Mesh>
     friend struct BrickKernel;
 
     VolumeInfo mVolume;
@@ -83,10 +101,17 @@ private:
     // from the seam map are older, so their edges are looked up in the map each time. When
     // the numbers start again (the extractor used on another mesh), the array is cleared.
     std::vector<uint32_t> mEdgeVertex;
+    std::vector<uint64_t> mEdgeSeen;  // countInPlace: a bit per local edge
     static constexpr uint32_t kNoFirstVertex = UINT32_MAX;
     uint32_t mBrickFirstVertex = kNoFirstVertex;  // set by the brick's first kernel
     uint32_t mVerticesMade = 0;                   // the largest entry written
     void forgetBrickVertices();  // a new brick: forget the vertices of the last one
+    template <class Mesh>
+    void extractInto(int64_t id, const void* samples, double iso, std::span<const uint32_t> metaCells,
+                     Mesh& mesh, EdgeVertexMap& seams);
+    template <class F>
+    void forEachActiveMetaCell(int64_t id, const void* samples, double iso,
+                               std::span<const uint32_t> metaCells, F&& f);
     std::vector<BrickRange> mRanges;
     bool mRangesCurrent = false;  // mRanges are the current brick's
     int64_t mCurrentBrick = -1;

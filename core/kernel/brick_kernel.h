@@ -31,6 +31,7 @@
 #include "core/kernel/edge_vertex_map.h"
 #include "core/kernel/iso.h"
 #include "core/kernel/mc_tables.h"
+#include "core/kernel/placed_mesh.h"
 
 namespace vdiso {
 
@@ -57,8 +58,11 @@ struct IsoThreshold {
 };
 
 // The cell loop for one brick of sample type T.
-template <class T>
+// `Mesh`: a TriangleMesh appended to, or a PlacedMesh (core/kernel/placed_mesh.h) written in
+// place, where a brick makes only the vertices it owns.
+template <class T, class Mesh>
 struct BrickKernel {
+    static constexpr bool kPlaced = std::is_same_v<Mesh, PlacedMesh>;
     BrickExtractor& x;
     const T* s;          // the brick's (B+3)^3 samples
     int side;            // B + 3
@@ -66,13 +70,14 @@ struct BrickKernel {
     int64_t corner0[3];  // global coordinates of the brick's first cell corner
     double iso;
     IsoThreshold<T> threshold;
-    TriangleMesh& mesh;
+    Mesh& mesh;
     EdgeVertexMap& seams;
+    int64_t brick;
 
     BrickKernel(BrickExtractor& extractor, int64_t id, const void* samples, double isovalue,
-                TriangleMesh& out, EdgeVertexMap& seamMap)
+                Mesh& out, EdgeVertexMap& seamMap)
         : x(extractor), s(static_cast<const T*>(samples)), side(extractor.mLayout.side()),
-          iso(isovalue), threshold(isovalue), mesh(out), seams(seamMap) {
+          iso(isovalue), threshold(isovalue), mesh(out), seams(seamMap), brick(id) {
         if (x.mBrickFirstVertex == BrickExtractor::kNoFirstVertex) {
             x.mBrickFirstVertex = out.nextVertex();
             if (x.mBrickFirstVertex < x.mVerticesMade) {  // another mesh: its numbers restart
@@ -142,6 +147,13 @@ struct BrickKernel {
             key = edgeKey(d, corner0[0] + px, corner0[1] + py, corner0[2] + pz, axis);
             const uint32_t v = seams.find(key);
             if (v != UINT32_MAX) return v;
+            if constexpr (kPlaced)
+                if (!mesh.ownership->owns(brick, corner0, p, axis)) {
+                    // Its owner, in another chunk, makes it: a placeholder until then.
+                    const uint32_t placeholder = mesh.addPlaceholder(key);
+                    seams.insert(key, placeholder);
+                    return placeholder;
+                }
         }
 
         const size_t i0 = sampleIndex(px, py, pz);
@@ -154,8 +166,7 @@ struct BrickKernel {
             x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
                                    x.mVolume.spacing;
         const uint32_t v = mesh.nextVertex();
-        mesh.positions.push_back(glm::vec3(position));
-        mesh.normals.push_back(withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
+        mesh.addVertex(glm::vec3(position), withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
         slot = v + 1;
         x.mVerticesMade = v + 1;
         if (onFace) seams.insert(key, v);
@@ -190,6 +201,58 @@ struct BrickKernel {
         normal = edgeNormal(sampleIndex(cx + o[0], cy + o[1], cz + o[2]), step, axis);
     }
 
+    // Above bits of the corner samples of the cells lo..hi, one word per corner row (bit i:
+    // corner lo[0] + i). A cell's case is then four 2-bit fields, and a row of cells that the
+    // surface misses is passed over with a few word operations instead of 8 comparisons per
+    // cell: most cells of an active meta-cell are empty.
+    void classifyCorners(const int lo[3], const int hi[3], uint64_t (&above)[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1]) const {
+        const int nx = hi[0] - lo[0];
+        for (int z = 0; z <= hi[2] - lo[2]; ++z)
+            for (int y = 0; y <= hi[1] - lo[1]; ++y) {
+                const T* row = s + sampleIndex(lo[0], lo[1] + y, lo[2] + z);
+                uint64_t bits = 0;
+                for (int i = 0; i <= nx; ++i) bits |= uint64_t(threshold.above(row[i])) << i;
+                above[z][y] = bits;
+            }
+    }
+
+    // What extractMetaCell(m, AllCells) writes into a PlacedMesh, by classification alone: adds
+    // the triangles to count.triangles and, once per edge (`seen`: a bit per local edge of the
+    // brick, cleared for each brick), the vertices this brick owns to count.vertices.
+    void countMetaCell(int m, uint64_t* seen, const EdgeOwnership& ownership, BrickCount& count) const {
+        int lo[3], hi[3];
+        metaCellBox(m, lo, hi);
+        const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
+        uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
+        classifyCorners(lo, hi, above);
+        const uint64_t cellBits = (uint64_t(1) << nx) - 1;
+        const size_t edgeRow = size_t(x.mLayout.brickSize + 1);
+        for (int rz = 0; rz < nz; ++rz)
+            for (int ry = 0; ry < ny; ++ry) {
+                const uint64_t r00 = above[rz][ry], r10 = above[rz][ry + 1];
+                const uint64_t r01 = above[rz + 1][ry], r11 = above[rz + 1][ry + 1];
+                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
+                for (uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits; mixed; mixed &= mixed - 1) {
+                    const int rx = __builtin_ctzll(mixed);
+                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
+                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
+                    count.triangles += mcTriangleCase(caseIndex).triangleCount;
+                    for (unsigned crossed = mcCrossedEdges(caseIndex); crossed; crossed &= crossed - 1) {
+                        const int e = __builtin_ctz(crossed);
+                        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+                        const int p[3] = {lo[0] + rx + o[0], lo[1] + ry + o[1], lo[2] + rz + o[2]};
+                        const int axis = mcEdgeAxis(e);
+                        const size_t local = ((size_t(p[2]) * edgeRow + size_t(p[1])) * edgeRow + size_t(p[0])) * 3 + size_t(axis);
+                        uint64_t& word = seen[local >> 6];
+                        const uint64_t bit = uint64_t(1) << (local & 63);
+                        if (word & bit) continue;
+                        word |= bit;
+                        count.vertices += ownership.owns(brick, corner0, p, axis);
+                    }
+                }
+            }
+    }
+
     // Appends the surface of meta-cell m, asking `cells` about each active cell and polygon;
     // cells go front to back from `eyeCell` (this brick's cell coordinates: eyeInCells) when
     // given, else in memory order.
@@ -209,10 +272,6 @@ struct BrickKernel {
                     return std::abs(i + 0.5 - (*eyeCell)[a]) < std::abs(j + 0.5 - (*eyeCell)[a]);
                 });
         }
-        // Above bits of the meta-cell's corner samples, one word per corner row (bit i: corner
-        // lo[0] + i). A cell's case is then four 2-bit fields, and a row of cells that the
-        // surface misses is passed over with a few word operations instead of 8 comparisons
-        // per cell: most cells of an active meta-cell are empty.
         const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
         uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
         const int edgeRow = x.mLayout.brickSize + 1;
@@ -225,11 +284,8 @@ struct BrickKernel {
                     x.mEdgeVertex.data() + ((size_t(lo[2] + z) * edgeRow + size_t(lo[1] + y)) * edgeRow + size_t(lo[0])) * 3;
                 __builtin_prefetch(slots);
                 __builtin_prefetch(slots + 3 * nx + 2);
-                const T* row = s + sampleIndex(lo[0], lo[1] + y, lo[2] + z);
-                uint64_t bits = 0;
-                for (int i = 0; i <= nx; ++i) bits |= uint64_t(threshold.above(row[i])) << i;
-                above[z][y] = bits;
             }
+        classifyCorners(lo, hi, above);
         const uint64_t cellBits = (uint64_t(1) << nx) - 1;
         KernelCounters& counters = x.mCounters;
         ++counters.metaCellsActive;
@@ -270,8 +326,7 @@ struct BrickKernel {
                     }
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++])
                         for (int k = 2; k < pc.vertexCount[p]; ++k)
-                            mesh.indices.insert(mesh.indices.end(),
-                                                {outline[at], outline[at + k - 1], outline[at + k]});
+                            mesh.addTriangle(outline[at], outline[at + k - 1], outline[at + k]);
                 }
             }
     }

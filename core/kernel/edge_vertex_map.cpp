@@ -17,6 +17,11 @@ void SeamTrimmer::maybeTrim(EdgeVertexMap& seams) {
     mTrimAt = std::max(mFirstTrim, 2 * seams.size());
 }
 
+EdgeOwnership::EdgeOwnership(const Dims3& dims, const BrickLayout& layout, std::span<const int64_t> bricks)
+    : mDims(dims), mLayout(layout), mRank(size_t(layout.brickCount()), -1) {
+    for (int64_t id : bricks) mRank[size_t(id)] = int32_t(id);
+}
+
 int32_t edgeOwner(const Dims3& dims, const BrickLayout& layout, uint64_t key,
                   std::span<const int32_t> partOfBrick, int32_t self) {
     int64_t bricks[4];

@@ -8,7 +8,6 @@
 
 #include <cstdint>
 #include <span>
-#include <span>
 #include <vector>
 
 #include "core/brick_layout.h"
@@ -46,6 +45,40 @@ int bricksOnEdge(const Dims3& dims, const BrickLayout& layout, uint64_t key, int
 // the same owner, so welding takes the owner's vertex.
 int32_t edgeOwner(const Dims3& dims, const BrickLayout& layout, uint64_t key,
                   std::span<const int32_t> partOfBrick, int32_t self);
+
+// Which brick makes the vertex of an edge that several extracted bricks hold, when each brick
+// writes only its own vertices (core/extract/extract_in_place.h): the lowest-numbered extracted
+// brick on the edge. Where the ranges agree with the cell test (core/kernel/iso.h), every brick
+// on a crossed edge visits a cell of it, so that brick is also the first to make it in id order.
+class EdgeOwnership {
+public:
+    // `bricks`: those extracted, increasing ids.
+    EdgeOwnership(const Dims3& dims, const BrickLayout& layout, std::span<const int64_t> bricks);
+    // The owner of edge `key`, which brick `self` (extracted) holds.
+    int64_t owner(int64_t self, uint64_t key) const {
+        return edgeOwner(mDims, mLayout, key, mRank, int32_t(self));
+    }
+    // The owner of edge `key`; -1 when no extracted brick holds it.
+    int64_t owner(uint64_t key) const {
+        const int32_t o = edgeOwner(mDims, mLayout, key, mRank, INT32_MAX);
+        return o == INT32_MAX ? -1 : o;
+    }
+    // Whether brick `self`, whose first cell corner is corner0 (global), owns the edge from its
+    // local corner p along `axis`: always, unless the edge lies on a face the brick shares with
+    // a lower brick.
+    bool owns(int64_t self, const int64_t corner0[3], const int p[3], int axis) const {
+        bool lowerFace = false;
+        for (int a = 0; a < 3; ++a) lowerFace |= a != axis && p[a] == 0 && corner0[a] > 0;
+        if (!lowerFace) return true;
+        const uint64_t key = edgeKey(mDims, corner0[0] + p[0], corner0[1] + p[1], corner0[2] + p[2], axis);
+        return owner(self, key) == self;
+    }
+
+private:
+    Dims3 mDims;
+    BrickLayout mLayout;
+    std::vector<int32_t> mRank;  // brick id for extracted bricks, -1 for the others
+};
 
 // Vertex numbers by edge key.
 // Open addressing with linear probing on a power-of-two table (keys are stored plus one, so

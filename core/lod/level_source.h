@@ -22,6 +22,7 @@ public:
     }
     BrickHandle acquire(int64_t id) override { return mBase.acquire(mLevel.firstBrick + id); }
     bool isResident(int64_t id) const override { return mBase.isResident(mLevel.firstBrick + id); }
+    int64_t brickCapacity() const override { return mBase.brickCapacity(); }
 
     // The underlying source's number of this level's brick `id`.
     int64_t baseBrick(int64_t id) const { return mLevel.firstBrick + id; }

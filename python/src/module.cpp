@@ -1,7 +1,8 @@
 // The compiled module behind `import vdiso` (python/vdiso/__init__.py holds the Python side).
 // Errors are translated once, here: a setting or an argument -> ValueError naming the keyword,
 // I/O -> OSError with the library's message (which names the file or URL), an interrupt ->
-// KeyboardInterrupt, anything else -> vdiso.Error (a RuntimeError).
+// KeyboardInterrupt, memory that cannot be had -> MemoryError (the library's message names the
+// size), anything else -> vdiso.Error (a RuntimeError).
 #include <pybind11/pybind11.h>
 
 #include "app/extract_settings.h"
@@ -40,6 +41,8 @@ void bindErrors(pyb::module_& m) {
             PyErr_SetString(PyExc_OSError, e.what());
         } catch (const std::invalid_argument& e) {
             PyErr_SetString(PyExc_ValueError, e.what());
+        } catch (const std::bad_alloc& e) {
+            PyErr_SetString(PyExc_MemoryError, e.what());
         } catch (const std::exception& e) {
             error(e.what());
         }

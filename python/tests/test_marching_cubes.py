@@ -156,3 +156,31 @@ def test_no_level_checks_the_array_before_reading_it():
     np.testing.assert_array_equal(faces, faces2)
     with pytest.raises(ValueError, match="no finite sample"):
         vdiso.marching_cubes(np.full((4, 4, 4), np.nan, np.float32))
+
+
+def test_an_output_that_cannot_be_allocated_is_a_memory_error():
+    # A child with its address space capped a little above what it holds: the noise's surface
+    # (about 20 M triangles, some 500 MB) cannot be allocated. MemoryError names the size, and
+    # the module goes on working (nothing half-made is left).
+    from conftest import python_child
+    code = """
+import resource, numpy as np, vdiso
+volume = np.random.default_rng(0).integers(0, 256, (200, 200, 200), dtype=np.uint8)
+small = np.zeros((8, 8, 8), np.float32); small[3:5, 3:5, 3:5] = 1
+print('before:', len(vdiso.marching_cubes(small, 0.5, threads=1)[1]))
+held = int([l for l in open('/proc/self/status') if l.startswith('VmSize')][0].split()[1]) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (held + 300 * 2**20, resource.RLIM_INFINITY))
+try:
+    vdiso.marching_cubes(volume, 127.5, threads=1)
+    print('no error')
+except MemoryError as e:
+    print('MemoryError:', e)
+v, f, n, values = vdiso.marching_cubes(small, 0.5, threads=1)
+print('after:', len(f))
+"""
+    child = python_child(code)
+    out, err = child.communicate(timeout=120)
+    assert child.returncode == 0, err
+    assert "MemoryError: cannot allocate the surface:" in out and " MB" in out, out
+    before = [l for l in out.splitlines() if l.startswith("before:")]
+    assert before and before[0].replace("before", "after") in out, out

@@ -1,0 +1,243 @@
+#include "core/extract/extract_in_place.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "core/clock.h"
+#include "core/extract/brick_prefetcher.h"
+#include "core/extract/part_border.h"
+#include "core/kernel/edge_vertex_map.h"
+#include "core/kernel/placed_mesh.h"
+
+namespace vdiso {
+
+namespace {
+
+constexpr int64_t kProgressEvery = 32;
+// Chunks per thread: enough to balance what the triangle counts do not foresee.
+constexpr size_t kChunksPerThread = 8;
+
+struct Chunk {
+    size_t begin = 0, end = 0;           // items
+    size_t vertexBase = 0, indexBase = 0;  // into the arrays, from where this extraction starts
+    uint64_t vertices = 0, triangles = 0;
+    PlacedMesh placed;
+    EdgeVertexMap seams;  // the vertices of brick faces this chunk made, global numbers
+};
+
+std::string megabytes(double bytes) { return std::to_string(int64_t(bytes / 1e6 + 0.5)) + " MB"; }
+
+// Grows the arrays of `mesh` by `vertices` and `triangles` (to exactly that from empty; by
+// std::vector's doubling when a later round grows them), or throws MeshAllocationError naming
+// the sizes with the mesh as it was.
+void grow(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
+    const uint64_t limit = PlacedMesh::kPlaceholderTop / 2;  // numbers above: placeholders
+    if (uint64_t(mesh.nextVertex()) + vertices > limit)
+        throw MeshAllocationError("the surface has " + std::to_string(vertices) + " vertices; a mesh holds at most " +
+                                  std::to_string(limit) + " (32-bit indices)");
+    const size_t oldVertices = mesh.positions.size(), oldIndices = mesh.indices.size();
+    try {
+        mesh.positions.resize(oldVertices + vertices);
+        mesh.normals.resize(oldVertices + vertices);
+        mesh.indices.resize(oldIndices + 3 * triangles);
+    } catch (const std::bad_alloc&) {
+        mesh.positions.resize(oldVertices);
+        mesh.normals.resize(oldVertices);
+        mesh.indices.resize(oldIndices);
+        const double bytes = double(vertices) * 2 * sizeof(glm::vec3) + double(triangles) * 3 * sizeof(uint32_t);
+        throw MeshAllocationError("cannot allocate the surface: " + std::to_string(triangles) + " triangles and " +
+                                  std::to_string(vertices) + " vertices need " + megabytes(bytes));
+    }
+}
+
+}  // namespace
+
+KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& source,
+                              const FullExtractOptions& options, TriangleMesh& mesh,
+                              ExtractStats& stats, const ProgressFn& progress, double progressStart) {
+    const VolumeInfo& volume = source.volume();
+    const BrickLayout& layout = source.layout();
+    const size_t n = items.size();
+    const int threads = std::max(1, options.threads);
+    std::vector<int64_t> bricks(n);
+    for (size_t i = 0; i < n; ++i) bricks[i] = items[i].id;
+    const EdgeOwnership ownership(volume.dims, layout, bricks);
+    tbb::enumerable_thread_specific<BrickExtractor> extractors(
+        [&] { return BrickExtractor(volume, layout, options.metaCellSize); });
+    std::atomic<int64_t> waitNanoseconds{0};
+    auto acquireTimed = [&](int64_t id) {
+        const auto start = Clock::now();
+        BrickHandle brick = source.acquire(id);
+        waitNanoseconds += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start).count();
+        return brick;
+    };
+    // Progress: the count is the first half, the emission the second.
+    std::atomic<size_t> done{0};
+    std::mutex progressMutex;
+    auto step = [&] {
+        const size_t k = ++done;
+        if (!progress || (k % kProgressEvery != 0 && k != 2 * n)) return;
+        std::lock_guard lock(progressMutex);  // the callback is not thread-safe
+        progress(progressStart + (1.0 - progressStart) * double(k) / double(2 * n));
+    };
+    tbb::task_arena arena(threads);
+    auto forEach = [&](size_t count, auto&& body) {
+        if (threads == 1) {
+            for (size_t i = 0; i < count; ++i) body(i);
+            return;
+        }
+        arena.execute([&] { tbb::parallel_for(size_t(0), count, [&](size_t i) { body(i); }); });
+    };
+
+    // Rounds of as many bricks as half the source's cache holds, each counted, then written:
+    // the emission finds the bricks the count read still in memory. (One round, exact arrays,
+    // unless the surface's bricks outgrow the cache.)
+    const size_t roundBricks = size_t(std::clamp<int64_t>(source.brickCapacity() / 2, 1, int64_t(std::max<size_t>(n, 1))));
+    const PartBorder border(volume, layout, options.bricks);
+    EdgeVertexMap* const borderOut = options.bricks.empty() ? nullptr : options.borderVertices;
+    const std::vector<int64_t> outside = borderOut ? border.outside() : std::vector<int64_t>{};
+    // Brick-face vertices of earlier rounds that a brick still to come may take.
+    EdgeVertexMap carried;
+    std::vector<int64_t> pendingAll = bricks;
+    pendingAll.insert(pendingAll.end(), outside.begin(), outside.end());
+    SeamTrimmer carriedTrimmer(volume, layout, pendingAll, options.seamTrimEntries);
+    const uint32_t firstNumber = mesh.nextVertex();
+    const size_t vertexStart = mesh.positions.size(), indexStart = mesh.indices.size();
+    uint64_t vertices = 0, triangles = 0;  // written by earlier rounds
+    std::vector<BrickCount> counts;
+    std::vector<uint64_t> trianglesBefore;
+    for (size_t first = 0; first < n; first += roundBricks) {
+        const size_t last = std::min(n, first + roundBricks);
+        // 1. Count. One thread reads ahead.
+        counts.assign(last - first, BrickCount{});
+        {
+            BrickPrefetcher prefetcher(source, threads == 1 ? size_t(options.prefetchBricks) : 0,
+                                       options.prefetchReaders);
+            for (size_t i = first; i < last; ++i) prefetcher.push(bricks[i]);
+            prefetcher.close();
+            forEach(last - first, [&](size_t k) {
+                if (threads == 1) prefetcher.consumed(k);
+                const BrickItem& item = items[first + k];
+                const BrickHandle brick = acquireTimed(item.id);
+                counts[k] = extractors.local().countInPlace(item.id, brick.samples(), options.iso, item.metaCells,
+                                                            ownership);
+                step();
+            });
+        }
+
+        // 2. Chunks of about equal triangles, and their places in the arrays.
+        const size_t roundSize = last - first;
+        trianglesBefore.assign(roundSize + 1, 0);
+        for (size_t k = 0; k < roundSize; ++k) trianglesBefore[k + 1] = trianglesBefore[k] + counts[k].triangles;
+        const size_t chunkCount = threads == 1 ? 1 : std::min(roundSize, size_t(threads) * kChunksPerThread);
+        std::vector<Chunk> chunks(chunkCount);
+        uint64_t roundVertices = 0, roundTriangles = 0;
+        for (size_t c = 0; c < chunkCount; ++c) {
+            Chunk& chunk = chunks[c];
+            chunk.begin = c == 0 ? first : chunks[c - 1].end;
+            const uint64_t target = trianglesBefore[roundSize] * (c + 1) / chunkCount;
+            const size_t end = size_t(std::lower_bound(trianglesBefore.begin() + std::ptrdiff_t(chunk.begin - first),
+                                                       trianglesBefore.end(), target) - trianglesBefore.begin());
+            chunk.end = c + 1 == chunkCount ? last : std::max(first + end, chunk.begin);
+            chunk.vertexBase = vertices + roundVertices;
+            chunk.indexBase = 3 * (triangles + roundTriangles);
+            for (size_t i = chunk.begin; i < chunk.end; ++i) {
+                chunk.vertices += counts[i - first].vertices;
+                chunk.triangles += counts[i - first].triangles;
+            }
+            roundVertices += chunk.vertices;
+            roundTriangles += chunk.triangles;
+        }
+        grow(mesh, roundVertices, roundTriangles);
+
+        // 3. Emit, each chunk into its place. Its seam map keeps the faces a later brick
+        // shares: of this chunk, of a later one (which may take a vertex this chunk owns), or
+        // outside the part.
+        forEach(chunkCount, [&](size_t c) {
+            Chunk& chunk = chunks[c];
+            PlacedMesh& placed = chunk.placed;
+            placed.positions = mesh.positions.data() + vertexStart + chunk.vertexBase;
+            placed.normals = mesh.normals.data() + vertexStart + chunk.vertexBase;
+            placed.indices = mesh.indices.data() + indexStart + chunk.indexBase;
+            placed.firstVertex = firstNumber + uint32_t(chunk.vertexBase);
+            placed.vertexCapacity = chunk.vertices;
+            placed.indexCapacity = 3 * chunk.triangles;
+            placed.ownership = &ownership;
+            std::vector<int64_t> pending(bricks.begin() + std::ptrdiff_t(chunk.begin), bricks.end());
+            pending.insert(pending.end(), outside.begin(), outside.end());
+            SeamTrimmer trimmer(volume, layout, pending, options.seamTrimEntries);
+            BrickExtractor& extractor = extractors.local();
+            for (size_t i = chunk.begin; i < chunk.end; ++i) {
+                const BrickHandle brick = acquireTimed(items[i].id);
+                extractor.extractInPlace(items[i].id, brick.samples(), options.iso, items[i].metaCells, placed,
+                                         chunk.seams);
+                trimmer.finished(items[i].id);
+                trimmer.maybeTrim(chunk.seams);
+                step();
+            }
+            if (placed.vertices != chunk.vertices || placed.indexCount != 3 * chunk.triangles)
+                throw std::logic_error("full extraction: a chunk wrote fewer vertices or triangles than were counted");
+        });
+
+        // Placeholders: the owner's vertex, from its chunk or an earlier round. Every brick on
+        // a crossed edge visits a cell of it (the ranges are exact in every sample type,
+        // core/kernel/iso.h), so the owner made it.
+        for (const Chunk& chunk : chunks) {
+            const PlacedMesh& placed = chunk.placed;
+            for (const PlacedMesh::PlaceholderRef& ref : placed.refs) {
+                const uint64_t key = placed.placeholders[ref.placeholder];
+                const int64_t owner = ownership.owner(key);
+                const size_t i = size_t(std::lower_bound(bricks.begin(), bricks.end(), owner) - bricks.begin());
+                uint32_t v = UINT32_MAX;
+                if (i < first) {
+                    v = carried.find(key);
+                } else {
+                    const auto ownerChunk = std::upper_bound(chunks.begin(), chunks.end(), i,
+                                                             [](size_t k, const Chunk& c) { return k < c.end; });
+                    v = ownerChunk->seams.find(key);
+                    if (ownerChunk->placed.isPlaceholder(v)) v = UINT32_MAX;
+                }
+                if (v == UINT32_MAX)
+                    throw std::logic_error("full extraction: brick " + std::to_string(owner) +
+                                           " did not make the vertex of an edge it owns");
+                mesh.indices[indexStart + chunk.indexBase + ref.index] = v;
+            }
+        }
+        for (const Chunk& chunk : chunks) {
+            auto real = [&](uint32_t v) { return chunk.placed.isPlaceholder(v) ? UINT32_MAX : v; };
+            if (borderOut) border.collect(chunk.seams, *borderOut, real);
+            if (last == n) continue;
+            chunk.seams.forEach([&](uint64_t key, uint32_t v) {
+                if (real(v) != UINT32_MAX && carried.find(key) == UINT32_MAX) carried.insert(key, v);
+            });
+        }
+        for (size_t i = first; i < last; ++i) carriedTrimmer.finished(bricks[i]);
+        carriedTrimmer.maybeTrim(carried);
+        vertices += roundVertices;
+        triangles += roundTriangles;
+    }
+
+    KernelCounters total;
+    for (const BrickExtractor& e : extractors) {
+        total.metaCellsTested += e.counters().metaCellsTested;
+        total.metaCellsActive += e.counters().metaCellsActive;
+        total.cellsVisited += e.counters().cellsVisited;
+        total.cellsActive += e.counters().cellsActive;
+    }
+    stats.triangles = triangles;
+    stats.vertices = vertices;
+    stats.brickWaitSeconds = double(waitNanoseconds) * 1e-9;
+    if (progress && n == 0) progress(1.0);
+    return total;
+}
+
+}  // namespace vdiso

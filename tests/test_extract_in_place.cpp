@@ -1,0 +1,191 @@
+// A full extraction held in memory is counted, then written in place (core/extract/extract_in_place.h):
+// the same mesh, bit for bit, as the streamed extraction appending brick by brick, for any
+// thread count and both methods; and an output that cannot be held is refused before anything
+// is written.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_in_place.h"
+#include "core/kernel/brick_extractor.h"
+#include "core/kernel/edge_vertex_map.h"
+#include "core/kernel/placed_mesh.h"
+#include "core/synth/synth.h"
+#include "tests/extract_test_util.h"
+#include "tests/test_util.h"
+
+namespace vdiso {
+namespace {
+
+// What a streamed extraction hands over, appended into one mesh.
+struct Appended final : MeshSink {
+    TriangleMesh all;
+    void append(const TriangleMesh& part) override {
+        all.positions.insert(all.positions.end(), part.positions.begin(), part.positions.end());
+        all.normals.insert(all.normals.end(), part.normals.begin(), part.normals.end());
+        all.indices.insert(all.indices.end(), part.indices.begin(), part.indices.end());
+    }
+};
+
+ExtractStats extract(bool noise, BrickSource& source, const FullExtractOptions& o, TriangleMesh& mesh) {
+    return noise ? extractNoise(source, o, mesh) : extractOctree(source, o, mesh);
+}
+
+// Many chunks (8 a thread) over bricks of 8 cells, partial on every axis: chunk borders cut
+// faces, edges and corners of bricks, so vertices owned in one chunk are placeholders in others.
+TEST(ExtractInPlace, IsTheStreamedMeshBitForBitOnAnyThreads) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {45, 41, 37};
+    auto source = test::synthBrickSource(p, 8);
+    const double iso = turbulenceIso(ScalarType::U16);
+    for (bool noise : {false, true}) {
+        Appended streamed;
+        FullExtractOptions s{iso, 4, 1};
+        s.sink = &streamed;
+        TriangleMesh rest;
+        extract(noise, *source, s, rest);
+        ASSERT_GT(streamed.all.triangleCount(), 10000u);
+        for (int threads : {1, 2, 3, 5}) {
+            TriangleMesh held;
+            const ExtractStats stats = extract(noise, *source, {iso, 4, threads}, held);
+            EXPECT_EQ(held.positions, streamed.all.positions) << threads << noise;
+            EXPECT_EQ(held.normals, streamed.all.normals) << threads << noise;
+            EXPECT_EQ(held.indices, streamed.all.indices) << threads << noise;
+            EXPECT_EQ(stats.triangles, held.triangleCount());
+            EXPECT_EQ(stats.vertices, held.vertexCount());
+            // Exact size: nothing reserved beyond what was written.
+            EXPECT_EQ(held.indices.capacity(), held.indices.size());
+            EXPECT_EQ(held.positions.capacity(), held.positions.size());
+        }
+    }
+    EXPECT_EQ(source->pinned(), 0);
+}
+
+// A source whose cache holds 10 bricks: the bricks are counted and written 5 at a time, each
+// round growing the arrays; vertices owned by a brick of an earlier round are taken from it.
+class SmallCache final : public BrickSource {
+public:
+    explicit SmallCache(BrickSource& inner) : mInner(inner) {}
+    const VolumeInfo& volume() const override { return mInner.volume(); }
+    const BrickLayout& layout() const override { return mInner.layout(); }
+    std::span<const BrickRange> brickRanges() const override { return mInner.brickRanges(); }
+    BrickHandle acquire(int64_t id) override { return mInner.acquire(id); }
+    int64_t brickCapacity() const override { return 10; }
+
+protected:
+    void release(int64_t) override {}
+
+private:
+    BrickSource& mInner;
+};
+
+TEST(ExtractInPlace, RoundsOfWhatTheCacheHoldsGiveTheSameMesh) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {45, 41, 37};
+    auto source = test::synthBrickSource(p, 8);
+    SmallCache small(*source);
+    const double iso = turbulenceIso(ScalarType::U16);
+    TriangleMesh whole;
+    extractOctree(*source, {iso, 4, 1}, whole);
+    for (bool noise : {false, true})
+        for (int threads : {1, 3}) {
+            TriangleMesh rounds;
+            extract(noise, small, {iso, 4, threads}, rounds);
+            EXPECT_EQ(rounds.positions, whole.positions) << threads << noise;
+            EXPECT_EQ(rounds.normals, whole.normals) << threads << noise;
+            EXPECT_EQ(rounds.indices, whole.indices) << threads << noise;
+        }
+    EXPECT_EQ(source->pinned(), 0);
+}
+
+// Appended to a mesh that already holds a surface, numbered after it.
+TEST(ExtractInPlace, AppendsAfterWhatTheMeshHolds) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {33, 30, 27};
+    auto source = test::synthBrickSource(p, 8);
+    const double iso = turbulenceIso(ScalarType::U16);
+    TriangleMesh once, twice;
+    extractOctree(*source, {iso, 4, 2}, once);
+    extractOctree(*source, {iso, 4, 2}, twice);
+    extractOctree(*source, {iso, 4, 2}, twice);
+    ASSERT_EQ(twice.vertexCount(), 2 * once.vertexCount());
+    for (size_t i = 0; i < once.indices.size(); ++i) {
+        EXPECT_EQ(twice.indices[i], once.indices[i]);
+        EXPECT_EQ(twice.indices[once.indices.size() + i], once.indices[i] + uint32_t(once.vertexCount()));
+    }
+}
+
+// The count is what the kernel writes, brick by brick, on every sample type and where samples
+// are not finite (NaN counts as below every isovalue, infinities as ordered values).
+TEST(ExtractInPlace, CountsAreWhatEachBrickWrites) {
+    for (ScalarType type : {ScalarType::U8, ScalarType::I16, ScalarType::U16, ScalarType::F32}) {
+        test::MemoryBrickSource source({27, 22, 19}, type, 8, [&](int64_t x, int64_t y, int64_t z) {
+            const double v = double((x * 7 + y * 13 + z * 29) % 23);
+            if (type == ScalarType::F32 && (x + y + z) % 11 == 0) return (x % 2) ? double(NAN) : double(INFINITY);
+            return v;
+        });
+        const double iso = 11.5;
+        std::vector<int64_t> bricks;
+        for (int64_t id = 0; id < source.layout().brickCount(); ++id) bricks.push_back(id);
+        const EdgeOwnership ownership(source.volume().dims, source.layout(), bricks);
+        BrickExtractor counter(source.volume(), source.layout(), 4), writer(source.volume(), source.layout(), 4);
+        std::vector<BrickCount> counts;
+        uint64_t vertices = 0, triangles = 0;
+        for (int64_t id : bricks) {
+            const BrickHandle brick = source.acquire(id);
+            counts.push_back(counter.countInPlace(id, brick.samples(), iso, {}, ownership));
+            vertices += counts.back().vertices;
+            triangles += counts.back().triangles;
+        }
+        ASSERT_GT(triangles, 1000u) << int(type);
+        // One chunk: every brick writes into one range; no placeholder may remain unset.
+        MeshArray<glm::vec3> positions(vertices), normals(vertices);
+        MeshArray<uint32_t> indices(3 * triangles);
+        PlacedMesh placed;
+        placed.positions = positions.data();
+        placed.normals = normals.data();
+        placed.indices = indices.data();
+        placed.vertexCapacity = vertices;
+        placed.indexCapacity = 3 * triangles;
+        placed.ownership = &ownership;
+        EdgeVertexMap seams;
+        for (int64_t id : bricks) {
+            const size_t v0 = placed.vertices, i0 = placed.indexCount;
+            const BrickHandle brick = source.acquire(id);
+            writer.extractInPlace(id, brick.samples(), iso, {}, placed, seams);
+            EXPECT_EQ(placed.vertices - v0, counts[size_t(id)].vertices) << int(type) << " brick " << id;
+            EXPECT_EQ(placed.indexCount - i0, 3 * counts[size_t(id)].triangles) << int(type) << " brick " << id;
+        }
+        EXPECT_TRUE(placed.placeholders.empty());
+        TriangleMesh mesh;
+        extractOctree(source, {iso, 4, 1}, mesh);
+        EXPECT_EQ(mesh.indices.size(), indices.size());
+    }
+}
+
+// More vertices than 32-bit indices can number: refused before anything is allocated or
+// written, naming the count, and the mesh is left as it was.
+TEST(ExtractInPlace, AnOutputTooLargeIsRefusedWithItsSize) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = {33, 30, 27};
+    auto source = test::synthBrickSource(p, 8);
+    TriangleMesh mesh;
+    mesh.firstVertex = PlacedMesh::kPlaceholderTop / 2 - 100;  // as if that many were streamed
+    try {
+        extractOctree(*source, {turbulenceIso(ScalarType::U16), 4, 2}, mesh);
+        FAIL() << "no error";
+    } catch (const MeshAllocationError& e) {
+        EXPECT_NE(std::string(e.what()).find("vertices; a mesh holds at most"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(mesh.vertexCount(), 0u);
+    EXPECT_EQ(mesh.indices.size(), 0u);
+    EXPECT_EQ(source->pinned(), 0);
+}
+
+}  // namespace
+}  // namespace vdiso
