@@ -252,7 +252,9 @@ TEST(ServeServer, AFloodOfViewsStartsFramesAtABoundedRate) {
     // Two passes a frame at most (coarse and final, on a store with levels).
     const double most = 2 * (ms / double(SessionSettings::kMinFrameInterval.count()) + 2);
     EXPECT_LE(double(passes), most) << passes << " passes in " << ms << " ms";
-    EXPECT_LT(passes, views) << ms << " ms";
+    // Fewer frames than messages (each frame two passes): on a loaded machine the loop's 1 ms
+    // sleeps stretch, the bound above grows, and 341 passes for 300 VIEWs were seen in 1.7 s.
+    EXPECT_LT(passes, 2 * views) << ms << " ms";
 }
 
 // A client writing bad messages as fast as it can and reading nothing: each earns an error
