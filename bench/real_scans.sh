@@ -17,18 +17,7 @@ repeat=${1:-5}
 build=${BUILD_DIR:-build}
 vdiso=$build/bin/vdiso
 py=/usr/bin/python3
-scripts/fetch_data.sh
-mkdir -p data/bench
-[ -f data/bench/head512.raw ] || $vdiso synth data/bench/head512.raw --kind head --size 512 --quiet
-for s in cranium:data/cranium.nhdr ch2better:data/ch2better.nii.gz ch2:data/ch2.nii.gz head512:data/bench/head512.raw; do
-  name=${s%%:*} src=${s#*:}
-  [ -f data/bench/$name.vdiso ] && continue
-  if [ "$name" = head512 ]; then
-    $vdiso convert "$src" data/bench/$name.vdiso --dims 512,512,512 --type u16 --quiet
-  else
-    $vdiso convert "$src" data/bench/$name.vdiso --quiet
-  fi
-done
+vdiso=$vdiso bench/real_stores.sh
 rows=$(mktemp)
 trap 'rm -f "$rows"' EXIT
 # extract_s of `vdiso extract` with the given options, one JSON line per run.

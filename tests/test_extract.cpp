@@ -58,12 +58,11 @@ TEST(ExtractOctree, BallIsClosedAcrossBricksWithAnalyticAreaAndVolume) {
         std::set<std::tuple<float, float, float>> unique;
         for (const glm::vec3& p : mesh.positions) unique.insert({p.x, p.y, p.z});
         EXPECT_EQ(unique.size(), mesh.vertexCount());
-        // Only bricks whose range holds the isovalue were read: each twice, to count its
-        // output and then to write it in place (core/extract/extract_in_place.h).
+        // Only bricks whose range holds the isovalue were read.
         int64_t activeBricks = 0;
         for (const BrickRange& b : source.brickRanges())
             activeBricks += (b.minValue <= iso && iso < b.maxValue);
-        EXPECT_EQ(source.acquired(), 2 * activeBricks);
+        EXPECT_EQ(source.acquired(), activeBricks);
         EXPECT_EQ(stats.bricksActive, activeBricks);
         EXPECT_EQ(source.pinned(), 0);
     }

@@ -86,9 +86,11 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams, 
     });
 }
 
-// A mesh held whole is written in place (core/extract/extract_in_place.h); streamed output goes
-// through extractItems.
-bool writesInPlace(const FullExtractOptions& options) { return !options.sink && !options.brickSink; }
+// A mesh held whole on several threads is counted, then written in place
+// (core/extract/extract_in_place.h); on one thread, and streamed, it goes through extractItems.
+bool writesInPlace(const FullExtractOptions& options) {
+    return !options.sink && !options.brickSink && options.threads > 1;
+}
 
 int64_t brickOf(int64_t id) { return id; }
 
@@ -99,9 +101,10 @@ struct BrickWork {
 };
 int64_t brickOf(const BrickWork& w) { return w.id; }
 
-// Streams the surface of `items` to options.sink or options.brickSink (the in-memory output is
-// extractInPlace's): runs extractItem(extractor, item, samples, mesh, seams) over them on
-// `threads` threads, acquiring each item's brick first (the time waited for it is counted).
+// Streams the surface of `items` to options.sink or options.brickSink, or on one thread appends
+// it to `mesh` (held on several threads, it is extractInPlace's): runs extractItem(extractor,
+// item, samples, mesh, seams) over them on `threads` threads, acquiring each item's brick first
+// (the time waited for it is counted).
 template <class Item, class ExtractItem>
 KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
                             const FullExtractOptions& options, TriangleMesh& mesh,
@@ -134,10 +137,16 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     // that reserved up front saves the copies and fresh page faults of regrowth (reserved pages
     // that are never touched cost nothing; process wall A/B 0.94-0.98 against B^2).
     const size_t perBrick = 2 * size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
-    const size_t expectVertices = options.sink ? options.streamPieceVertices + perBrick * 4 : perBrick * 4;
-    mesh.indices.reserve(mesh.indices.size() + expectVertices * 6);
-    mesh.positions.reserve(mesh.positions.size() + expectVertices);
-    mesh.normals.reserve(mesh.positions.capacity());
+    const size_t expectVertices = options.sink        ? options.streamPieceVertices + perBrick * 4
+                                  : brickSink != nullptr ? perBrick * 4
+                                                         : items.size() * perBrick;
+    try {
+        mesh.indices.reserve(mesh.indices.size() + expectVertices * 6);
+        mesh.positions.reserve(mesh.positions.size() + expectVertices);
+        mesh.normals.reserve(mesh.positions.capacity());
+    } catch (const std::bad_alloc&) {
+        throw meshAllocationError(expectVertices, 2 * expectVertices);
+    }
     auto report = [&](size_t done) {
         // No items (an isovalue outside the volume's range) is all done, not 0/0.
         const double part = items.empty() ? 1.0 : double(done) / double(items.size());
@@ -171,7 +180,11 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         for (size_t i = 0; i < items.size(); ++i) {
             prefetcher.consumed(i);
             const BrickHandle brick = acquireTimed(items[i]);
-            extractItem(extractor, items[i], brick.samples(), mesh, seams);
+            try {
+                extractItem(extractor, items[i], brick.samples(), mesh, seams);
+            } catch (const std::bad_alloc&) {  // the mesh outgrew what was reserved
+                throw meshAllocationError(2 * mesh.positions.capacity(), mesh.indices.capacity() / 3 * 2);
+            }
             if (brickSink) handOverBrick(bricks[i]);
             trimmer.finished(bricks[i]);
             trimmer.maybeTrim(seams);

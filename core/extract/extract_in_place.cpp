@@ -13,7 +13,6 @@
 #include <tbb/task_arena.h>
 
 #include "core/clock.h"
-#include "core/extract/brick_prefetcher.h"
 #include "core/extract/part_border.h"
 #include "core/kernel/edge_vertex_map.h"
 #include "core/kernel/placed_mesh.h"
@@ -36,9 +35,25 @@ struct Chunk {
 
 std::string megabytes(double bytes) { return std::to_string(int64_t(bytes / 1e6 + 0.5)) + " MB"; }
 
-// Grows the arrays of `mesh` by `vertices` and `triangles` (to exactly that from empty; by
-// std::vector's doubling when a later round grows them), or throws MeshAllocationError naming
-// the sizes with the mesh as it was.
+[[noreturn]] void cannotAllocate(uint64_t vertices, uint64_t triangles) {
+    throw meshAllocationError(vertices, triangles);
+}
+
+// Reserves room for `vertices` and `triangles` more (pages never written cost nothing), or
+// throws MeshAllocationError naming the sizes with the mesh as it was.
+void reserve(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
+    try {
+        mesh.positions.reserve(mesh.positions.size() + vertices);
+        mesh.normals.reserve(mesh.normals.size() + vertices);
+        mesh.indices.reserve(mesh.indices.size() + 3 * triangles);
+    } catch (const std::bad_alloc&) {
+        cannotAllocate(vertices, triangles);
+    }
+}
+
+// Grows the arrays of `mesh` by `vertices` and `triangles` (to exactly that from empty; past
+// what is reserved, by std::vector's doubling), or throws MeshAllocationError naming the sizes
+// with the mesh as it was.
 void grow(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
     const uint64_t limit = PlacedMesh::kPlaceholderTop / 2;  // numbers above: placeholders
     if (uint64_t(mesh.nextVertex()) + vertices > limit)
@@ -53,13 +68,17 @@ void grow(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
         mesh.positions.resize(oldVertices);
         mesh.normals.resize(oldVertices);
         mesh.indices.resize(oldIndices);
-        const double bytes = double(vertices) * 2 * sizeof(glm::vec3) + double(triangles) * 3 * sizeof(uint32_t);
-        throw MeshAllocationError("cannot allocate the surface: " + std::to_string(triangles) + " triangles and " +
-                                  std::to_string(vertices) + " vertices need " + megabytes(bytes));
+        cannotAllocate(vertices, triangles);
     }
 }
 
 }  // namespace
+
+MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles) {
+    const double bytes = double(vertices) * 2 * sizeof(glm::vec3) + double(triangles) * 3 * sizeof(uint32_t);
+    return MeshAllocationError("cannot allocate the surface: " + std::to_string(triangles) + " triangles and " +
+                               std::to_string(vertices) + " vertices need " + megabytes(bytes));
+}
 
 KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& source,
                               const FullExtractOptions& options, TriangleMesh& mesh,
@@ -70,7 +89,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     const int threads = std::max(1, options.threads);
     std::vector<int64_t> bricks(n);
     for (size_t i = 0; i < n; ++i) bricks[i] = items[i].id;
-    const EdgeOwnership ownership(volume.dims, layout, bricks);
+    const EdgeOwnership ownership(volume.dims, layout, bricks, options.bricks.empty());
     tbb::enumerable_thread_specific<BrickExtractor> extractors(
         [&] { return BrickExtractor(volume, layout, options.metaCellSize); });
     std::atomic<int64_t> waitNanoseconds{0};
@@ -99,8 +118,9 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     };
 
     // Rounds of as many bricks as half the source's cache holds, each counted, then written:
-    // the emission finds the bricks the count read still in memory. (One round, exact arrays,
-    // unless the surface's bricks outgrow the cache.)
+    // the emission finds the bricks the count read still in memory. One round, and arrays of
+    // the exact size, unless the surface's bricks outgrow the cache; then the arrays are
+    // reserved for the surface the first round foretells, and grow only past that.
     const size_t roundBricks = size_t(std::clamp<int64_t>(source.brickCapacity() / 2, 1, int64_t(std::max<size_t>(n, 1))));
     const PartBorder border(volume, layout, options.bricks);
     EdgeVertexMap* const borderOut = options.bricks.empty() ? nullptr : options.borderVertices;
@@ -114,116 +134,130 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     const size_t vertexStart = mesh.positions.size(), indexStart = mesh.indices.size();
     uint64_t vertices = 0, triangles = 0;  // written by earlier rounds
     std::vector<BrickCount> counts;
+    std::vector<std::vector<uint32_t>> activeOf;
     std::vector<uint64_t> trianglesBefore;
-    for (size_t first = 0; first < n; first += roundBricks) {
-        const size_t last = std::min(n, first + roundBricks);
-        // 1. Count. One thread reads ahead.
-        counts.assign(last - first, BrickCount{});
-        {
-            BrickPrefetcher prefetcher(source, threads == 1 ? size_t(options.prefetchBricks) : 0,
-                                       options.prefetchReaders);
-            for (size_t i = first; i < last; ++i) prefetcher.push(bricks[i]);
-            prefetcher.close();
+    // An error leaves the mesh as it was.
+    try {
+        for (size_t first = 0; first < n; first += roundBricks) {
+            const size_t last = std::min(n, first + roundBricks);
+            // 1. Count.
+            // The meta-cells the emission visits, found by the count where none are listed.
+            counts.assign(last - first, BrickCount{});
+            activeOf.assign(last - first, {});
             forEach(last - first, [&](size_t k) {
-                if (threads == 1) prefetcher.consumed(k);
                 const BrickItem& item = items[first + k];
                 const BrickHandle brick = acquireTimed(item.id);
                 counts[k] = extractors.local().countInPlace(item.id, brick.samples(), options.iso, item.metaCells,
-                                                            ownership);
+                                                            ownership, &activeOf[k]);
                 step();
             });
-        }
 
-        // 2. Chunks of about equal triangles, and their places in the arrays.
-        const size_t roundSize = last - first;
-        trianglesBefore.assign(roundSize + 1, 0);
-        for (size_t k = 0; k < roundSize; ++k) trianglesBefore[k + 1] = trianglesBefore[k] + counts[k].triangles;
-        const size_t chunkCount = threads == 1 ? 1 : std::min(roundSize, size_t(threads) * kChunksPerThread);
-        std::vector<Chunk> chunks(chunkCount);
-        uint64_t roundVertices = 0, roundTriangles = 0;
-        for (size_t c = 0; c < chunkCount; ++c) {
-            Chunk& chunk = chunks[c];
-            chunk.begin = c == 0 ? first : chunks[c - 1].end;
-            const uint64_t target = trianglesBefore[roundSize] * (c + 1) / chunkCount;
-            const size_t end = size_t(std::lower_bound(trianglesBefore.begin() + std::ptrdiff_t(chunk.begin - first),
-                                                       trianglesBefore.end(), target) - trianglesBefore.begin());
-            chunk.end = c + 1 == chunkCount ? last : std::max(first + end, chunk.begin);
-            chunk.vertexBase = vertices + roundVertices;
-            chunk.indexBase = 3 * (triangles + roundTriangles);
-            for (size_t i = chunk.begin; i < chunk.end; ++i) {
-                chunk.vertices += counts[i - first].vertices;
-                chunk.triangles += counts[i - first].triangles;
-            }
-            roundVertices += chunk.vertices;
-            roundTriangles += chunk.triangles;
-        }
-        grow(mesh, roundVertices, roundTriangles);
-
-        // 3. Emit, each chunk into its place. Its seam map keeps the faces a later brick
-        // shares: of this chunk, of a later one (which may take a vertex this chunk owns), or
-        // outside the part.
-        forEach(chunkCount, [&](size_t c) {
-            Chunk& chunk = chunks[c];
-            PlacedMesh& placed = chunk.placed;
-            placed.positions = mesh.positions.data() + vertexStart + chunk.vertexBase;
-            placed.normals = mesh.normals.data() + vertexStart + chunk.vertexBase;
-            placed.indices = mesh.indices.data() + indexStart + chunk.indexBase;
-            placed.firstVertex = firstNumber + uint32_t(chunk.vertexBase);
-            placed.vertexCapacity = chunk.vertices;
-            placed.indexCapacity = 3 * chunk.triangles;
-            placed.ownership = &ownership;
-            std::vector<int64_t> pending(bricks.begin() + std::ptrdiff_t(chunk.begin), bricks.end());
-            pending.insert(pending.end(), outside.begin(), outside.end());
-            SeamTrimmer trimmer(volume, layout, pending, options.seamTrimEntries);
-            BrickExtractor& extractor = extractors.local();
-            for (size_t i = chunk.begin; i < chunk.end; ++i) {
-                const BrickHandle brick = acquireTimed(items[i].id);
-                extractor.extractInPlace(items[i].id, brick.samples(), options.iso, items[i].metaCells, placed,
-                                         chunk.seams);
-                trimmer.finished(items[i].id);
-                trimmer.maybeTrim(chunk.seams);
-                step();
-            }
-            if (placed.vertices != chunk.vertices || placed.indexCount != 3 * chunk.triangles)
-                throw std::logic_error("full extraction: a chunk wrote fewer vertices or triangles than were counted");
-        });
-
-        // Placeholders: the owner's vertex, from its chunk or an earlier round. Every brick on
-        // a crossed edge visits a cell of it (the ranges are exact in every sample type,
-        // core/kernel/iso.h), so the owner made it.
-        for (const Chunk& chunk : chunks) {
-            const PlacedMesh& placed = chunk.placed;
-            for (const PlacedMesh::PlaceholderRef& ref : placed.refs) {
-                const uint64_t key = placed.placeholders[ref.placeholder];
-                const int64_t owner = ownership.owner(key);
-                const size_t i = size_t(std::lower_bound(bricks.begin(), bricks.end(), owner) - bricks.begin());
-                uint32_t v = UINT32_MAX;
-                if (i < first) {
-                    v = carried.find(key);
-                } else {
-                    const auto ownerChunk = std::upper_bound(chunks.begin(), chunks.end(), i,
-                                                             [](size_t k, const Chunk& c) { return k < c.end; });
-                    v = ownerChunk->seams.find(key);
-                    if (ownerChunk->placed.isPlaceholder(v)) v = UINT32_MAX;
+            // 2. Chunks of about equal triangles, and their places in the arrays.
+            const size_t roundSize = last - first;
+            trianglesBefore.assign(roundSize + 1, 0);
+            for (size_t k = 0; k < roundSize; ++k) trianglesBefore[k + 1] = trianglesBefore[k] + counts[k].triangles;
+            const size_t chunkCount = std::min(roundSize, size_t(threads) * kChunksPerThread);
+            std::vector<Chunk> chunks(chunkCount);
+            uint64_t roundVertices = 0, roundTriangles = 0;
+            for (size_t c = 0; c < chunkCount; ++c) {
+                Chunk& chunk = chunks[c];
+                chunk.begin = c == 0 ? first : chunks[c - 1].end;
+                const uint64_t target = trianglesBefore[roundSize] * (c + 1) / chunkCount;
+                const size_t end = size_t(std::lower_bound(trianglesBefore.begin() + std::ptrdiff_t(chunk.begin - first),
+                                                           trianglesBefore.end(), target) - trianglesBefore.begin());
+                chunk.end = c + 1 == chunkCount ? last : std::max(first + end, chunk.begin);
+                chunk.vertexBase = vertices + roundVertices;
+                chunk.indexBase = 3 * (triangles + roundTriangles);
+                for (size_t i = chunk.begin; i < chunk.end; ++i) {
+                    chunk.vertices += counts[i - first].vertices;
+                    chunk.triangles += counts[i - first].triangles;
                 }
-                if (v == UINT32_MAX)
-                    throw std::logic_error("full extraction: brick " + std::to_string(owner) +
-                                           " did not make the vertex of an edge it owns");
-                mesh.indices[indexStart + chunk.indexBase + ref.index] = v;
+                roundVertices += chunk.vertices;
+                roundTriangles += chunk.triangles;
             }
-        }
-        for (const Chunk& chunk : chunks) {
-            auto real = [&](uint32_t v) { return chunk.placed.isPlaceholder(v) ? UINT32_MAX : v; };
-            if (borderOut) border.collect(chunk.seams, *borderOut, real);
-            if (last == n) continue;
-            chunk.seams.forEach([&](uint64_t key, uint32_t v) {
-                if (real(v) != UINT32_MAX && carried.find(key) == UINT32_MAX) carried.insert(key, v);
+            if (first == 0 && last < n) {
+                // The surface this round foretells and a quarter more, or (the first bricks may hold
+                // little of it) about 2 B^2 vertices a brick, a surface crossing it twice.
+                const double scale = 1.25 * double(n) / double(last);
+                const uint64_t perBrick = 2 * uint64_t(layout.brickSize) * uint64_t(layout.brickSize);
+                const uint64_t expect = std::max(uint64_t(double(roundVertices) * scale), uint64_t(n) * perBrick);
+                reserve(mesh, expect, 2 * expect);
+            }
+            grow(mesh, roundVertices, roundTriangles);
+
+            // 3. Emit, each chunk into its place. Its seam map keeps the faces a later brick
+            // shares: of this chunk, of a later one (which may take a vertex this chunk owns), or
+            // outside the part.
+            forEach(chunkCount, [&](size_t c) {
+                Chunk& chunk = chunks[c];
+                PlacedMesh& placed = chunk.placed;
+                placed.positions = mesh.positions.data() + vertexStart + chunk.vertexBase;
+                placed.normals = mesh.normals.data() + vertexStart + chunk.vertexBase;
+                placed.indices = mesh.indices.data() + indexStart + chunk.indexBase;
+                placed.firstVertex = firstNumber + uint32_t(chunk.vertexBase);
+                placed.vertexCapacity = chunk.vertices;
+                placed.indexCapacity = 3 * chunk.triangles;
+                placed.ownership = &ownership;
+                std::vector<int64_t> pending(bricks.begin() + std::ptrdiff_t(chunk.begin), bricks.end());
+                pending.insert(pending.end(), outside.begin(), outside.end());
+                SeamTrimmer trimmer(volume, layout, pending, options.seamTrimEntries);
+                BrickExtractor& extractor = extractors.local();
+                for (size_t i = chunk.begin; i < chunk.end; ++i) {
+                    const BrickHandle brick = acquireTimed(items[i].id);
+                    const std::vector<uint32_t>& found = activeOf[i - first];
+                    extractor.extractInPlace(items[i].id, brick.samples(), options.iso,
+                                             found.empty() ? items[i].metaCells : std::span<const uint32_t>(found),
+                                             placed, chunk.seams);
+                    trimmer.finished(items[i].id);
+                    trimmer.maybeTrim(chunk.seams);
+                    step();
+                }
+                if (placed.vertices != chunk.vertices || placed.indexCount != 3 * chunk.triangles)
+                    throw std::logic_error("full extraction: a chunk wrote fewer vertices or triangles than were counted");
             });
+
+            // Placeholders: the owner's vertex, from its chunk or an earlier round. Every brick on
+            // a crossed edge visits a cell of it (the ranges are exact in every sample type,
+            // core/kernel/iso.h), so the owner made it.
+            for (const Chunk& chunk : chunks) {
+                const PlacedMesh& placed = chunk.placed;
+                for (const PlacedMesh::PlaceholderRef& ref : placed.refs) {
+                    const uint64_t key = placed.placeholders[ref.placeholder];
+                    const int64_t owner = ownership.owner(key);
+                    const size_t i = size_t(std::lower_bound(bricks.begin(), bricks.end(), owner) - bricks.begin());
+                    uint32_t v = UINT32_MAX;
+                    if (i < first) {
+                        v = carried.find(key);
+                    } else {
+                        const auto ownerChunk = std::upper_bound(chunks.begin(), chunks.end(), i,
+                                                                 [](size_t k, const Chunk& c) { return k < c.end; });
+                        v = ownerChunk->seams.find(key);
+                        if (ownerChunk->placed.isPlaceholder(v)) v = UINT32_MAX;
+                    }
+                    if (v == UINT32_MAX)
+                        throw std::logic_error("full extraction: brick " + std::to_string(owner) +
+                                               " did not make the vertex of an edge it owns");
+                    mesh.indices[indexStart + chunk.indexBase + ref.index] = v;
+                }
+            }
+            for (const Chunk& chunk : chunks) {
+                auto real = [&](uint32_t v) { return chunk.placed.isPlaceholder(v) ? UINT32_MAX : v; };
+                if (borderOut) border.collect(chunk.seams, *borderOut, real);
+                if (last == n) continue;
+                chunk.seams.forEach([&](uint64_t key, uint32_t v) {
+                    if (real(v) != UINT32_MAX && carried.find(key) == UINT32_MAX) carried.insert(key, v);
+                });
+            }
+            for (size_t i = first; i < last; ++i) carriedTrimmer.finished(bricks[i]);
+            carriedTrimmer.maybeTrim(carried);
+            vertices += roundVertices;
+            triangles += roundTriangles;
         }
-        for (size_t i = first; i < last; ++i) carriedTrimmer.finished(bricks[i]);
-        carriedTrimmer.maybeTrim(carried);
-        vertices += roundVertices;
-        triangles += roundTriangles;
+    } catch (...) {
+        mesh.positions.resize(vertexStart);
+        mesh.normals.resize(vertexStart);
+        mesh.indices.resize(indexStart);
+        throw;
     }
 
     KernelCounters total;

@@ -44,7 +44,12 @@ private:
     std::string mMessage;
 };
 
-// Extracts `items` (increasing brick ids) on options.threads threads and appends the surface to
+// The error for a surface of `vertices` and `triangles` that cannot be allocated.
+MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles);
+
+// Extracts `items` (increasing brick ids) on options.threads threads (the full extractions call
+// it with two or more: on one, appending brick by brick writes once too, and its reads ahead
+// overlap the extraction where a count would wait for them) and appends the surface to
 // `mesh` (numbered from mesh.nextVertex()); options.bricks and options.borderVertices as in
 // FullExtractOptions, options.sink and brickSink unused. Progress runs from progressStart to 1.
 // Sets stats.triangles, vertices and brickWaitSeconds; returns the kernel's counters.

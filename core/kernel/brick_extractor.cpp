@@ -158,11 +158,11 @@ void BrickExtractor::extractInto(int64_t id, const void* samples, double iso,
 }
 
 BrickCount BrickExtractor::countInPlace(int64_t id, const void* samples, double iso,
-                                        std::span<const uint32_t> metaCells,
-                                        const EdgeOwnership& ownership) {
+                                        std::span<const uint32_t> metaCells, const EdgeOwnership& ownership,
+                                        std::vector<uint32_t>* activeMetaCells) {
+    if (!metaCells.empty()) activeMetaCells = nullptr;  // listed already
     BrickCount count;
     const KernelCounters counters = mCounters;  // the emission counts what it visits
-    std::fill(mEdgeSeen.begin(), mEdgeSeen.end(), uint64_t(0));
     // The kernel's output, which the count does not touch; a first vertex already set, so that
     // making the kernel leaves the vertex slots alone.
     thread_local TriangleMesh none;
@@ -171,8 +171,16 @@ BrickCount BrickExtractor::countInPlace(int64_t id, const void* samples, double 
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         const BrickKernel<T> k(*this, id, samples, iso, none, noSeams);
-        forEachActiveMetaCell(id, samples, iso, metaCells,
-                              [&](int m) { k.countMetaCell(m, mEdgeSeen.data(), ownership, count); });
+        if (mLayout.brickSize < 64) {  // the whole brick at once, a word per corner row
+            mEdgeSeen.resize(std::max(mEdgeSeen.size(), size_t(k.cells[1] + 1) * size_t(k.cells[2] + 1)));
+            count = k.countBrick(mEdgeSeen.data(), ownership, activeMetaCells);
+            return;
+        }
+        std::fill(mEdgeSeen.begin(), mEdgeSeen.end(), uint64_t(0));
+        forEachActiveMetaCell(id, samples, iso, metaCells, [&](int m) {
+            k.countMetaCell(m, mEdgeSeen.data(), ownership, count);
+            if (activeMetaCells) activeMetaCells->push_back(uint32_t(m));
+        });
     });
     forgetBrickVertices();
     mCounters = counters;

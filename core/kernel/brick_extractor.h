@@ -71,8 +71,11 @@ public:
     void extractInPlace(int64_t id, const void* samples, double iso,
                         std::span<const uint32_t> metaCells, PlacedMesh& mesh, EdgeVertexMap& seams);
     // What extractInPlace writes, by classification alone (the count before the emission).
+    // With `activeMetaCells` and no metaCells listed, appends the meta-cells whose range holds
+    // iso, in increasing order: the list extractInPlace then takes instead of ranging the brick.
     BrickCount countInPlace(int64_t id, const void* samples, double iso,
-                            std::span<const uint32_t> metaCells, const EdgeOwnership& ownership);
+                            std::span<const uint32_t> metaCells, const EdgeOwnership& ownership,
+                            std::vector<uint32_t>* activeMetaCells = nullptr);
 
     // One meta-cell at a time, for traversals that decide per meta-cell (SAGE): beginBrick
     // makes `samples` the current brick (its vertices are shared across its meta-cells); a
@@ -101,7 +104,7 @@ private:
     // from the seam map are older, so their edges are looked up in the map each time. When
     // the numbers start again (the extractor used on another mesh), the array is cleared.
     std::vector<uint32_t> mEdgeVertex;
-    std::vector<uint64_t> mEdgeSeen;  // countInPlace: a bit per local edge
+    std::vector<uint64_t> mEdgeSeen;  // countInPlace: a bit per local edge, or a word per corner row
     static constexpr uint32_t kNoFirstVertex = UINT32_MAX;
     uint32_t mBrickFirstVertex = kNoFirstVertex;  // set by the brick's first kernel
     uint32_t mVerticesMade = 0;                   // the largest entry written

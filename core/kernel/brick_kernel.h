@@ -32,6 +32,7 @@
 #include "core/kernel/iso.h"
 #include "core/kernel/mc_tables.h"
 #include "core/kernel/placed_mesh.h"
+#include "core/kernel/row_classify.h"
 
 namespace vdiso {
 
@@ -42,22 +43,6 @@ struct AllCells {
     bool keepPolygon(const uint32_t*, int) { return true; }
 };
 
-// Comparisons against the isovalue in the samples' own type: for integers, s > iso exactly
-// when s > floor(iso), so the cell loop compares integers.
-template <class T>
-struct IsoThreshold {
-    using Compare = std::conditional_t<std::is_integral_v<T>, int64_t, double>;
-    Compare value;
-    explicit IsoThreshold(double iso) {
-        if constexpr (std::is_integral_v<T>)
-            value = int64_t(std::clamp(std::floor(iso), -1e18, 1e18));
-        else
-            value = iso;
-    }
-    bool above(T s) const { return Compare(s) > value; }
-};
-
-// The cell loop for one brick of sample type T.
 // `Mesh`: a TriangleMesh appended to, or a PlacedMesh (core/kernel/placed_mesh.h) written in
 // place, where a brick makes only the vertices it owns.
 template <class T, class Mesh>
@@ -208,12 +193,69 @@ struct BrickKernel {
     void classifyCorners(const int lo[3], const int hi[3], uint64_t (&above)[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1]) const {
         const int nx = hi[0] - lo[0];
         for (int z = 0; z <= hi[2] - lo[2]; ++z)
-            for (int y = 0; y <= hi[1] - lo[1]; ++y) {
-                const T* row = s + sampleIndex(lo[0], lo[1] + y, lo[2] + z);
-                uint64_t bits = 0;
-                for (int i = 0; i <= nx; ++i) bits |= uint64_t(threshold.above(row[i])) << i;
-                above[z][y] = bits;
+            for (int y = 0; y <= hi[1] - lo[1]; ++y)
+                above[z][y] = aboveBits(s + sampleIndex(lo[0], lo[1] + y, lo[2] + z), nx + 1, threshold);
+    }
+
+    // What a full extraction of this brick writes into a PlacedMesh, from the classification
+    // of the whole brick (the meta-cells whose ranges hold iso, or NOISE's exact list of them,
+    // hold every cell the surface crosses, so they make the same): a word per corner row
+    // (`rows`: (cells[1] + 1) * (cells[2] + 1) words), crossed edges counted by popcount, those
+    // on a face shared with a lower brick asked one by one whether this brick owns them, and
+    // each crossed cell's triangles from its case. Rows of at most 64 corners: cells[0] < 64.
+    // With `activeMetaCells`, appends the meta-cells holding a crossed cell, in increasing
+    // order: exactly those whose range holds iso (a meta-cell holding samples on both sides
+    // has an edge between them), so the emission takes them without ranging the brick again.
+    BrickCount countBrick(uint64_t* rows, const EdgeOwnership& ownership,
+                          std::vector<uint32_t>* activeMetaCells) const {
+        const int nx = cells[0], ny = cells[1], nz = cells[2];
+        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
+        uint64_t metaRows[64 * 64];  // [mz * n + my]: bit mx set when that meta-cell is crossed
+        if (activeMetaCells) std::fill_n(metaRows, size_t(n) * size_t(n), uint64_t(0));
+        for (int z = 0; z <= nz; ++z)
+            for (int y = 0; y <= ny; ++y)
+                rows[size_t(z) * size_t(ny + 1) + size_t(y)] = aboveBits(s + sampleIndex(0, y, z), nx + 1, threshold);
+        BrickCount count;
+        const uint64_t cellBits = (uint64_t(1) << nx) - 1, cornerBits = cellBits | (uint64_t(1) << nx);
+        const bool lower[3] = {corner0[0] > 0, corner0[1] > 0, corner0[2] > 0};
+        // Crossed edges in `mask` (bit i: the edge from corner x = i) along `axis` from corner
+        // row (y, z): owned unless on a lower face, where the owner is asked.
+        auto addEdges = [&](uint64_t mask, int y, int z, int axis) {
+            const bool faceRow = (axis != 1 && y == 0 && lower[1]) || (axis != 2 && z == 0 && lower[2]);
+            if (!faceRow && !(axis != 0 && lower[0] && (mask & 1))) {
+                count.vertices += bitCount(mask);
+                return;
             }
+            for (; mask; mask &= mask - 1) {
+                const int p[3] = {__builtin_ctzll(mask), y, z};
+                count.vertices += ownership.owns(brick, corner0, p, axis);
+            }
+        };
+        auto row = [&](int y, int z) { return rows[size_t(z) * size_t(ny + 1) + size_t(y)]; };
+        for (int z = 0; z <= nz; ++z)
+            for (int y = 0; y <= ny; ++y) {
+                const uint64_t r = row(y, z);
+                addEdges((r ^ r >> 1) & cellBits, y, z, 0);
+                if (y < ny) addEdges((r ^ row(y + 1, z)) & cornerBits, y, z, 1);
+                if (z < nz) addEdges((r ^ row(y, z + 1)) & cornerBits, y, z, 2);
+                if (y == ny || z == nz) continue;
+                const uint64_t r00 = r, r10 = row(y + 1, z), r01 = row(y, z + 1), r11 = row(y + 1, z + 1);
+                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
+                uint64_t meta = 0;
+                for (uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits; mixed; mixed &= mixed - 1) {
+                    const int rx = __builtin_ctzll(mixed);
+                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
+                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
+                    count.triangles += mcTriangleCase(caseIndex).triangleCount;
+                    meta |= uint64_t(1) << (rx / M);
+                }
+                if (activeMetaCells) metaRows[size_t(z / M) * size_t(n) + size_t(y / M)] |= meta;
+            }
+        if (activeMetaCells)
+            for (int m = 0; m < n * n; ++m)
+                for (uint64_t bits = metaRows[m]; bits; bits &= bits - 1)
+                    activeMetaCells->push_back(uint32_t(m * n + __builtin_ctzll(bits)));
+        return count;
     }
 
     // What extractMetaCell(m, AllCells) writes into a PlacedMesh, by classification alone: adds

@@ -17,8 +17,9 @@ void SeamTrimmer::maybeTrim(EdgeVertexMap& seams) {
     mTrimAt = std::max(mFirstTrim, 2 * seams.size());
 }
 
-EdgeOwnership::EdgeOwnership(const Dims3& dims, const BrickLayout& layout, std::span<const int64_t> bricks)
-    : mDims(dims), mLayout(layout), mRank(size_t(layout.brickCount()), -1) {
+EdgeOwnership::EdgeOwnership(const Dims3& dims, const BrickLayout& layout, std::span<const int64_t> bricks,
+                             bool everyActive)
+    : mDims(dims), mLayout(layout), mRank(size_t(layout.brickCount()), -1), mEveryActive(everyActive) {
     for (int64_t id : bricks) mRank[size_t(id)] = int32_t(id);
 }
 

@@ -52,8 +52,10 @@ int32_t edgeOwner(const Dims3& dims, const BrickLayout& layout, uint64_t key,
 // on a crossed edge visits a cell of it, so that brick is also the first to make it in id order.
 class EdgeOwnership {
 public:
-    // `bricks`: those extracted, increasing ids.
-    EdgeOwnership(const Dims3& dims, const BrickLayout& layout, std::span<const int64_t> bricks);
+    // `bricks`: those extracted, increasing ids. `everyActive`: they are every brick whose range
+    // holds the isovalue (no part of the volume left out), so every brick on a crossed edge is
+    // among them and a brick owns exactly the crossed edges off its lower faces.
+    EdgeOwnership(const Dims3& dims, const BrickLayout& layout, std::span<const int64_t> bricks, bool everyActive);
     // The owner of edge `key`, which brick `self` (extracted) holds.
     int64_t owner(int64_t self, uint64_t key) const {
         return edgeOwner(mDims, mLayout, key, mRank, int32_t(self));
@@ -69,7 +71,7 @@ public:
     bool owns(int64_t self, const int64_t corner0[3], const int p[3], int axis) const {
         bool lowerFace = false;
         for (int a = 0; a < 3; ++a) lowerFace |= a != axis && p[a] == 0 && corner0[a] > 0;
-        if (!lowerFace) return true;
+        if (!lowerFace || mEveryActive) return !lowerFace;
         const uint64_t key = edgeKey(mDims, corner0[0] + p[0], corner0[1] + p[1], corner0[2] + p[2], axis);
         return owner(self, key) == self;
     }
@@ -78,6 +80,7 @@ private:
     Dims3 mDims;
     BrickLayout mLayout;
     std::vector<int32_t> mRank;  // brick id for extracted bricks, -1 for the others
+    bool mEveryActive;
 };
 
 // Vertex numbers by edge key.
