@@ -4,6 +4,7 @@
 // is written.
 #include <gtest/gtest.h>
 
+#include <random>
 #include <string>
 
 #include "core/extract/extract_full.h"
@@ -194,6 +195,29 @@ TEST(ExtractInPlace, AnOutputTooLargeIsRefusedWithItsSize) {
     EXPECT_EQ(mesh.vertexCount(), 0u);
     EXPECT_EQ(mesh.indices.size(), 0u);
     EXPECT_EQ(source->pinned(), 0);
+}
+
+// The command line, under an address-space limit below a noise volume's surface (34 M
+// triangles, 817 MB): a clear error naming the size and exit code 1, on one thread (where the
+// surface outgrows what was reserved) and on two (where the count knows it before writing).
+TEST(ExtractInPlace, TheCommandLineNamesTheSizeOfASurfaceItCannotHold) {
+    if (VDISO_UNDER_ASAN) GTEST_SKIP() << "an address-space limit and AddressSanitizer exclude each other";
+    test::ScratchDir dir;
+    std::string noise(size_t(200) * 200 * 200, '\0');
+    std::mt19937 rng(1);
+    for (char& c : noise) c = char(rng() & 255);
+    test::writeFile(dir.file("noise.raw"), noise);
+    ASSERT_EQ(test::runCommand(std::string(VDISO_BINARY) + " convert " + dir.file("noise.raw") + " " +
+                               dir.file("noise.vdiso") + " --dims 200,200,200 --type u8 --quiet").exitCode, 0);
+    for (int threads : {1, 2}) {
+        const test::CommandResult r = test::runCommand(
+            "ulimit -v 600000; " + std::string(VDISO_BINARY) + " extract " + dir.file("noise.vdiso") +
+            " --iso 127.5 --method octree --threads " + std::to_string(threads) + " --stats - --quiet");
+        EXPECT_EQ(r.exitCode, 1) << threads << r.output;
+        EXPECT_NE(r.output.find("error: cannot allocate the surface: "), std::string::npos) << threads << r.output;
+        EXPECT_NE(r.output.find(" MB"), std::string::npos) << r.output;
+        EXPECT_EQ(r.output.find("bad_alloc"), std::string::npos) << r.output;
+    }
 }
 
 }  // namespace

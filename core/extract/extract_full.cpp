@@ -183,7 +183,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             try {
                 extractItem(extractor, items[i], brick.samples(), mesh, seams);
             } catch (const std::bad_alloc&) {  // the mesh outgrew what was reserved
-                throw meshAllocationError(2 * mesh.positions.capacity(), mesh.indices.capacity() / 3 * 2);
+                throw meshAllocationError(mesh.vertexCount(), mesh.triangleCount(), AllocationFailure::Growth);
             }
             if (brickSink) handOverBrick(bricks[i]);
             trimmer.finished(bricks[i]);

@@ -74,10 +74,19 @@ void grow(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
 
 }  // namespace
 
-MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles) {
+MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles, AllocationFailure what) {
     const double bytes = double(vertices) * 2 * sizeof(glm::vec3) + double(triangles) * 3 * sizeof(uint32_t);
-    return MeshAllocationError("cannot allocate the surface: " + std::to_string(triangles) + " triangles and " +
-                               std::to_string(vertices) + " vertices need " + megabytes(bytes));
+    const std::string size = std::to_string(triangles) + " triangles and " + std::to_string(vertices) + " vertices";
+    switch (what) {
+        case AllocationFailure::Growth:
+            return MeshAllocationError("cannot allocate the surface: it holds " + size + " (" + megabytes(bytes) +
+                                       ") and cannot grow");
+        case AllocationFailure::Working:
+            return MeshAllocationError("cannot allocate the surface: " + size + " (" + megabytes(bytes) +
+                                       ") were allocated, the extraction's working memory was not");
+        case AllocationFailure::Output: break;
+    }
+    return MeshAllocationError("cannot allocate the surface: " + size + " need " + megabytes(bytes));
 }
 
 KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& source,
@@ -137,6 +146,11 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     std::vector<std::vector<uint32_t>> activeOf;
     std::vector<uint64_t> trianglesBefore;
     // An error leaves the mesh as it was.
+    auto restore = [&] {
+        mesh.positions.resize(vertexStart);
+        mesh.normals.resize(vertexStart);
+        mesh.indices.resize(indexStart);
+    };
     try {
         for (size_t first = 0; first < n; first += roundBricks) {
             const size_t last = std::min(n, first + roundBricks);
@@ -253,10 +267,15 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
             vertices += roundVertices;
             triangles += roundTriangles;
         }
+    } catch (const MeshAllocationError&) {
+        restore();
+        throw;
+    } catch (const std::bad_alloc&) {
+        const uint64_t held = mesh.positions.size() - vertexStart, heldIndices = mesh.indices.size() - indexStart;
+        restore();
+        throw meshAllocationError(held, heldIndices / 3, AllocationFailure::Working);
     } catch (...) {
-        mesh.positions.resize(vertexStart);
-        mesh.normals.resize(vertexStart);
-        mesh.indices.resize(indexStart);
+        restore();
         throw;
     }
 

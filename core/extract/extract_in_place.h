@@ -44,8 +44,12 @@ private:
     std::string mMessage;
 };
 
-// The error for a surface of `vertices` and `triangles` that cannot be allocated.
-MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles);
+// The error for a surface of `vertices` and `triangles` that cannot be allocated: "cannot
+// allocate the surface: T triangles and V vertices need N MB" (`grown`: the surface held that
+// much and could not grow; `working`: it was allocated, the extraction's own memory was not).
+enum class AllocationFailure { Output, Growth, Working };
+MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles,
+                                        AllocationFailure what = AllocationFailure::Output);
 
 // Extracts `items` (increasing brick ids) on options.threads threads (the full extractions call
 // it with two or more: on one, appending brick by brick writes once too, and its reads ahead
