@@ -233,7 +233,9 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
             // Placeholders: the owner's vertex, from its chunk or an earlier round. Every brick on
             // a crossed edge visits a cell of it (the ranges are exact in every sample type,
             // core/kernel/iso.h), so the owner made it.
-            for (const Chunk& chunk : chunks) {
+            // Each chunk sets its own indices, in parallel; the maps are only read.
+            forEach(chunkCount, [&](size_t c) {
+                const Chunk& chunk = chunks[c];
                 const PlacedMesh& placed = chunk.placed;
                 for (const PlacedMesh::PlaceholderRef& ref : placed.refs) {
                     const uint64_t key = placed.placeholders[ref.placeholder];
@@ -244,7 +246,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                         v = carried.find(key);
                     } else {
                         const auto ownerChunk = std::upper_bound(chunks.begin(), chunks.end(), i,
-                                                                 [](size_t k, const Chunk& c) { return k < c.end; });
+                                                                 [](size_t k, const Chunk& other) { return k < other.end; });
                         v = ownerChunk->seams.find(key);
                         if (ownerChunk->placed.isPlaceholder(v)) v = UINT32_MAX;
                     }
@@ -253,7 +255,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                                                " did not make the vertex of an edge it owns");
                     mesh.indices[indexStart + chunk.indexBase + ref.index] = v;
                 }
-            }
+            });
             for (const Chunk& chunk : chunks) {
                 auto real = [&](uint32_t v) { return chunk.placed.isPlaceholder(v) ? UINT32_MAX : v; };
                 if (borderOut) border.collect(chunk.seams, *borderOut, real);
