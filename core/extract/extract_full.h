@@ -40,9 +40,10 @@ public:
 struct FullExtractOptions {
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
-    // Threads extracting bricks. 1 runs on the calling thread alone. Into a mesh held whole,
-    // the bricks are counted, then written in place, chunks of about equal triangles in
-    // parallel (core/extract/extract_in_place.h); streamed, contiguous chunks of a few dozen
+    // Threads extracting bricks. 1 runs on the calling thread alone, appending brick by brick.
+    // More, into a mesh held whole: the bricks are counted, then written in place, chunks of
+    // about equal triangles in parallel (core/extract/extract_in_place.h); streamed, contiguous
+    // chunks of a few dozen
     // bricks a round at a time are extracted into chunk meshes and merged chunk by chunk, to
     // keep memory bounded. The mesh is the same, vertex numbers included, for any thread count.
     int threads = 1;
