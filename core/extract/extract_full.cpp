@@ -86,10 +86,11 @@ void mergeChunk(ChunkOutput& chunk, TriangleMesh& out, EdgeVertexMap& outSeams, 
     });
 }
 
-// A mesh held whole on several threads is counted, then written in place
-// (core/extract/extract_in_place.h); on one thread, and streamed, it goes through extractItems.
+// On several threads the surface is counted, then written in place, held or streamed to a
+// sink (core/extract/extract_in_place.h); on one thread, and brick by brick to post-processing,
+// it goes through extractItems.
 bool writesInPlace(const FullExtractOptions& options) {
-    return !options.sink && !options.brickSink && options.threads > 1;
+    return options.threads > 1 && (options.sink || !options.brickSink);
 }
 
 int64_t brickOf(int64_t id) { return id; }

@@ -41,11 +41,11 @@ struct FullExtractOptions {
     double iso = 0;
     int metaCellSize = kDefaultMetaCellSize;
     // Threads extracting bricks. 1 runs on the calling thread alone, appending brick by brick.
-    // More, into a mesh held whole: the bricks are counted, then written in place, chunks of
-    // about equal triangles in parallel (core/extract/extract_in_place.h); streamed, contiguous
-    // chunks of a few dozen
-    // bricks a round at a time are extracted into chunk meshes and merged chunk by chunk, to
-    // keep memory bounded. The mesh is the same, vertex numbers included, for any thread count.
+    // More: the bricks are counted, then written in place, chunks of about equal triangles in
+    // parallel (core/extract/extract_in_place.h), held or streamed to `sink` round by round;
+    // handed to `brickSink`, contiguous chunks of a few dozen bricks a round at a time are
+    // extracted into chunk meshes and merged chunk by chunk. The mesh is the same, vertex
+    // numbers included, for any thread count.
     int threads = 1;
     // When set, the surface is streamed: every streamPieceVertices vertices, what the mesh holds is
     // handed to the sink and dropped (drainInto), and at the end the mesh is empty. Memory then

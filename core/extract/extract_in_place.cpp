@@ -126,11 +126,21 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
         arena.execute([&] { tbb::parallel_for(size_t(0), count, [&](size_t i) { body(i); }); });
     };
 
-    // Rounds of as many bricks as half the source's cache holds, each counted, then written:
-    // the emission finds the bricks the count read still in memory. One round, and arrays of
-    // the exact size, unless the surface's bricks outgrow the cache; then the arrays are
-    // reserved for the surface the first round foretells, and grow only past that.
-    const size_t roundBricks = size_t(std::clamp<int64_t>(source.brickCapacity() / 2, 1, int64_t(std::max<size_t>(n, 1))));
+    // Rounds of at most as many bricks as half the source's cache holds, each counted, then
+    // written: the emission finds the bricks the count read still in memory. Held, one round
+    // and arrays of the exact size, unless the surface's bricks outgrow the cache; then the
+    // arrays are reserved for the surface the first round foretells, and grow only past that.
+    // Streamed, rounds of about options.streamPieceVertices vertices, each handed to the sink
+    // and dropped: the next round writes into the same memory.
+    const int64_t cacheRound = std::max<int64_t>(source.brickCapacity() / 2, 1);
+    const int64_t fewestBricks = int64_t(threads) * int64_t(kChunksPerThread);
+    const uint64_t brickArea = uint64_t(layout.brickSize) * uint64_t(layout.brickSize);
+    auto roundFor = [&](uint64_t verticesPerBrick) {  // bricks of the next round
+        if (!options.sink) return cacheRound;
+        const uint64_t bricksForPiece = options.streamPieceVertices / std::max<uint64_t>(verticesPerBrick, 1);
+        return std::min(cacheRound, std::max(fewestBricks, int64_t(std::min<uint64_t>(bricksForPiece, INT64_MAX / 2))));
+    };
+    size_t roundBricks = size_t(roundFor(brickArea));  // a surface crosses a brick about once
     const PartBorder border(volume, layout, options.bricks);
     EdgeVertexMap* const borderOut = options.bricks.empty() ? nullptr : options.borderVertices;
     const std::vector<int64_t> outside = borderOut ? border.outside() : std::vector<int64_t>{};
@@ -139,21 +149,24 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     std::vector<int64_t> pendingAll = bricks;
     pendingAll.insert(pendingAll.end(), outside.begin(), outside.end());
     SeamTrimmer carriedTrimmer(volume, layout, pendingAll, options.seamTrimEntries);
-    const uint32_t firstNumber = mesh.nextVertex();
     const size_t vertexStart = mesh.positions.size(), indexStart = mesh.indices.size();
     uint64_t vertices = 0, triangles = 0;  // written by earlier rounds
     std::vector<BrickCount> counts;
     std::vector<std::vector<uint32_t>> activeOf;
     std::vector<uint64_t> trianglesBefore;
-    // An error leaves the mesh as it was.
+    // An error leaves the mesh as it was (streamed, without the round that failed).
     auto restore = [&] {
+        if (mesh.positions.size() < vertexStart || mesh.indices.size() < indexStart) return mesh.clear();
         mesh.positions.resize(vertexStart);
         mesh.normals.resize(vertexStart);
         mesh.indices.resize(indexStart);
     };
     try {
-        for (size_t first = 0; first < n; first += roundBricks) {
-            const size_t last = std::min(n, first + roundBricks);
+        for (size_t first = 0, last = 0; first < n; first = last) {
+            last = std::min(n, first + roundBricks);
+            // This round's vertices and triangles follow what the mesh holds.
+            const uint32_t roundFirstNumber = mesh.nextVertex();
+            const size_t roundVertexStart = mesh.positions.size(), roundIndexStart = mesh.indices.size();
             // 1. Count.
             // The meta-cells the emission visits, found by the count where none are listed.
             counts.assign(last - first, BrickCount{});
@@ -180,8 +193,8 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                 const size_t end = size_t(std::lower_bound(trianglesBefore.begin() + std::ptrdiff_t(chunk.begin - first),
                                                            trianglesBefore.end(), target) - trianglesBefore.begin());
                 chunk.end = c + 1 == chunkCount ? last : std::max(first + end, chunk.begin);
-                chunk.vertexBase = vertices + roundVertices;
-                chunk.indexBase = 3 * (triangles + roundTriangles);
+                chunk.vertexBase = roundVertices;
+                chunk.indexBase = 3 * roundTriangles;
                 for (size_t i = chunk.begin; i < chunk.end; ++i) {
                     chunk.vertices += counts[i - first].vertices;
                     chunk.triangles += counts[i - first].triangles;
@@ -189,7 +202,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                 roundVertices += chunk.vertices;
                 roundTriangles += chunk.triangles;
             }
-            if (first == 0 && last < n) {
+            if (first == 0 && last < n && !options.sink) {
                 // The surface this round foretells and a quarter more, or (the first bricks may hold
                 // little of it) about 2 B^2 vertices a brick, a surface crossing it twice.
                 const double scale = 1.25 * double(n) / double(last);
@@ -205,10 +218,10 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
             forEach(chunkCount, [&](size_t c) {
                 Chunk& chunk = chunks[c];
                 PlacedMesh& placed = chunk.placed;
-                placed.positions = mesh.positions.data() + vertexStart + chunk.vertexBase;
-                placed.normals = mesh.normals.data() + vertexStart + chunk.vertexBase;
-                placed.indices = mesh.indices.data() + indexStart + chunk.indexBase;
-                placed.firstVertex = firstNumber + uint32_t(chunk.vertexBase);
+                placed.positions = mesh.positions.data() + roundVertexStart + chunk.vertexBase;
+                placed.normals = mesh.normals.data() + roundVertexStart + chunk.vertexBase;
+                placed.indices = mesh.indices.data() + roundIndexStart + chunk.indexBase;
+                placed.firstVertex = roundFirstNumber + uint32_t(chunk.vertexBase);
                 placed.vertexCapacity = chunk.vertices;
                 placed.indexCapacity = 3 * chunk.triangles;
                 placed.ownership = &ownership;
@@ -253,7 +266,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                     if (v == UINT32_MAX)
                         throw std::logic_error("full extraction: brick " + std::to_string(owner) +
                                                " did not make the vertex of an edge it owns");
-                    mesh.indices[indexStart + chunk.indexBase + ref.index] = v;
+                    mesh.indices[roundIndexStart + chunk.indexBase + ref.index] = v;
                 }
             });
             for (const Chunk& chunk : chunks) {
@@ -268,12 +281,17 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
             carriedTrimmer.maybeTrim(carried);
             vertices += roundVertices;
             triangles += roundTriangles;
+            if (options.sink) {
+                drainInto(*options.sink, mesh);
+                roundBricks = size_t(roundFor(roundVertices / std::max<uint64_t>(last - first, 1)));
+            }
         }
     } catch (const MeshAllocationError&) {
         restore();
         throw;
     } catch (const std::bad_alloc&) {
-        const uint64_t held = mesh.positions.size() - vertexStart, heldIndices = mesh.indices.size() - indexStart;
+        const uint64_t held = mesh.positions.size() - std::min(vertexStart, mesh.positions.size());
+        const uint64_t heldIndices = mesh.indices.size() - std::min(indexStart, mesh.indices.size());
         restore();
         throw meshAllocationError(held, heldIndices / 3, AllocationFailure::Working);
     } catch (...) {

@@ -1,4 +1,4 @@
-// A full extraction into a mesh held whole, each vertex and triangle written once, into its
+// A full extraction into a mesh held whole or streamed, each vertex and triangle written once, into its
 // final place (Flying Edges' passes, over bricks instead of rows):
 //   1. count: each brick's triangles and the vertices it owns (an edge's vertex belongs to the
 //      lowest-numbered extracted brick on it: EdgeOwnership), by classification alone;
@@ -8,9 +8,11 @@
 //      chunk's offsets (core/kernel/placed_mesh.h), welding within the chunk through its seam
 //      map; a vertex whose owner is in an earlier chunk gets a placeholder, set from the
 //      owner chunk's map once every chunk is written.
-// Nothing is merged or copied; each thread first-touches the pages it writes. The mesh is the
-// one a single thread appending brick by brick makes, vertex numbers included, for any thread
-// count: the owner of an edge is the first brick, in id order, to make its vertex.
+// Streamed to a sink, rounds of bricks are counted, written into the same arrays and handed
+// over in turn. Nothing is merged or copied; each thread first-touches the pages it writes.
+// The mesh is the one a single thread appending brick by brick makes, vertex numbers
+// included, for any thread count: the owner of an edge is the first brick, in id order, to
+// make its vertex.
 #pragma once
 
 #include <cstdint>
@@ -55,7 +57,10 @@ MeshAllocationError meshAllocationError(uint64_t vertices, uint64_t triangles,
 // it with two or more: on one, appending brick by brick writes once too, and its reads ahead
 // overlap the extraction where a count would wait for them) and appends the surface to
 // `mesh` (numbered from mesh.nextVertex()); options.bricks and options.borderVertices as in
-// FullExtractOptions, options.sink and brickSink unused. Progress runs from progressStart to 1.
+// FullExtractOptions. With options.sink, the surface goes to it in rounds of about
+// options.streamPieceVertices vertices, each written in place, handed over and dropped, and
+// the mesh is empty at the end; options.brickSink is not taken. Progress runs from
+// progressStart to 1.
 // Sets stats.triangles, vertices and brickWaitSeconds; returns the kernel's counters.
 KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& source,
                               const FullExtractOptions& options, TriangleMesh& mesh,
