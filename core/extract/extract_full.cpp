@@ -141,12 +141,11 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     const size_t expectVertices = options.sink        ? options.streamPieceVertices + perBrick * 4
                                   : brickSink != nullptr ? perBrick * 4
                                                          : items.size() * perBrick;
-    try {
+    try {  // a hint: where the address space will not have it, the mesh grows as it is written
         mesh.indices.reserve(mesh.indices.size() + expectVertices * 6);
         mesh.positions.reserve(mesh.positions.size() + expectVertices);
         mesh.normals.reserve(mesh.positions.capacity());
     } catch (const std::bad_alloc&) {
-        throw meshAllocationError(expectVertices, 2 * expectVertices);
     }
     auto report = [&](size_t done) {
         // No items (an isovalue outside the volume's range) is all done, not 0/0.

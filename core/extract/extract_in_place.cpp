@@ -27,7 +27,7 @@ constexpr size_t kChunksPerThread = 8;
 
 struct Chunk {
     size_t begin = 0, end = 0;           // items
-    size_t vertexBase = 0, indexBase = 0;  // into the arrays, from where this extraction starts
+    size_t vertexBase = 0, indexBase = 0;  // into the arrays, from where this round starts
     uint64_t vertices = 0, triangles = 0;
     PlacedMesh placed;
     EdgeVertexMap seams;  // the vertices of brick faces this chunk made, global numbers
@@ -35,19 +35,14 @@ struct Chunk {
 
 std::string megabytes(double bytes) { return std::to_string(int64_t(bytes / 1e6 + 0.5)) + " MB"; }
 
-[[noreturn]] void cannotAllocate(uint64_t vertices, uint64_t triangles) {
-    throw meshAllocationError(vertices, triangles);
-}
-
-// Reserves room for `vertices` and `triangles` more (pages never written cost nothing), or
-// throws MeshAllocationError naming the sizes with the mesh as it was.
+// Reserves room for `vertices` and `triangles` more (pages never written cost nothing). Only a
+// hint: where the address space will not have it, the arrays grow as they are written.
 void reserve(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
     try {
         mesh.positions.reserve(mesh.positions.size() + vertices);
         mesh.normals.reserve(mesh.normals.size() + vertices);
         mesh.indices.reserve(mesh.indices.size() + 3 * triangles);
     } catch (const std::bad_alloc&) {
-        cannotAllocate(vertices, triangles);
     }
 }
 
@@ -68,7 +63,7 @@ void grow(TriangleMesh& mesh, uint64_t vertices, uint64_t triangles) {
         mesh.positions.resize(oldVertices);
         mesh.normals.resize(oldVertices);
         mesh.indices.resize(oldIndices);
-        cannotAllocate(vertices, triangles);
+        throw meshAllocationError(vertices, triangles);
     }
 }
 
