@@ -30,6 +30,8 @@ public:
     }
     BrickHandle acquire(int64_t id) override;
     const std::vector<unsigned char>& samples() const { return mSamples; }
+    // Brick `id`'s own copy of its samples, to make bricks disagree on the ones they share.
+    unsigned char* brickSamples(int64_t id) { return mBricks.at(size_t(id)).data(); }
     int64_t acquired() const { return mAcquired; }
     int pinned() const { return mPinned; }
 

@@ -113,6 +113,32 @@ TEST(ExtractInPlace, RoundsOfWhatTheCacheHoldsGiveTheSameMesh) {
     EXPECT_EQ(source->pinned(), 0);
 }
 
+// Two bricks that disagree on the face they share (a damaged store): brick 1 sees the surface
+// cross edges of that face, brick 0, their owner, does not. Written in place, brick 1's
+// placeholders for them find no vertex at their owner and make it themselves, once per edge:
+// the triangles one thread makes, numbered otherwise.
+TEST(ExtractInPlace, BricksThatDisagreeOnASharedFaceStillGiveEveryTriangle) {
+    test::MemoryBrickSource source({17, 9, 9}, ScalarType::U16, 8, [](int64_t x, int64_t y, int64_t) {
+        return x < 8 ? 10.0 : y < 4 ? 100.0 : 50.0;
+    });
+    // Brick 0's copy of the face x = 8: all above the isovalue, so no edge of it is crossed there.
+    const int side = source.layout().side();
+    auto* face = reinterpret_cast<uint16_t*>(source.brickSamples(0));
+    for (int z = -1; z <= 9; ++z)
+        for (int y = -1; y <= 9; ++y) face[BrickLayout::cornerIndex(side, 8, y, z)] = 100;
+    const double iso = 75;
+    TriangleMesh serial;
+    extractOctree(source, {iso, 4, 1}, serial);
+    for (int threads : {2, 3}) {
+        TriangleMesh placed;
+        extractOctree(source, {iso, 4, threads}, placed);
+        ASSERT_GT(placed.triangleCount(), 0u);
+        EXPECT_EQ(test::canonicalTriangles(placed), test::canonicalTriangles(serial)) << threads;
+        EXPECT_EQ(placed.vertexCount(), serial.vertexCount()) << threads;
+        for (uint32_t v : placed.indices) ASSERT_LT(v, placed.vertexCount());
+    }
+}
+
 // Appended to a mesh that already holds a surface, numbered after it.
 TEST(ExtractInPlace, AppendsAfterWhatTheMeshHolds) {
     SynthParams p;

@@ -31,6 +31,8 @@ struct Chunk {
     uint64_t vertices = 0, triangles = 0;
     PlacedMesh placed;
     EdgeVertexMap seams;  // the vertices of brick faces this chunk made, global numbers
+    // Placeholders whose owner did not make the vertex: the index to set, and the placeholder.
+    std::vector<std::pair<size_t, const PlacedMesh::Placeholder*>> unmade;
 };
 
 std::string megabytes(double bytes) { return std::to_string(int64_t(bytes / 1e6 + 0.5)) + " MB"; }
@@ -238,32 +240,47 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                     throw std::logic_error("full extraction: a chunk wrote fewer vertices or triangles than were counted");
             });
 
-            // Placeholders: the owner's vertex, from its chunk or an earlier round. Every brick on
-            // a crossed edge visits a cell of it (the ranges are exact in every sample type,
-            // core/kernel/iso.h), so the owner made it.
-            // Each chunk sets its own indices, in parallel; the maps are only read.
+            // Placeholders: the owner's vertex, from its chunk or an earlier round. Where the
+            // owner did not make it (bricks that disagree on a sample they share, or ranges that
+            // say a brick misses the surface it crosses: a damaged or hostile store), the vertex
+            // is made here, after the round's own, once per edge.
             forEach(chunkCount, [&](size_t c) {
-                const Chunk& chunk = chunks[c];
-                const PlacedMesh& placed = chunk.placed;
-                for (const PlacedMesh::PlaceholderRef& ref : placed.refs) {
-                    const uint64_t key = placed.placeholders[ref.placeholder];
-                    const int64_t owner = ownership.owner(key);
+                Chunk& chunk = chunks[c];
+                for (const PlacedMesh::PlaceholderRef& ref : chunk.placed.refs) {
+                    const PlacedMesh::Placeholder& p = chunk.placed.placeholders[ref.placeholder];
+                    const int64_t owner = ownership.owner(p.key);
                     const size_t i = size_t(std::lower_bound(bricks.begin(), bricks.end(), owner) - bricks.begin());
                     uint32_t v = UINT32_MAX;
-                    if (i < first) {
-                        v = carried.find(key);
-                    } else {
+                    if (owner >= 0 && i < first) {
+                        v = carried.find(p.key);
+                    } else if (owner >= 0 && i < n) {
                         const auto ownerChunk = std::upper_bound(chunks.begin(), chunks.end(), i,
                                                                  [](size_t k, const Chunk& other) { return k < other.end; });
-                        v = ownerChunk->seams.find(key);
+                        v = ownerChunk->seams.find(p.key);
                         if (ownerChunk->placed.isPlaceholder(v)) v = UINT32_MAX;
                     }
                     if (v == UINT32_MAX)
-                        throw std::logic_error("full extraction: brick " + std::to_string(owner) +
-                                               " did not make the vertex of an edge it owns");
-                    mesh.indices[roundIndexStart + chunk.indexBase + ref.index] = v;
+                        chunk.unmade.push_back({roundIndexStart + chunk.indexBase + ref.index, &p});
+                    else
+                        mesh.indices[roundIndexStart + chunk.indexBase + ref.index] = v;
                 }
             });
+            EdgeVertexMap made;
+            for (const Chunk& chunk : chunks)
+                for (const auto& [index, p] : chunk.unmade) {
+                    uint32_t v = made.find(p->key);
+                    if (v == UINT32_MAX) {
+                        v = mesh.nextVertex();
+                        mesh.addVertex(p->position, p->normal);
+                        made.insert(p->key, v);
+                        ++roundVertices;
+                    }
+                    mesh.indices[index] = v;
+                }
+            if (last < n)
+                made.forEach([&](uint64_t key, uint32_t v) {
+                    if (carried.find(key) == UINT32_MAX) carried.insert(key, v);
+                });
             for (const Chunk& chunk : chunks) {
                 auto real = [&](uint32_t v) { return chunk.placed.isPlaceholder(v) ? UINT32_MAX : v; };
                 if (borderOut) border.collect(chunk.seams, *borderOut, real);

@@ -132,14 +132,9 @@ struct BrickKernel {
             key = edgeKey(d, corner0[0] + px, corner0[1] + py, corner0[2] + pz, axis);
             const uint32_t v = seams.find(key);
             if (v != UINT32_MAX) return v;
-            if constexpr (kPlaced)
-                if (!mesh.ownership->owns(brick, corner0, p, axis)) {
-                    // Its owner, in another chunk, makes it: a placeholder until then.
-                    const uint32_t placeholder = mesh.addPlaceholder(key);
-                    seams.insert(key, placeholder);
-                    return placeholder;
-                }
         }
+        bool owned = true;
+        if constexpr (kPlaced) owned = !onFace || mesh.ownership->owns(brick, corner0, p, axis);
 
         const size_t i0 = sampleIndex(px, py, pz);
         const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
@@ -150,8 +145,15 @@ struct BrickKernel {
         const glm::dvec3 position =
             x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
                                    x.mVolume.spacing;
+        const glm::vec3 normal = withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f);
+        if constexpr (kPlaced)
+            if (!owned) {  // its owner, in another chunk, makes it: a placeholder until then
+                const uint32_t placeholder = mesh.addPlaceholder(key, glm::vec3(position), normal);
+                seams.insert(key, placeholder);
+                return placeholder;
+            }
         const uint32_t v = mesh.nextVertex();
-        mesh.addVertex(glm::vec3(position), withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f));
+        mesh.addVertex(glm::vec3(position), normal);
         slot = v + 1;
         x.mVerticesMade = v + 1;
         if (onFace) seams.insert(key, v);

@@ -4,9 +4,10 @@
 // writes into it through addVertex and addTriangle, as it appends to a TriangleMesh.
 //
 // A brick writes only the vertices it owns (core/kernel/edge_vertex_map.h, EdgeOwnership). A
-// vertex its owner made in another chunk, which this chunk cannot see, gets a placeholder
-// number (kPlaceholderTop, then down), recorded with its edge key; each index that refers to
-// it is recorded too, for the caller to set once every chunk is written.
+// vertex its owner makes in another chunk, which this chunk cannot see, gets a placeholder
+// number (kPlaceholderTop, then down), recorded with its edge key, position and normal (for a
+// store whose bricks disagree on the samples they share, where the owner may not make it); each
+// index that refers to it is recorded too, for the caller to set once every chunk is written.
 // Writing past the counted size throws std::logic_error: the count and the kernel disagree.
 #pragma once
 
@@ -33,11 +34,15 @@ struct PlacedMesh {
     size_t vertices = 0, indexCount = 0;  // written so far
     const EdgeOwnership* ownership = nullptr;  // which brick makes a shared edge's vertex
 
+    struct Placeholder {
+        uint64_t key;
+        glm::vec3 position, normal;
+    };
     struct PlaceholderRef {
         size_t index;      // into the whole mesh's indices, from this range's start
         uint32_t placeholder;
     };
-    std::vector<uint64_t> placeholders;  // number kPlaceholderTop - k: the edge placeholders[k]
+    std::vector<Placeholder> placeholders;  // number kPlaceholderTop - k is placeholders[k]
     std::vector<PlaceholderRef> refs;
 
     uint32_t nextVertex() const { return firstVertex + uint32_t(vertices); }
@@ -47,8 +52,8 @@ struct PlacedMesh {
         normals[vertices] = normal;
         ++vertices;
     }
-    uint32_t addPlaceholder(uint64_t key) {
-        placeholders.push_back(key);
+    uint32_t addPlaceholder(uint64_t key, const glm::vec3& position, const glm::vec3& normal) {
+        placeholders.push_back({key, position, normal});
         mLowestPlaceholder = kPlaceholderTop - uint32_t(placeholders.size() - 1);
         return mLowestPlaceholder;
     }
