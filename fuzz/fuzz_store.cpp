@@ -61,6 +61,11 @@ void exercise(const std::string& path) {
     const double iso = 0.5 * (reader.header().valueMin + reader.header().valueMax);
     vdiso::TriangleMesh mesh;
     vdiso::extractOctree(cache, {iso, 4}, mesh);
+    // Two threads count, then write in place: bricks that disagree on what they share, or
+    // ranges that lie, must not break the placeholders' resolution.
+    vdiso::TriangleMesh placed;
+    vdiso::extractOctree(cache, {iso, 4, 2}, placed);
+    if (placed.triangleCount() != mesh.triangleCount()) __builtin_trap();
     const vdiso::VolumeInfo& v = reader.volume();
     // As vdiso extract writes it: in physical space, and seen from the patient's front.
     vdiso::transformMesh(vdiso::volumeToPhysical(v), mesh);
