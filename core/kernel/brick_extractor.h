@@ -32,7 +32,18 @@ constexpr int kMaxMetaCellSize = 32;
 
 struct KernelCounters {
     int64_t metaCellsTested = 0, metaCellsActive = 0, cellsVisited = 0, cellsActive = 0;
+    KernelCounters& operator+=(const KernelCounters& o) {
+        metaCellsTested += o.metaCellsTested;
+        metaCellsActive += o.metaCellsActive;
+        cellsVisited += o.cellsVisited;
+        cellsActive += o.cellsActive;
+        return *this;
+    }
 };
+
+// Vertices a brick of `brickSize` cells is expected to make, at most about: a surface crossing it
+// twice (2 B^2). What a full extraction reserves ahead; pages never written cost nothing.
+inline uint64_t expectedVerticesPerBrick(int brickSize) { return 2 * uint64_t(brickSize) * uint64_t(brickSize); }
 
 // What one brick writes into a PlacedMesh: the vertices it owns and its triangles.
 struct BrickCount {

@@ -43,6 +43,20 @@ struct AllCells {
     bool keepPolygon(const uint32_t*, int) { return true; }
 };
 
+// A row of cells between four corner rows of above bits (rows (y, z), (y + 1, z), (y, z + 1),
+// (y + 1, z + 1); bit i: corner x = i): the cells with corners on both sides (bit i: cell x = i,
+// of `cellBits`), and cell rx's marching-cubes case (corner k is (k & 1, k >> 1 & 1, k >> 2)).
+struct CellRow {
+    uint64_t r00, r10, r01, r11;
+    uint64_t crossed(uint64_t cellBits) const {
+        const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
+        return (any | any >> 1) & ~(all & all >> 1) & cellBits;
+    }
+    int caseOf(int rx) const {
+        return int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 | int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
+    }
+};
+
 // `Mesh`: a TriangleMesh appended to, or a PlacedMesh (core/kernel/placed_mesh.h) written in
 // place, where a brick makes only the vertices it owns.
 template <class T, class Mesh>
@@ -241,14 +255,11 @@ struct BrickKernel {
                 if (y < ny) addEdges((r ^ row(y + 1, z)) & cornerBits, y, z, 1);
                 if (z < nz) addEdges((r ^ row(y, z + 1)) & cornerBits, y, z, 2);
                 if (y == ny || z == nz) continue;
-                const uint64_t r00 = r, r10 = row(y + 1, z), r01 = row(y, z + 1), r11 = row(y + 1, z + 1);
-                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
+                const CellRow cellRow{r, row(y + 1, z), row(y, z + 1), row(y + 1, z + 1)};
                 uint64_t meta = 0;
-                for (uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits; mixed; mixed &= mixed - 1) {
+                for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1) {
                     const int rx = __builtin_ctzll(mixed);
-                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
-                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
-                    count.triangles += mcTriangleCase(caseIndex).triangleCount;
+                    count.triangles += mcTriangleCase(cellRow.caseOf(rx)).triangleCount;
                     meta |= uint64_t(1) << (rx / M);
                 }
                 if (activeMetaCells) metaRows[size_t(z / M) * size_t(n) + size_t(y / M)] |= meta;
@@ -273,13 +284,10 @@ struct BrickKernel {
         const size_t edgeRow = size_t(x.mLayout.brickSize + 1);
         for (int rz = 0; rz < nz; ++rz)
             for (int ry = 0; ry < ny; ++ry) {
-                const uint64_t r00 = above[rz][ry], r10 = above[rz][ry + 1];
-                const uint64_t r01 = above[rz + 1][ry], r11 = above[rz + 1][ry + 1];
-                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
-                for (uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits; mixed; mixed &= mixed - 1) {
+                const CellRow cellRow{above[rz][ry], above[rz][ry + 1], above[rz + 1][ry], above[rz + 1][ry + 1]};
+                for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1) {
                     const int rx = __builtin_ctzll(mixed);
-                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
-                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
+                    const int caseIndex = cellRow.caseOf(rx);
                     count.triangles += mcTriangleCase(caseIndex).triangleCount;
                     for (unsigned crossed = mcCrossedEdges(caseIndex); crossed; crossed &= crossed - 1) {
                         const int e = __builtin_ctz(crossed);
@@ -338,17 +346,13 @@ struct BrickKernel {
             for (int iy = 0; iy < ny; ++iy) {
                 const int cz = order[2][iz], cy = order[1][iy];
                 const int rz = cz - lo[2], ry = cy - lo[1];
-                const uint64_t r00 = above[rz][ry], r10 = above[rz][ry + 1];
-                const uint64_t r01 = above[rz + 1][ry], r11 = above[rz + 1][ry + 1];
-                const uint64_t any = r00 | r10 | r01 | r11, all = r00 & r10 & r01 & r11;
-                const uint64_t mixed = (any | any >> 1) & ~(all & all >> 1) & cellBits;
+                const CellRow cellRow{above[rz][ry], above[rz][ry + 1], above[rz + 1][ry], above[rz + 1][ry + 1]};
+                const uint64_t mixed = cellRow.crossed(cellBits);
                 if (mixed == 0) continue;
                 for (int ix = 0; ix < nx; ++ix) {
                     const int cx = order[0][ix], rx = cx - lo[0];
                     if (!(mixed >> rx & 1)) continue;
-                    // Corner k is (k & 1, k >> 1 & 1, k >> 2): rows (y, z) = 00, 10, 01, 11.
-                    const int caseIndex = int(r00 >> rx & 3) | int(r10 >> rx & 3) << 2 |
-                                          int(r01 >> rx & 3) << 4 | int(r11 >> rx & 3) << 6;
+                    const int caseIndex = cellRow.caseOf(rx);
                     if constexpr (Cells::kTestsCells)
                         if (!cellPolicy.keepCell(corner0[0] + cx, corner0[1] + cy, corner0[2] + cz)) continue;
                     ++counters.cellsActive;
