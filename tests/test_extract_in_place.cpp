@@ -30,6 +30,14 @@ struct Appended final : MeshSink {
     }
 };
 
+// Generated turbulence (a surface with many pieces) in bricks of 8 cells.
+std::unique_ptr<test::MemoryBrickSource> turbulence(const Dims3& dims) {
+    SynthParams p;
+    p.kind = SynthKind::Turbulence;
+    p.dims = dims;
+    return test::synthBrickSource(p, 8);
+}
+
 ExtractStats extract(bool noise, BrickSource& source, const FullExtractOptions& o, TriangleMesh& mesh) {
     return noise ? extractNoise(source, o, mesh) : extractOctree(source, o, mesh);
 }
@@ -37,10 +45,7 @@ ExtractStats extract(bool noise, BrickSource& source, const FullExtractOptions& 
 // Many chunks (8 a thread) over bricks of 8 cells, partial on every axis: chunk borders cut
 // faces, edges and corners of bricks, so vertices owned in one chunk are placeholders in others.
 TEST(ExtractInPlace, IsTheStreamedMeshBitForBitOnAnyThreads) {
-    SynthParams p;
-    p.kind = SynthKind::Turbulence;
-    p.dims = {45, 41, 37};
-    auto source = test::synthBrickSource(p, 8);
+    auto source = turbulence({45, 41, 37});
     const double iso = turbulenceIso(ScalarType::U16);
     for (bool noise : {false, true}) {
         Appended streamed;
@@ -94,10 +99,7 @@ private:
 };
 
 TEST(ExtractInPlace, RoundsOfWhatTheCacheHoldsGiveTheSameMesh) {
-    SynthParams p;
-    p.kind = SynthKind::Turbulence;
-    p.dims = {45, 41, 37};
-    auto source = test::synthBrickSource(p, 8);
+    auto source = turbulence({45, 41, 37});
     SmallCache small(*source);
     const double iso = turbulenceIso(ScalarType::U16);
     TriangleMesh whole;
@@ -141,10 +143,7 @@ TEST(ExtractInPlace, BricksThatDisagreeOnASharedFaceStillGiveEveryTriangle) {
 
 // Appended to a mesh that already holds a surface, numbered after it.
 TEST(ExtractInPlace, AppendsAfterWhatTheMeshHolds) {
-    SynthParams p;
-    p.kind = SynthKind::Turbulence;
-    p.dims = {33, 30, 27};
-    auto source = test::synthBrickSource(p, 8);
+    auto source = turbulence({33, 30, 27});
     const double iso = turbulenceIso(ScalarType::U16);
     TriangleMesh once, twice;
     extractOctree(*source, {iso, 4, 2}, once);
@@ -219,10 +218,7 @@ TEST(ExtractInPlace, CountsAreWhatEachBrickWrites) {
 // More vertices than 32-bit indices can number: refused before anything is allocated or
 // written, naming the count, and the mesh is left as it was.
 TEST(ExtractInPlace, AnOutputTooLargeIsRefusedWithItsSize) {
-    SynthParams p;
-    p.kind = SynthKind::Turbulence;
-    p.dims = {33, 30, 27};
-    auto source = test::synthBrickSource(p, 8);
+    auto source = turbulence({33, 30, 27});
     TriangleMesh mesh;
     mesh.firstVertex = PlacedMesh::kPlaceholderTop / 2 - 100;  // as if that many were streamed
     try {

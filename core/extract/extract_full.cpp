@@ -137,7 +137,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     // vertex each (the 512^3 head about 1,700 vertices a brick of 32^3, the MRI more): twice
     // that reserved up front saves the copies and fresh page faults of regrowth (reserved pages
     // that are never touched cost nothing; process wall A/B 0.94-0.98 against B^2).
-    const size_t perBrick = 2 * size_t(source.layout().brickSize) * size_t(source.layout().brickSize);
+    const size_t perBrick = size_t(expectedVerticesPerBrick(source.layout().brickSize));
     const size_t expectVertices = options.sink        ? options.streamPieceVertices + perBrick * 4
                                   : brickSink != nullptr ? perBrick * 4
                                                          : items.size() * perBrick;
@@ -195,9 +195,9 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         finish();
         return extractor.counters();
     }
-    // Chunks of a bounded number of bricks are extracted a round at a time and merged: memory
-    // holds a round's surface, not all of it. (Vertices are numbered as one thread would number
-    // them whatever the chunks: see mergeChunk.)
+    // To the brick sink on several threads: chunks of a bounded number of bricks are extracted a
+    // round at a time and merged: memory holds a round's surface, not all of it. (Vertices are
+    // numbered as one thread would number them whatever the chunks: see mergeChunk.)
     const size_t chunkCount =
         std::max(std::min(items.size(), size_t(options.threads) * kChunksPerThread),
                  (items.size() + kStreamedChunkBricks - 1) / kStreamedChunkBricks);
@@ -233,16 +233,12 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
             });
         });
         for (size_t c = first; c < last; ++c) {
-            total.metaCellsTested += chunks[c].counters.metaCellsTested;
-            total.metaCellsActive += chunks[c].counters.metaCellsActive;
-            total.cellsVisited += chunks[c].counters.cellsVisited;
-            total.cellsActive += chunks[c].counters.cellsActive;
+            total += chunks[c].counters;
             const size_t begin = items.size() * c / chunkCount;
             mergeChunk(chunks[c], mesh, seams, [&](size_t k) { handOverBrick(bricks[begin + k]); });
             chunks[c] = ChunkOutput();  // free the chunk's memory as soon as it is merged
             for (size_t i = begin; i < items.size() * (c + 1) / chunkCount; ++i) trimmer.finished(bricks[i]);
             trimmer.maybeTrim(seams);
-            stream(false);
         }
     }
     if (borderOut) border.collect(seams, *borderOut, identity);

@@ -35,6 +35,37 @@ struct Chunk {
     std::vector<std::pair<size_t, const PlacedMesh::Placeholder*>> unmade;
 };
 
+// The items first .. first + counts.size() - 1 cut into at most `most` chunks of about equal
+// triangles, with their vertex and triangle counts and their offsets from the first.
+std::vector<Chunk> cutChunks(const std::vector<BrickCount>& counts, size_t first, size_t most) {
+    const size_t size = counts.size();
+    std::vector<uint64_t> trianglesBefore(size + 1, 0);
+    for (size_t k = 0; k < size; ++k) trianglesBefore[k + 1] = trianglesBefore[k] + counts[k].triangles;
+    std::vector<Chunk> chunks(std::min(size, most));
+    uint64_t vertices = 0, triangles = 0;
+    for (size_t c = 0; c < chunks.size(); ++c) {
+        Chunk& chunk = chunks[c];
+        const size_t begin = c == 0 ? 0 : chunks[c - 1].end - first;
+        const uint64_t target = trianglesBefore[size] * (c + 1) / chunks.size();
+        const size_t end = c + 1 == chunks.size()
+                               ? size
+                               : std::max(begin, size_t(std::lower_bound(trianglesBefore.begin() + std::ptrdiff_t(begin),
+                                                                         trianglesBefore.end(), target) -
+                                                        trianglesBefore.begin()));
+        chunk.begin = first + begin;
+        chunk.end = first + end;
+        chunk.vertexBase = vertices;
+        chunk.indexBase = 3 * triangles;
+        for (size_t k = begin; k < end; ++k) {
+            chunk.vertices += counts[k].vertices;
+            chunk.triangles += counts[k].triangles;
+        }
+        vertices += chunk.vertices;
+        triangles += chunk.triangles;
+    }
+    return chunks;
+}
+
 std::string megabytes(double bytes) { return std::to_string(int64_t(bytes / 1e6 + 0.5)) + " MB"; }
 
 // Reserves room for `vertices` and `triangles` more (pages never written cost nothing). Only a
@@ -116,10 +147,6 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     };
     tbb::task_arena arena(threads);
     auto forEach = [&](size_t count, auto&& body) {
-        if (threads == 1) {
-            for (size_t i = 0; i < count; ++i) body(i);
-            return;
-        }
         arena.execute([&] { tbb::parallel_for(size_t(0), count, [&](size_t i) { body(i); }); });
     };
 
@@ -150,7 +177,6 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     uint64_t vertices = 0, triangles = 0;  // written by earlier rounds
     std::vector<BrickCount> counts;
     std::vector<std::vector<uint32_t>> activeOf;
-    std::vector<uint64_t> trianglesBefore;
     // An error leaves the mesh as it was (streamed, without the round that failed).
     auto restore = [&] {
         if (mesh.positions.size() < vertexStart || mesh.indices.size() < indexStart) return mesh.clear();
@@ -177,25 +203,10 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
             });
 
             // 2. Chunks of about equal triangles, and their places in the arrays.
-            const size_t roundSize = last - first;
-            trianglesBefore.assign(roundSize + 1, 0);
-            for (size_t k = 0; k < roundSize; ++k) trianglesBefore[k + 1] = trianglesBefore[k] + counts[k].triangles;
-            const size_t chunkCount = std::min(roundSize, size_t(threads) * kChunksPerThread);
-            std::vector<Chunk> chunks(chunkCount);
+            std::vector<Chunk> chunks = cutChunks(counts, first, size_t(threads) * kChunksPerThread);
+            const size_t chunkCount = chunks.size();
             uint64_t roundVertices = 0, roundTriangles = 0;
-            for (size_t c = 0; c < chunkCount; ++c) {
-                Chunk& chunk = chunks[c];
-                chunk.begin = c == 0 ? first : chunks[c - 1].end;
-                const uint64_t target = trianglesBefore[roundSize] * (c + 1) / chunkCount;
-                const size_t end = size_t(std::lower_bound(trianglesBefore.begin() + std::ptrdiff_t(chunk.begin - first),
-                                                           trianglesBefore.end(), target) - trianglesBefore.begin());
-                chunk.end = c + 1 == chunkCount ? last : std::max(first + end, chunk.begin);
-                chunk.vertexBase = roundVertices;
-                chunk.indexBase = 3 * roundTriangles;
-                for (size_t i = chunk.begin; i < chunk.end; ++i) {
-                    chunk.vertices += counts[i - first].vertices;
-                    chunk.triangles += counts[i - first].triangles;
-                }
+            for (const Chunk& chunk : chunks) {
                 roundVertices += chunk.vertices;
                 roundTriangles += chunk.triangles;
             }
@@ -203,8 +214,8 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
                 // The surface this round foretells and a quarter more, or (the first bricks may hold
                 // little of it) about 2 B^2 vertices a brick, a surface crossing it twice.
                 const double scale = 1.25 * double(n) / double(last);
-                const uint64_t perBrick = 2 * uint64_t(layout.brickSize) * uint64_t(layout.brickSize);
-                const uint64_t expect = std::max(uint64_t(double(roundVertices) * scale), uint64_t(n) * perBrick);
+                const uint64_t expect = std::max(uint64_t(double(roundVertices) * scale),
+                                                 uint64_t(n) * expectedVerticesPerBrick(layout.brickSize));
                 reserve(mesh, expect, 2 * expect);
             }
             grow(mesh, roundVertices, roundTriangles);
@@ -312,12 +323,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     }
 
     KernelCounters total;
-    for (const BrickExtractor& e : extractors) {
-        total.metaCellsTested += e.counters().metaCellsTested;
-        total.metaCellsActive += e.counters().metaCellsActive;
-        total.cellsVisited += e.counters().cellsVisited;
-        total.cellsActive += e.counters().cellsActive;
-    }
+    for (const BrickExtractor& e : extractors) total += e.counters();
     stats.triangles = triangles;
     stats.vertices = vertices;
     stats.brickWaitSeconds = double(waitNanoseconds) * 1e-9;
