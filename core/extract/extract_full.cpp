@@ -331,8 +331,11 @@ ExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options
         const PartBorder part(source.volume(), layout, options.bricks);
         std::erase_if(work, [&](const BrickWork& w) { return !part.holds(w.id); });
     }
+    // A brick's meta-cells whose range holds iso are exactly those its surface crosses: where
+    // the kernel takes bricks whole, it emits them at once, as the octree's, in the same order.
+    const bool whole = rangeExtractor.wholeBricks();
     auto metaCellsOf = [&](const BrickWork& w) {
-        return std::span<const uint32_t>(local.data() + w.begin, w.end - w.begin);
+        return whole ? std::span<const uint32_t>() : std::span<const uint32_t>(local.data() + w.begin, w.end - w.begin);
     };
     KernelCounters counters;
     if (writesInPlace(options)) {
@@ -344,7 +347,10 @@ ExtractStats extractNoise(BrickSource& source, const FullExtractOptions& options
         counters = extractItems(work, source, options, mesh, stats, progress, 0.5,
                                 [&](BrickExtractor& extractor, const BrickWork& w, const void* samples,
                                     TriangleMesh& out, EdgeVertexMap& seams) {
-                                    extractor.extractMetaCells(w.id, samples, options.iso, metaCellsOf(w), out, seams);
+                                    if (whole)
+                                        extractor.extractBrick(w.id, samples, options.iso, out, seams);
+                                    else
+                                        extractor.extractMetaCells(w.id, samples, options.iso, metaCellsOf(w), out, seams);
                                 });
     }
     stats.bricksActive = int64_t(work.size());

@@ -99,6 +99,7 @@ BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layo
     const size_t corners = size_t(layout.brickSize + 1);
     mEdgeVertex.resize(corners * corners * corners * 3);
     mEdgeSeen.resize((mEdgeVertex.size() + 63) / 64);
+    if (wholeBricks()) mLayerVertex.resize(BrickKernel<uint8_t>::layerSlots(layout.brickSize));
 }
 
 void BrickExtractor::metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out) {
@@ -152,6 +153,11 @@ void BrickExtractor::extractInto(int64_t id, const void* samples, double iso,
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         BrickKernel<T, Mesh> k(*this, id, samples, iso, mesh, seams);
+        if (metaCells.empty() && wholeBricks()) {
+            mEdgeSeen.resize(std::max(mEdgeSeen.size(), size_t(k.cells[1] + 1) * size_t(k.cells[2] + 1)));
+            k.emitBrick(mEdgeSeen.data(), mLayerVertex.data());
+            return;
+        }
         AllCells all;
         forEachActiveMetaCell(id, samples, iso, metaCells, [&](int m) { k.extractMetaCell(m, all); });
     });
@@ -160,7 +166,8 @@ void BrickExtractor::extractInto(int64_t id, const void* samples, double iso,
 BrickCount BrickExtractor::countInPlace(int64_t id, const void* samples, double iso,
                                         std::span<const uint32_t> metaCells, const EdgeOwnership& ownership,
                                         std::vector<uint32_t>* activeMetaCells) {
-    if (!metaCells.empty()) activeMetaCells = nullptr;  // listed already
+    // Listed already, or not needed: a whole brick is emitted at once (extractInto).
+    if (!metaCells.empty() || wholeBricks()) activeMetaCells = nullptr;
     BrickCount count;
     const KernelCounters counters = mCounters;  // the emission counts what it visits
     // The kernel's output, which the count does not touch; a first vertex already set, so that
@@ -171,7 +178,7 @@ BrickCount BrickExtractor::countInPlace(int64_t id, const void* samples, double 
     visitScalarType(mVolume.type, [&](auto zero) {
         using T = decltype(zero);
         const BrickKernel<T> k(*this, id, samples, iso, none, noSeams);
-        if (mLayout.brickSize < 64) {  // the whole brick at once, a word per corner row
+        if (wholeBricks()) {  // the whole brick at once, a word per corner row
             mEdgeSeen.resize(std::max(mEdgeSeen.size(), size_t(k.cells[1] + 1) * size_t(k.cells[2] + 1)));
             count = k.countBrick(mEdgeSeen.data(), ownership, activeMetaCells);
             return;

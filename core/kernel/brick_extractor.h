@@ -67,7 +67,8 @@ public:
     // meta-cell order; empty meta-cells (beyond a partial brick's cells) get an empty range.
     void metaCellRanges(int64_t id, const void* samples, std::vector<BrickRange>& out);
 
-    // Appends the surface of every cell of brick `id` whose meta-cell range holds iso.
+    // Appends the surface of every cell of brick `id` whose meta-cell range holds iso: with
+    // wholeBricks(), every crossed cell of the brick at once (BrickKernel::emitBrick), in rows.
     void extractBrick(int64_t id, const void* samples, double iso, TriangleMesh& mesh,
                       EdgeVertexMap& seams);
 
@@ -82,8 +83,9 @@ public:
     void extractInPlace(int64_t id, const void* samples, double iso,
                         std::span<const uint32_t> metaCells, PlacedMesh& mesh, EdgeVertexMap& seams);
     // What extractInPlace writes, by classification alone (the count before the emission).
-    // With `activeMetaCells` and no metaCells listed, appends the meta-cells whose range holds
-    // iso, in increasing order: the list extractInPlace then takes instead of ranging the brick.
+    // With `activeMetaCells`, no metaCells listed and bricks not taken whole, appends the
+    // meta-cells whose range holds iso, in increasing order: the list extractInPlace then takes
+    // instead of ranging the brick.
     BrickCount countInPlace(int64_t id, const void* samples, double iso,
                             std::span<const uint32_t> metaCells, const EdgeOwnership& ownership,
                             std::vector<uint32_t>* activeMetaCells = nullptr);
@@ -99,6 +101,9 @@ public:
     int metaCellsPerAxis() const { return mMetaPerAxis; }
 
     const KernelCounters& counters() const { return mCounters; }
+    // A full extraction takes a brick whole, a 64-bit word per row of corners, when its rows
+    // have at most 64 corners; larger bricks go meta-cell by meta-cell.
+    bool wholeBricks() const { return mLayout.brickSize < 64; }
 
 private:
     template <class T, class Mesh>
@@ -116,6 +121,7 @@ private:
     // the numbers start again (the extractor used on another mesh), the array is cleared.
     std::vector<uint32_t> mEdgeVertex;
     std::vector<uint64_t> mEdgeSeen;  // countInPlace: a bit per local edge, or a word per corner row
+    std::vector<uint32_t> mLayerVertex;  // emitBrick's vertex slots
     static constexpr uint32_t kNoFirstVertex = UINT32_MAX;
     uint32_t mBrickFirstVertex = kNoFirstVertex;  // set by the brick's first kernel
     uint32_t mVerticesMade = 0;                   // the largest entry written

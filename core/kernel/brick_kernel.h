@@ -129,13 +129,19 @@ struct BrickKernel {
     // makes, and the normal is most of a vertex's cost.
     uint32_t edgeVertex(int cx, int cy, int cz, int e, bool withNormal) {
         const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
-        const int px = cx + o[0], py = cy + o[1], pz = cz + o[2], axis = mcEdgeAxis(e);
+        const int p[3] = {cx + o[0], cy + o[1], cz + o[2]}, axis = mcEdgeAxis(e);
         const int n = x.mLayout.brickSize + 1;
-        const size_t local = ((size_t(pz) * n + py) * n + px) * 3 + axis;
+        const size_t local = ((size_t(p[2]) * n + p[1]) * n + p[0]) * 3 + axis;
         uint32_t& slot = x.mEdgeVertex[local];
         if (slot > x.mBrickFirstVertex) return slot - 1;
+        return makeEdgeVertex(p[0], p[1], p[2], axis, withNormal, &slot);
+    }
 
-        // Edges on the brick's faces are shared with a neighbour brick: weld through the map.
+    // The vertex on the edge from local corner (px, py, pz) along `axis`, asked for once per brick: an
+    // edge on a face the brick shares with a neighbour is welded through the seam map (and, in
+    // a PlacedMesh, gets a placeholder when a brick in another chunk owns it); else it is made
+    // now, and its number + 1 kept in `slot` when one is given.
+    uint32_t makeEdgeVertex(int px, int py, int pz, int axis, bool withNormal, uint32_t* slot) {
         const int p[3] = {px, py, pz};
         bool onFace = false;
         for (int a = 0; a < 3; ++a)
@@ -143,18 +149,18 @@ struct BrickKernel {
         uint64_t key = 0;
         if (onFace) {
             const Dims3& d = x.mVolume.dims;
-            key = edgeKey(d, corner0[0] + px, corner0[1] + py, corner0[2] + pz, axis);
+            key = edgeKey(d, corner0[0] + p[0], corner0[1] + p[1], corner0[2] + p[2], axis);
             const uint32_t v = seams.find(key);
             if (v != UINT32_MAX) return v;
         }
         bool owned = true;
         if constexpr (kPlaced) owned = !onFace || mesh.ownership->owns(brick, corner0, p, axis);
 
-        const size_t i0 = sampleIndex(px, py, pz);
+        const size_t i0 = sampleIndex(p[0], p[1], p[2]);
         const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
         const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
         const double t = crossingFraction(s0, s1, iso);
-        glm::dvec3 local3(px, py, pz);
+        glm::dvec3 local3(p[0], p[1], p[2]);
         local3[axis] += t;
         const glm::dvec3 position =
             x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
@@ -168,7 +174,7 @@ struct BrickKernel {
             }
         const uint32_t v = mesh.nextVertex();
         mesh.addVertex(glm::vec3(position), normal);
-        slot = v + 1;
+        if (slot) *slot = v + 1;
         x.mVerticesMade = v + 1;
         if (onFace) seams.insert(key, v);
         return v;
@@ -213,6 +219,113 @@ struct BrickKernel {
                 above[z][y] = aboveBits(s + sampleIndex(lo[0], lo[1] + y, lo[2] + z), nx + 1, threshold);
     }
 
+    // Above bits of every corner row of the brick, a word per row (bit i: corner x = i), row (y, z)
+    // at rows[z * (cells[1] + 1) + y]. Rows of at most 64 corners: cells[0] < 64.
+    void classifyBrick(uint64_t* rows) const {
+        for (int z = 0; z <= cells[2]; ++z)
+            for (int y = 0; y <= cells[1]; ++y)
+                rows[size_t(z) * size_t(cells[1] + 1) + size_t(y)] = aboveBits(s + sampleIndex(0, y, z), cells[0] + 1, threshold);
+    }
+
+    // Every crossed cell of the brick, for a full extraction: what extractMetaCell(m, AllCells)
+    // makes over every meta-cell whose range holds iso, in another order, Flying Edges' way. The
+    // brick is classified a word per corner row (classifyBrick, into `rows`); then layer by layer
+    // of cells, the vertices of the crossed edges of its corner rows are made in row order (x
+    // edges, y edges, then z edges between layers) into a small table of slots, `layerVertex`:
+    // (kLayerSlots, two corner layers of x and y edges and one of z edges), and each crossed
+    // cell's polygons are fanned from the slots of its edges. No vertex is looked for but on the
+    // brick's faces (the seam map); nothing is touched but the samples, a few KB and the mesh.
+    static constexpr size_t layerSlots(int brickSize) { return size_t(brickSize + 1) * size_t(brickSize + 1) * 5; }
+    void emitBrick(uint64_t* rows, uint32_t* layerVertex) {
+        const int nx = cells[0], ny = cells[1], nz = cells[2];
+        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
+        classifyBrick(rows);
+        auto row = [&](int y, int z) { return rows[size_t(z) * size_t(ny + 1) + size_t(y)]; };
+        const uint64_t cellBits = (uint64_t(1) << nx) - 1, cornerBits = cellBits | (uint64_t(1) << nx);
+        // Slots: the x edge from corner (i, y) of a corner layer at xy[layer & 1][2 y w + i], its y
+        // edge at xy[..][(2 y + 1) w + i]; the z edge from corner (i, y) of the current layer at
+        // zv[y w + i].
+        const size_t w = size_t(nx + 1), layer = 2 * w * size_t(ny + 1);
+        uint32_t* const xy[2] = {layerVertex, layerVertex + layer};
+        uint32_t* const zv = layerVertex + 2 * layer;
+        auto makeRow = [&](uint64_t mask, int y, int z, int axis, uint32_t* slots) {
+            for (; mask; mask &= mask - 1) {
+                const int px = __builtin_ctzll(mask);
+                slots[px] = makeEdgeVertex(px, y, z, axis, true, nullptr);
+            }
+        };
+        // The seam map's slots of a row's edges on the brick's faces, asked for a layer ahead of
+        // their lookups: the map outgrows the caches, and a lookup was a fifth of a vertex.
+        const Dims3& dims = x.mVolume.dims;
+        const uint64_t ends = 1 | uint64_t(1) << nx;
+        auto prefetchRow = [&](uint64_t mask, int y, int z, int axis) {
+            const bool faceRow = (axis != 1 && (y == 0 || y == ny)) || (axis != 2 && (z == 0 || z == nz));
+            for (mask &= faceRow ? ~uint64_t(0) : axis == 0 ? 0 : ends; mask; mask &= mask - 1)
+                seams.prefetch(edgeKey(dims, corner0[0] + __builtin_ctzll(mask), corner0[1] + y, corner0[2] + z, axis));
+        };
+        auto forLayer = [&](int z, auto&& f) {  // f(mask, y, axis, row offset) for corner layer z's x and y edges
+            for (int y = 0; y <= ny; ++y) {
+                const uint64_t r = row(y, z);
+                f((r ^ r >> 1) & cellBits, y, 0, 2 * size_t(y) * w);
+                if (y < ny) f((r ^ row(y + 1, z)) & cornerBits, y, 1, (2 * size_t(y) + 1) * w);
+            }
+        };
+        auto makeLayer = [&](int z) {  // the x and y edges of corner layer z
+            uint32_t* to = xy[z & 1];
+            forLayer(z, [&](uint64_t mask, int y, int axis, size_t at) { makeRow(mask, y, z, axis, to + at); });
+        };
+        auto prefetchLayer = [&](int z) {  // what cell layer z makes: z edges, then corner layer z + 1's
+            for (int y = 0; y <= ny; ++y) prefetchRow((row(y, z) ^ row(y, z + 1)) & cornerBits, y, z, 2);
+            forLayer(z + 1, [&](uint64_t mask, int y, int axis, size_t) { prefetchRow(mask, y, z + 1, axis); });
+        };
+        uint64_t metaMask[64];  // the cells of meta-cell mx of a row
+        for (int mx = 0; mx < n; ++mx) metaMask[mx] = ((uint64_t(1) << M) - 1) << (mx * M) & cellBits;
+        KernelCounters& counters = x.mCounters;
+        counters.metaCellsTested += int64_t(n) * n * n;
+        counters.cellsVisited += int64_t(nx) * ny * nz;
+        uint64_t metaRows[64 * 64];  // [mz * n + my]: bit mx set when that meta-cell is crossed
+        std::fill_n(metaRows, size_t(n) * size_t(n), uint64_t(0));
+        forLayer(0, [&](uint64_t mask, int y, int axis, size_t) { prefetchRow(mask, y, 0, axis); });
+        prefetchLayer(0);
+        makeLayer(0);
+        for (int z = 0; z < nz; ++z) {
+            if (z + 1 < nz) prefetchLayer(z + 1);  // a layer ahead
+            for (int y = 0; y <= ny; ++y) makeRow((row(y, z) ^ row(y, z + 1)) & cornerBits, y, z, 2, zv + size_t(y) * w);
+            makeLayer(z + 1);
+            const uint32_t* lo = xy[z & 1];
+            const uint32_t* hi = xy[(z + 1) & 1];
+            for (int y = 0; y < ny; ++y) {
+                const CellRow cellRow{row(y, z), row(y + 1, z), row(y, z + 1), row(y + 1, z + 1)};
+                uint64_t mixed = cellRow.crossed(cellBits);
+                if (mixed == 0) continue;
+                const size_t xRow = 2 * size_t(y) * w, yRow = xRow + w, zRow = size_t(y) * w;
+                // Edge e of cell i has its vertex at edgeSlot[e][i] (kEdgeCorners: its first corner).
+                const uint32_t* const edgeSlot[kMcEdgeCount] = {
+                    lo + xRow, lo + xRow + 2 * w, hi + xRow, hi + xRow + 2 * w,
+                    lo + yRow, lo + yRow + 1, hi + yRow, hi + yRow + 1,
+                    zv + zRow, zv + zRow + 1, zv + zRow + w, zv + zRow + w + 1};
+                uint64_t meta = 0;
+                for (int mx = 0; mx < n; ++mx) meta |= uint64_t((mixed & metaMask[mx]) != 0) << mx;
+                for (; mixed; mixed &= mixed - 1) {
+                    const int rx = __builtin_ctzll(mixed);
+                    const McPolygonCase& pc = mcPolygonCase(cellRow.caseOf(rx));
+                    for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
+                        const uint32_t first = edgeSlot[pc.edges[at]][rx];
+                        uint32_t last = edgeSlot[pc.edges[at + 1]][rx];
+                        for (int k = 2; k < pc.vertexCount[p]; ++k) {
+                            const uint32_t next = edgeSlot[pc.edges[at + k]][rx];
+                            mesh.addTriangle(first, last, next);
+                            last = next;
+                        }
+                    }
+                    ++counters.cellsActive;
+                }
+                metaRows[size_t(z / M) * size_t(n) + size_t(y / M)] |= meta;
+            }
+        }
+        for (int m = 0; m < n * n; ++m) counters.metaCellsActive += bitCount(metaRows[m]);
+    }
+
     // What a full extraction of this brick writes into a PlacedMesh, from the classification
     // of the whole brick (the meta-cells whose ranges hold iso, or NOISE's exact list of them,
     // hold every cell the surface crosses, so they make the same): a word per corner row
@@ -228,9 +341,7 @@ struct BrickKernel {
         const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
         uint64_t metaRows[64 * 64];  // [mz * n + my]: bit mx set when that meta-cell is crossed
         if (activeMetaCells) std::fill_n(metaRows, size_t(n) * size_t(n), uint64_t(0));
-        for (int z = 0; z <= nz; ++z)
-            for (int y = 0; y <= ny; ++y)
-                rows[size_t(z) * size_t(ny + 1) + size_t(y)] = aboveBits(s + sampleIndex(0, y, z), nx + 1, threshold);
+        classifyBrick(rows);
         BrickCount count;
         const uint64_t cellBits = (uint64_t(1) << nx) - 1, cornerBits = cellBits | (uint64_t(1) << nx);
         const bool lower[3] = {corner0[0] > 0, corner0[1] > 0, corner0[2] > 0};
