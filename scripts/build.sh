@@ -1,7 +1,20 @@
 #!/usr/bin/env bash
-# Configures and builds vdiso in Release into build/ (binary: build/bin/vdiso).
-# Extra arguments go to the CMake configure step (e.g. -DVDISO_BUILD_VTK_COMPARE=ON).
+# Configures and builds vdiso in Release into build/ (binary: build/bin/vdiso), everything: the
+# command, the Python module, vdiso-mpi, the tests and the benchmarks' programs.
+#   scripts/build.sh [CMAKE_OPTION...] [--target TARGET...]
+# CMAKE_OPTIONs go to the configure step (e.g. -DVDISO_BUILD_VTK_COMPARE=ON, or
+# -DVDISO_BUILD_TESTS=OFF); --target builds only those targets (scripts/demo.sh: vdiso _vdiso).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
-cmake --build build -j "$(nproc)"
+configure=(-DVDISO_BUILD_TESTS=ON -DVDISO_BUILD_BENCH=ON -DVDISO_BUILD_MPI=ON)
+targets=()
+while [ $# -gt 0 ]; do
+  if [ "$1" = --target ]; then
+    shift
+    while [ $# -gt 0 ] && [ "${1#-}" = "$1" ]; do targets+=("$1"); shift; done
+  else
+    configure+=("$1"); shift
+  fi
+done
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${configure[@]}" >/dev/null
+cmake --build build -j "$(nproc)" ${targets[@]:+--target "${targets[@]}"}

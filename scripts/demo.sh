@@ -3,8 +3,10 @@
 # convert it into a brick store, describe it, extract its surface, render it, print statistics.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
-scripts/build.sh
+# Only what the demo runs is installed and built: the command and the Python module
+# (scripts/test.sh builds the rest).
+scripts/setup.sh demo
+scripts/build.sh -DVDISO_BUILD_TESTS=OFF -DVDISO_BUILD_BENCH=OFF -DVDISO_BUILD_MPI=OFF --target vdiso _vdiso
 scripts/fetch_data.sh
 vdiso=build/bin/vdiso
 

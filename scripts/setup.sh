@@ -1,31 +1,42 @@
 #!/usr/bin/env bash
-# Installs the Debian packages vdiso builds against, only those missing.
+# Installs the Debian packages vdiso builds against, only those missing: `demo`, what the
+# command and the Python module need; no argument, everything the tests need; `bench`, also VTK.
 # Uses sudo when not root. Safe to run again: does nothing when everything is there.
 set -euo pipefail
 
+# What the vdiso command and the Python module build against and run with: all the demo needs
+# (`scripts/setup.sh demo`).
 packages=(
   build-essential cmake pkg-config
   libglm-dev libtbb-dev zlib1g-dev libzstd-dev liblz4-dev libpng-dev
   libopenvdb-dev libboost-iostreams-dev   # OpenVDB's Find module needs boost-iostreams and TBB
   libosmesa6-dev nlohmann-json3-dev
-  libgtest-dev libbenchmark-dev
   libboost-dev libmeshoptimizer-dev       # vdiso serve: Beast (HTTP, WebSocket), geometry codecs
-  chromium                                # the viewer's end-to-end test (headless)
-  libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
-  clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
   libtiff-dev                             # TIFF stacks (io/readers/tiff_reader.h)
   libgdcm-dev                             # DICOM series (io/readers/dicom_reader.h)
   libhdf5-dev                             # HDF5 datasets (io/readers/hdf5_reader.h)
   libblosc-dev                            # Zarr chunks (io/readers/zarr_array.h)
-  libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
   libcurl4-openssl-dev                    # remote stores over HTTP(S) and S3 (io/remote)
-  nginx-light python3-botocore curl openssl   # their tests' servers (tests/remote/)
-  pybind11-dev python3-dev python3-numpy      # the Python module (python/)
-  python3-pytest python3-skimage python3-zarr python3-dask   # its tests
+  pybind11-dev python3-dev python3-numpy  # the Python module (python/)
 )
+# Everything else (`scripts/setup.sh`, what scripts/test.sh runs): the tests, the benchmarks'
+# own programs, vdiso-mpi, the sanitizer and fuzz builds, the servers and the browser the tests
+# run against, and the viewer's modules.
+profile=${1:-all}
+if [ "$profile" != demo ]; then
+  packages+=(
+    libgtest-dev libbenchmark-dev
+    chromium                                # the viewer's end-to-end test (headless)
+    libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames
+    clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
+    libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
+    nginx-light python3-botocore curl openssl   # the remote stores' test servers (tests/remote/)
+    python3-pytest python3-skimage python3-zarr python3-dask   # the Python module's tests
+  )
+fi
 # `scripts/setup.sh bench`: also what the benchmarks compare against (VTK's Flying Edges from
 # Python, for bench/python.sh and bench/real_scans.sh), which the build and tests do not need.
-if [ "${1:-}" = bench ]; then
+if [ "$profile" = bench ]; then
   packages+=(python3-vtk9)
 fi
 
@@ -35,7 +46,7 @@ for p in "${packages[@]}"; do
 done
 # npm comes with Debian's nodejs from its own package (a machine may have a newer nodejs with
 # npm built in: then nothing is installed).
-command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
+[ "$profile" = demo ] || command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
 
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
@@ -47,6 +58,7 @@ fi
 
 # The viewer's modules (three.js, meshoptimizer's decoder, puppeteer-core for its test), at the
 # versions web/package-lock.json pins; again only when the lock file is newer than the install.
+[ "$profile" != demo ] || exit 0
 cd "$(dirname "$0")/../web"
 if [ ! -f node_modules/.package-lock.json ] || [ package-lock.json -nt node_modules/.package-lock.json ]; then
   echo "setup: npm ci in web/" >&2
