@@ -12,6 +12,7 @@
 #include "core/lod/level_source.h"
 #include "core/orientation.h"
 #include "fuzz/fuzz_input.h"
+#include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_format.h"
 
@@ -40,13 +41,13 @@ void fixChecksums(std::vector<uint8_t>& b) {
             const uint64_t offset = load<uint64_t>(b, entry);
             const uint32_t stored = load<uint32_t>(b, entry + 8);
             if (offset < b.size() && stored <= b.size() - offset)
-                store(b, entry + 12, vdiso::store_format::crc32Of(b.data() + offset, stored));
+                store(b, entry + 12, vdiso::crc32Of(b.data() + offset, stored));
         }
-        store(b, indexOffset + indexSize - 4, vdiso::store_format::crc32Of(b.data() + indexOffset, indexSize - 4));
+        store(b, indexOffset + indexSize - 4, vdiso::crc32Of(b.data() + indexOffset, indexSize - 4));
     }
-    store(b, 160, vdiso::store_format::crc32Of(b.data(), 160));
+    store(b, 160, vdiso::crc32Of(b.data(), 160));
     // Version 4's second checksum, over the orientation too (older versions ignore the bytes).
-    store(b, 240, vdiso::store_format::crc32Of(b.data(), 240));
+    store(b, 240, vdiso::crc32Of(b.data(), 240));
 }
 
 void exercise(const std::string& path) {

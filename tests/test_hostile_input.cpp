@@ -19,6 +19,7 @@
 #include "core/extract/extract_full.h"
 #include "core/kernel/iso.h"
 #include "core/kernel/mc_tables.h"
+#include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/camera_json.h"
 #include "io/error.h"
@@ -174,7 +175,7 @@ protected:
     template <class T>
     void patchHeader(size_t offset, T value) {
         std::memcpy(bytes.data() + offset, &value, sizeof(T));
-        const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+        const uint32_t crc = crc32Of(bytes.data(), 160);
         std::memcpy(bytes.data() + 160, &crc, 4);
     }
     // `offset` within the raw index (packed again after).
@@ -182,7 +183,7 @@ protected:
     void patchIndex(size_t offset, T value) {
         bytes = test::rewriteStoreIndex(bytes, [&](std::vector<unsigned char>& index) {
             std::memcpy(index.data() + offset, &value, sizeof(T));
-            const uint32_t crc = store_format::crc32Of(index.data(), index.size() - 4);
+            const uint32_t crc = crc32Of(index.data(), index.size() - 4);
             std::memcpy(index.data() + index.size() - 4, &crc, 4);
         });
     }

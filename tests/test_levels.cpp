@@ -18,6 +18,7 @@
 #include "core/lod/level_source.h"
 #include "core/trees/minmax_tree.h"
 #include "core/synth/synth.h"
+#include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"
 #include "io/render/renderer.h"
@@ -330,7 +331,7 @@ TEST(Levels, VersionTwoStoreOpensAndExtractsAsBefore) {
     const uint32_t two = 2, none = 0;
     std::memcpy(bytes.data() + 8, &two, 4);
     std::memcpy(bytes.data() + 108, &none, 4);  // the level count was reserved, zero
-    const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+    const uint32_t crc = crc32Of(bytes.data(), 160);
     std::memcpy(bytes.data() + 160, &crc, 4);
     const std::string old = dir.file("old.vdiso");
     test::writeFile(old, bytes.data(), bytes.size());
@@ -368,7 +369,7 @@ TEST(Levels, ImpossibleLevelCountsAreRefused) {
         auto bytes = good;
         std::memcpy(bytes.data() + 108, &levels, 4);
         if (bricks) std::memcpy(bytes.data() + 112, &*bricks, 8);
-        const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+        const uint32_t crc = crc32Of(bytes.data(), 160);
         std::memcpy(bytes.data() + 160, &crc, 4);
         const std::string bad = dir.file("bad.vdiso");
         test::writeFile(bad, bytes.data(), bytes.size());

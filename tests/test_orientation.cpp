@@ -16,6 +16,7 @@
 #include "core/camera.h"
 #include "core/extract/extract_full.h"
 #include "core/orientation.h"
+#include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/mesh/mesh_writer.h"
 #include "io/store/store_format.h"
@@ -74,7 +75,7 @@ std::vector<unsigned char> asVersion(std::vector<unsigned char> bytes, uint32_t 
     std::memcpy(bytes.data() + 8, &version, 4);
     if (version == 2) std::memset(bytes.data() + 108, 0, 4);
     std::memset(bytes.data() + 164, 0, kStoreHeaderBytes - 164);
-    const uint32_t crc = store_format::crc32Of(bytes.data(), 160);
+    const uint32_t crc = crc32Of(bytes.data(), 160);
     std::memcpy(bytes.data() + 160, &crc, 4);
     return bytes;
 }
@@ -114,7 +115,7 @@ TEST(OrientedStore, DamagedOrientationIsRefused) {
     auto rewrite = [&](size_t at, const void* value, size_t n) {
         auto bytes = good;
         std::memcpy(bytes.data() + at, value, n);
-        const uint32_t crc = store_format::crc32Of(bytes.data(), 240);
+        const uint32_t crc = crc32Of(bytes.data(), 240);
         std::memcpy(bytes.data() + 240, &crc, 4);
         return test::storeOpenError(bad, bytes);
     };

@@ -19,6 +19,7 @@
 
 #include "core/camera.h"
 #include "core/interrupt.h"
+#include "io/crc32.h"
 #include "io/error.h"
 #include "io/remote/remote_file.h"
 #include "io/store/brick_store.h"
@@ -208,7 +209,7 @@ TEST_F(RemoteHostile, TheDiskCacheKeepsOnlyVerifiedRanges) {
         std::vector<unsigned char> bytes = test::readFile(path);
         const size_t n = bytes.size() - 4;
         bytes[n / 2] ^= 0x5a;
-        const uint32_t crc = store_format::crc32Of(bytes.data(), n);
+        const uint32_t crc = crc32Of(bytes.data(), n);
         std::memcpy(bytes.data() + n, &crc, 4);
         test::writeFile(path, bytes.data(), bytes.size());
         planted.push_back(bytes);

@@ -9,6 +9,7 @@
 
 #include "core/brick_layout.h"
 #include "core/synth/synth.h"
+#include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/store/byte_shuffle.h"
 #include "io/error.h"
@@ -238,10 +239,10 @@ TEST(StoreDecode, MalformedCompressedBrickIsReportedNotReturned) {
         std::vector<unsigned char> b = test::readFile(path);
         // Overwrite the stream after its first bytes, then make both checksums agree.
         std::fill_n(b.begin() + std::ptrdiff_t(e.offset + 16), e.storedBytes - 16, uint8_t(0xff));
-        const uint32_t brickCrc = store_format::crc32Of(b.data() + e.offset, e.storedBytes);
+        const uint32_t brickCrc = crc32Of(b.data() + e.offset, e.storedBytes);
         b = test::rewriteStoreIndex(b, [&](std::vector<unsigned char>& index) {
             std::memcpy(index.data() + 16 + 32 * id + 12, &brickCrc, 4);
-            const uint32_t indexCrc = store_format::crc32Of(index.data(), index.size() - 4);
+            const uint32_t indexCrc = crc32Of(index.data(), index.size() - 4);
             std::memcpy(index.data() + index.size() - 4, &indexCrc, 4);
         });
         test::writeFile(path, b.data(), b.size());

@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "io/crc32.h"
 #include "io/store/index_parts.h"
 #include "io/store/store_format.h"
 
@@ -212,9 +213,9 @@ std::vector<unsigned char> rewriteStoreIndex(std::vector<unsigned char> bytes,
     bytes.insert(bytes.end(), index.begin(), index.end());
     const uint64_t size = index.size();
     std::memcpy(bytes.data() + 128, &size, 8);
-    const uint32_t first = store_format::crc32Of(bytes.data(), 160);
+    const uint32_t first = crc32Of(bytes.data(), 160);
     std::memcpy(bytes.data() + 160, &first, 4);
-    const uint32_t whole = store_format::crc32Of(bytes.data(), 240);
+    const uint32_t whole = crc32Of(bytes.data(), 240);
     std::memcpy(bytes.data() + 240, &whole, 4);
     return bytes;
 }

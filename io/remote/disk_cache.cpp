@@ -11,8 +11,8 @@
 #include <filesystem>
 #include <vector>
 
+#include "io/crc32.h"
 #include "io/error.h"
-#include "io/store/store_format.h"
 
 namespace vdiso {
 
@@ -94,7 +94,7 @@ bool RangeDiskCache::read(uint64_t offset, size_t n, void* dst) const {
             done += size_t(r);
         }
         whole = done == n && ::pread(fd, &crc, sizeof(crc), off_t(n)) == ssize_t(sizeof(crc)) &&
-                crc == store_format::crc32Of(dst, n);
+                crc == crc32Of(dst, n);
     }
     if (whole) ::futimens(fd, nullptr);  // recently used
     ::close(fd);
@@ -113,7 +113,7 @@ void RangeDiskCache::write(uint64_t offset, size_t n, const void* src) const {
                                   std::to_string(mWrites.fetch_add(1));
     const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) return;
-    const uint32_t crc = store_format::crc32Of(src, n);
+    const uint32_t crc = crc32Of(src, n);
     bool written = true;
     for (const auto& [data, bytes] : {std::pair{static_cast<const char*>(src), n},
                                       std::pair{reinterpret_cast<const char*>(&crc), sizeof(crc)}}) {

@@ -21,6 +21,7 @@
 #include "core/kernel/iso.h"
 #include "core/orientation.h"
 #include "io/atomic_output.h"
+#include "io/crc32.h"
 #include "io/store/byte_shuffle.h"
 #include "io/error.h"
 #include "io/store/store_format.h"
@@ -199,7 +200,7 @@ void encodeBrick(const SliceWindow& window, const BrickLayout& layout, ScalarTyp
     }
     if (!out.entry.compressed) out.bytes.assign(scratch.raw.begin(), scratch.raw.end());
     out.entry.storedBytes = uint32_t(out.bytes.size());
-    out.entry.checksum = store_format::crc32Of(out.bytes.data(), out.bytes.size());
+    out.entry.checksum = crc32Of(out.bytes.data(), out.bytes.size());
 }
 
 }  // namespace

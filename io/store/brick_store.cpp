@@ -12,6 +12,7 @@
 #include <lz4.h>
 #include <zstd.h>
 
+#include "io/crc32.h"
 #include "io/store/byte_shuffle.h"
 #include "io/error.h"
 #include "io/store/lazy_index.h"
@@ -217,7 +218,7 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(i
     // check of a piece found (the bytes as read) is not computed again below.
     std::vector<int8_t> intact(size_t(count), -1);  // -1: not checked by the source
     auto check = [&](size_t k) {
-        intact[k] = store_format::crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(first) + k].checksum;
+        intact[k] = crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(first) + k].checksum;
         return intact[k] == 1;
     };
     mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data", check);

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstring>
 
+#include "io/crc32.h"
 #include "io/error.h"
 #include "io/store/store_format.h"
 

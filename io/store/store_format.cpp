@@ -11,6 +11,7 @@
 
 #include "core/orientation.h"
 #include "core/trees/sub_blocks.h"
+#include "io/crc32.h"
 #include "io/error.h"
 #include "io/store/index_parts.h"
 
@@ -93,18 +94,6 @@ void decodeOrientation(const unsigned char* bytes, const std::string& path, Volu
 }
 
 }  // namespace
-
-uint32_t crc32Of(const void* data, size_t n) {
-    uLong crc = crc32(0L, Z_NULL, 0);
-    const auto* p = static_cast<const Bytef*>(data);
-    while (n > 0) {
-        uInt chunk = uInt(std::min<size_t>(n, 1u << 30));
-        crc = crc32(crc, p, chunk);
-        p += chunk;
-        n -= chunk;
-    }
-    return uint32_t(crc);
-}
 
 std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) {
     std::array<unsigned char, kStoreHeaderBytes> bytes{};

@@ -50,7 +50,4 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
                  const BrickLayout& layout, const std::string& path, std::vector<BrickEntry>& entries,
                  ValueHistogram& histogram);
 
-// CRC-32 (zlib) of a byte range: the store's checksum algorithm.
-uint32_t crc32Of(const void* data, size_t n);
-
 }  // namespace vdiso::store_format
