@@ -9,8 +9,8 @@
 
 #include "cache/brick_cache.h"
 #include "io/error.h"
-#include "io/store/store_writer.h"
 #include "io/readers/volume_open.h"
+#include "io/store/store_writer.h"
 #include "tests/test_util.h"
 
 namespace vdiso {
@@ -152,7 +152,7 @@ TEST(BrickCache, MemoryItCannotGetIsSaidWithTheStore) {
     }
     ::setrlimit(RLIMIT_AS, &old);
     EXPECT_EQ(message.rfind(dir.file("h.vdiso") + ": the brick cache cannot get", 0), 0u) << message;
-    // The library names the quantity; the front end adds its option (tools/args.h messageOf).
+    // The library names the quantity; the front end adds its option (cli/args.h messageOf).
     EXPECT_NE(message.find("lower the budget"), std::string::npos) << message;
     EXPECT_EQ(message.find("--"), std::string::npos) << message;
 }

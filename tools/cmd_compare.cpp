@@ -1,8 +1,8 @@
 #include <cstdio>
 
+#include "cli/args.h"
 #include "io/render/image_compare.h"
 #include "io/render/png_image.h"
-#include "tools/args.h"
 #include "tools/commands.h"
 
 namespace vdiso::cli {

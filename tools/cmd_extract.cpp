@@ -4,18 +4,18 @@
 #include <string>
 
 #include "app/extract_session.h"
+#include "cli/args.h"
+#include "cli/extract_options.h"
+#include "cli/progress_bar.h"
 #include "core/camera.h"
 #include "io/atomic_output.h"
 #include "io/json.h"
 #include "io/mesh/mesh_writer.h"
+#include "io/process_stats.h"
 #include "io/render/oracle_comparison.h"
 #include "io/render/png_image.h"
-#include "io/process_stats.h"
 #include "io/render/renderer.h"
-#include "tools/args.h"
 #include "tools/commands.h"
-#include "tools/extract_options.h"
-#include "tools/progress_bar.h"
 
 namespace vdiso::cli {
 

@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "app/store_info.h"
+#include "cli/args.h"
 #include "core/orientation.h"
-#include "io/store/brick_store.h"
 #include "io/json.h"
-#include "tools/args.h"
+#include "io/store/brick_store.h"
 #include "tools/commands.h"
 
 namespace vdiso::cli {

@@ -1,9 +1,9 @@
 #include <cstdio>
 #include <string>
 
-#include "serve/server.h"
 #include "app/extract_settings.h"
-#include "tools/args.h"
+#include "cli/args.h"
+#include "serve/server.h"
 #include "tools/commands.h"
 
 namespace vdiso::cli {

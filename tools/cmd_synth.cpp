@@ -1,11 +1,11 @@
 #include <cstdio>
 
-#include "io/raw_writer.h"
-#include "io/store/store_writer.h"
+#include "cli/args.h"
+#include "cli/progress_bar.h"
+#include "io/readers/raw_writer.h"
 #include "io/readers/volume_open.h"
-#include "tools/args.h"
+#include "io/store/store_writer.h"
 #include "tools/commands.h"
-#include "tools/progress_bar.h"
 
 namespace vdiso::cli {
 

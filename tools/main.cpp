@@ -4,11 +4,11 @@
 #include <exception>
 #include <string>
 
+#include "cli/args.h"
+#include "cli/progress_bar.h"
 #include "core/interrupt.h"
 #include "io/error.h"
-#include "tools/args.h"
 #include "tools/commands.h"
-#include "tools/progress_bar.h"
 
 namespace {
 

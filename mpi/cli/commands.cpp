@@ -2,8 +2,8 @@
 
 #include <cstdio>
 
+#include "cli/args.h"
 #include "io/atomic_output.h"
-#include "tools/args.h"
 
 namespace vdiso::mpi::cli {
 

@@ -9,7 +9,7 @@
 
 namespace vdiso::mpi::cli {
 
-// The exit code of a phase's exception: vdiso's (tools/args.h exitCodeOf).
+// The exit code of a phase's exception: vdiso's (cli/args.h exitCodeOf).
 int exitCodeOf(const std::exception& e);
 
 // Rank 0's statistics: `json` and a newline to stdout for "-", else to the file, whole or not at

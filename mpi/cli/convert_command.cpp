@@ -1,10 +1,12 @@
-// vdiso-mpi convert: vdiso convert's command line (tools/convert_args.h) with the ranks of the
+// vdiso-mpi convert: vdiso convert's command line (cli/convert_args.h) with the ranks of the
 // job sharing the work (mpi/convert_across_ranks.h).
 #include <cstdio>
 #include <string>
 
 #include <tbb/global_control.h>
 
+#include "cli/args.h"
+#include "cli/convert_args.h"
 #include "io/atomic_output.h"
 #include "io/json.h"
 #include "io/process_stats.h"
@@ -12,8 +14,6 @@
 #include "mpi/cli/commands.h"
 #include "mpi/convert_across_ranks.h"
 #include "mpi/rank_status.h"
-#include "tools/args.h"
-#include "tools/convert_args.h"
 
 namespace vdiso::mpi::cli {
 

@@ -1,4 +1,4 @@
-// `vdiso-mpi extract`: vdiso extract's command line (tools/extract_options.h), shared by the
+// `vdiso-mpi extract`: vdiso extract's command line (cli/extract_options.h), shared by the
 // ranks. The full surface (octree) by runs of bricks, welded into one PLY written together
 // (mpi/extract_across_ranks.h); the view-dependent surface (sage, wise) by parts of the image or
 // of the volume, gathered on rank 0 for the picture and the mesh (mpi/view_across_ranks.h).
@@ -8,23 +8,23 @@
 #include <string>
 #include <vector>
 
+#include "app/extract_stats_json.h"
 #include "cache/brick_cache.h"
 #include "cache/cache_plan.h"
+#include "cli/args.h"
+#include "cli/extract_options.h"
 #include "core/orientation.h"
 #include "io/atomic_output.h"
-#include "io/store/brick_store.h"
 #include "io/json.h"
 #include "io/mesh/mesh_writer.h"
-#include "io/render/png_image.h"
 #include "io/process_stats.h"
+#include "io/render/png_image.h"
 #include "io/render/renderer.h"
+#include "io/store/brick_store.h"
 #include "mpi/cli/commands.h"
 #include "mpi/extract_across_ranks.h"
 #include "mpi/rank_status.h"
 #include "mpi/view_across_ranks.h"
-#include "tools/args.h"
-#include "tools/extract_options.h"
-#include "app/extract_stats_json.h"
 
 namespace vdiso::mpi::cli {
 

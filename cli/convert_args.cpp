@@ -1,4 +1,4 @@
-#include "tools/convert_args.h"
+#include "cli/convert_args.h"
 
 #include <algorithm>
 #include <cstdio>

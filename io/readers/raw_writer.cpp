@@ -1,4 +1,4 @@
-#include "io/raw_writer.h"
+#include "io/readers/raw_writer.h"
 
 #include <algorithm>
 #include <vector>

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
+#include "cli/args.h"
 #include "io/readers/raw_reader.h"
-#include "io/store/store_writer.h"
 #include "io/readers/volume_open.h"
-#include "tools/args.h"
+#include "io/store/store_writer.h"
 
 namespace vdiso::cli {
 
@@ -23,7 +23,7 @@ struct ConvertArgs {
 
 class ConvertArgParser {
 public:
-    // Consumes `flag` (with its value) when it is an input option, a store option (tools/args.h),
+    // Consumes `flag` (with its value) when it is an input option, a store option (cli/args.h),
     // --quiet or a positional argument (not starting with '-', or "-"); returns false for any
     // other option, which the caller takes or refuses. Throws UsageError for a bad value.
     bool take(const std::string& flag, Args& args);

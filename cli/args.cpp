@@ -1,4 +1,4 @@
-#include "tools/args.h"
+#include "cli/args.h"
 
 #include "app/extract_settings.h"
 #include "cache/brick_cache.h"

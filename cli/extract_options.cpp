@@ -1,12 +1,12 @@
-#include "tools/extract_options.h"
+#include "cli/extract_options.h"
 
 #include <cctype>
 #include <stdexcept>
 
 #include "app/view_camera.h"
+#include "cli/args.h"
 #include "io/camera_json.h"
 #include "io/mesh/mesh_writer.h"
-#include "tools/args.h"
 
 namespace vdiso::cli {
 
