@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "app/extract_settings.h"
+#include "core/view_presets.h"
 
 namespace vdiso {
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "core/volume.h"
 
 namespace vdiso {

@@ -30,6 +30,7 @@
 #include "core/camera.h"
 #include "core/extract/extract_full.h"
 #include "core/extract/extract_view.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 #include "io/json.h"
 #include "io/render/png_image.h"

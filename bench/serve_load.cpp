@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "io/json.h"
 #include "io/store/brick_store.h"
 #include "serve/server.h"

@@ -64,6 +64,7 @@
 #include "core/extract/extract_view.h"
 #include "core/mesh.h"
 #include "core/scalar_type.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 
 namespace {

@@ -5,6 +5,7 @@
 
 #include "app/view_camera.h"
 #include "cli/args.h"
+#include "core/view_presets.h"
 #include "io/camera_json.h"
 #include "io/mesh/mesh_writer.h"
 

@@ -9,6 +9,7 @@
 #include "app/extract_settings.h"
 #include "core/camera.h"
 #include "core/extract/extract_view.h"
+#include "core/view_presets.h"
 #include "core/volume.h"
 #include "io/remote/remote_options.h"
 

@@ -11,6 +11,7 @@
 #include "core/extract/extract_view.h"
 #include "core/lod/level_source.h"
 #include "core/orientation.h"
+#include "core/view_presets.h"
 #include "fuzz/fuzz_input.h"
 #include "io/crc32.h"
 #include "io/store/brick_store.h"

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "io/error.h"
 #include "io/json.h"
 #include "serve/protocol.h"

@@ -14,6 +14,7 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 
+#include "core/view_presets.h"
 #include "io/readers/volume_open.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_writer.h"

@@ -11,6 +11,7 @@
 
 #include "core/camera.h"
 #include "core/synth/synth.h"
+#include "core/view_presets.h"
 #include "serve/protocol.h"
 #include "serve/server.h"
 #include "serve/viewer_client.h"

@@ -16,6 +16,7 @@
 #include "core/synth/synth.h"
 #include "core/extract/traversal_cursor.h"
 #include "core/view/view_culler.h"
+#include "core/view_presets.h"
 #include "tests/extract_test_util.h"
 
 namespace vdiso {

@@ -9,6 +9,7 @@
 #include <glm/trigonometric.hpp>
 
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "io/camera_json.h"
 #include "io/error.h"
 #include "tests/test_util.h"

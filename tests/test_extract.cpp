@@ -18,6 +18,7 @@
 #include "core/extract/extract_view.h"
 #include "core/kernel/iso.h"
 #include "core/synth/synth.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_writer.h"
 #include "io/readers/volume_open.h"

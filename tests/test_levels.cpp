@@ -18,6 +18,7 @@
 #include "core/lod/level_source.h"
 #include "core/trees/minmax_tree.h"
 #include "core/synth/synth.h"
+#include "core/view_presets.h"
 #include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"

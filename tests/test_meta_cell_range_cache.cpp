@@ -5,6 +5,7 @@
 #include "core/extract/extract_view.h"
 #include "core/trees/meta_cell_range_cache.h"
 #include "core/synth/synth.h"
+#include "core/view_presets.h"
 #include "tests/extract_test_util.h"
 
 namespace vdiso {

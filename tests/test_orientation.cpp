@@ -16,6 +16,7 @@
 #include "core/camera.h"
 #include "core/extract/extract_full.h"
 #include "core/orientation.h"
+#include "core/view_presets.h"
 #include "io/crc32.h"
 #include "io/store/brick_store.h"
 #include "io/mesh/mesh_writer.h"

@@ -19,6 +19,7 @@
 
 #include "core/camera.h"
 #include "core/interrupt.h"
+#include "core/view_presets.h"
 #include "io/crc32.h"
 #include "io/error.h"
 #include "io/remote/remote_file.h"

@@ -14,6 +14,7 @@
 #include <png.h>
 
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "io/error.h"
 #include "io/render/png_image.h"
 #include "io/render/renderer.h"

@@ -26,6 +26,7 @@
 #include "core/extract/extract_full.h"
 #include "core/extract/extract_view.h"
 #include "core/synth/synth.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 #include "io/error.h"
 #include "io/render/image_compare.h"

@@ -16,6 +16,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "core/view_presets.h"
 #include "serve/outbox.h"
 #include "tests/serve_test_util.h"
 

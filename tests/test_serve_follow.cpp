@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/view_presets.h"
 #include "serve/outbox.h"
 #include "tests/serve_test_util.h"
 

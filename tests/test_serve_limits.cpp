@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 #include "serve/protocol.h"
 #include "serve/viewer_client.h"

@@ -18,6 +18,7 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/view_presets.h"
 #include "serve/viewer_session.h"
 #include "tests/serve_test_util.h"
 

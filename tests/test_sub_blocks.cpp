@@ -13,6 +13,7 @@
 #include "core/kernel/iso.h"
 #include "core/trees/sub_blocks.h"
 #include "core/synth/synth.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 #include "io/error.h"
 #include "io/store/store_writer.h"

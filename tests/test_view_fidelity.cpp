@@ -12,6 +12,7 @@
 #include "core/extract/extract_full.h"
 #include "core/extract/extract_view.h"
 #include "core/extract/visible_oracle.h"
+#include "core/view_presets.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"
 #include "io/render/renderer.h"

@@ -12,6 +12,7 @@
 #include "core/extract/depth_slabs.h"
 #include "core/extract/extract_view.h"
 #include "core/extract/image_strips.h"
+#include "core/view_presets.h"
 #include "io/render/image_compare.h"
 #include "io/render/renderer.h"
 #include "tests/extract_test_util.h"

@@ -8,6 +8,7 @@
 #include "cli/extract_options.h"
 #include "cli/progress_bar.h"
 #include "core/camera.h"
+#include "core/view_presets.h"
 #include "io/atomic_output.h"
 #include "io/json.h"
 #include "io/mesh/mesh_writer.h"

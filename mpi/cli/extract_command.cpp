@@ -14,6 +14,7 @@
 #include "cli/args.h"
 #include "cli/extract_options.h"
 #include "core/orientation.h"
+#include "core/view_presets.h"
 #include "io/atomic_output.h"
 #include "io/json.h"
 #include "io/mesh/mesh_writer.h"

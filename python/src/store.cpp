@@ -14,6 +14,7 @@
 #include "app/view_camera.h"
 #include "arrays.h"
 #include "bindings.h"
+#include "core/view_presets.h"
 #include "io/camera_json.h"
 #include "io/error.h"
 #include "io/mesh/mesh_writer.h"
