@@ -155,7 +155,7 @@ Options parseOptions(int argc, char** argv) {
     if (o.vtkThreads < 1) usage("--vtk-threads must be at least 1");
     if (o.repeat < 1) usage("--repeat must be at least 1");
     if (o.threads < 1) usage("--threads must be at least 1");
-    if (o.size < 16 || o.size > 8192) usage("--size must be in 16..8192");
+    if (o.size < kMinImageSide || o.size > kMaxImageSide) usage("--size must be in " + std::to_string(kMinImageSide) + ".." + std::to_string(kMaxImageSide));
     return o;
 }
 

@@ -119,8 +119,8 @@ namespace {
 void parseSize(const std::string& text, int& width, int& height) {
     const size_t x = text.find('x');
     if (x == std::string::npos) throw UsageError("--size expects WxH, not '" + text + "'");
-    width = int(parseInt("--size", text.substr(0, x), 16, 8192));
-    height = int(parseInt("--size", text.substr(x + 1), 16, 8192));
+    width = int(parseInt("--size", text.substr(0, x), kMinImageSide, kMaxImageSide));
+    height = int(parseInt("--size", text.substr(x + 1), kMinImageSide, kMaxImageSide));
 }
 
 // True for a name with exactly one integer conversion (frame_%04d.png).

@@ -61,6 +61,30 @@ glm::dvec3 PixelProjector::unproject(const glm::dvec3& pixelAndDepth) const {
     return glm::dvec3(world) / world.w;
 }
 
+std::string cameraProblem(const Camera& camera) {
+    auto finite = [](const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    if (!finite(camera.eye) || !finite(camera.target) || !finite(camera.up))
+        return "eye, target and up must be finite numbers";
+    if (!(camera.fovYDegrees > 0.0 && camera.fovYDegrees < 180.0)) return "fov must be in (0, 180) degrees";
+    for (const int side : {camera.width, camera.height})
+        if (side < kMinImageSide || side > kMaxImageSide)
+            return "width and height must be " + std::to_string(kMinImageSide) + " to " +
+                   std::to_string(kMaxImageSide) + " pixels, not " + std::to_string(camera.width) + " x " +
+                   std::to_string(camera.height);
+    const glm::dvec3 view = camera.target - camera.eye;
+    const double distance = glm::length(view);
+    if (!(distance > 0.0)) return "eye and target must differ";
+    if (!(distance <= kMaxEyeDistance)) {
+        char text[96];
+        std::snprintf(text, sizeof text, "eye is too far from target (%.17g; at most %g)", distance, kMaxEyeDistance);
+        return text;
+    }
+    const double upLength = glm::length(camera.up);
+    if (!(upLength > 0.0) || !(glm::length(glm::cross(view / distance, camera.up / upLength)) >= 1e-9))
+        return "up must not be zero nor parallel to the view direction (target - eye)";
+    return "";
+}
+
 void fitClipPlanes(Camera& camera, const glm::dvec3& boundsMin, const glm::dvec3& boundsMax) {
     const glm::dvec3 f = camera.forward();
     double nearest = std::numeric_limits<double>::infinity();

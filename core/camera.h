@@ -67,6 +67,20 @@ private:
     double mWidth, mHeight;
 };
 
+// Every picture a camera makes is kMinImageSide to kMaxImageSide pixels each way: the command
+// line's --size, camera files, the viewer's VIEW and Python take this one range.
+constexpr int kMinImageSide = 16, kMaxImageSide = 8192;
+// World units between eye and target at most (farther, the projection's arithmetic overflows).
+constexpr double kMaxEyeDistance = 1e15;
+
+// What keeps `camera` from making a picture, in words that name its fields (eye, target, up,
+// fov, width, height), or "" when it can: eye, target and up finite; fov in (0, 180) degrees;
+// each image side in [kMinImageSide, kMaxImageSide]; eye and target apart, by at most
+// kMaxEyeDistance; up neither zero nor parallel to target - eye. The one check of a camera that
+// comes from outside (a camera file, a VIEW message, Python); the clip planes are not checked
+// (a camera may have none yet).
+std::string cameraProblem(const Camera& camera);
+
 // Sets zNear and zFar so that the box [boundsMin, boundsMax] lies between them with a 1% margin.
 // When the eye is inside the box or close to it, zNear is clamped to zFar / 1000 to keep depth
 // precision (24-bit buffers); geometry nearer than that is clipped.

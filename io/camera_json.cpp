@@ -18,7 +18,6 @@ namespace {
 
 using nlohmann::json;
 
-constexpr int kMaxImageSide = 16384;
 
 // A camera path of 16 MiB holds some 80,000 cameras; more is not a camera file.
 constexpr size_t kMaxCameraFileBytes = size_t(16) << 20;
@@ -63,8 +62,6 @@ public:
         camera.target = vec3("target");
         camera.up = vec3("up");
         camera.fovYDegrees = number(required("fov"), "fov");
-        if (!(camera.fovYDegrees > 0.0 && camera.fovYDegrees < 180.0))
-            fail("'fov' must be between 0 and 180 degrees");
         camera.width = imageSide("width", defaultWidth);
         camera.height = imageSide("height", defaultHeight);
 
@@ -78,15 +75,8 @@ public:
                 fail("'near' and 'far' must satisfy 0 < near < far");
         }
 
-        const glm::dvec3 view = camera.target - camera.eye;
-        if (!(glm::length(view) > 0.0)) fail("'eye' and 'target' must differ");
-        // Farther, the projection's arithmetic overflows (a far eye is not an up problem).
-        if (!(glm::length(view) <= kMaxEyeDistance))
-            fail("'eye' is too far from 'target' (" + jsonNumber(glm::length(view)) + "; at most " +
-                 jsonNumber(kMaxEyeDistance) + ")");
-        if (!(glm::length(glm::cross(view, camera.up)) > 1e-9 * glm::length(view) *
-                                                             glm::length(camera.up)))
-            fail("'up' must not be zero nor parallel to the view direction");
+        // The camera as every front end checks one (core/camera.h).
+        if (const std::string problem = cameraProblem(camera); !problem.empty()) fail(problem);
         return camera;
     }
 
@@ -121,12 +111,12 @@ private:
     int imageSide(const char* key, int fallback) const {
         const json* value = optional(key);
         if (!value) return fallback;
-        const std::string range = "1 to " + std::to_string(kMaxImageSide);
+        const std::string range = std::to_string(kMinImageSide) + " to " + std::to_string(kMaxImageSide);
         // 800.0 is as good as 800: some writers have only doubles.
         const double side = value->is_number() ? value->get<double>() : 0.5;
         if (side != std::floor(side))
             fail(std::string("'") + key + "' must be a whole number of pixels, " + range);
-        if (side < 1 || side > kMaxImageSide)
+        if (side < kMinImageSide || side > kMaxImageSide)  // before it is made an int
             fail(std::string("'") + key + "' must be " + range + " pixels");
         return int(side);
     }

@@ -3,10 +3,11 @@
 // One camera is an object:
 //   {"eye": [x,y,z], "target": [x,y,z], "up": [x,y,z], "fov": 30,
 //    "width": 800, "height": 600, "near": 0.1, "far": 1000}
-// eye, target, up (world units) and fov (vertical, degrees, in (0, 180)) are required; width
-// and height (1..16384) default to the caller's values; near and far are optional (0 < near <
-// far, both or neither; without them the clip planes are derived later, see core/camera.h).
-// eye must lie within kMaxEyeDistance of target. Unknown fields are errors, so that a misspelt
+// eye, target, up (world units) and fov (vertical, degrees) are required; width and height
+// default to the caller's values; near and far are optional (0 < near < far, both or neither;
+// without them the clip planes are derived later, see core/camera.h). The camera must pass
+// core/camera.h's cameraProblem (fov in (0, 180), sides of kMinImageSide to kMaxImageSide, eye
+// within kMaxEyeDistance of target, ...). Unknown fields are errors, so that a misspelt
 // "fovy" does not silently do nothing.
 // A camera path is a JSON array of such objects, or {"cameras": [...]}, with at least one.
 // A camera file holds at most 16 MiB; a larger or endless one (/dev/zero) is refused after
@@ -22,9 +23,6 @@
 #include "core/camera.h"
 
 namespace vdiso {
-
-// World units between eye and target at most (farther, the projection's arithmetic overflows).
-constexpr double kMaxEyeDistance = 1e15;
 
 Camera readCameraJson(const std::string& path, int defaultWidth, int defaultHeight);
 std::vector<Camera> readCameraPath(const std::string& path, int defaultWidth, int defaultHeight);

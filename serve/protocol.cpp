@@ -40,10 +40,6 @@ void writeHeader(uint8_t* p, MessageType type, uint16_t flags = 0) {
     store<uint16_t>(p + 2, flags);
 }
 
-bool finite(const glm::dvec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
 }  // namespace
 
 MessageType clientMessageType(std::span<const uint8_t> message) {
@@ -84,24 +80,10 @@ ViewMessage parseView(std::span<const uint8_t> message) {
     v.fovYDegrees = load<double>(p + 96);
     v.iso = load<double>(p + 104) + 0.0;  // -0 is 0: isovalues key cached chunks
     if (v.seq > kMaxSeq) throw ProtocolError("VIEW: seq must be at most " + std::to_string(kMaxSeq));
-    for (const uint32_t size : {v.width, v.height})
-        if (size < uint32_t(kMinViewport) || size > uint32_t(kMaxViewport))
-            throw ProtocolError("VIEW: viewport " + std::to_string(v.width) + "x" +
-                                std::to_string(v.height) + " is outside " +
-                                std::to_string(kMinViewport) + ".." + std::to_string(kMaxViewport));
-    if (!finite(v.eye) || !finite(v.target) || !finite(v.up))
-        throw ProtocolError("VIEW: eye, target and up must be finite numbers");
-    if (!std::isfinite(v.fovYDegrees) || !(v.fovYDegrees > 0.0 && v.fovYDegrees < 180.0))
-        throw ProtocolError("VIEW: fov must be in (0, 180) degrees");
     if (!std::isfinite(v.iso)) throw ProtocolError("VIEW: iso must be a finite number");
-    const glm::dvec3 forward = v.target - v.eye;
-    const double distance = glm::length(forward);
-    if (!(distance > 0.0) || !std::isfinite(distance))
-        throw ProtocolError("VIEW: eye and target must differ, by a distance a double holds");
-    const double upLength = glm::length(v.up);
-    if (!(upLength > 0.0) || !std::isfinite(upLength) ||
-        glm::length(glm::cross(forward / distance, v.up / upLength)) < 1e-9)
-        throw ProtocolError("VIEW: up must be non-zero and not parallel to target - eye");
+    // The camera as every front end checks one (core/camera.h).
+    if (const std::string problem = cameraProblem(cameraOf(v)); !problem.empty())
+        throw ProtocolError("VIEW: " + problem);
     return v;
 }
 

@@ -20,7 +20,6 @@ namespace vdiso::serve {
 
 constexpr uint8_t kProtocolVersion = 1;
 constexpr size_t kMaxClientMessageBytes = size_t(1) << 20;
-constexpr int kMinViewport = 16, kMaxViewport = 8192;
 constexpr uint32_t kMaxEvictCount = 65536;
 constexpr uint32_t kNoBrick = 0xFFFFFFFFu;
 constexpr uint32_t kMaxSeq = 0xFFFFFFFEu;  // a VIEW's seq (0xFFFFFFFF marks control messages)
@@ -64,9 +63,9 @@ constexpr size_t kSessionIdChars = 8;
 // and reserved bytes. Throws ProtocolError.
 MessageType clientMessageType(std::span<const uint8_t> message);
 
-// Parse a VIEW or an EVICT, validating every field that does not depend on the store (finite
-// numbers, eye != target, up not parallel to the view, fov in (0, 180), viewport in
-// [kMinViewport, kMaxViewport], sizes). Throws ProtocolError.
+// Parse a VIEW or an EVICT, validating every field that does not depend on the store (the
+// camera as core/camera.h's cameraProblem checks it, a finite iso, seq, sizes). Throws
+// ProtocolError.
 ViewMessage parseView(std::span<const uint8_t> message);
 EvictMessage parseEvict(std::span<const uint8_t> message);
 // A HANDOVER's `to`: 8 lower-case hex digits, or 8 zero bytes. Throws ProtocolError.

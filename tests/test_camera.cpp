@@ -253,9 +253,9 @@ TEST(CameraJson, SizeDefaultsToTheCallersAndPathsReadBothForms) {
     test::writeFile(dir.file("array.json"), "[" + one + ", " + two + "]");
     test::writeFile(dir.file("object.json"), R"({"cameras": [)" + one + ", " + two + "]}");
     for (const char* name : {"array.json", "object.json"}) {
-        const std::vector<Camera> path = readCameraPath(dir.file(name), 10, 20);
+        const std::vector<Camera> path = readCameraPath(dir.file(name), 100, 200);
         ASSERT_EQ(path.size(), 2u);
-        EXPECT_EQ(path[0].width, 10);
+        EXPECT_EQ(path[0].width, 100);
         EXPECT_EQ(path[1].width, 64);
         EXPECT_EQ(path[1].zNear, 0.5);
         EXPECT_EQ(path[1].zFar, 9.0);
@@ -265,9 +265,9 @@ TEST(CameraJson, SizeDefaultsToTheCallersAndPathsReadBothForms) {
 std::string cameraError(const std::string& path, bool asPath = false) {
     try {
         if (asPath)
-            readCameraPath(path, 8, 8);
+            readCameraPath(path, 80, 80);
         else
-            readCameraJson(path, 8, 8);
+            readCameraJson(path, 80, 80);
     } catch (const IoError& e) {
         return e.what();
     }
@@ -293,19 +293,19 @@ TEST(CameraJson, BadFilesNameTheFileAndTheField) {
          "'eye' must be an array of 3 numbers"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":"wide"})",
          "'fov' must be a number"},
-        {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":180})", "'fov' must be between"},
+        {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":180})", "fov must be in (0, 180)"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":30,"width":12.5})",
          "'width' must be a whole number"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":30,"width":"64"})",
          "'width' must be a whole number"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":30,"height":0})",
-         "'height' must be 1 to"},
+         "'height' must be 16 to"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":30,"near":1})",
          "'near' and 'far' go together"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fov":30,"near":2,"far":1})",
          "0 < near < far"},
         {R"({"eye":[0,0,0],"target":[0,0,0],"up":[0,0,1],"fov":30})", "must differ"},
-        {R"({"eye":[0,0,-1],"target":[0,0,0],"up":[0,0,1],"fov":30})", "'up' must not be"},
+        {R"({"eye":[0,0,-1],"target":[0,0,0],"up":[0,0,1],"fov":30})", "up must not be zero"},
         {R"({"eye":[0,-1,0],"target":[0,0,0],"up":[0,0,1],"fovy":30})", "unknown field 'fovy'"},
     };
     for (const Case& k : cases) {

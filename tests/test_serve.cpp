@@ -289,7 +289,7 @@ TEST(ServeSession, BadMessagesGetAnErrorAndTheConnectionStays) {
     expectError(encodeView(v), false, "eye and target");
     v = viewOf(camera, 1);
     v.width = 8193;
-    expectError(encodeView(v), false, "viewport");
+    expectError(encodeView(v), false, "width and height");
     v = viewOf(camera, 1);
     v.store = 3;
     expectError(encodeView(v), false, "unknown store");

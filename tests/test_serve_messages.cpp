@@ -101,10 +101,10 @@ TEST(ServeProtocol, RefusesBadViews) {
     EXPECT_NE(viewError(v).find("eye and target"), std::string::npos);
     v = validView();
     v.width = 8193;
-    EXPECT_NE(viewError(v).find("viewport"), std::string::npos);
+    EXPECT_NE(viewError(v).find("width and height"), std::string::npos);
     v = validView();
     v.height = 0;
-    EXPECT_NE(viewError(v).find("viewport"), std::string::npos);
+    EXPECT_NE(viewError(v).find("width and height"), std::string::npos);
     v = validView();
     v.up = {0, 1, 0};  // along the view
     EXPECT_NE(viewError(v).find("parallel"), std::string::npos);

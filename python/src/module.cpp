@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 
 #include "app/extract_settings.h"
+#include "core/camera.h"
 #include "core/settings_error.h"
 #include "bindings.h"
 #include "cache/brick_cache.h"
@@ -59,4 +60,7 @@ PYBIND11_MODULE(_vdiso, m) {
     vdiso::py::bindConvert(m);
     vdiso::py::bindServe(m);
     m.attr("_web_root") = VDISO_WEB_DIR;
+    // The image sides a camera may have (core/camera.h), for the arguments' checks in Python.
+    m.attr("_min_image_side") = vdiso::kMinImageSide;
+    m.attr("_max_image_side") = vdiso::kMaxImageSide;
 }

@@ -106,8 +106,9 @@ def _size(size):
         width, height = (int(v) for v in size)
     except (TypeError, ValueError):
         raise ValueError(f"size: expects (width, height), not {size!r}") from None
-    if not (16 <= width <= 8192 and 16 <= height <= 8192):
-        raise ValueError(f"size: expects 16 to 8192 pixels each way, not {width} x {height}")
+    low, high = _vdiso._min_image_side, _vdiso._max_image_side  # core/camera.h's
+    if not (low <= width <= high and low <= height <= high):
+        raise ValueError(f"size: expects {low} to {high} pixels each way, not {width} x {height}")
     return width, height
 
 

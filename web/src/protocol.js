@@ -13,6 +13,9 @@ export const MessageType = Object.freeze({
 });
 
 export const VIEW_BYTES = 112;
+// A VIEW's viewport sides: what the server takes (core/camera.h kMinImageSide, kMaxImageSide).
+export const VIEWPORT_MIN = 16;
+export const VIEWPORT_MAX = 8192;
 export const EVICT_HEADER_BYTES = 24;
 export const HANDOVER_BYTES = 12;
 const SESSION_ID = /^[0-9a-f]{8}$/;

@@ -13,12 +13,12 @@ import { Follow } from './follow.js';
 import { FrameAssembler } from './frames.js';
 import { Overlay } from './overlay.js';
 import { Panel } from './panel.js';
-import { MessageType, PROTOCOL_VERSION, decodeServerMessage, encodeEvict, encodeHandOver, encodeView } from './protocol.js';
+import {
+  MessageType, PROTOCOL_VERSION, VIEWPORT_MAX, VIEWPORT_MIN, decodeServerMessage, encodeEvict, encodeHandOver, encodeView,
+} from './protocol.js';
 import { SurfaceScene, fitClipPlanes } from './scene.js';
 
 const DEFAULT_CACHE_MB = 512;
-const VIEWPORT_MIN = 16;
-const VIEWPORT_MAX = 8192;
 
 function parseVec3(params, name) {
   const text = params.get(name);
