@@ -12,7 +12,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <lz4.h>
 #include <zstd.h>
 
 #include "core/brick_levels.h"
@@ -21,8 +20,8 @@
 #include "core/kernel/iso.h"
 #include "core/orientation.h"
 #include "io/atomic_output.h"
+#include "io/store/brick_codec.h"
 #include "io/crc32.h"
-#include "io/store/byte_shuffle.h"
 #include "io/error.h"
 #include "io/store/store_format.h"
 
@@ -143,13 +142,10 @@ void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord,
 }
 
 struct BrickScratch {
-    std::vector<unsigned char> raw, shuffled;
+    std::vector<unsigned char> raw;
     std::vector<uint64_t> histogramEven = std::vector<uint64_t>(kFineBins, 0);
     std::vector<uint64_t> histogramOdd = std::vector<uint64_t>(kFineBins, 0);
-    ZSTD_CCtx* cctx = nullptr;
-    BrickScratch() = default;
-    BrickScratch(const BrickScratch&) = delete;
-    ~BrickScratch() { ZSTD_freeCCtx(cctx); }
+    BrickCodecScratch codec;
 };
 
 // Brick `id` of the level whose slices `window` holds, in `layout`; its owned samples count in
@@ -170,35 +166,9 @@ void encodeBrick(const SliceWindow& window, const BrickLayout& layout, ScalarTyp
     });
     measureSubBlocks(type, scratch.raw.data(), layout, coord,
                      {out.entry.minValue, out.entry.maxValue}, out.subBlocks);
-    out.entry.compressed = false;
-    if (options.compression != Compression::None) {
-        const unsigned char* input = scratch.raw.data();
-        if (storeFilterFor(type, options) == BrickFilter::ByteShuffle) {
-            scratch.shuffled.resize(rawBytes);
-            shuffleBytes(input, rawBytes / scalarSize(type), scalarSize(type), scratch.shuffled.data());
-            input = scratch.shuffled.data();
-        }
-        size_t n = 0;
-        if (options.compression == Compression::Lz4) {
-            out.bytes.resize(size_t(LZ4_compressBound(int(rawBytes))));
-            n = size_t(LZ4_compress_default(reinterpret_cast<const char*>(input),
-                                            reinterpret_cast<char*>(out.bytes.data()),
-                                            int(rawBytes), int(out.bytes.size())));
-            if (n == 0) throw std::runtime_error("lz4: cannot compress a brick");
-        } else {
-            if (!scratch.cctx) scratch.cctx = ZSTD_createCCtx();
-            out.bytes.resize(ZSTD_compressBound(rawBytes));
-            n = ZSTD_compressCCtx(scratch.cctx, out.bytes.data(), out.bytes.size(), input, rawBytes,
-                                  options.compressionLevel);
-            if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n));
-        }
-        // Incompressible bricks (noise) are stored raw: reading them is then a plain copy.
-        if (n < rawBytes) {
-            out.bytes.resize(n);
-            out.entry.compressed = true;
-        }
-    }
-    if (!out.entry.compressed) out.bytes.assign(scratch.raw.begin(), scratch.raw.end());
+    out.entry.compressed = encodeBrickBytes(scratch.raw, scalarSize(type), options.compression,
+                                            storeFilterFor(type, options), options.compressionLevel,
+                                            scratch.codec, out.bytes);
     out.entry.storedBytes = uint32_t(out.bytes.size());
     out.entry.checksum = crc32Of(out.bytes.data(), out.bytes.size());
 }

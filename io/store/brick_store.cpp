@@ -9,12 +9,10 @@
 
 #include <fcntl.h>
 #include <unistd.h>
-#include <lz4.h>
-#include <zstd.h>
 
 #include "io/crc32.h"
-#include "io/store/byte_shuffle.h"
 #include "io/error.h"
+#include "io/store/brick_codec.h"
 #include "io/store/lazy_index.h"
 #include "io/store/store_format.h"
 #include "core/trees/sub_blocks.h"
@@ -29,60 +27,6 @@ constexpr size_t kCodePartsAtOnce = 16;
 
 }  // namespace
 
-const char* compressionName(Compression c) {
-    return c == Compression::Zstd ? "zstd" : c == Compression::Lz4 ? "lz4" : "none";
-}
-
-std::optional<Compression> parseCompression(std::string_view name) {
-    for (Compression c : {Compression::Zstd, Compression::Lz4, Compression::None})
-        if (name == compressionName(c)) return c;
-    return std::nullopt;
-}
-
-const char* brickFilterName(BrickFilter f) {
-    return f == BrickFilter::ByteShuffle ? "byte shuffle" : "none";
-}
-
-double ValueHistogram::otsuThreshold() const {
-    double total = 0, sum = 0;
-    for (int b = 0; b < kHistogramBins; ++b) {
-        total += double(counts[b]);
-        sum += double(counts[b]) * (b + 0.5);
-    }
-    double below = 0, sumBelow = 0, best = -1;
-    int bestEdge = kHistogramBins / 2;
-    for (int edge = 1; edge < kHistogramBins; ++edge) {  // classes [0, edge) and [edge, end)
-        below += double(counts[edge - 1]);
-        sumBelow += double(counts[edge - 1]) * (edge - 0.5);
-        const double above = total - below;
-        if (below == 0 || above == 0) continue;
-        const double meanBelow = sumBelow / below, meanAbove = (sum - sumBelow) / above;
-        const double between = below * above * (meanBelow - meanAbove) * (meanBelow - meanAbove);
-        if (between > best) {
-            best = between;
-            bestEdge = edge;
-        }
-    }
-    return lo + (hi - lo) * bestEdge / kHistogramBins;
-}
-
-double ValueHistogram::quantile(double fraction) const {
-    uint64_t total = 0;
-    for (uint64_t c : counts) total += c;
-    if (total == 0) return lo;
-    const double target = fraction * double(total);
-    const double binWidth = (hi - lo) / kHistogramBins;
-    uint64_t seen = 0;
-    for (int b = 0; b < kHistogramBins; ++b) {
-        if (double(seen + counts[b]) >= target && counts[b] > 0) {
-            // Interpolate inside the bin: samples are assumed spread evenly across it.
-            const double within = (target - double(seen)) / double(counts[b]);
-            return lo + (b + std::clamp(within, 0.0, 1.0)) * binWidth;
-        }
-        seen += counts[b];
-    }
-    return hi;
-}
 
 BrickStoreReader::BrickStoreReader(std::string path, ReadMode mode)
     : BrickStoreReader(std::move(path), StoreOpenOptions{mode, {}}) {}
@@ -235,30 +179,9 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(i
 
 void BrickStoreReader::decodeBrick(int64_t id, std::span<const unsigned char> stored,
                                    void* dst) const {
-    const BrickEntry& e = mIndex[size_t(id)];
-    const size_t raw = brickBytes();
-    if (!e.compressed) {
-        if (stored.size() != raw) failBrick(id, "stored size does not match the brick size");
-        std::memcpy(dst, stored.data(), raw);
-        return;
-    }
-    const size_t sampleBytes = scalarSize(volume().type);
-    const bool shuffled = mHeader.filter == BrickFilter::ByteShuffle && sampleBytes > 1;
-    thread_local std::vector<unsigned char> planes;
-    if (shuffled) planes.resize(raw);
-    unsigned char* out = shuffled ? planes.data() : static_cast<unsigned char*>(dst);
-    if (mHeader.compression == Compression::Lz4) {
-        const int got = LZ4_decompress_safe(reinterpret_cast<const char*>(stored.data()),
-                                            reinterpret_cast<char*>(out), int(stored.size()), int(raw));
-        if (got < 0) failBrick(id, "cannot decompress: malformed LZ4 data");
-        if (size_t(got) != raw) failBrick(id, "decompressed to the wrong size");
-    } else {
-        const size_t got = ZSTD_decompress(out, raw, stored.data(), stored.size());
-        if (ZSTD_isError(got)) failBrick(id, std::string("cannot decompress: ") + ZSTD_getErrorName(got));
-        if (got != raw) failBrick(id, "decompressed to the wrong size");
-    }
-    if (shuffled)
-        unshuffleBytes(planes.data(), raw / sampleBytes, sampleBytes, static_cast<unsigned char*>(dst));
+    const std::string problem = decodeBrickBytes(stored, mIndex[size_t(id)].compressed, scalarSize(volume().type),
+                                                 mHeader.compression, mHeader.filter, dst, brickBytes());
+    if (!problem.empty()) failBrick(id, problem);
 }
 
 void BrickStoreReader::readBrick(int64_t id, void* dst) const {

@@ -26,72 +26,11 @@
 #include "core/brick_source.h"
 #include "core/volume.h"
 #include "io/store/byte_source.h"
+#include "io/store/store_format.h"
 
 namespace vdiso {
 
 class LazyIndex;
-
-// 5: the index stored in compressed parts (io/store/index_parts.h): several times smaller, which is
-// what a remote store's open fetches. Version 4 stores open as before.
-// 4: the volume's orientation (direction matrix and whether the input had one) in the header.
-// 3: levels of detail (the header's level count; every level's bricks in the index). Version
-// 2 and 3 stores open as before, without orientation; version 2 ones with level 0 only.
-constexpr uint32_t kStoreFormatVersion = 5;
-constexpr uint32_t kStoreHeaderBytes = 4096;
-constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
-constexpr int kHistogramBins = 256;
-
-// How each brick is compressed (on its own). zstd stores about a fifth smaller; LZ4 decodes
-// about five times faster (head volume, byte-shuffled: 1.99x at 1.2 GB/s against 1.61x at
-// 5.6 GB/s), which matters when one core decodes for a view that another extracts.
-enum class Compression : uint8_t { None = 0, Zstd = 1, Lz4 = 2 };
-const char* compressionName(Compression c);
-// The codec compressionName names ("zstd", "lz4", "none"); nullopt for anything else.
-std::optional<Compression> parseCompression(std::string_view name);
-
-enum class ChecksumAlgorithm : uint8_t { Crc32 = 1 };  // zlib's CRC-32 of the stored bytes
-
-// A reversible transform applied to a brick's bytes before compression. Byte shuffle groups
-// the k-th byte of every sample together (as Blosc and HDF5 do): the high bytes of smooth data
-// become long runs, which zstd compresses about twice as well and 2.5x faster on CT-like u16.
-enum class BrickFilter : uint8_t { None = 0, ByteShuffle = 1 };
-const char* brickFilterName(BrickFilter f);
-
-// One brick's entry in the index.
-struct BrickEntry {
-    uint64_t offset = 0;       // byte offset of the stored brick in the file
-    uint32_t storedBytes = 0;  // bytes on disk (compressed, or raw when compression did not pay)
-    uint32_t checksum = 0;     // CRC-32 of the stored bytes
-    float minValue = 0;        // min and max over the samples of the brick's cells
-    float maxValue = 0;        //   (ghosts excluded: they only feed normals)
-    bool compressed = false;
-};
-
-// A histogram of every sample in the volume, counted once each: bins of equal width over
-// [valueMin, valueMax].
-struct ValueHistogram {
-    double lo = 0, hi = 0;
-    std::array<uint64_t, kHistogramBins> counts{};
-
-    // The value below which `fraction` of the samples lie, to within one bin.
-    double quantile(double fraction) const;
-    // Otsu's threshold: the bin edge that best splits the samples into two classes (the least
-    // within-class variance), a default isovalue for scans (air against tissue).
-    double otsuThreshold() const;
-};
-
-struct StoreHeader {
-    uint32_t formatVersion = kStoreFormatVersion;  // as read; written is always the current
-    VolumeInfo volume;
-    int brickSize = 32;
-    int levelCount = 1;  // levels of detail, level 0 included (core/brick_levels.h)
-    Compression compression = Compression::Zstd;
-    ChecksumAlgorithm checksum = ChecksumAlgorithm::Crc32;
-    BrickFilter filter = BrickFilter::None;  // applied to compressed bricks only
-    uint64_t indexOffset = 0, indexBytes = 0;
-    double valueMin = 0, valueMax = 0;
-    uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded), all levels
-};
 
 // How a store is opened: local files by ReadMode (io/store/byte_source.h), remote ones by their URL
 // and RemoteOptions.

@@ -1,19 +1,77 @@
 #include "io/store/store_format.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
 
 #include <glm/geometric.hpp>
-#include <zlib.h>
-#include <lz4.h>
-#include <zstd.h>
 
 #include "core/orientation.h"
 #include "core/trees/sub_blocks.h"
 #include "io/crc32.h"
 #include "io/error.h"
+#include "io/store/brick_codec.h"
 #include "io/store/index_parts.h"
+
+namespace vdiso {
+
+const char* compressionName(Compression c) {
+    return c == Compression::Zstd ? "zstd" : c == Compression::Lz4 ? "lz4" : "none";
+}
+
+std::optional<Compression> parseCompression(std::string_view name) {
+    for (Compression c : {Compression::Zstd, Compression::Lz4, Compression::None})
+        if (name == compressionName(c)) return c;
+    return std::nullopt;
+}
+
+const char* brickFilterName(BrickFilter f) {
+    return f == BrickFilter::ByteShuffle ? "byte shuffle" : "none";
+}
+
+double ValueHistogram::otsuThreshold() const {
+    double total = 0, sum = 0;
+    for (int b = 0; b < kHistogramBins; ++b) {
+        total += double(counts[b]);
+        sum += double(counts[b]) * (b + 0.5);
+    }
+    double below = 0, sumBelow = 0, best = -1;
+    int bestEdge = kHistogramBins / 2;
+    for (int edge = 1; edge < kHistogramBins; ++edge) {  // classes [0, edge) and [edge, end)
+        below += double(counts[edge - 1]);
+        sumBelow += double(counts[edge - 1]) * (edge - 0.5);
+        const double above = total - below;
+        if (below == 0 || above == 0) continue;
+        const double meanBelow = sumBelow / below, meanAbove = (sum - sumBelow) / above;
+        const double between = below * above * (meanBelow - meanAbove) * (meanBelow - meanAbove);
+        if (between > best) {
+            best = between;
+            bestEdge = edge;
+        }
+    }
+    return lo + (hi - lo) * bestEdge / kHistogramBins;
+}
+
+double ValueHistogram::quantile(double fraction) const {
+    uint64_t total = 0;
+    for (uint64_t c : counts) total += c;
+    if (total == 0) return lo;
+    const double target = fraction * double(total);
+    const double binWidth = (hi - lo) / kHistogramBins;
+    uint64_t seen = 0;
+    for (int b = 0; b < kHistogramBins; ++b) {
+        if (double(seen + counts[b]) >= target && counts[b] > 0) {
+            // Interpolate inside the bin: samples are assumed spread evenly across it.
+            const double within = (target - double(seen)) / double(counts[b]);
+            return lo + (b + std::clamp(within, 0.0, 1.0)) * binWidth;
+        }
+        seen += counts[b];
+    }
+    return hi;
+}
+
+}  // namespace vdiso
 
 namespace vdiso::store_format {
 
@@ -291,8 +349,7 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
     if (r.get<uint64_t>() != count) throwIoError(path, "index brick count does not match header");
 
     const uint64_t rawBytes = uint64_t(layout.samplesPerBrick()) * scalarSize(header.volume.type);
-    const uint64_t maxStored = std::max<uint64_t>(
-        {rawBytes, ZSTD_compressBound(rawBytes), uint64_t(LZ4_compressBound(int(rawBytes)))});
+    const uint64_t maxStored = maxStoredBrickBytes(rawBytes);
     entries.resize(count);
     for (uint64_t id = 0; id < count; ++id) {
         BrickEntry& e = entries[id];
