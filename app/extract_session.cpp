@@ -1,6 +1,7 @@
 #include "app/extract_session.h"
 
 #include <algorithm>
+#include <memory>
 
 #include "cache/cache_plan.h"
 #include "core/clock.h"
@@ -16,31 +17,41 @@ namespace vdiso {
 
 namespace {
 
-const ExtractSettings& checked(const ExtractSettings& s, const BrickStoreReader& store) {
+void checked(const ExtractSettings& s, const BrickStoreReader& store) {
     checkExtractSettings(s);
     const int levels = store.header().levelCount;
     if (s.level >= levels)
         throw SettingsError("level", std::to_string(s.level) + ": " + store.path() + " holds " +
                                          std::to_string(levels) + " level" + (levels == 1 ? "" : "s") +
                                          " of detail (0 to " + std::to_string(levels - 1) + ")");
-    return s;
 }
 
 }  // namespace
 
-ExtractSession::ExtractSession(const BrickStoreReader& store, ExtractSettings settings)
-    : mStore(store),
-      mSettings(checked(settings, store)),
-      mCache(store, mSettings.cacheMb << 20),
-      // Meta-cell ranges are kept across the frames of a path, for as many bricks as the cache.
-      mRanges(mCache.budgetBytes() / store.brickBytes()) {
-    if (store.remote())
-        adaptToRemoteStore(mSettings);
+ExtractSession::ExtractSession(const BrickStoreReader& store, ExtractSettings settings) : mStore(store) {
+    reconfigure(std::move(settings));
+}
+
+void ExtractSession::reconfigure(ExtractSettings settings) {
+    checked(settings, mStore);  // before anything changes: a bad setting leaves the session as it was
+    if (store().remote())
+        adaptToRemoteStore(settings);
     else
-        adaptToLocalStore(mSettings, machineThreads());
-    if (isViewDependent(mSettings.method)) {
+        adaptToLocalStore(settings, machineThreads());
+    // Another budget is another cache (and what is kept beside it); the same keeps its bricks.
+    if (!mCache || settings.cacheMb != mSettings.cacheMb) {
+        auto cache = std::make_unique<BrickCache>(mStore, settings.cacheMb << 20);  // may throw: nothing changed
+        // Meta-cell ranges are kept across the frames of a path, for as many bricks as the cache.
+        auto ranges = std::make_unique<MetaCellRangeCache>(cache->budgetBytes() / mStore.brickBytes());
+        mTree.reset();  // built over the old cache's levels
+        mCache = std::move(cache);
+        mRanges = std::move(ranges);
+    }
+    mSettings = std::move(settings);
+    mTreeSeconds = 0;
+    if (isViewDependent(mSettings.method) && !mTree) {
         const auto start = Clock::now();
-        mTree.emplace(mCache.levels(), mCache.brickRanges());
+        mTree.emplace(mCache->levels(), mCache->brickRanges());
         mTreeSeconds = secondsSince(start);
     }
 }
@@ -52,20 +63,20 @@ SpaceTransform ExtractSession::meshTransform() const {
 ExtractFrame ExtractSession::extract(const std::optional<Camera>& camera, const FrameOutput& output,
                                      const ProgressFn& progress) {
     const ExtractSettings& s = mSettings;
-    const CacheCounters before = mCache.counters();
+    const CacheCounters before = mCache->counters();
     ExtractFrame f;
-    f.plan = planCache(s, mCache, machineThreads());
+    f.plan = planCache(s, *mCache, machineThreads());
     if (isViewDependent(s.method)) {
         if (!camera) throw SettingsError("camera", "is needed by the view-dependent methods, sage and wise");
         ViewExtractOptions v = viewExtractOptions(s, f.plan);
-        v.rangeCache = &mRanges;
+        v.rangeCache = &*mRanges;
         v.tree = &*mTree;
-        f.stats = extractViewDependent(mCache, *camera, v, f.mesh, f.points, progress);
+        f.stats = extractViewDependent(*mCache, *camera, v, f.mesh, f.points, progress);
     } else {
         FullExtractOptions extract{*s.iso, s.metaCellSize, f.plan.threads};
         extract.prefetchBricks = f.plan.prefetchBricks;
         extract.prefetchReaders = s.readers;
-        LevelSource level(mCache, s.level);
+        LevelSource level(*mCache, s.level);
         // Post-processing takes the surface brick by brick and hands its result on to the sink
         // or to the mesh held.
         MeshAppender held(f.mesh);
@@ -91,7 +102,7 @@ ExtractFrame ExtractSession::extract(const std::optional<Camera>& camera, const 
             f.stats.vertices = f.post->verticesOut;
         }
     }
-    f.io = mCache.counters() - before;
+    f.io = mCache->counters() - before;
     return f;
 }
 

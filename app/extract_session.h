@@ -4,6 +4,7 @@
 // from one camera and frameStats() describes it as the --stats JSON object.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -49,6 +50,11 @@ public:
     // readers and look-ahead to a store at a URL (adaptToRemoteStore) or on this machine
     // (adaptToLocalStore: no more readers than the cores beside the extraction).
     ExtractSession(const BrickStoreReader& store, ExtractSettings settings);
+    // Other settings for the frames to come, checked as the constructor checks them (a bad one
+    // throws and changes nothing). The cache, its bricks, the meta-cell ranges and the tree are
+    // kept unless the cache's budget changes: a second extraction of the same store reads no
+    // brick the first left in the cache, whatever its isovalue or method.
+    void reconfigure(ExtractSettings settings);
 
     // One frame; `camera` is needed by sage and wise, ignored by octree and noise.
     ExtractFrame extract(const std::optional<Camera>& camera, const FrameOutput& output = {},
@@ -60,8 +66,9 @@ public:
 
     const ExtractSettings& settings() const { return mSettings; }
     const BrickStoreReader& store() const { return mStore; }
-    BrickCache& cache() { return mCache; }
-    // Building the view-dependent tree, before the first frame (0 for the full methods).
+    BrickCache& cache() { return *mCache; }
+    // Building the view-dependent tree, before the first frame (0 for the full methods, and when
+    // the tree was already built for earlier settings).
     double treeSeconds() const { return mTreeSeconds; }
     // Meshes go from volume space to this: physical space unless the settings say volume.
     SpaceTransform meshTransform() const;
@@ -69,8 +76,8 @@ public:
 private:
     const BrickStoreReader& mStore;
     ExtractSettings mSettings;
-    BrickCache mCache;
-    MetaCellRangeCache mRanges;
+    std::unique_ptr<BrickCache> mCache;
+    std::unique_ptr<MetaCellRangeCache> mRanges;
     std::optional<MinMaxTree> mTree;
     double mTreeSeconds = 0;
 };

@@ -61,6 +61,12 @@ class Session {
 public:
     Session(const Store& store, ExtractSettings settings) : mStore(store.reader), mSession(*mStore, std::move(settings)) {}
 
+    // Other settings for the frames to come; the cache and the tree stay (ExtractSession::reconfigure).
+    void configure(ExtractSettings settings) {
+        std::lock_guard lock(mFrameLock);
+        mSession.reconfigure(std::move(settings));
+    }
+
     // The camera of a frame: a camera JSON text, else a named view (the default "normal").
     Camera camera(const std::optional<std::string>& cameraJson, const std::string& view, int width, int height) const {
         Camera c;
@@ -232,6 +238,16 @@ void bindStore(pyb::module_& m) {
              }),
              "store"_a, "method"_a, "iso"_a, "lod_error"_a, "threads"_a, "cache_mb"_a, "largest"_a, "min_piece"_a,
              "smooth"_a, "decimate"_a, "volume_space"_a)
+        .def("configure",
+             [](Session& self, const std::string& method, double iso, double lodError, int64_t threads, int64_t cacheMb,
+                bool largest, int64_t minPiece, int64_t smooth, double decimate, bool volumeSpace) {
+                 ExtractSettings s = settingsOf(method, iso, lodError, threads, cacheMb, largest, minPiece, smooth,
+                                                decimate, volumeSpace);
+                 pyb::gil_scoped_release release;
+                 self.configure(std::move(s));
+             },
+             "method"_a, "iso"_a, "lod_error"_a, "threads"_a, "cache_mb"_a, "largest"_a, "min_piece"_a, "smooth"_a,
+             "decimate"_a, "volume_space"_a)
         .def("extract", &Session::extract, "camera_json"_a, "view"_a, "width"_a, "height"_a,
              "progress"_a = pyb::none())
         .def("render", &Session::render, "camera_json"_a, "view"_a, "width"_a, "height"_a);

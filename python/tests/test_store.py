@@ -295,9 +295,27 @@ def test_post_processing_and_progress_match_the_command_line(vdiso_bin, volume_a
         vdiso.open(cli).extract(500.5, method="sage", largest=True)
 
 
+def test_a_second_extract_reads_no_brick_the_first_read(volume_and_cli_store):
+    """One Store keeps one session: its brick cache and tree stay from call to call, whatever
+    the isovalue or method; a refused setting leaves it as it was; another budget is another cache."""
+    _, cli = volume_and_cli_store
+    store = vdiso.open(cli)
+    first = store.extract(500.5)
+    assert first.stats["bricks_loaded"] > 0
+    again = store.extract(500.5)
+    assert again.stats["bricks_loaded"] == 0 and len(again.faces) == len(first.faces)
+    store.extract(700.5, method="noise")  # NOISE ranges every brick: the cache now holds them all
+    assert store.extract(600.5, method="noise").stats["bricks_loaded"] == 0
+    assert store.extract(700.5).stats["bricks_loaded"] == 0
+    with pytest.raises(ValueError, match="method"):
+        store.extract(500, method="marching")
+    assert store.extract(500.5).stats["bricks_loaded"] == 0
+    assert store.extract(500.5, cache_mb=64).stats["bricks_loaded"] > 0
+
+
 def test_threads_extract_and_post_process_at_once(volume_and_cli_store):
-    """The GIL is released: Python threads extract side by side, post-processing included, and
-    each gets what one alone gets."""
+    """The GIL is released: Python threads extract at once (one Store runs its extractions one
+    at a time over its one cache), post-processing included, and each gets what one alone gets."""
     import threading
     _, cli = volume_and_cli_store
     store = vdiso.open(cli)

@@ -17,6 +17,7 @@ import json as _json
 import operator as _operator
 import os as _os
 import errno as _errno
+import threading as _threading
 
 from . import _vdiso
 from ._vdiso import Error, Mesh
@@ -132,6 +133,8 @@ class Store:
 
     def __init__(self, path, *, s3_endpoint="", anonymous=False, disk_cache=""):
         self._store = _vdiso._Store(_local_input(path, "store"), s3_endpoint, anonymous, _os.fspath(disk_cache))
+        self._live = None  # the session extract() and render() share (_shared)
+        self._lock = _threading.Lock()
 
     path = property(lambda self: self._store.path)
     shape = property(lambda self: tuple(reversed(self._store.dims)), doc="(z, y, x) samples")
@@ -151,13 +154,27 @@ class Store:
         """What `vdiso info --json` prints, as a dict."""
         return _json.loads(self._store.info_json(iso))
 
-    def _session(self, iso, method="octree", lod_error=1.0, threads=None, cache_mb=None, largest=False,
-                 min_piece=0, smooth=0, decimate=None, volume_space=False):
-        return _vdiso._Session(self._store, method, _float(iso, "iso"), _float(lod_error, "lod_error"),
-                               _int(0 if threads is None else threads, "threads"),
-                               _int(1024 if cache_mb is None else cache_mb, "cache_mb"), bool(largest),
-                               _int(min_piece, "min_piece"), _int(smooth, "smooth"),
-                               1.0 if decimate is None else _float(decimate, "decimate"), bool(volume_space))
+    @staticmethod
+    def _settings(iso, method="octree", lod_error=1.0, threads=None, cache_mb=None, largest=False,
+                  min_piece=0, smooth=0, decimate=None, volume_space=False):
+        return (method, _float(iso, "iso"), _float(lod_error, "lod_error"), _int(0 if threads is None else threads, "threads"),
+                _int(1024 if cache_mb is None else cache_mb, "cache_mb"), bool(largest), _int(min_piece, "min_piece"),
+                _int(smooth, "smooth"), 1.0 if decimate is None else _float(decimate, "decimate"), bool(volume_space))
+
+    def _session(self, iso, method="octree", **settings):
+        """A session of its own (a path of frames keeps its settings)."""
+        return _vdiso._Session(self._store, *self._settings(iso, method, **settings))
+
+    def _shared(self, iso, method="octree", **settings):
+        """The store's one session, set to these settings: its brick cache and tree are kept from
+        call to call, so a second extract() reads no brick the first left in the cache. Call with
+        self._lock held: one extraction at a time per Store (open the store twice to run two)."""
+        values = self._settings(iso, method, **settings)
+        if self._live is None:
+            self._live = _vdiso._Session(self._store, *values)
+        else:
+            self._live.configure(*values)
+        return self._live
 
     def extract(self, iso, *, method="octree", camera=None, view=None, size=(1024, 1024), lod_error=1.0,
                 threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None):
@@ -170,10 +187,14 @@ class Store:
         pixels allow). camera: a dict with eye, target, up, fov or a vdiso.Camera; view: the
         --view words ("normal", "distant", "closeup", with a side: "normal:left"); neither: the
         normal view. largest, min_piece, smooth, decimate: post-processing of the full surface.
+        Calls on one Store share its brick cache and tree (a second call reads no brick the first
+        left in the cache) and run one at a time; open the store twice to extract in parallel.
         """
         width, height = _size(size)
-        session = self._session(iso, method, lod_error, threads, cache_mb, largest, min_piece, smooth, decimate)
-        return session.extract(_camera_json(camera), view or "normal", width, height, progress)
+        with self._lock:
+            session = self._shared(iso, method, lod_error=lod_error, threads=threads, cache_mb=cache_mb, largest=largest,
+                                   min_piece=min_piece, smooth=smooth, decimate=decimate)
+            return session.extract(_camera_json(camera), view or "normal", width, height, progress)
 
     def frames(self, iso, cameras, *, size=(1024, 1024), **settings):
         """A generator of Meshes, one per camera (dicts, vdiso.Camera or view words), over one
@@ -192,8 +213,8 @@ class Store:
 
         The surface drawn as `vdiso extract --png` draws it (OSMesa), for a notebook."""
         width, height = _size(size)
-        session = self._session(iso, method, **settings)
-        return session.render(_camera_json(camera), view or "normal", width, height)
+        with self._lock:
+            return self._shared(iso, method, **settings).render(_camera_json(camera), view or "normal", width, height)
 
     def __repr__(self):
         return f"<vdiso.Store {self.path}: {self.shape} {self.dtype}, {self.levels} levels>"
