@@ -19,6 +19,9 @@
 
 namespace vdiso {
 
+// The picture a view is made for when no size is given (vdiso extract --size, Python's size).
+constexpr int kDefaultImageWidth = 800, kDefaultImageHeight = 800;
+
 struct ExtractSettings {
     std::string method = "octree";  // octree, noise (full); sage, wise (view-dependent)
     std::optional<double> iso;

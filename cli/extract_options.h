@@ -29,7 +29,7 @@ struct ExtractOptions : ExtractSettings {
     std::string meshPath, pngPath, statsPath, cameraPath;
     ViewChoice view;
     bool viewGiven = false;
-    int width = 800, height = 800;
+    int width = kDefaultImageWidth, height = kDefaultImageHeight;
     RemoteOptions remote;  // for a store at a URL
     bool overwrite = false, quiet = false, cold = false, help = false;
     bool meshCompress = false;  // --mesh-compress (.glb only)

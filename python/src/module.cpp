@@ -63,4 +63,6 @@ PYBIND11_MODULE(_vdiso, m) {
     // The image sides a camera may have (core/camera.h), for the arguments' checks in Python.
     m.attr("_min_image_side") = vdiso::kMinImageSide;
     m.attr("_max_image_side") = vdiso::kMaxImageSide;
+    // The library's defaults, where Python's signatures say None (app/extract_settings.h).
+    m.attr("_default_size") = pybind11::make_tuple(vdiso::kDefaultImageWidth, vdiso::kDefaultImageHeight);
 }

@@ -135,15 +135,19 @@ private:
     std::mutex mFrameLock;
 };
 
-ExtractSettings settingsOf(const std::string& method, double iso, double lodError, int64_t threads, int64_t cacheMb,
-                           bool largest, int64_t minPiece, int64_t smooth, double decimate, bool volumeSpace) {
+// Python's None: the library's default (ExtractSettings).
+ExtractSettings settingsOf(const std::string& method, double iso, std::optional<double> lodError, int64_t threads,
+                           std::optional<int64_t> cacheMb, bool largest, int64_t minPiece, int64_t smooth,
+                           double decimate, bool volumeSpace) {
     ExtractSettings s;
     s.method = method;
     s.iso = iso;
-    s.lodError = lodError;
-    s.lodErrorGiven = lodError != 1.0;
+    if (lodError) {
+        s.lodError = *lodError;
+        s.lodErrorGiven = true;
+    }
     s.threads = int(checkedInt("threads", threads, 0, 256));  // 0: every core
-    s.cacheMb = uint64_t(checkedInt("cache_mb", cacheMb, 1, int64_t(1) << 30));
+    if (cacheMb) s.cacheMb = uint64_t(checkedInt("cache_mb", *cacheMb, 1, int64_t(1) << 30));
     s.post.largestPiece = largest;
     s.post.minPieceTriangles = uint64_t(checkedInt("min_piece", minPiece, 0, int64_t(1) << 40));
     s.post.smoothIterations = int(checkedInt("smooth", smooth, 0, 1000));
@@ -228,8 +232,8 @@ void bindStore(pyb::module_& m) {
              "iso"_a = pyb::none());
 
     pyb::class_<Session>(m, "_Session")
-        .def(pyb::init([](const Store& store, const std::string& method, double iso, double lodError, int64_t threads,
-                          int64_t cacheMb, bool largest, int64_t minPiece, int64_t smooth, double decimate,
+        .def(pyb::init([](const Store& store, const std::string& method, double iso, std::optional<double> lodError,
+                          int64_t threads, std::optional<int64_t> cacheMb, bool largest, int64_t minPiece, int64_t smooth, double decimate,
                           bool volumeSpace) {
                  ExtractSettings s = settingsOf(method, iso, lodError, threads, cacheMb, largest, minPiece, smooth,
                                                 decimate, volumeSpace);
@@ -239,8 +243,8 @@ void bindStore(pyb::module_& m) {
              "store"_a, "method"_a, "iso"_a, "lod_error"_a, "threads"_a, "cache_mb"_a, "largest"_a, "min_piece"_a,
              "smooth"_a, "decimate"_a, "volume_space"_a)
         .def("configure",
-             [](Session& self, const std::string& method, double iso, double lodError, int64_t threads, int64_t cacheMb,
-                bool largest, int64_t minPiece, int64_t smooth, double decimate, bool volumeSpace) {
+             [](Session& self, const std::string& method, double iso, std::optional<double> lodError, int64_t threads,
+                std::optional<int64_t> cacheMb, bool largest, int64_t minPiece, int64_t smooth, double decimate, bool volumeSpace) {
                  ExtractSettings s = settingsOf(method, iso, lodError, threads, cacheMb, largest, minPiece, smooth,
                                                 decimate, volumeSpace);
                  pyb::gil_scoped_release release;

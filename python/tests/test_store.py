@@ -85,6 +85,17 @@ def test_extract_equals_the_command_line(tmp_path, vdiso_bin, volume_and_cli_sto
     mesh.write(out, overwrite=True)
 
 
+def test_defaults_are_the_command_lines(vdiso_bin, volume_and_cli_store):
+    """size, lod_error and cache_mb left out: the library's defaults, which the command line takes."""
+    _, cli = volume_and_cli_store
+    r = run([vdiso_bin, "extract", str(cli), "--iso", "500.5", "--method", "sage", "--stats", "-", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    theirs = json.loads(r.stdout.splitlines()[-1])
+    mine = vdiso.open(cli).extract(500.5, method="sage").stats
+    for key in ("triangles", "vertices", "points", "lod_error"):
+        assert mine[key] == theirs[key], key
+
+
 def test_frames_and_render(volume_and_cli_store):
     _, cli = volume_and_cli_store
     store = vdiso.open(cli)

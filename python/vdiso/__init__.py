@@ -103,6 +103,9 @@ def _camera_json(camera):
 
 
 def _size(size):
+    """(width, height) checked; None: the library's default, as `vdiso extract --size`'s (800 x 800)."""
+    if size is None:
+        return _vdiso._default_size
     try:
         width, height = (int(v) for v in size)
     except (TypeError, ValueError):
@@ -155,10 +158,12 @@ class Store:
         return _json.loads(self._store.info_json(iso))
 
     @staticmethod
-    def _settings(iso, method="octree", lod_error=1.0, threads=None, cache_mb=None, largest=False,
+    def _settings(iso, method="octree", lod_error=None, threads=None, cache_mb=None, largest=False,
                   min_piece=0, smooth=0, decimate=None, volume_space=False):
-        return (method, _float(iso, "iso"), _float(lod_error, "lod_error"), _int(0 if threads is None else threads, "threads"),
-                _int(1024 if cache_mb is None else cache_mb, "cache_mb"), bool(largest), _int(min_piece, "min_piece"),
+        # None: the library's default (lod_error 1, cache_mb 1024: app/extract_settings.h).
+        return (method, _float(iso, "iso"), None if lod_error is None else _float(lod_error, "lod_error"),
+                _int(0 if threads is None else threads, "threads"),
+                None if cache_mb is None else _int(cache_mb, "cache_mb"), bool(largest), _int(min_piece, "min_piece"),
                 _int(smooth, "smooth"), 1.0 if decimate is None else _float(decimate, "decimate"), bool(volume_space))
 
     def _session(self, iso, method="octree", **settings):
@@ -176,9 +181,9 @@ class Store:
             self._live.configure(*values)
         return self._live
 
-    def extract(self, iso, *, method="octree", camera=None, view=None, size=(1024, 1024), lod_error=1.0,
+    def extract(self, iso, *, method="octree", camera=None, view=None, size=None, lod_error=None,
                 threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None):
-        """extract(iso, *, method="octree", camera=None, view=None, size=(1024, 1024), lod_error=1.0,
+        """extract(iso, *, method="octree", camera=None, view=None, size=None, lod_error=None,
         threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None)
         -> Mesh
 
@@ -186,7 +191,9 @@ class Store:
         surface), "sage" or "wise" (what `camera` sees, at the levels of detail `lod_error`
         pixels allow). camera: a dict with eye, target, up, fov or a vdiso.Camera; view: the
         --view words ("normal", "distant", "closeup", with a side: "normal:left"); neither: the
-        normal view. largest, min_piece, smooth, decimate: post-processing of the full surface.
+        normal view. size: (width, height) of the picture the view is for, by default the
+        command line's (800, 800); lod_error and cache_mb default to the command line's too.
+        largest, min_piece, smooth, decimate: post-processing of the full surface.
         Calls on one Store share its brick cache and tree (a second call reads no brick the first
         left in the cache) and run one at a time; open the store twice to extract in parallel.
         """
@@ -196,7 +203,7 @@ class Store:
                                    min_piece=min_piece, smooth=smooth, decimate=decimate)
             return session.extract(_camera_json(camera), view or "normal", width, height, progress)
 
-    def frames(self, iso, cameras, *, size=(1024, 1024), **settings):
+    def frames(self, iso, cameras, *, size=None, **settings):
         """A generator of Meshes, one per camera (dicts, vdiso.Camera or view words), over one
         brick cache, as `vdiso extract --path`. Takes extract()'s settings."""
         width, height = _size(size)
@@ -208,8 +215,8 @@ class Store:
             else:
                 yield session.extract(_camera_json(camera), "normal", width, height)
 
-    def render(self, iso, camera=None, view="normal", size=(800, 800), method="sage", **settings):
-        """render(iso, camera=None, view="normal", size=(800, 800), method="sage") -> (H, W, 3) uint8
+    def render(self, iso, camera=None, view="normal", size=None, method="sage", **settings):
+        """render(iso, camera=None, view="normal", size=None, method="sage") -> (H, W, 3) uint8
 
         The surface drawn as `vdiso extract --png` draws it (OSMesa), for a notebook."""
         width, height = _size(size)
