@@ -408,5 +408,20 @@ TEST(CliExtract, OrbitPathWritesAStatsLineAndAPicturePerFrame) {
     EXPECT_EQ(r.exitCode, 2);
 }
 
+// vdiso serve reads its numbers and leaves their ranges to the server, which checks them once,
+// before opening a store: out of range, the flag is named and nothing is served (exit 2).
+TEST(CliServe, SettingsOutOfRangeNameTheFlag) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 24 --quiet").exitCode, 0);
+    for (const std::string bad : {"--threads 0", "--threads 65", "--metacell 33", "--max-viewers 100001", "--lod-error -1"}) {
+        // A server that started would run until killed: the timeout ends it (exit 124).
+        const auto r = test::runCommand("timeout 20 " + std::string(VDISO_BINARY) + " serve " + store +
+                                        " --host 127.0.0.1 --port 0 " + bad);
+        EXPECT_EQ(r.exitCode, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find(bad.substr(0, bad.find(' ')) + " expects"), std::string::npos) << bad << ": " << r.output;
+    }
+}
+
 }  // namespace
 }  // namespace vdiso

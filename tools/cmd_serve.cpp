@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "app/extract_settings.h"
@@ -39,6 +40,9 @@ constexpr const char* kHelp =
 
 }  // namespace
 
+// Numbers are only read here; their ranges are the server's (serve::checkServeOptions).
+constexpr int64_t kIntMin = std::numeric_limits<int>::min(), kIntMax = std::numeric_limits<int>::max();
+
 int runServe(int argc, char** argv) {
     Args args(argc, argv, 1);
     serve::ServeOptions o;
@@ -62,13 +66,13 @@ int runServe(int argc, char** argv) {
         } else if (a == "--chunk-cache-mb") {
             o.chunkCacheBytes = uint64_t(parseInt(a, args.value(a), 0, int64_t(1) << 30)) << 20;
         } else if (a == "--max-viewers") {
-            o.maxViewers = int(parseInt(a, args.value(a), 1, 100000));
+            o.maxViewers = int(parseInt(a, args.value(a), kIntMin, kIntMax));
         } else if (a == "--threads") {
-            o.threads = int(parseInt(a, args.value(a), 1, 64));
+            o.threads = int(parseInt(a, args.value(a), kIntMin, kIntMax));
         } else if (a == "--lod-error") {
             o.lodError = parseDouble(a, args.value(a));
         } else if (a == "--metacell") {
-            o.metaCellSize = int(parseInt(a, args.value(a), 1, 32));
+            o.metaCellSize = int(parseInt(a, args.value(a), kIntMin, kIntMax));
         } else if (a == "--token") {
             o.token = args.value(a);
         } else if (a == "--web") {
@@ -81,8 +85,7 @@ int runServe(int argc, char** argv) {
         }
     }
     if (o.stores.empty()) throw UsageError("expects at least one STORE.vdiso");
-    serve::checkServeOptions(o);  // before the stores are opened
-    serve::Server server(o);
+    serve::Server server(o);  // checks the options (SettingsError, named as flags) before opening a store
     std::printf("vdiso serve: open %s\n", server.url().c_str());
     std::fflush(stdout);
     server.run();
