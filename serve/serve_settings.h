@@ -1,15 +1,12 @@
-// What a server's options make, before any connection: the options checked, the settings every
-// viewer's frames run with, and how many frames may extract at once.
+// What a server's options (serve/serve_options.h) make, before any connection: the settings
+// every viewer's frames run with, and how many frames may extract at once.
 #pragma once
 
-#include "serve/server.h"
+#include "serve/serve_options.h"
 #include "serve/store_catalog.h"
 #include "serve/viewer_session.h"
 
 namespace vdiso::serve {
-
-// The options with their defaults filled in (maxViewers).
-ServeOptions withDefaults(ServeOptions options);
 
 // A frame looks 8 bricks ahead with 2 readers in all (at least one a strip), so that a frame's
 // threads stay near the cores it runs on; over a network, as far as vdiso extract does
