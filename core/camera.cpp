@@ -1,12 +1,9 @@
 #include "core/camera.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
-#include <stdexcept>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>

@@ -1,15 +1,10 @@
 #include "serve/serve_settings.h"
 
 #include <algorithm>
-#include <string>
 #include <thread>
-
-#include <unistd.h>
 
 #include "cache/cache_plan.h"
 #include "core/extract/brick_look_ahead.h"
-#include "core/kernel/brick_extractor.h"
-#include "core/settings_error.h"
 
 namespace vdiso::serve {
 

@@ -180,7 +180,7 @@ BrickCount BrickExtractor::countInPlace(int64_t id, const void* samples, double 
         const BrickKernel<T> k(*this, id, samples, iso, none, noSeams);
         if (wholeBricks()) {  // the whole brick at once, a word per corner row
             mEdgeSeen.resize(std::max(mEdgeSeen.size(), size_t(k.cells[1] + 1) * size_t(k.cells[2] + 1)));
-            count = k.countBrick(mEdgeSeen.data(), ownership, activeMetaCells);
+            count = k.countBrick(mEdgeSeen.data(), ownership);
             return;
         }
         std::fill(mEdgeSeen.begin(), mEdgeSeen.end(), uint64_t(0));

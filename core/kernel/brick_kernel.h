@@ -331,16 +331,10 @@ struct BrickKernel {
     // hold every cell the surface crosses, so they make the same): a word per corner row
     // (`rows`: (cells[1] + 1) * (cells[2] + 1) words), crossed edges counted by popcount, those
     // on a face shared with a lower brick asked one by one whether this brick owns them, and
-    // each crossed cell's triangles from its case. Rows of at most 64 corners: cells[0] < 64.
-    // With `activeMetaCells`, appends the meta-cells holding a crossed cell, in increasing
-    // order: exactly those whose range holds iso (a meta-cell holding samples on both sides
-    // has an edge between them), so the emission takes them without ranging the brick again.
-    BrickCount countBrick(uint64_t* rows, const EdgeOwnership& ownership,
-                          std::vector<uint32_t>* activeMetaCells) const {
+    // each crossed cell's triangles from its case. Rows of at most 64 corners: cells[0] < 64:
+    // the bricks emitBrick takes whole.
+    BrickCount countBrick(uint64_t* rows, const EdgeOwnership& ownership) const {
         const int nx = cells[0], ny = cells[1], nz = cells[2];
-        const int M = x.mMetaCellSize, n = x.mMetaPerAxis;
-        uint64_t metaRows[64 * 64];  // [mz * n + my]: bit mx set when that meta-cell is crossed
-        if (activeMetaCells) std::fill_n(metaRows, size_t(n) * size_t(n), uint64_t(0));
         classifyBrick(rows);
         BrickCount count;
         const uint64_t cellBits = (uint64_t(1) << nx) - 1, cornerBits = cellBits | (uint64_t(1) << nx);
@@ -367,18 +361,9 @@ struct BrickKernel {
                 if (z < nz) addEdges((r ^ row(y, z + 1)) & cornerBits, y, z, 2);
                 if (y == ny || z == nz) continue;
                 const CellRow cellRow{r, row(y + 1, z), row(y, z + 1), row(y + 1, z + 1)};
-                uint64_t meta = 0;
-                for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1) {
-                    const int rx = __builtin_ctzll(mixed);
-                    count.triangles += mcTriangleCase(cellRow.caseOf(rx)).triangleCount;
-                    meta |= uint64_t(1) << (rx / M);
-                }
-                if (activeMetaCells) metaRows[size_t(z / M) * size_t(n) + size_t(y / M)] |= meta;
+                for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1)
+                    count.triangles += mcTriangleCase(cellRow.caseOf(__builtin_ctzll(mixed))).triangleCount;
             }
-        if (activeMetaCells)
-            for (int m = 0; m < n * n; ++m)
-                for (uint64_t bits = metaRows[m]; bits; bits &= bits - 1)
-                    activeMetaCells->push_back(uint32_t(m * n + __builtin_ctzll(bits)));
         return count;
     }
 
