@@ -11,9 +11,11 @@
 
 #include <glm/common.hpp>
 
+#include "core/simd.h"
 #include "core/view/occlusion_pyramid.h"
 #include "core/view/pixel_round.h"
 #include "core/view/scan_convert.h"
+#include "core/view/tile_coverage.h"
 
 namespace vdiso {
 namespace {
@@ -271,6 +273,69 @@ TEST(ScanConvert, PyramidOverloadCoversTheSameSpans) {
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
             ASSERT_EQ(pyramid.isCovered(x, y), model[size_t(y) * w + x] != 0);
+}
+
+// The pixel-centre rectangle of a polygon's box, clamped to the image, as the traversal's
+// polygon test makes it (core/view/polygon_coverage.h).
+PixelRect centreRect(const Polygon& poly, int width, int height) {
+    double xMin = poly[0].x, xMax = poly[0].x, yMin = poly[0].y, yMax = poly[0].y;
+    for (const glm::dvec2& p : poly) {
+        xMin = std::min(xMin, p.x);
+        xMax = std::max(xMax, p.x);
+        yMin = std::min(yMin, p.y);
+        yMax = std::max(yMax, p.y);
+    }
+    return {std::max(detail::firstCentreAtOrAfter(xMin, width), 0),
+            std::max(detail::firstCentreAtOrAfter(yMin, height), 0),
+            std::min(detail::firstCentreAtOrAfter(xMax, width) - 1, width - 1),
+            std::min(detail::firstCentreAtOrAfter(yMax, height) - 1, height - 1)};
+}
+
+// Tile by tile, on every SIMD path this CPU runs (core/simd.h), the same bits as the rows and
+// the same answer to "anything new?", over polygons from sub-pixel to a hundred pixels (many on
+// quarter-pixel grids, so centres fall on edges and vertices), onto coverage left by earlier
+// ones, on images whose last tiles are ragged; and a rectangle wider than the polygon's box
+// changes nothing.
+TEST(TileCoverage, EveryPathCoversWhatTheRowsCover) {
+    std::vector<SimdLevel> paths;
+    for (SimdLevel level : {SimdLevel::Baseline, SimdLevel::Avx2})
+        if (simdLevelRuns(level)) paths.push_back(level);
+    std::mt19937 rng(99);
+    const int sizes[][2] = {{97, 61}, {8, 8}, {1, 1}, {13, 40}, {64, 9}};
+    int newTotal = 0, tiled = 0;
+    for (const auto& size : sizes) {
+        const int w = size[0], h = size[1];
+        OcclusionPyramid rows(w, h);
+        std::vector<OcclusionPyramid> tiles(paths.size(), OcclusionPyramid(w, h));
+        for (int trial = 0; trial < 1500; ++trial) {
+            Polygon poly = randomPolygon(rng, w, h, trial % 2 == 0);
+            if (trial % 3 == 0)  // a few pixels, where cells are about a pixel
+                for (glm::dvec2& p : poly) p = poly[0] + (p - poly[0]) * (3.0 / 100.0);
+            PixelRect r = centreRect(poly, w, h);
+            if (r.empty()) continue;
+            if (trial % 5 == 0) r = {0, 0, w - 1, h - 1};
+            const bool want = scanConvertPolygon(poly, rows);
+            for (size_t k = 0; k < paths.size(); ++k) {
+                bool got = false;
+                if (!coverPolygonTiles(poly.data(), int(poly.size()), r, tiles[k], got, paths[k])) {
+                    ASSERT_GT(poly.size(), size_t(kTileCoverageEdges));
+                    got = scanConvertPolygon(poly, tiles[k]);
+                } else {
+                    ++tiled;
+                }
+                ASSERT_EQ(got, want) << simdLevelName(paths[k]) << ", image " << w << "x" << h << ", trial " << trial;
+                ASSERT_TRUE(std::equal(rows.tiles().begin(), rows.tiles().end(), tiles[k].tiles().begin()))
+                    << simdLevelName(paths[k]) << ", image " << w << "x" << h << ", trial " << trial;
+            }
+            newTotal += want;
+            if (trial % 25 == 24) {  // start again from nothing now and then
+                rows.clear();
+                for (OcclusionPyramid& p : tiles) p.clear();
+            }
+        }
+    }
+    EXPECT_GT(newTotal, 400);
+    EXPECT_GT(tiled, 1500 * int(paths.size()));
 }
 
 }  // namespace

@@ -126,22 +126,11 @@ bool OcclusionPyramid::coverSpan(int y, int x0, int x1) {
     ++mStats.spans;
     bool changed = false;
     const int rowShift = (y & 7) * 8;
-    const size_t rowStart = size_t(y >> 3) * mWordsX[0];
     for (int tx = x0 >> 3, last = x1 >> 3; tx <= last; ++tx) {
         const int c0 = std::max(x0 - tx * kTileSize, 0);
         const int c1 = std::min(x1 - tx * kTileSize, kTileSize - 1);
         const uint64_t m = ((uint64_t(0xFF) >> (7 - (c1 - c0))) << c0) << rowShift;
-        uint64_t& w = mWords[rowStart + size_t(tx)];
-        if ((w & m) == m) continue;
-        w |= m;
-        changed = true;
-        ++mStats.tileUpdates;
-        // Coverage only grows, so the one change that matters above is a tile becoming
-        // full, and that happens once per tile: no duplicates in the list.
-        if (w == kFull) {
-            ++mStats.tilesFilled;
-            mFilledTiles.push_back(uint32_t(rowStart + size_t(tx)));
-        }
+        changed |= coverTile(tx, y >> 3, m);
     }
     return changed;
 }
@@ -150,17 +139,8 @@ bool OcclusionPyramid::coverTiles(std::span<const uint64_t> tiles) {
     if (tiles.size() != this->tiles().size())
         throw std::invalid_argument("OcclusionPyramid::coverTiles: tiles of another image size");
     bool changed = false;
-    for (size_t t = 0; t < tiles.size(); ++t) {
-        uint64_t& w = mWords[t];
-        if ((w | tiles[t]) == w) continue;
-        w |= tiles[t];
-        changed = true;
-        ++mStats.tileUpdates;
-        if (w == kFull) {
-            ++mStats.tilesFilled;
-            mFilledTiles.push_back(uint32_t(t));
-        }
-    }
+    const size_t tilesX = size_t(mWordsX[0]);
+    for (size_t t = 0; t < tiles.size(); ++t) changed |= coverTile(int(t % tilesX), int(t / tilesX), tiles[t]);
     return changed;
 }
 

@@ -68,6 +68,24 @@ public:
     // Covers pixels x0..x1 (inclusive, clamped to the image) of row y; returns whether any of
     // them was not covered before.
     bool coverSpan(int y, int x0, int x1);
+    // The bottom word of tile (tx, ty) (bit = row * 8 + column); both in the image's tiles.
+    uint64_t tileWord(int tx, int ty) const { return mWords[size_t(ty) * mWordsX[0] + size_t(tx)]; }
+    // Covers the pixels set in `mask` of tile (tx, ty); returns whether any was not covered
+    // before.
+    bool coverTile(int tx, int ty, uint64_t mask) {
+        const size_t at = size_t(ty) * mWordsX[0] + size_t(tx);
+        uint64_t& w = mWords[at];
+        if ((w | mask) == w) return false;
+        w |= mask;
+        ++mStats.tileUpdates;
+        // Coverage only grows, so the one change that matters above is a tile becoming full,
+        // and that happens once per tile: no duplicates in the list.
+        if (w == ~uint64_t(0)) {
+            ++mStats.tilesFilled;
+            mFilledTiles.push_back(uint32_t(at));
+        }
+        return true;
+    }
     // Carries the tiles filled since the last call up the hierarchy.
     void propagate();
     bool hasPendingChanges() const { return !mFilledTiles.empty(); }

@@ -12,6 +12,7 @@
 
 #include "core/view/occlusion_pyramid.h"
 #include "core/view/scan_convert.h"
+#include "core/view/tile_coverage.h"
 #include "core/view/view_culler.h"
 
 namespace vdiso {
@@ -21,7 +22,7 @@ public:
     // bottomUp: mark pixel centres bottom-up (false: insert each fan triangle top-down, WISE);
     // scanPolygons: scan-convert the polygon whole (false: each fan triangle on its own).
     PolygonCoverage(OcclusionPyramid& pyramid, bool bottomUp, bool scanPolygons)
-        : mPyramid(pyramid), mBottomUp(bottomUp), mScanPolygons(scanPolygons) {}
+        : mPyramid(pyramid), mBottomUp(bottomUp), mScanPolygons(scanPolygons), mSimd(simdLevel()) {}
 
     // Marks the pixel centres the polygon (count vertices in pixel coordinates, a fan from v[0])
     // covers. With keepOnlyNew, returns whether it covered a centre not covered before, or one
@@ -33,11 +34,24 @@ public:
 
 private:
     bool uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const;
-    bool coversSingleCentre(const glm::dvec2* v, int count, int x, int y, bool keepOnlyNew);
+    // Covers the outline's centres (within r, its box's or a larger one's) tile by tile
+    // (core/view/tile_coverage.h), or by rows beyond kTileCoverageEdges vertices; whether one was new.
+    bool coverOutline(const glm::dvec2* v, int count, const PixelRect& r) {
+        bool fresh = false;
+        if (!coverPolygonTiles(v, count, r, mPyramid, fresh, mSimd))
+            fresh = scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), mPyramid);
+        return fresh;
+    }
     bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const;
+    // The pixel centres within kRasterSlack of the box of v[0..count), clamped to the image.
+    PixelRect slackRect(const glm::dvec2* v, int count) const;
+    bool uncoveredCentreIn(const PixelRect& r) const {
+        return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
+    }
 
     OcclusionPyramid& mPyramid;
     bool mBottomUp, mScanPolygons;
+    SimdLevel mSimd;  // chosen once (core/simd.h)
 };
 
 // Inline: called for every polygon, and most are answered by the box test.
@@ -49,22 +63,20 @@ inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnly
             coversNew |= mPyramid.insertTriangleTopDown(triangle);
         }
     } else if (PixelRect r; uncoveredCentresInBox(v, count, r)) {
-        if (r.x0 == r.x1 && r.y0 == r.y1) {
-            coversNew = coversSingleCentre(v, count, r.x0, r.y0, keepOnlyNew);
-        } else if (mScanPolygons) {
-            coversNew = scanConvertPolygon(std::span<const glm::dvec2>(v, size_t(count)), mPyramid);
+        if (mScanPolygons) {
+            coversNew = coverOutline(v, count, r);
             // Where a non-planar polygon's projection folds over itself its winding cancels,
             // yet its fan triangles, which are what gets drawn, cover those centres: before
             // dropping it, ask them (they mark only what they draw).
             const bool askFans = keepOnlyNew && !coversNew && folds(v, count);
             for (int k = 2; k < count && !coversNew && askFans; ++k) {
                 const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), mPyramid);
+                coversNew |= coverOutline(triangle, 3, r);
             }
         } else {
             for (int k = 2; k < count; ++k) {
                 const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                coversNew |= scanConvertPolygon(std::span<const glm::dvec2>(triangle, 3), mPyramid);
+                coversNew |= coverOutline(triangle, 3, r);
             }
         }
     }
@@ -72,6 +84,9 @@ inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnly
     // The rasterizer works in float on snapped coordinates, so a centre within a hair of an
     // edge may fall the other way there: such a polygon is kept as well (it marks nothing; only
     // coverage this side of the rounding is ever marked).
+    // Each fan triangle's rectangle lies in the polygon's: one query answers for all of them
+    // when it is covered, as it is for most polygons that covered nothing new.
+    if (coversNew || !uncoveredCentreIn(slackRect(v, count))) return coversNew;
     for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
     return coversNew;
 }

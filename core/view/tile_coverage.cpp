@@ -1,0 +1,161 @@
+#include "core/view/tile_coverage.h"
+
+#include <algorithm>
+
+#if VDISO_HAS_AVX2_PATHS
+#include <immintrin.h>
+#endif
+
+namespace vdiso {
+
+namespace {
+
+constexpr uint64_t kByteOnes = 0x0101010101010101ull;  // 1 in each byte
+constexpr uint64_t kByteZero = 0x8080808080808080ull;  // winding 0 in each byte, offset by 128
+constexpr uint64_t kFull = ~uint64_t(0);
+
+// What one tile row [row0, row1] (image rows, within tile row ty) of a polygon needs.
+struct TileRow {
+    const detail::ScanEdge* edges;
+    int edgeCount;
+    int ty, row0, row1;
+    int tileX0, tileX1;
+    int width;
+};
+
+// Bit j set where byte j of `bytes` is not zero.
+inline uint64_t nonzeroBytes(uint64_t bytes) {
+    uint64_t t = bytes | bytes >> 4;
+    t |= t >> 2;
+    t |= t >> 1;
+    return ((t & kByteOnes) * 0x0102040810204080ull) >> 56;
+}
+
+// The baseline: each row's crossings listed, then per tile a word of byte counters per row.
+bool coverTileRowBaseline(const TileRow& t, OcclusionPyramid& pyramid) {
+    int column[8][kTileCoverageEdges];  // the first centre at or after the crossing
+    int winding[8][kTileCoverageEdges];
+    int crossings[8];
+    for (int row = t.row0; row <= t.row1; ++row) {
+        const double yc = row + 0.5;
+        const int k = row - t.row0;
+        int count = 0;
+        for (int e = 0; e < t.edgeCount; ++e) {
+            const detail::ScanEdge& edge = t.edges[e];
+            if (!(edge.yTop <= yc && yc < edge.yBottom)) continue;
+            // scanRow's crossing, to the bit.
+            const double x = edge.xTop + (yc - edge.yTop) * edge.dx / edge.dy;
+            column[k][count] = detail::firstCentreAtOrAfter(x, t.width);
+            winding[k][count] = edge.winding;
+            ++count;
+        }
+        crossings[k] = count;
+    }
+    bool fresh = false;
+    for (int tx = t.tileX0; tx <= t.tileX1; ++tx) {
+        const uint64_t word = pyramid.tileWord(tx, t.ty);
+        if (word == kFull) continue;
+        uint64_t mask = 0;
+        for (int row = t.row0; row <= t.row1; ++row) {
+            const int k = row - t.row0;
+            uint64_t counters = kByteZero;
+            for (int c = 0; c < crossings[k]; ++c) {
+                const int at = column[k][c] - tx * 8;
+                if (at >= 8) continue;
+                const uint64_t step = at <= 0 ? kByteOnes : kByteOnes << (8 * at);
+                counters = winding[k][c] > 0 ? counters + step : counters - step;
+            }
+            mask |= nonzeroBytes(counters ^ kByteZero) << (8 * (row & 7));
+        }
+        if (mask & ~word) fresh |= pyramid.coverTile(tx, t.ty, mask);
+    }
+    return fresh;
+}
+
+#if VDISO_HAS_AVX2_PATHS
+// AVX2: a quad of rows (tile rows 0-3 or 4-7) at a time. Per edge, the quad's four crossings in
+// one register (the same operations in the same order as the baseline's, so the same bits:
+// IEEE division, and vroundpd's ceiling is exact), kept as the column of the first centre at or
+// after each, or a far column where the edge misses the row. Per tile, a row's eight byte
+// counters are one 64-bit lane: each edge adds its step to the four rows at once, the step made
+// by a variable shift (zero once the shift passes 63: the crossing lies right of the tile), and
+// the counters that are not zero are the tile's bits, in the tile's own layout, by one
+// byte-compare and movemask.
+VDISO_TARGET_AVX2 bool coverTileRowAvx2(const TileRow& t, OcclusionPyramid& pyramid) {
+    const int quad0 = (t.row0 & 7) >> 2, quad1 = (t.row1 & 7) >> 2;
+    __m256i column[2][kTileCoverageEdges];
+    int winding[2][kTileCoverageEdges];
+    int used[2] = {0, 0};
+    const __m256d lo = _mm256_set1_pd(-1.0), hi = _mm256_set1_pd(double(t.width) + 1.0);
+    const __m256d half = _mm256_set1_pd(0.5);
+    const __m256i far = _mm256_set1_epi64x(int64_t(1) << 40);
+    for (int q = quad0; q <= quad1; ++q) {
+        const double firstCentre = t.ty * 8 + q * 4 + 0.5;
+        const __m256d yc = _mm256_add_pd(_mm256_set1_pd(firstCentre), _mm256_set_pd(3.0, 2.0, 1.0, 0.0));
+        for (int e = 0; e < t.edgeCount; ++e) {
+            const detail::ScanEdge& edge = t.edges[e];
+            if (edge.yBottom <= firstCentre || edge.yTop > firstCentre + 3.0) continue;  // misses the quad
+            const __m256d yTop = _mm256_set1_pd(edge.yTop);
+            const __m256d active = _mm256_and_pd(_mm256_cmp_pd(yTop, yc, _CMP_LE_OQ),
+                                                 _mm256_cmp_pd(yc, _mm256_set1_pd(edge.yBottom), _CMP_LT_OQ));
+            const __m256d x = _mm256_add_pd(
+                _mm256_set1_pd(edge.xTop),
+                _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(yc, yTop), _mm256_set1_pd(edge.dx)), _mm256_set1_pd(edge.dy)));
+            const __m256d clamped = _mm256_min_pd(_mm256_max_pd(x, lo), hi);
+            const __m256d ceiling = _mm256_round_pd(_mm256_sub_pd(clamped, half), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+            const __m256i at = _mm256_cvtepi32_epi64(_mm256_cvtpd_epi32(ceiling));
+            column[q][used[q]] = _mm256_blendv_epi8(far, at, _mm256_castpd_si256(active));
+            winding[q][used[q]] = edge.winding;
+            ++used[q];
+        }
+    }
+    const __m256i ones = _mm256_set1_epi8(1), zero = _mm256_set1_epi8(char(0x80));
+    bool fresh = false;
+    for (int tx = t.tileX0; tx <= t.tileX1; ++tx) {
+        const uint64_t word = pyramid.tileWord(tx, t.ty);
+        if (word == kFull) continue;
+        const __m256i tileColumn = _mm256_set1_epi64x(int64_t(tx) * 8);
+        uint64_t mask = 0;
+        for (int q = quad0; q <= quad1; ++q) {
+            __m256i counters = zero;
+            for (int c = 0; c < used[q]; ++c) {
+                __m256i at = _mm256_sub_epi64(column[q][c], tileColumn);
+                at = _mm256_and_si256(at, _mm256_cmpgt_epi64(at, _mm256_setzero_si256()));  // at <= 0: every byte
+                const __m256i step = _mm256_sllv_epi64(ones, _mm256_slli_epi64(at, 3));
+                counters = winding[q][c] > 0 ? _mm256_add_epi8(counters, step) : _mm256_sub_epi8(counters, step);
+            }
+            const uint32_t windingZero = uint32_t(_mm256_movemask_epi8(_mm256_cmpeq_epi8(counters, zero)));
+            mask |= uint64_t(~windingZero) << (32 * q);
+        }
+        if (mask & ~word) fresh |= pyramid.coverTile(tx, t.ty, mask);
+    }
+    return fresh;
+}
+#endif
+
+}  // namespace
+
+bool coverPolygonTiles(const glm::dvec2* v, int n, const PixelRect& rect, OcclusionPyramid& pyramid,
+                       bool& newCentres, SimdLevel simd) {
+    newCentres = false;
+    if (n > kTileCoverageEdges) return false;
+    detail::ScanEdge edges[kTileCoverageEdges];
+    double yMin, yMax;
+    const int edgeCount = detail::buildScanEdges(v, size_t(n), edges, yMin, yMax);
+    if (edgeCount < 2) return true;  // not finite, or flat: scanConvertPolygon covers nothing too
+    TileRow t{edges, edgeCount, 0, 0, 0, rect.x0 >> 3, rect.x1 >> 3, pyramid.width()};
+    for (t.ty = rect.y0 >> 3; t.ty <= rect.y1 >> 3; ++t.ty) {
+        t.row0 = std::max(rect.y0, t.ty * 8);
+        t.row1 = std::min(rect.y1, t.ty * 8 + 7);
+#if VDISO_HAS_AVX2_PATHS
+        if (simd == SimdLevel::Avx2) {
+            newCentres |= coverTileRowAvx2(t, pyramid);
+            continue;
+        }
+#endif
+        newCentres |= coverTileRowBaseline(t, pyramid);
+    }
+    return true;
+}
+
+}  // namespace vdiso
