@@ -1,5 +1,7 @@
 #include "app/extract_stats_json.h"
 
+#include <algorithm>
+
 namespace vdiso {
 
 void addViewCounters(JsonObject& s, const ExtractStats& stats) {
@@ -13,6 +15,15 @@ void addViewCounters(JsonObject& s, const ExtractStats& stats) {
     s.add("bricks_culled_by_sub_blocks", view.bricksCulledBySubBlocks);
     s.add("polygons_hidden", view.polygonsHidden);
     s.add("thin_part_points", view.thinPartPoints);
+    // The visibility work and the kernel, sampled (core/extract/extract_stats.h), and per kept
+    // triangle.
+    const double kernel = std::max(view.scanSeconds - view.cellTestSeconds - view.projectionSeconds -
+                                       view.coverageSeconds, 0.0);
+    const double visibility = view.cellTestSeconds + view.projectionSeconds + view.coverageSeconds + view.boxTestSeconds;
+    s.add("cell_test_s", view.cellTestSeconds).add("projection_s", view.projectionSeconds);
+    s.add("coverage_s", view.coverageSeconds).add("box_test_s", view.boxTestSeconds).add("kernel_s", kernel);
+    const double perTriangle = stats.triangles > 0 ? 1e9 / double(stats.triangles) : 0.0;
+    s.add("visibility_ns_per_triangle", visibility * perTriangle).add("kernel_ns_per_triangle", kernel * perTriangle);
 }
 
 }  // namespace vdiso

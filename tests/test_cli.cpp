@@ -203,6 +203,35 @@ TEST(CliExtract, WritesMeshPictureAndStats) {
     EXPECT_EQ(test::readFile(obj)[0], '#');
 }
 
+// SAGE's statistics split the time of visible meta-cells between the visibility work (sampled:
+// cell tests, projection, coverage; box tests beside) and the kernel, in seconds and per kept
+// triangle, on every SIMD path (core/simd.h), with the same triangles on each.
+TEST(CliExtract, SageStatsSplitTheVisibilityWorkFromTheKernel) {
+    test::ScratchDir dir;
+    const std::string store = dir.file("h.vdiso");
+    ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 96 --brick 16 --quiet").exitCode, 0);
+    uint64_t triangles[2] = {0, 0};
+    for (int path = 0; path < 2; ++path) {
+        const auto r = test::runCommand(std::string(path == 0 ? "VDISO_SIMD=baseline " : "") + VDISO_BINARY +
+                                        " extract " + store +
+                                        " --iso 600.5 --method sage --size 512x512 --threads 1 --stats - --quiet");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        const nlohmann::json stats = nlohmann::json::parse(r.output);
+        triangles[path] = stats["triangles"];
+        for (const char* key : {"cell_test_s", "projection_s", "coverage_s", "box_test_s", "kernel_s",
+                                "visibility_ns_per_triangle", "kernel_ns_per_triangle"})
+            ASSERT_TRUE(stats.contains(key)) << key << " in " << r.output;
+        EXPECT_GT(double(stats["coverage_s"]), 0.0) << r.output;
+        EXPECT_GT(double(stats["kernel_s"]), 0.0) << r.output;
+        EXPECT_GT(double(stats["visibility_ns_per_triangle"]), 0.0) << r.output;
+        const double parts = double(stats["cell_test_s"]) + double(stats["projection_s"]) +
+                             double(stats["coverage_s"]) + double(stats["kernel_s"]);
+        EXPECT_NEAR(parts, double(stats["scan_s"]), 1e-6) << r.output;
+    }
+    EXPECT_GT(triangles[0], 1000u);
+    EXPECT_EQ(triangles[0], triangles[1]);
+}
+
 // Every mesh format from a streamed extraction (and a held one, with a picture) has the PLY's
 // vertices and triangles; --mesh-compress is for .glb only; an unknown extension is refused
 // naming it; an existing output is kept without --force.

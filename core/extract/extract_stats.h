@@ -22,6 +22,11 @@ struct ViewCounters {
     bool abandoned = false;  // a stream's beginBrick returned false
     double scanSeconds = 0;  // extracting visible meta-cells, with their projection and scan
                              // conversion into the pyramid (interleaved per polygon)
+    // The visibility work, sampled (core/clock.h SampledTimer): the per-cell tests, projecting
+    // polygons' vertices, covering polygons (box query, tiles, rounding check), and the tests of
+    // the boxes of meta-cells within bricks. All but the last are part of scanSeconds; the rest
+    // of it is the cell kernel's (vertices, normals, triangles).
+    double cellTestSeconds = 0, projectionSeconds = 0, coverageSeconds = 0, boxTestSeconds = 0;
 
     ViewCounters& operator+=(const ViewCounters& o) {
         culledByRange += o.culledByRange;
@@ -39,6 +44,10 @@ struct ViewCounters {
         thinPartPoints += o.thinPartPoints;
         abandoned |= o.abandoned;
         scanSeconds += o.scanSeconds;
+        cellTestSeconds += o.cellTestSeconds;
+        projectionSeconds += o.projectionSeconds;
+        coverageSeconds += o.coverageSeconds;
+        boxTestSeconds += o.boxTestSeconds;
         return *this;
     }
 };

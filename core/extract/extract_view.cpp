@@ -116,6 +116,8 @@ private:
     // not on the image plane. Grows with the mesh; cleared with it in streaming.
     std::vector<glm::dvec2> mScreen;
     PointSet mThinParts;
+    // The visibility work's share of the time (ViewCounters).
+    SampledTimer mCellTimer, mProjectionTimer, mCoverageTimer, mBoxTimer;
 };
 
 // One brick of sample type T in the traversal: the visitor of its meta-cell walk
@@ -159,7 +161,9 @@ struct BrickVisit {
     // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
     bool keepCell(int64_t x, int64_t y, int64_t z) {
         if (!cellTests) return true;
-        const bool keep = culler.cullScreenBox(culler.cellBox(x, y, z)) == Cull::None;
+        const bool keep = t.mCellTimer(t.mStats.view.cellTestSeconds, [&] {
+            return culler.cullScreenBox(culler.cellBox(x, y, z)) == Cull::None;
+        });
         t.mStats.view.cellsCulled += !keep;
         return keep;
     }
@@ -169,9 +173,14 @@ struct BrickVisit {
     bool keepPolygon(const uint32_t* vertices, int count) {
         if (!t.mOptions.occlusion) return true;
         glm::dvec2 v[kMcMaxPolygonVertices];
-        for (int k = 0; k < count; ++k)
-            if (!t.screenPosition(vertices[k], v[k])) return true;  // marks nothing
-        const bool draws = t.mCoverage.cover(v, count, cellTests);
+        const bool placed = t.mProjectionTimer(t.mStats.view.projectionSeconds, [&] {
+            for (int k = 0; k < count; ++k)
+                if (!t.screenPosition(vertices[k], v[k])) return false;
+            return true;
+        });
+        if (!placed) return true;  // marks nothing
+        const bool draws =
+            t.mCoverageTimer(t.mStats.view.coverageSeconds, [&] { return t.mCoverage.cover(v, count, cellTests); });
         t.mStats.view.polygonsHidden += !draws;
         return draws;
     }
@@ -182,7 +191,7 @@ struct BrickVisit {
     Verdict test(const BrickRange& range, const glm::dvec3& a, const glm::dvec3& b) {
         ++t.mStats.nodesVisited;
         ScreenBox box;
-        const Cull cull = culler.cull(range, a, b, box);
+        const Cull cull = t.mBoxTimer(t.mStats.view.boxTestSeconds, [&] { return culler.cull(range, a, b, box); });
         if (cull != Cull::None) {
             t.count(cull);
             return Verdict::Culled;
