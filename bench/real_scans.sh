@@ -49,7 +49,10 @@ print(json.dumps({"store": store, "iso": iso, "view": view, "fe_s": fe["seconds"
                   "octree_s": octree, "sage_s": one, "frame_s": frame, "triangles": runs[0]["triangles"],
                   "points": runs[0]["points"], "decode_s": statistics.median(r["decode_s"] for r in runs),
                   "io_s": statistics.median(r["io_s"] for r in runs),
-                  "bytes_decoded": runs[0]["bricks_loaded"]}))
+                  "bytes_decoded": runs[0]["bricks_loaded"],
+                  "visibility_ns": statistics.median(f["visibility_ns_per_triangle"] for f in frames),
+                  "kernel_ns": statistics.median(f["kernel_ns_per_triangle"] for f in frames),
+                  "coverage_ns": statistics.median(f["coverage_s"] / max(f["triangles"], 1) * 1e9 for f in frames)}))
 PY
   done
 done
@@ -59,13 +62,18 @@ rows = [json.loads(l) for l in open(sys.argv[1])]
 # "bound": what SAGE would take if its triangles cost what the octree's do (the octree's time per
 # triangle times SAGE's triangles: nothing spent on culling, projection or scan conversion);
 # FE / bound is the most any view-dependent extraction of that surface could show against FE.
-print("| scan | iso | view | FE s | octree s | SAGE one-shot s | FE / SAGE one-shot | SAGE / octree | SAGE frame s | FE / frame | triangles + points (FE) | FE / bound |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+# Per kept triangle, medians over the warm frames (--stats, sampled: core/clock.h): SAGE's
+# visibility work (cell tests, projection, coverage, box tests) and its kernel, beside FE's
+# whole cost per triangle on this machine (Masked Occlusion Culling's published figure for
+# comparison: about 12 ns a triangle rasterised, Hasselgren et al. 2016).
+print("| scan | iso | view | FE s | octree s | SAGE one-shot s | FE / SAGE one-shot | SAGE / octree | SAGE frame s | FE / frame | triangles + points (FE) | FE / bound | visibility ns / kept tri | of which coverage | kernel ns / kept tri | FE ns / tri |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for r in rows:
     bound = r["octree_s"] / r["fe_triangles"] * r["triangles"]
     print(f"| {r['store']} | {r['iso']} | {r['view']} | {r['fe_s']:.3f} | {r['octree_s']:.3f} | {r['sage_s']:.3f} | "
           f"{r['fe_s'] / r['sage_s']:.1f}x | {r['sage_s'] / r['octree_s']:.2f} | {r['frame_s']:.4f} | "
-          f"{r['fe_s'] / r['frame_s']:.1f}x | {r['triangles']} + {r['points']} ({r['fe_triangles']}) | {r['fe_s'] / bound:.1f}x |")
+          f"{r['fe_s'] / r['frame_s']:.1f}x | {r['triangles']} + {r['points']} ({r['fe_triangles']}) | {r['fe_s'] / bound:.1f}x | "
+          f"{r['visibility_ns']:.0f} | {r['coverage_ns']:.0f} | {r['kernel_ns']:.0f} | {r['fe_s'] / r['fe_triangles'] * 1e9:.0f} |")
 PY
 echo
 # 1 and 2 threads in turn, pair by pair, so that the machine's moods fall on both: the ratio
