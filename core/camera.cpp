@@ -79,6 +79,9 @@ std::string cameraProblem(const Camera& camera) {
     const double upLength = glm::length(camera.up);
     if (!(upLength > 0.0) || !(glm::length(glm::cross(view / distance, camera.up / upLength)) >= 1e-9))
         return "up must not be zero nor parallel to the view direction (target - eye)";
+    if ((camera.zNear != 0.0 || camera.zFar != 0.0) &&
+        !(camera.zNear > 0.0 && camera.zFar > camera.zNear && std::isfinite(camera.zFar)))
+        return "near and far must satisfy 0 < near < far";
     return "";
 }
 

@@ -76,9 +76,9 @@ constexpr double kMaxEyeDistance = 1e15;
 // What keeps `camera` from making a picture, in words that name its fields (eye, target, up,
 // fov, width, height), or "" when it can: eye, target and up finite; fov in (0, 180) degrees;
 // each image side in [kMinImageSide, kMaxImageSide]; eye and target apart, by at most
-// kMaxEyeDistance; up neither zero nor parallel to target - eye. The one check of a camera that
-// comes from outside (a camera file, a VIEW message, Python); the clip planes are not checked
-// (a camera may have none yet).
+// kMaxEyeDistance; up neither zero nor parallel to target - eye; clip planes, when either is
+// set (not 0), 0 < near < far. The one check of a camera that comes from outside (a camera
+// file, a VIEW message, Python); a camera may have no clip planes yet.
 std::string cameraProblem(const Camera& camera);
 
 // Sets zNear and zFar so that the box [boundsMin, boundsMax] lies between them with a 1% margin.

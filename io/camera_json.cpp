@@ -71,8 +71,6 @@ public:
         if (n) {
             camera.zNear = number(*n, "near");
             camera.zFar = number(*f, "far");
-            if (!(camera.zNear > 0.0 && camera.zFar > camera.zNear))
-                fail("'near' and 'far' must satisfy 0 < near < far");
         }
 
         // The camera as every front end checks one (core/camera.h).

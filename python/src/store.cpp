@@ -4,10 +4,12 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 
 #include "app/extract_session.h"
 #include "app/store_info.h"
@@ -15,7 +17,6 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "core/view_presets.h"
-#include "io/camera_json.h"
 #include "io/error.h"
 #include "io/mesh/mesh_writer.h"
 #include "io/render/renderer.h"
@@ -67,15 +68,12 @@ public:
         mSession.reconfigure(std::move(settings));
     }
 
-    // The camera of a frame: a camera JSON text, else a named view (the default "normal").
-    Camera camera(const std::optional<std::string>& cameraJson, const std::string& view, int width, int height) const {
+    // The camera of a frame: the one given (checked when it was made: cameraOf), its clip
+    // planes fitted to the volume, else a named view (the default "normal").
+    Camera camera(const std::optional<Camera>& given, const std::string& view, int width, int height) const {
         Camera c;
-        if (cameraJson) {
-            try {
-                c = parseCameraJson(*cameraJson, "camera", width, height);
-            } catch (const IoError& e) {  // a bad dict is a bad argument, not a file's fault
-                throw SettingsError("camera", e.what());
-            }
+        if (given) {
+            c = *given;
             fitClipPlanes(c, mStore->volume());
         } else {
             ViewChoice choice;
@@ -89,11 +87,11 @@ public:
         return c;
     }
 
-    std::shared_ptr<Mesh> extract(const std::optional<std::string>& cameraJson, const std::string& view, int width,
-                                  int height, pyb::object progress) {
+    std::shared_ptr<Mesh> extract(const std::optional<Camera>& given, const std::string& view, int width, int height,
+                                  pyb::object progress) {
         auto result = std::make_shared<Mesh>();
         std::string statsText;
-        const Camera c = camera(cameraJson, view, width, height);
+        const Camera c = camera(given, view, width, height);
         runReleased([&](const ProgressFn& fraction) {
             // One frame at a time per session: Python threads may share one (frames()).
             std::lock_guard lock(mFrameLock);
@@ -113,9 +111,8 @@ public:
     }
 
     // The frame drawn as the command line draws it (OSMesa): an (height, width, 3) uint8 image.
-    pyb::array_t<uint8_t> render(const std::optional<std::string>& cameraJson, const std::string& view, int width,
-                                 int height) {
-        const Camera c = camera(cameraJson, view, width, height);
+    pyb::array_t<uint8_t> render(const std::optional<Camera>& given, const std::string& view, int width, int height) {
+        const Camera c = camera(given, view, width, height);
         RenderResult drawn;
         runReleased([&](const ProgressFn& fraction) {
             std::lock_guard lock(mFrameLock);
@@ -231,6 +228,29 @@ void bindStore(pyb::module_& m) {
         .def("info_json", [](const Store& s, std::optional<double> iso) { return storeInfoJson(*s.reader, iso).str(); },
              "iso"_a = pyb::none());
 
+    // A camera crosses from Python as this struct, made from vdiso.Camera's fields or a dict's
+    // and checked once, by core/camera.h's cameraProblem.
+    pyb::class_<Camera>(m, "_Camera")
+        .def(pyb::init([](std::array<double, 3> eye, std::array<double, 3> target, std::array<double, 3> up,
+                          double fov, int width, int height, std::optional<double> near, std::optional<double> far) {
+                 Camera c;
+                 c.eye = {eye[0], eye[1], eye[2]};
+                 c.target = {target[0], target[1], target[2]};
+                 c.up = {up[0], up[1], up[2]};
+                 c.fovYDegrees = fov;
+                 c.width = width;
+                 c.height = height;
+                 if (near.has_value() != far.has_value()) throw std::invalid_argument("camera: near and far go together");
+                 if (near) {
+                     c.zNear = *near;
+                     c.zFar = *far;
+                 }
+                 if (const std::string problem = cameraProblem(c); !problem.empty())
+                     throw std::invalid_argument("camera: " + problem);  // a ValueError
+                 return c;
+             }),
+             "eye"_a, "target"_a, "up"_a, "fov"_a, "width"_a, "height"_a, "near"_a = pyb::none(), "far"_a = pyb::none());
+
     pyb::class_<Session>(m, "_Session")
         .def(pyb::init([](const Store& store, const std::string& method, double iso, std::optional<double> lodError,
                           int64_t threads, std::optional<int64_t> cacheMb, bool largest, int64_t minPiece, int64_t smooth, double decimate,
@@ -252,9 +272,8 @@ void bindStore(pyb::module_& m) {
              },
              "method"_a, "iso"_a, "lod_error"_a, "threads"_a, "cache_mb"_a, "largest"_a, "min_piece"_a, "smooth"_a,
              "decimate"_a, "volume_space"_a)
-        .def("extract", &Session::extract, "camera_json"_a, "view"_a, "width"_a, "height"_a,
-             "progress"_a = pyb::none())
-        .def("render", &Session::render, "camera_json"_a, "view"_a, "width"_a, "height"_a);
+        .def("extract", &Session::extract, "camera"_a, "view"_a, "width"_a, "height"_a, "progress"_a = pyb::none())
+        .def("render", &Session::render, "camera"_a, "view"_a, "width"_a, "height"_a);
 }
 
 }  // namespace vdiso::py

@@ -156,6 +156,21 @@ def test_refusals(tmp_path, volume_and_cli_store):
     camera["eye"] = [1e300, 0, 0]
     with pytest.raises(ValueError, match="too far from target"):
         store.extract(500, method="sage", camera=camera)
+    # The camera crosses as a struct: its fields named, the library's one check applied.
+    camera["eye"] = [-60, 20, 20]
+    with pytest.raises(ValueError, match="camera: unknown field 'fovy'"):
+        store.extract(500, method="sage", camera={**camera, "fovy": 30})
+    with pytest.raises(ValueError, match="camera: near and far go together"):
+        store.extract(500, method="sage", camera={**camera, "near": 1})
+    with pytest.raises(ValueError, match="camera: near and far must satisfy 0 < near < far"):
+        store.extract(500, method="sage", camera={**camera, "near": 2, "far": 1})
+    with pytest.raises(TypeError, match="camera: eye, target and up expect 3 numbers"):
+        store.extract(500, method="sage", camera={**camera, "eye": ["a", 0, 0]})
+    same = vdiso.Camera(eye=camera["eye"], target=camera["target"], up=camera["up"], fov=camera["fov"])
+    a = store.extract(500, method="sage", camera=camera, size=(64, 48))
+    b = store.extract(500, method="sage", camera=same, size=(64, 48))
+    assert a.stats["triangles"] > 0 and np.array_equal(a.faces, b.faces)
+    assert np.array_equal(a.vertices, b.vertices)
     # A volume with no finite sample has no isosurface: refused at conversion, nothing written.
     with pytest.raises(OSError, match="no finite sample"):
         vdiso.convert(np.full((8, 8, 8), np.nan, np.float32), tmp_path / "nan.vdiso")

@@ -87,19 +87,29 @@ class Camera:
         return f"vdiso.Camera(eye={self.eye}, target={self.target}, up={self.up}, fov={self.fov})"
 
 
-def _camera_json(camera):
+_CAMERA_FIELDS = ("eye", "target", "up", "fov", "width", "height", "near", "far")
+
+
+def _camera(camera, width, height):
+    """The library's camera struct for a vdiso.Camera or a dict of its fields (width and height
+    default to the picture's); the library checks it (core/camera.h)."""
     if camera is None:
         return None
     if isinstance(camera, Camera):
         camera = camera.to_dict()
     if not isinstance(camera, dict):
         raise ValueError(f"camera: expects a dict with eye, target, up, fov or a vdiso.Camera, not {type(camera).__name__}")
+    for name in camera:
+        if name not in _CAMERA_FIELDS:
+            raise ValueError(f"camera: unknown field {name!r} (expected {', '.join(_CAMERA_FIELDS)})")
+    for name in _CAMERA_FIELDS[:4]:
+        if name not in camera:
+            raise ValueError(f"camera: {name!r} missing")
     try:
-        return _json.dumps(camera, allow_nan=False)
-    except ValueError:
-        raise ValueError("camera: eye, target, up and fov must be finite numbers (a NaN or infinity was given)") from None
-    except TypeError as e:
-        raise TypeError(f"camera: {e}") from None
+        return _vdiso._Camera(**{"width": width, "height": height, **camera})
+    except TypeError:
+        raise TypeError("camera: eye, target and up expect 3 numbers each, fov, near and far a number, "
+                        "width and height a whole number") from None
 
 
 def _size(size):
@@ -201,7 +211,7 @@ class Store:
         with self._lock:
             session = self._shared(iso, method, lod_error=lod_error, threads=threads, cache_mb=cache_mb, largest=largest,
                                    min_piece=min_piece, smooth=smooth, decimate=decimate)
-            return session.extract(_camera_json(camera), view or "normal", width, height, progress)
+            return session.extract(_camera(camera, width, height), view or "normal", width, height, progress)
 
     def frames(self, iso, cameras, *, size=None, **settings):
         """A generator of Meshes, one per camera (dicts, vdiso.Camera or view words), over one
@@ -213,7 +223,7 @@ class Store:
             if isinstance(camera, str):
                 yield session.extract(None, camera, width, height)
             else:
-                yield session.extract(_camera_json(camera), "normal", width, height)
+                yield session.extract(_camera(camera, width, height), "normal", width, height)
 
     def render(self, iso, camera=None, view="normal", size=None, method="sage", **settings):
         """render(iso, camera=None, view="normal", size=None, method="sage") -> (H, W, 3) uint8
@@ -221,7 +231,7 @@ class Store:
         The surface drawn as `vdiso extract --png` draws it (OSMesa), for a notebook."""
         width, height = _size(size)
         with self._lock:
-            return self._shared(iso, method, **settings).render(_camera_json(camera), view or "normal", width, height)
+            return self._shared(iso, method, **settings).render(_camera(camera, width, height), view or "normal", width, height)
 
     def __repr__(self):
         return f"<vdiso.Store {self.path}: {self.shape} {self.dtype}, {self.levels} levels>"
