@@ -7,6 +7,7 @@
 
 #include "bindings.h"
 #include "core/settings_error.h"
+#include "app/extract_settings.h"
 #include "serve/server.h"
 
 namespace vdiso::py {
@@ -44,17 +45,19 @@ private:
 
 void bindServe(pyb::module_& m) {
     pyb::class_<Server>(m, "_Server")
+        // Unset budgets and errors are the server's defaults (serve/serve_options.h), threads the
+        // machine's cores as `vdiso serve` has them: one source for each.
         .def(pyb::init([](const std::vector<std::string>& stores, std::optional<double> iso, int64_t port,
-                          const std::string& host, int64_t cacheMb, int64_t threads, double lodError,
-                          const std::string& webRoot, int64_t maxViewers) {
+                          const std::string& host, std::optional<int64_t> cacheMb, std::optional<int64_t> threads,
+                          std::optional<double> lodError, const std::string& webRoot, int64_t maxViewers) {
                  serve::ServeOptions o;
                  o.stores = stores;
                  o.iso = iso;
                  o.port = uint16_t(checkedInt("port", port, 0, 65535));
                  o.host = host;
-                 o.cacheBytes = uint64_t(checkedInt("cache_mb", cacheMb, 1, int64_t(1) << 30)) << 20;
-                 o.threads = int(checkedInt("threads", threads, 1, 64));
-                 o.lodError = lodError;
+                 if (cacheMb) o.cacheBytes = uint64_t(checkedInt("cache_mb", *cacheMb, 1, int64_t(1) << 30)) << 20;
+                 o.threads = threads ? int(checkedInt("threads", *threads, 1, 64)) : machineThreads();
+                 if (lodError) o.lodError = *lodError;
                  o.webRoot = webRoot;
                  o.maxViewers = int(checkedInt("max_viewers", maxViewers, 0, 100000));  // 0: by memory
                  return std::make_unique<Server>(o);

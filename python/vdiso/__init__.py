@@ -281,15 +281,15 @@ class Server:
     """A running `vdiso serve` (vdiso.serve): url, stop(), a context manager; in Jupyter it shows the
     viewer in an iframe."""
 
-    def __init__(self, stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None,
-                 lod_error=1.0, web_root=None, max_viewers=None):
+    def __init__(self, stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=None, threads=None,
+                 lod_error=None, web_root=None, max_viewers=None):
         if isinstance(stores, (str, bytes, _os.PathLike)):
             stores = [stores]
         stores = [_local_input(s, "store") for s in stores]
-        self._server = _vdiso._Server(stores, None if iso is None else _float(iso, "iso"), _int(port, "port"),
-                                      str(host), _int(cache_mb, "cache_mb"),
-                                      _int(min(64, _os.cpu_count() or 1) if threads is None else threads, "threads"),
-                                      _float(lod_error, "lod_error"), web_root or _vdiso._web_root,
+        optional = lambda value, check, name: None if value is None else check(value, name)  # noqa: E731
+        self._server = _vdiso._Server(stores, optional(iso, _float, "iso"), _int(port, "port"), str(host),
+                                      optional(cache_mb, _int, "cache_mb"), optional(threads, _int, "threads"),
+                                      optional(lod_error, _float, "lod_error"), web_root or _vdiso._web_root,
                                       _int(0 if max_viewers is None else max_viewers, "max_viewers"))
 
     url = property(lambda self: self._server.url, doc="http://HOST:PORT/?token=... (the token is the key)")
@@ -314,10 +314,12 @@ class Server:
 
 
 def serve(stores, iso=None, port=0, host="127.0.0.1", **options):
-    """serve(stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=1024, threads=None, lod_error=1.0,
+    """serve(stores, iso=None, port=0, host="127.0.0.1", *, cache_mb=None, threads=None, lod_error=None,
     max_viewers=None)
     -> Server
 
     `vdiso serve` in this process, on its own thread: the browser viewer of one or more stores
-    (paths or URLs) at server.url. port 0: any free port. Use as a context manager, or stop()."""
+    (paths or URLs) at server.url. port 0: any free port. cache_mb, threads, lod_error and
+    max_viewers left out: `vdiso serve`'s defaults (`vdiso serve --help`). Use as a context
+    manager, or stop()."""
     return Server(stores, iso, port, host, **options)
