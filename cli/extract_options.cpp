@@ -248,7 +248,6 @@ ExtractOptions parseExtractOptions(int argc, char** argv) {
         }
     }
     if (o.input.empty()) throw UsageError("expects FILE.vdiso");
-    checkExtractSettings(o);  // SettingsError: the front end's message names the flag
     if (o.viewGiven && !o.cameraPath.empty()) throw UsageError("give --view or --camera, not both");
     const bool viewDependent = isViewDependent(o.method);
     if (o.pngPath.empty() && !viewDependent && o.orbitFrames == 0 && o.pathFile.empty() &&

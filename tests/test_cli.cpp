@@ -318,7 +318,7 @@ TEST(CliExtract, PostProcessesTheMesh) {
 
     const std::pair<const char*, const char*> refused[] = {
         {" --smooth 2 --method sage -o x.ply", "apply to the full surface"},
-        {" --decimate 0", "--decimate expects the fraction"},
+        {" --decimate 0 -o x.ply", "--decimate expects the fraction"},
         {" --decimate 1.5 -o x.ply", "--decimate expects the fraction"},
         {" --min-piece 0 -o x.ply", "--min-piece"},
         {" --smooth -1 -o x.ply", "--smooth"},

@@ -95,6 +95,10 @@ MpiExtractOptions parse(int argc, char** argv) {
     }
     ExtractOptions& o = m.extract = vdiso::cli::parseExtractOptions(int(rest.size()), rest.data());
     if (o.help) return m;
+    // vdiso extract's settings are checked by its session (app/extract_session.h); the ranks'
+    // extractions take them field by field, so they are checked here, once (SettingsError,
+    // named as flags).
+    checkExtractSettings(o);
     const bool view = vdiso::isViewDependent(o.method);
     if (o.method == "noise") throw UsageError("--method noise is not under MPI (octree is): run it with vdiso");
     if (o.orbitFrames > 0 || !o.pathFile.empty()) throw UsageError("--path is not under MPI: run it with vdiso");
