@@ -5,7 +5,6 @@
 #include <optional>
 
 #include "cache/brick_cache.h"
-#include "cache/cache_plan.h"
 #include "core/extract/extract_full.h"
 #include "core/lod/level_source.h"
 #include "core/orientation.h"
@@ -25,6 +24,9 @@ namespace {
 
 RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const RanksExtractOptions& options) {
     const auto start = Clock::now();
+    ExtractSettings s = options.settings;
+    if (!s.iso) throw std::invalid_argument("extractOctreeAcrossRanks: no isovalue");
+    const double iso = *s.iso;
     const bool ply = !options.meshPath.empty() && meshFormatFor(options.meshPath) == MeshFormat::Ply;
     const bool stl = !options.meshPath.empty() && meshFormatFor(options.meshPath) == MeshFormat::Stl;
     if (!options.meshPath.empty() && !ply && !stl)
@@ -42,11 +44,12 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     // Open, partition and extract this rank's part.
     runPhase(comm, [&] {
         store.emplace(options.store, StoreOpenOptions{options.cold ? ReadMode::Cold : ReadMode::Buffered, options.remote});
-        cache.emplace(*store, options.cacheBytes);
+        if (store->remote()) adaptToRemoteStore(s);  // read-ahead as vdiso extract's session sets it
+        cache.emplace(*store, uint64_t(s.cacheMb) << 20);
         level.emplace(*cache, 0);
-        const CachePlan plan = planCacheUse(*cache, false, 32, options.threads, options.threads);
-        std::vector<int64_t> active = octreeActiveBricks(*level, options.iso, &stats.nodesVisited);
-        std::vector<uint64_t> weights = activeSubBlockWeights(*cache, active, options.iso);
+        const CachePlan plan = planCache(s, *cache, s.threads);
+        std::vector<int64_t> active = octreeActiveBricks(*level, iso, &stats.nodesVisited);
+        std::vector<uint64_t> weights = activeSubBlockWeights(*cache, active, iso);
         partition = partitionBricks(std::move(active), std::move(weights), comm.size(), level->layout().brickCount());
         const std::span<const int64_t> part = partition.part(comm.rank());
         mine.bricks = part.size();
@@ -54,7 +57,7 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
         if (!part.empty()) {
             mine.firstBrick = part.front();
             mine.lastBrick = part.back();
-            FullExtractOptions extract{options.iso, options.metaCellSize, plan.threads};
+            FullExtractOptions extract{iso, s.metaCellSize, plan.threads};
             extract.prefetchBricks = plan.prefetchBricks;
             extract.bricks = part;
             extract.borderVertices = &border;
@@ -72,7 +75,7 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     // one numbering (and everyone's vertex counts).
     runPhase(comm, [&] {
         const SpaceTransform transform = volumeToPhysical(store->volume());
-        if (options.physicalMeshes && !transform.isIdentity()) transformMesh(transform, mesh);
+        if (s.physicalMeshes.value_or(true) && !transform.isIdentity()) transformMesh(transform, mesh);
     });
     if (stl) writeStlCollectively(comm, options.meshPath, options.overwrite, mesh);
     RankMeshNumbering numbering;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/kernel/brick_extractor.h"
+#include "app/extract_settings.h"
 #include "io/remote/remote_options.h"
 #include "mpi/communicator.h"
 
@@ -22,14 +22,12 @@ namespace vdiso::mpi {
 struct RanksExtractOptions {
     std::string store;     // a path or a URL
     RemoteOptions remote;  // for a URL
-    double iso = 0;
-    int metaCellSize = kDefaultMetaCellSize;
-    int threads = 1;                      // per rank
-    uint64_t cacheBytes = uint64_t(1) << 30;  // per rank
-    std::string meshPath;                 // a .ply, or empty for no mesh
+    // vdiso extract's settings, checked (app/extract_settings.h checkExtractSettings): the
+    // isovalue, meta-cell size, threads and cache per rank, read-ahead, the mesh's space.
+    ExtractSettings settings;
+    std::string meshPath;  // a .ply, or empty for no mesh
     bool overwrite = false;
-    bool physicalMeshes = true;           // as vdiso extract --mesh-space
-    bool cold = false;                    // as vdiso extract --cold: bricks from disk (O_DIRECT)
+    bool cold = false;     // as vdiso extract --cold: bricks from disk (O_DIRECT)
 };
 
 // One rank's figures.

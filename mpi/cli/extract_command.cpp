@@ -216,13 +216,9 @@ int runOctree(const Communicator& comm, const ExtractOptions& o) {
     RanksExtractOptions run;
     run.store = o.input;
     run.remote = o.remote;
-    run.iso = *o.iso;
-    run.metaCellSize = o.metaCellSize;
-    run.threads = o.threads;
-    run.cacheBytes = o.cacheMb << 20;
+    run.settings = o;
     run.meshPath = o.meshPath;
     run.overwrite = o.overwrite;
-    run.physicalMeshes = o.physicalMeshes.value_or(true);
     run.cold = o.cold;
     const RanksExtractResult r = extractOctreeAcrossRanks(comm, run);
     runPhase(comm, [&] {
@@ -248,7 +244,9 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         store.emplace(o.input, StoreOpenOptions{o.cold ? ReadMode::Cold : ReadMode::Buffered, o.remote});
         cache.emplace(*store, o.cacheMb << 20);
         camera = vdiso::cli::extractCameras(o, store->volume(), view).front();
-        run.view = vdiso::viewExtractOptions(o, vdiso::planCache(o, *cache, o.threads));
+        vdiso::ExtractSettings settings = o;
+        if (store->remote()) vdiso::adaptToRemoteStore(settings);  // read-ahead as vdiso extract's session sets it
+        run.view = vdiso::viewExtractOptions(settings, vdiso::planCache(settings, *cache, settings.threads));
         run.partition = m.partition;
         run.exchangeBricks = m.exchangeBricks;
         run.gather = !o.meshPath.empty() || !o.pngPath.empty() || !o.pointsPath.empty();
