@@ -9,7 +9,7 @@ import re
 import sys
 
 # Lowest first; folders on one level do not include each other.
-LEVELS = [["core"], ["io"], ["cache"], ["serve", "app"], ["mpi"], ["cli"], ["tools", "mpi/cli", "python"]]
+LEVELS = [["core"], ["io"], ["cache"], ["app"], ["serve"], ["mpi"], ["cli"], ["tools", "mpi/cli", "python"]]
 # Inside a library folder: (subfolder or "" for the files at its top) -> level.
 INNER = {
     "core": {"": 0, "kernel": 1, "mesh_post": 1, "synth": 1, "trees": 2, "view": 3, "lod": 4, "extract": 5},

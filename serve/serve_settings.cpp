@@ -4,19 +4,24 @@
 #include <thread>
 
 #include "cache/cache_plan.h"
-#include "core/extract/brick_look_ahead.h"
 
 namespace vdiso::serve {
 
 SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
     // Two readers a frame however many strips: with 2 frames of 2 strips on 2 cores, 4 readers
     // a frame made 13 threads for no more frames a second (bench/log.md, "Many viewers").
-    SessionSettings s{o.threads, o.metaCellSize, 8, std::max(1, 2 / o.threads), 2, o.outboxBytes, o.lodError};
+    SessionSettings s;
+    s.view.method = "sage";
+    s.view.threads = o.threads;
+    s.view.metaCellSize = o.metaCellSize;
+    s.view.prefetch = 8;
+    s.view.readers = std::max(1, 2 / o.threads);
+    s.view.lodError = o.lodError;
+    s.outboxBytes = o.outboxBytes;
     for (size_t i = 0; i < stores.size(); ++i)
         if (stores[i].reader->remote()) {
-            s.prefetchBricks = RemoteReadAhead::kBricks;
-            s.prefetchReaders = RemoteReadAhead::kReaders;
-            s.prefetchNear = RemoteReadAhead::kNear;
+            adaptToRemoteStore(s.view);
+            break;
         }
     return s;
 }
@@ -35,12 +40,12 @@ int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
         const BrickCache& cache = *stores[i].cache;
         const uint64_t bricks = cache.budgetBytes() / stores[i].reader->brickBytes();
         if (bricks >= uint64_t(stores[i].reader->index().size())) continue;
-        const uint64_t perFrame = frameCacheBricks(settings.prefetchBricks, settings.threads);
+        const uint64_t perFrame = frameCacheBricks(settings.view.prefetch, settings.view.threads);
         if (bricks < perFrame)
             throw CacheBudgetError(stores[i].reader->path() + ": a brick cache of " + std::to_string(bricks) +
                                    " bricks cannot hold what one frame pins (" + std::to_string(perFrame) +
                                    " bricks of " + std::to_string(stores[i].reader->brickBytes() >> 10) +
-                                   " KB with " + std::to_string(settings.threads) + " threads a frame)");
+                                   " KB with " + std::to_string(settings.view.threads) + " threads a frame)");
         slots = std::min<int>(slots, int(bricks / perFrame));
     }
     return slots;

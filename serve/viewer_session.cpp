@@ -184,7 +184,7 @@ void ViewerSession::runPass() {
     const std::vector<std::shared_ptr<ViewerOutput>> outputs =
         catchUps.empty() ? mDirectory.outputsOf(mId) : catchUps;
     if (outputs.empty()) return;  // no longer leading
-    const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.lodError : 0.0;
+    const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.view.lodError : 0.0;
     const bool coarse = first && lodError > 0;
     try {
         // The final pass after a coarse one lets first passes run inside it.
@@ -298,12 +298,12 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
         fanned.push_back(streams.back().get());
     }
     FanOutStream fanOut(fanned, view.seq, view.store, view.iso);
-    ViewExtractOptions options = ViewExtractOptions::sage(view.iso);
-    options.metaCellSize = mSettings.metaCellSize;
-    options.threads = mSettings.threads;
-    options.prefetchBricks = mSettings.prefetchBricks;
-    options.prefetchReaders = mSettings.prefetchReaders;
-    options.prefetchNear = mSettings.prefetchNear;
+    // The session's settings for this VIEW's isovalue and pass, made into the core's options
+    // as vdiso extract makes them (the cache's budget is checked once, by frameSlots).
+    ExtractSettings frame = mSettings.view;
+    frame.iso = view.iso;
+    frame.lodError = lodError;
+    ViewExtractOptions options = viewExtractOptions(frame, CachePlan{frame.prefetch, frame.threads});
     ViewStream& stream = streams.size() == 1 ? static_cast<ViewStream&>(*streams[0]) : fanOut;
     YieldToFirstPasses yielding(stream, mPool, *this);
     options.stream = yields ? &yielding : &stream;
@@ -313,14 +313,11 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
     }
     options.rangeCache = store.ranges.get();
     options.tree = store.tree.get();
-    options.lodError = lodError;
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;
     ExtractStats stats;
     try {
-        TriangleMesh unused;
-        PointSet unusedPoints;
-        stats = extractViewDependent(*store.cache, camera, options, unused, unusedPoints);
+        stats = streamViewDependent(*store.cache, camera, options);
         if (stats.view.abandoned) status = "superseded";
     } catch (const std::exception& e) {  // a brick that cannot be read, say
         status = "error";

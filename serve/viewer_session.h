@@ -25,6 +25,7 @@
 #include <utility>
 #include <vector>
 
+#include "app/extract_settings.h"
 #include "serve/frame_pool.h"
 #include "serve/frame_stream.h"
 #include "serve/outbox.h"
@@ -35,16 +36,14 @@
 namespace vdiso::serve {
 
 struct SessionSettings {
-    int threads = 1;        // image strips per frame (core/extract/extract_view.h)
-    int metaCellSize = 4;
-    int prefetchBricks = 8;  // per frame
-    int prefetchReaders = 2;  // threads loading them, per strip (more for stores at URLs)
-    int prefetchNear = 2;     // of them read before they are known to show (BrickLookAhead)
+    // Every frame's extraction, as vdiso extract's (app/extract_settings.h): method sage, image
+    // strips (threads), meta-cell size, read-ahead (prefetch bricks per frame, readers per
+    // strip, near), and levels of detail: a VIEW's final frame is extracted at lodError pixels
+    // (0: level 0 only); on a store with levels, a first frame at kCoarsePassFactor times it
+    // comes before, so the viewer shows a coarse surface at once and refines it. The isovalue
+    // is each VIEW's.
+    ExtractSettings view;
     size_t outboxBytes = size_t(32) << 20;
-    // Levels of detail (core/lod/view_levels.h): a VIEW's final frame is extracted at this error in
-    // pixels (0: level 0 only); on a store with levels, a first frame at kCoarsePassFactor times
-    // it comes before, so the viewer shows a coarse surface at once and refines it.
-    double lodError = 1.0;
     static constexpr double kCoarsePassFactor = 8.0;
     // A viewer's frames start at most once in this time: VIEWs that come faster replace one
     // another while the next start waits, so a client sending VIEWs as fast as it can costs the

@@ -332,8 +332,9 @@ TEST(ServeServer, ThreadsDoNotGrowWithTheViewers) {
     };
     const size_t one = mostThreadsDuring([&] { orbit(1); });
     const size_t sixteen = mostThreadsDuring([&] { orbit(16); });
-    // A frame reads ahead with SessionSettings' 2 threads (the store is local), on each worker.
-    const size_t bound = atRest + workers * SessionSettings{}.prefetchReaders;
+    // A frame reads ahead with 2 reader threads in all (serve/serve_settings.cpp; the store is
+    // local), on each worker.
+    const size_t bound = atRest + workers * 2;
     EXPECT_LE(one, bound);
     EXPECT_LE(sixteen, bound) << "1 viewer: " << one << " threads; at rest " << atRest;
     EXPECT_EQ(fixture.server->counters().frameWorkers, workers);

@@ -506,4 +506,11 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     return stats;
 }
 
+ExtractStats streamViewDependent(BrickSource& source, const Camera& camera, const ViewExtractOptions& options) {
+    if (!options.stream) throw std::invalid_argument("streamViewDependent: no stream to hand the bricks to");
+    TriangleMesh brickMesh;  // each brick's, cleared once handed over
+    PointSet brickPoints;
+    return extractViewDependent(source, camera, options, brickMesh, brickPoints);
+}
+
 }  // namespace vdiso

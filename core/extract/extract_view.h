@@ -167,5 +167,8 @@ struct ViewExtractOptions {
 ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
                                       const ViewExtractOptions& options, TriangleMesh& mesh,
                                       PointSet& points, const ProgressFn& progress = {});
+// The same, each brick's surface handed to options.stream (required) as it is made: nothing is
+// kept past its brick.
+ExtractStats streamViewDependent(BrickSource& source, const Camera& camera, const ViewExtractOptions& options);
 
 }  // namespace vdiso
