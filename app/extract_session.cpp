@@ -113,18 +113,8 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
     const BrickStoreReader& store = mStore;
     const VolumeInfo& volume = store.volume();
     JsonObject s;
-    s.add("file", store.path()).add("method", o.method).add("iso", *o.iso);
-    s.add("metacell", o.metaCellSize).add("threads", f.plan.threads);
-    if (isViewDependent(o.method))
-        s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks)
-            .add("capped_faces", stats.view.cappedFaces);
-    else
-        s.add("level", o.level);
-    s.add("levels", store.header().levelCount);
-    if (meshWritten)
-        s.add("mesh_space", o.physicalMeshes.value_or(true) && volume.hasOrientation ? "physical" : "volume");
-    s.add("triangles", stats.triangles).add("points", uint64_t(f.points.size()));
-    s.add("vertices", stats.vertices).add("mesh_streamed", f.streamed);
+    addFrameHeader(s, o, store, f.plan.threads, stats, uint64_t(f.points.size()), meshWritten);
+    s.add("mesh_streamed", f.streamed);
     if (const auto& post = f.post) {
         s.add("smooth", o.post.smoothIterations).add("decimate", o.post.decimateRatio);
         s.add("largest", o.post.largestPiece).add("min_piece", o.post.minPieceTriangles);
@@ -153,11 +143,8 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
     // waiting for a brick another strip loads counts as waiting, the read only once.
     s.add("brick_wait_s", stats.brickWaitSeconds);
     s.add("io_hidden_s", std::max(0.0, io.readSeconds + io.decodeSeconds - stats.brickWaitSeconds));
-    s.add("bricks_loaded", io.misses).add("bricks_requested", io.requests);
-    s.add("bricks_active", stats.bricksActive).add("bytes_read", io.bytesRead);
-    s.add("nodes_visited", stats.nodesVisited).add("meta_cells_active", stats.metaCellsActive);
-    s.add("cells_active", stats.cellsActive);
-    if (isViewDependent(o.method)) addViewCounters(s, stats);
+    s.add("bricks_loaded", io.misses).add("bricks_requested", io.requests).add("bytes_read", io.bytesRead);
+    addTraversalCounters(s, o.method, stats);
     s.add("voxels_per_s", double(volume.sampleCount()) / stats.extractSeconds);
     return s;
 }

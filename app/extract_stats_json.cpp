@@ -4,6 +4,28 @@
 
 namespace vdiso {
 
+void addFrameHeader(JsonObject& s, const ExtractSettings& o, const BrickStoreReader& store, int threads,
+                    const ExtractStats& stats, uint64_t points, bool meshWritten) {
+    s.add("file", store.path()).add("method", o.method).add("iso", *o.iso);
+    s.add("metacell", o.metaCellSize).add("threads", threads);
+    if (isViewDependent(o.method))
+        s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks)
+            .add("capped_faces", stats.view.cappedFaces);
+    else
+        s.add("level", o.level);
+    s.add("levels", store.header().levelCount);
+    if (meshWritten)
+        s.add("mesh_space",
+              o.physicalMeshes.value_or(true) && store.volume().hasOrientation ? "physical" : "volume");
+    s.add("triangles", stats.triangles).add("points", points).add("vertices", stats.vertices);
+}
+
+void addTraversalCounters(JsonObject& s, const std::string& method, const ExtractStats& stats) {
+    s.add("bricks_active", stats.bricksActive).add("nodes_visited", stats.nodesVisited);
+    s.add("meta_cells_active", stats.metaCellsActive).add("cells_active", stats.cellsActive);
+    if (isViewDependent(method)) addViewCounters(s, stats);
+}
+
 void addViewCounters(JsonObject& s, const ExtractStats& stats) {
     const ViewCounters& view = stats.view;
     s.add("culled_range", view.culledByRange).add("culled_frustum", view.culledByFrustum);

@@ -164,26 +164,17 @@ std::string viewStats(const MpiExtractOptions& m, const BrickStoreReader& store,
     const ExtractOptions& o = m.extract;
     const ExtractStats& stats = r.stats;
     JsonObject s;
-    s.add("file", o.input).add("method", o.method).add("iso", *o.iso);
-    s.add("metacell", o.metaCellSize).add("threads", threads).add("ranks", r.ranks);
-    s.add("partition", r.partition == ViewPartition::Image ? "image" : "object");
+    addFrameHeader(s, o, store, threads, stats, stats.view.points, !o.meshPath.empty() || !o.pointsPath.empty());
+    s.add("ranks", r.ranks).add("partition", r.partition == ViewPartition::Image ? "image" : "object");
     if (r.partition == ViewPartition::Object) {
         s.add("slab_axis", std::string(1, "xyz"[r.axis])).add("eye_slab", r.eyeSlab);
         s.add("exchange_bricks", m.exchangeBricks).add("coverage_rounds", r.rounds);
         s.add("coverage_bytes_per_rank", r.maskBytes);
     }
-    s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks);
-    s.add("capped_faces", stats.view.cappedFaces).add("levels", store.header().levelCount);
-    if (!o.meshPath.empty() || !o.pointsPath.empty())
-        s.add("mesh_space",
-              o.physicalMeshes.value_or(true) && store.volume().hasOrientation ? "physical" : "volume");
-    s.add("triangles", stats.triangles).add("points", stats.view.points).add("vertices", stats.vertices);
     s.add("gathered_bytes", r.gatheredBytes);
     s.add("extract_s", r.seconds).add("read_method", store.readMethod());
-    s.add("bricks_loaded", r.bricksLoaded).add("bricks_active", stats.bricksActive);
-    s.add("bytes_read", r.bytesRead).add("nodes_visited", stats.nodesVisited);
-    s.add("meta_cells_active", stats.metaCellsActive).add("cells_active", stats.cellsActive);
-    addViewCounters(s, stats);
+    s.add("bricks_loaded", r.bricksLoaded).add("bytes_read", r.bytesRead);
+    addTraversalCounters(s, o.method, stats);
     if (drawSeconds) s.add("draw_s", *drawSeconds);
     s.add("view", viewName);
     std::string perRank = "[";
