@@ -4,6 +4,7 @@
 #include <string>
 
 #include "app/extract_session.h"
+#include "app/frame_files.h"
 #include "cli/args.h"
 #include "cli/extract_options.h"
 #include "cli/progress_bar.h"
@@ -14,8 +15,6 @@
 #include "io/mesh/mesh_writer.h"
 #include "io/process_stats.h"
 #include "io/render/oracle_comparison.h"
-#include "io/render/png_image.h"
-#include "io/render/renderer.h"
 #include "tools/commands.h"
 
 namespace vdiso::cli {
@@ -53,17 +52,11 @@ JsonObject extractFrame(const ExtractOptions& o, ExtractSession& session, const 
                      (unsigned long long)o.post.minPieceTriangles,
                      (unsigned long long)frame.post->largestPieceTriangles);
 
-    if (streamed)
-        streamed->finish();
-    else if (!meshPath.empty())
-        writeMesh(meshPath, frame.mesh, o.overwrite, o.meshCompress, meshTransform);
-    std::optional<double> drawSeconds;
-    if (!pointsPath.empty()) writePointsPly(pointsPath, frame.points, o.overwrite, meshTransform);
-    if (!pngPath.empty()) {
-        const RenderResult r = renderSurface(frame.mesh, frame.points, *camera);
-        writePng(pngPath, r.image, o.overwrite);
-        drawSeconds = r.drawSeconds;
-    }
+    if (streamed) streamed->finish();
+    // The held mesh's file (a streamed one is written already), the points and the picture.
+    const FrameFiles files{streamed ? std::string() : meshPath, pointsPath, pngPath, o.overwrite, o.meshCompress};
+    const std::optional<double> drawSeconds =
+        writeFrameFiles(files, frame.mesh, frame.points, camera ? *camera : Camera{}, meshTransform);
 
     JsonObject s = session.frameStats(frame, !meshPath.empty() || !pointsPath.empty());
     if (drawSeconds) s.add("draw_s", *drawSeconds);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/extract_stats_json.h"
+#include "app/frame_files.h"
 #include "cache/brick_cache.h"
 #include "cache/cache_plan.h"
 #include "cli/args.h"
@@ -19,8 +20,6 @@
 #include "io/json.h"
 #include "io/mesh/mesh_writer.h"
 #include "io/process_stats.h"
-#include "io/render/png_image.h"
-#include "io/render/renderer.h"
 #include "io/store/brick_store.h"
 #include "mpi/cli/commands.h"
 #include "mpi/extract_across_ranks.h"
@@ -250,14 +249,8 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         if (comm.rank() != 0) return;
         const SpaceTransform transform =
             o.physicalMeshes.value_or(true) ? volumeToPhysical(store->volume()) : SpaceTransform{};
-        if (!o.meshPath.empty()) writeMesh(o.meshPath, r.mesh, o.overwrite, o.meshCompress, transform);
-        if (!o.pointsPath.empty()) writePointsPly(o.pointsPath, r.points, o.overwrite, transform);
-        std::optional<double> drawSeconds;
-        if (!o.pngPath.empty()) {
-            const RenderResult picture = renderSurface(r.mesh, r.points, camera);
-            writePng(o.pngPath, picture.image, o.overwrite);
-            drawSeconds = picture.drawSeconds;
-        }
+        const std::optional<double> drawSeconds = writeFrameFiles(
+            {o.meshPath, o.pointsPath, o.pngPath, o.overwrite, o.meshCompress}, r.mesh, r.points, camera, transform);
         char line[320];
         std::snprintf(line, sizeof line,
                       "%s iso %g on %d ranks by %s: %llu triangles, %llu points, %.3f s, %llu bricks read (%.1f MB)",
