@@ -294,8 +294,9 @@ std::vector<Camera> extractCameras(const ExtractOptions& o, const VolumeInfo& vo
     else if (!o.cameraPath.empty())
         cameras.push_back(readCameraJson(o.cameraPath, o.width, o.height));
     else if (!o.pngPath.empty() || isViewDependent(o.method))
-        cameras.push_back(viewCamera(view, volume, o.width, o.height));
-    for (Camera& c : cameras) fitClipPlanes(c, volume);
+        cameras.push_back(presetCamera(view.distance, facing, volume.origin, volume.worldMax(), o.width, o.height,
+                                       view.times));
+    for (Camera& c : cameras) fitClipPlanes(c, volume);  // once, for every kind
     return cameras;
 }
 
