@@ -14,7 +14,9 @@
 #include "core/simd.h"
 #include "core/view/occlusion_pyramid.h"
 #include "core/view/pixel_round.h"
+#include "core/view/polygon_coverage.h"
 #include "core/view/scan_convert.h"
+#include "core/view/screen_box.h"
 #include "core/view/tile_coverage.h"
 
 namespace vdiso {
@@ -275,22 +277,6 @@ TEST(ScanConvert, PyramidOverloadCoversTheSameSpans) {
             ASSERT_EQ(pyramid.isCovered(x, y), model[size_t(y) * w + x] != 0);
 }
 
-// The pixel-centre rectangle of a polygon's box, clamped to the image, as the traversal's
-// polygon test makes it (core/view/polygon_coverage.h).
-PixelRect centreRect(const Polygon& poly, int width, int height) {
-    double xMin = poly[0].x, xMax = poly[0].x, yMin = poly[0].y, yMax = poly[0].y;
-    for (const glm::dvec2& p : poly) {
-        xMin = std::min(xMin, p.x);
-        xMax = std::max(xMax, p.x);
-        yMin = std::min(yMin, p.y);
-        yMax = std::max(yMax, p.y);
-    }
-    return {std::max(detail::firstCentreAtOrAfter(xMin, width), 0),
-            std::max(detail::firstCentreAtOrAfter(yMin, height), 0),
-            std::min(detail::firstCentreAtOrAfter(xMax, width) - 1, width - 1),
-            std::min(detail::firstCentreAtOrAfter(yMax, height) - 1, height - 1)};
-}
-
 // Tile by tile, on every SIMD path this CPU runs (core/simd.h), the same bits as the rows and
 // the same answer to "anything new?", over polygons from sub-pixel to a hundred pixels (many on
 // quarter-pixel grids, so centres fall on edges and vertices), onto coverage left by earlier
@@ -311,7 +297,7 @@ TEST(TileCoverage, EveryPathCoversWhatTheRowsCover) {
             Polygon poly = randomPolygon(rng, w, h, trial % 2 == 0);
             if (trial % 3 == 0)  // a few pixels, where cells are about a pixel
                 for (glm::dvec2& p : poly) p = poly[0] + (p - poly[0]) * (3.0 / 100.0);
-            PixelRect r = centreRect(poly, w, h);
+            PixelRect r = centresOfBox(boxOfPoints(poly.data(), int(poly.size())), w, h);
             if (r.empty()) continue;
             if (trial % 5 == 0) r = {0, 0, w - 1, h - 1};
             const bool want = scanConvertPolygon(poly, rows);

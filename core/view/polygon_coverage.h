@@ -12,10 +12,20 @@
 
 #include "core/view/occlusion_pyramid.h"
 #include "core/view/scan_convert.h"
+#include "core/view/screen_box.h"
 #include "core/view/tile_coverage.h"
 #include "core/view/view_culler.h"
 
 namespace vdiso {
+
+// The pixel centres a polygon whose box is `box` can cover (scan_convert.h's rules: columns
+// [first at or after left, first at or after right), rows likewise), clamped to the image.
+inline PixelRect centresOfBox(const ScreenBox& box, int width, int height) {
+    return {std::max(detail::firstCentreAtOrAfter(box.left, width), 0),
+            std::max(detail::firstCentreAtOrAfter(box.top, height), 0),
+            std::min(detail::firstCentreAtOrAfter(box.right, width) - 1, width - 1),
+            std::min(detail::firstCentreAtOrAfter(box.bottom, height) - 1, height - 1)};
+}
 
 class PolygonCoverage {
 public:
@@ -33,7 +43,7 @@ public:
     static bool folds(const glm::dvec2* v, int count);
 
 private:
-    bool uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const;
+    bool uncoveredCentresInBox(const ScreenBox& box, PixelRect& r) const;
     // Covers the outline's centres (within r, its box's or a larger one's) tile by tile
     // (core/view/tile_coverage.h), or by rows beyond kTileCoverageEdges vertices; whether one was new.
     bool coverOutline(const glm::dvec2* v, int count, const PixelRect& r) {
@@ -43,8 +53,8 @@ private:
         return fresh;
     }
     bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const;
-    // The pixel centres within kRasterSlack of the box of v[0..count), clamped to the image.
-    PixelRect slackRect(const glm::dvec2* v, int count) const;
+    // The pixel centres within kRasterSlack of a polygon's box, clamped to the image.
+    PixelRect slackRect(const ScreenBox& box) const;
     bool uncoveredCentreIn(const PixelRect& r) const {
         return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
     }
@@ -57,12 +67,13 @@ private:
 // Inline: called for every polygon, and most are answered by the box test.
 inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnlyNew) {
     bool coversNew = false;
+    const ScreenBox box = boxOfPoints(v, count);
     if (!mBottomUp) {
         for (int k = 2; k < count; ++k) {
             const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
             coversNew |= mPyramid.insertTriangleTopDown(triangle);
         }
-    } else if (PixelRect r; uncoveredCentresInBox(v, count, r)) {
+    } else if (PixelRect r; uncoveredCentresInBox(box, r)) {
         if (mScanPolygons) {
             coversNew = coverOutline(v, count, r);
             // Where a non-planar polygon's projection folds over itself its winding cancels,
@@ -86,7 +97,7 @@ inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnly
     // coverage this side of the rounding is ever marked).
     // Each fan triangle's rectangle lies in the polygon's: one query answers for all of them
     // when it is covered, as it is for most polygons that covered nothing new.
-    if (coversNew || !uncoveredCentreIn(slackRect(v, count))) return coversNew;
+    if (coversNew || !uncoveredCentreIn(slackRect(box))) return coversNew;
     for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
     return coversNew;
 }
@@ -96,18 +107,8 @@ inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnly
 // (core/view/scan_convert.h's rules), so when this is false its scan conversion, and its fan
 // triangles', would mark nothing: where cells are about a pixel, most polygons are answered
 // here, and most of the rest hold a single centre.
-inline bool PolygonCoverage::uncoveredCentresInBox(const glm::dvec2* v, int count, PixelRect& r) const {
-    double xMin = v[0].x, xMax = v[0].x, yMin = v[0].y, yMax = v[0].y;
-    for (int k = 1; k < count; ++k) {
-        xMin = std::min(xMin, v[k].x);
-        xMax = std::max(xMax, v[k].x);
-        yMin = std::min(yMin, v[k].y);
-        yMax = std::max(yMax, v[k].y);
-    }
-    r = {std::max(detail::firstCentreAtOrAfter(xMin, mPyramid.width()), 0),
-         std::max(detail::firstCentreAtOrAfter(yMin, mPyramid.height()), 0),
-         std::min(detail::firstCentreAtOrAfter(xMax, mPyramid.width()) - 1, mPyramid.width() - 1),
-         std::min(detail::firstCentreAtOrAfter(yMax, mPyramid.height()) - 1, mPyramid.height() - 1)};
+inline bool PolygonCoverage::uncoveredCentresInBox(const ScreenBox& box, PixelRect& r) const {
+    r = centresOfBox(box, mPyramid.width(), mPyramid.height());
     return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
 }
 

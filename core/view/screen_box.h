@@ -14,6 +14,7 @@
 // may use one.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <optional>
 
@@ -92,6 +93,18 @@ private:
     }
     int mWidth, mHeight;
 };
+
+// The box of `count` (>= 1) points on the image plane, in pixels (a projected polygon's).
+inline ScreenBox boxOfPoints(const glm::dvec2* p, int count) {
+    ScreenBox box{p[0].x, p[0].x, p[0].y, p[0].y, false};
+    for (int k = 1; k < count; ++k) {
+        box.left = std::min(box.left, p[k].x);
+        box.right = std::max(box.right, p[k].x);
+        box.top = std::min(box.top, p[k].y);
+        box.bottom = std::max(box.bottom, p[k].y);
+    }
+    return box;
+}
 
 // Fig. 4 applies to boxes smaller than two pixels each way (never to one crossing the near
 // plane).
