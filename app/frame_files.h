@@ -19,8 +19,9 @@ struct FrameFiles {
     bool compressMesh = false;  // .glb only (EXT_meshopt_compression)
 };
 
-// Writes them; returns the drawing's seconds when a picture was drawn.
+// Writes them; returns the drawing's seconds when a picture was drawn. A picture needs a
+// camera (std::invalid_argument without one).
 std::optional<double> writeFrameFiles(const FrameFiles& files, const TriangleMesh& mesh, const PointSet& points,
-                                      const Camera& camera, const SpaceTransform& transform);
+                                      const Camera* camera, const SpaceTransform& transform);
 
 }  // namespace vdiso

@@ -56,7 +56,7 @@ JsonObject extractFrame(const ExtractOptions& o, ExtractSession& session, const 
     // The held mesh's file (a streamed one is written already), the points and the picture.
     const FrameFiles files{streamed ? std::string() : meshPath, pointsPath, pngPath, o.overwrite, o.meshCompress};
     const std::optional<double> drawSeconds =
-        writeFrameFiles(files, frame.mesh, frame.points, camera ? *camera : Camera{}, meshTransform);
+        writeFrameFiles(files, frame.mesh, frame.points, camera ? &*camera : nullptr, meshTransform);
 
     JsonObject s = session.frameStats(frame, !meshPath.empty() || !pointsPath.empty());
     if (drawSeconds) s.add("draw_s", *drawSeconds);

@@ -250,7 +250,7 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         const SpaceTransform transform =
             o.physicalMeshes.value_or(true) ? volumeToPhysical(store->volume()) : SpaceTransform{};
         const std::optional<double> drawSeconds = writeFrameFiles(
-            {o.meshPath, o.pointsPath, o.pngPath, o.overwrite, o.meshCompress}, r.mesh, r.points, camera, transform);
+            {o.meshPath, o.pointsPath, o.pngPath, o.overwrite, o.meshCompress}, r.mesh, r.points, &camera, transform);
         char line[320];
         std::snprintf(line, sizeof line,
                       "%s iso %g on %d ranks by %s: %llu triangles, %llu points, %.3f s, %llu bricks read (%.1f MB)",
