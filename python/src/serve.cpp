@@ -1,13 +1,14 @@
 // vdiso.serve: `vdiso serve` inside the Python process, on its own thread, for a notebook.
 #include <pybind11/stl.h>
 
+#include <climits>
 #include <memory>
 #include <optional>
 #include <thread>
 
 #include "bindings.h"
-#include "core/settings_error.h"
 #include "app/extract_settings.h"
+#include "core/settings_error.h"
 #include "serve/server.h"
 
 namespace vdiso::py {
@@ -56,7 +57,8 @@ void bindServe(pyb::module_& m) {
                  o.port = uint16_t(checkedInt("port", port, 0, 65535));
                  o.host = host;
                  if (cacheMb) o.cacheBytes = uint64_t(checkedInt("cache_mb", *cacheMb, 1, int64_t(1) << 30)) << 20;
-                 o.threads = threads ? int(checkedInt("threads", *threads, 1, 64)) : machineThreads();
+                 // Only what an int holds here: the range is the server's one check.
+                 o.threads = threads ? int(checkedInt("threads", *threads, INT_MIN, INT_MAX)) : machineThreads();
                  if (lodError) o.lodError = *lodError;
                  o.webRoot = webRoot;
                  o.maxViewers = int(checkedInt("max_viewers", maxViewers, 0, 100000));  // 0: by memory

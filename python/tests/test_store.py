@@ -258,6 +258,8 @@ def test_serve_shows_the_viewer_and_stops(volume_and_cli_store):
         vdiso.serve(str(cli), cache_mb=-1)
     with pytest.raises(ValueError, match="threads expects"):
         vdiso.serve(str(cli), threads=2 ** 31)
+    with pytest.raises(ValueError, match="threads expects 1 to 64 image strips"):  # the server's one check
+        vdiso.serve(str(cli), threads=100)
 
 
 @pytest.fixture
