@@ -205,7 +205,8 @@ TEST(CliExtract, WritesMeshPictureAndStats) {
 
 // SAGE's statistics split the time of visible meta-cells between the visibility work (sampled:
 // cell tests, projection, coverage; box tests beside) and the kernel, in seconds and per kept
-// triangle, on every SIMD path (core/simd.h), with the same triangles on each.
+// triangle: every part measured (none left at zero by a timer not wired), on every SIMD path
+// (core/simd.h), with the same triangles on each.
 TEST(CliExtract, SageStatsSplitTheVisibilityWorkFromTheKernel) {
     test::ScratchDir dir;
     const std::string store = dir.file("h.vdiso");
@@ -224,9 +225,9 @@ TEST(CliExtract, SageStatsSplitTheVisibilityWorkFromTheKernel) {
         EXPECT_GT(double(stats["coverage_s"]), 0.0) << r.output;
         EXPECT_GT(double(stats["kernel_s"]), 0.0) << r.output;
         EXPECT_GT(double(stats["visibility_ns_per_triangle"]), 0.0) << r.output;
-        const double parts = double(stats["cell_test_s"]) + double(stats["projection_s"]) +
-                             double(stats["coverage_s"]) + double(stats["kernel_s"]);
-        EXPECT_NEAR(parts, double(stats["scan_s"]), 1e-6) << r.output;
+        EXPECT_GT(double(stats["cell_test_s"]), 0.0) << r.output;
+        EXPECT_GT(double(stats["projection_s"]), 0.0) << r.output;
+        EXPECT_GT(double(stats["box_test_s"]), 0.0) << r.output;
     }
     EXPECT_GT(triangles[0], 1000u);
     EXPECT_EQ(triangles[0], triangles[1]);
