@@ -72,8 +72,12 @@ TEST(FramePool, ATaskPostedWhileItRunsRunsAgainBehindTheOthers) {
     std::vector<int> order;
     Recorded heavy(0, mutex, order), light(1, mutex, order);
     int heavyPasses = 0;
+    // The light task is posted before the heavy one's first pass posts its second (the worker
+    // may start that pass before the test posts the light task: it once ran 0, 0, 1, ...).
+    std::atomic<bool> lightPosted{false};
     // The heavy task always has another pass due; the light one posts one pass at a time.
     heavy.during = [&] {
+        while (!lightPosted) std::this_thread::yield();
         if (++heavyPasses < 4) pool.post(heavy, false);
     };
     int lightPasses = 0;
@@ -82,6 +86,7 @@ TEST(FramePool, ATaskPostedWhileItRunsRunsAgainBehindTheOthers) {
     };
     pool.post(heavy, false);
     pool.post(light, false);
+    lightPosted = true;
     while (!pool.idle(heavy) || !pool.idle(light)) std::this_thread::yield();
     EXPECT_EQ(order, (std::vector<int>{0, 1, 0, 1, 0, 1, 0, 1}));
 }
