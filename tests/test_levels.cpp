@@ -100,18 +100,21 @@ struct DistanceResult {
     uint64_t bytesRead, bytesReadFull;
 };
 
-DistanceResult viewAtDistance(const BrickStoreReader& store, double iso, double scale, int imageSize,
-                              bool wise = false, bool points = true) {
+// The full-resolution octree surface, the reference every view is compared with.
+TriangleMesh fullSurface(const BrickStoreReader& store, double iso) {
+    TriangleMesh full;
+    BrickCache cache(store, 256u << 20);
+    extractOctree(cache, {iso, 4}, full);
+    return full;
+}
+
+DistanceResult viewAtDistance(const BrickStoreReader& store, const TriangleMesh& full, double iso, double scale,
+                              int imageSize, bool wise = false, bool points = true) {
     const VolumeInfo& v = store.volume();
     Camera camera = presetCamera(ViewPreset::Normal, v.origin, v.worldMax(), imageSize, imageSize);
     camera.eye = camera.target + (camera.eye - camera.target) * scale;
     camera.zNear = camera.zFar = 0;
     fitClipPlanes(camera, v.origin, v.worldMax());
-    TriangleMesh full;
-    {
-        BrickCache cache(store, 256u << 20);
-        extractOctree(cache, {iso, 4}, full);
-    }
     DistanceResult r{};
     ViewExtractOptions o = wise ? ViewExtractOptions::wise(iso) : ViewExtractOptions::sage(iso);
     o.points = points;
@@ -152,8 +155,9 @@ DistanceResult viewAtDistance(const BrickStoreReader& store, double iso, double 
 void expectFaithfulAtEveryDistance(const BrickStoreReader& store, double iso, const char* what, bool smooth) {
     // 1: the normal view (cells about a pixel: level 0); then ever farther, to where the
     // volume is a few dozen pixels across and its coarsest levels are drawn.
+    const TriangleMesh full = fullSurface(store, iso);
     for (double scale : {1.0, 2.5, 5.0, 10.0}) {
-        const DistanceResult r = viewAtDistance(store, iso, scale, 600);
+        const DistanceResult r = viewAtDistance(store, full, iso, scale, 600);
         const std::string label = std::string(what) + " at " + std::to_string(scale) + "x of " +
                                   std::to_string(r.referenceCovered) + " pixels: " + std::to_string(r.missing) +
                                   " missing, " + std::to_string(r.differentColour) + " of another colour";
@@ -182,7 +186,7 @@ TEST(Levels, GeneratedHeadLooksTheSameAtEveryDistance) {
 TEST(Levels, WiseUsesTheLevelsToo) {
     test::ScratchDir dir;
     const BrickStoreReader store(headStore(dir, {192, 192, 192}, 8));
-    const DistanceResult r = viewAtDistance(store, kHeadSkinIso, 5.0, 600, true);
+    const DistanceResult r = viewAtDistance(store, fullSurface(store, kHeadSkinIso), kHeadSkinIso, 5.0, 600, true);
     EXPECT_GT(r.coarseBricks, 0);
     EXPECT_LT(double(r.bytesRead), 0.5 * double(r.bytesReadFull));
     EXPECT_LE(double(r.missing), 0.01 * double(r.referenceCovered)) << r.missing << " of " << r.referenceCovered;
@@ -226,8 +230,9 @@ TEST(Levels, ThinPlateStaysAtADistance) {
                 v[(z * dims[1] + y) * dims[0] + x] = plate || r < 24 ? 1000 : 100;
             }
     const BrickStoreReader store(writeStore(volume, dir.file("plate.vdiso"), 8, StoreWriteOptions::kLevelsUntilOneBrick));
+    const TriangleMesh full = fullSurface(store, 550);
     for (double scale : {10.0, 20.0}) {
-        const DistanceResult r = viewAtDistance(store, 550, scale, 600);
+        const DistanceResult r = viewAtDistance(store, full, 550, scale, 600);
         const std::string label = "at " + std::to_string(scale) + "x: " + std::to_string(r.missing) + " of " +
                                   std::to_string(r.referenceCovered) + " pixels missing";
         EXPECT_GT(r.coarseBricks, 0) << label;
@@ -247,8 +252,9 @@ TEST(Levels, RealCtKeepsItsThinPartsAtADistance) {
     test::ScratchDir scratch;
     auto ct = openVolume(path, {});
     const BrickStoreReader store(writeStore(*ct, scratch.file("ct.vdiso"), 32, StoreWriteOptions::kLevelsUntilOneBrick));
-    const DistanceResult kept = viewAtDistance(store, 200.5, 10.0, 800);
-    const DistanceResult lost = viewAtDistance(store, 200.5, 10.0, 800, false, false);
+    const TriangleMesh full = fullSurface(store, 200.5);
+    const DistanceResult kept = viewAtDistance(store, full, 200.5, 10.0, 800);
+    const DistanceResult lost = viewAtDistance(store, full, 200.5, 10.0, 800, false, false);
     const std::string label = std::to_string(kept.missing) + " of " + std::to_string(kept.referenceCovered) +
                               " pixels missing with points for thin parts (" + std::to_string(kept.thinPartPoints) +
                               "), " + std::to_string(lost.missing) + " without; " + std::to_string(kept.dark) +

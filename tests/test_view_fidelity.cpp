@@ -32,37 +32,52 @@ struct FidelityResult {
     bool everyVertexUsed;
 };
 
-FidelityResult compareWithFull(BrickSource& source, double iso, ViewPreset preset,
-                               const ViewExtractOptions& options) {
+// The full surface and what it shows from a preset's camera: the same for every extraction
+// compared with it, so made once.
+struct Reference {
+    Camera camera;
+    RenderResult picture;
+    VisibleSurfaceOracle oracle;
+};
+
+Reference referenceView(BrickSource& source, double iso, const TriangleMesh& full, ViewPreset preset) {
     const VolumeInfo& v = source.volume();
     const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 800, 800);  // vdiso extract's default
-    TriangleMesh full, view;
+    RenderResult picture = renderSurface(full, PointSet{}, camera);
+    VisibleSurfaceOracle oracle = visibleSurfaceOracle(source, camera, picture.depth, iso);
+    return {camera, std::move(picture), oracle};
+}
+
+FidelityResult compareWithFull(BrickSource& source, const TriangleMesh& full, int64_t fullBricks,
+                               const Reference& reference, const ViewExtractOptions& options) {
+    TriangleMesh view;
     PointSet points;
-    const ExtractStats f = extractOctree(source, {iso, 4}, full);
-    const ExtractStats s = extractViewDependent(source, camera, options, view, points);
-    const RenderResult a = renderSurface(full, PointSet{}, camera);
-    const RenderResult b = renderSurface(view, points, camera);
+    const ExtractStats s = extractViewDependent(source, reference.camera, options, view, points);
+    const RenderResult b = renderSurface(view, points, reference.camera);
     std::vector<uint8_t> used(view.vertexCount(), 0);
     for (uint32_t vertex : view.indices) used[vertex] = 1;
-    return {compareImages(a.image, b.image),
+    return {compareImages(reference.picture.image, b.image),
             full.triangleCount(),
             view.triangleCount(),
             points.size(),
-            f.bricksActive,
+            fullBricks,
             s.bricksActive,
-            visibleSurfaceOracle(source, camera, a.depth, iso),
+            reference.oracle,
             std::find(used.begin(), used.end(), 0) == used.end()};
 }
 
 void expectFaithful(BrickSource& source, double iso, const char* what,
                     bool distantHasPoints = false) {
-    for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup})
+    TriangleMesh full;
+    const int64_t fullBricks = extractOctree(source, {iso, 4}, full).bricksActive;
+    for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup}) {
+        const Reference reference = referenceView(source, iso, full, preset);
         for (int run = 0; run < 3; ++run) {
             // SAGE, SAGE in 3 image strips on 3 threads, WISE.
             const bool sage = run < 2;
             ViewExtractOptions o = sage ? ViewExtractOptions::sage(iso) : ViewExtractOptions::wise(iso);
             o.threads = run == 1 ? 3 : 1;
-            const FidelityResult r = compareWithFull(source, iso, preset, o);
+            const FidelityResult r = compareWithFull(source, full, fullBricks, reference, o);
             const std::string label = std::string(what) + " " + viewPresetName(preset) +
                                       (run == 0 ? " sage" : run == 1 ? " sage 3 strips" : " wise");
             EXPECT_GE(r.image.agreement(), 0.995)
@@ -86,6 +101,7 @@ void expectFaithful(BrickSource& source, double iso, const char* what,
                 EXPECT_LE(r.viewTriangles + r.viewPoints, 2 * r.oracle.pixels) << label;
             }
         }
+    }
 }
 
 TEST(ViewFidelity, GeneratedHeadSkinAndBone) {
