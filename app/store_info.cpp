@@ -6,6 +6,7 @@
 
 #include "core/orientation.h"
 #include "core/trees/span_space.h"
+#include "io/store/external_bricks.h"
 
 namespace vdiso {
 
@@ -82,6 +83,7 @@ JsonObject storeInfoJson(const BrickStoreReader& store, std::optional<double> is
     o.add("brick_size", h.brickSize).addRaw("brick_counts", triple(l.brickCounts));
     o.add("bricks", l.brickCount()).add("compression", compressionName(h.compression));
     o.add("volume_bytes", v.byteSize()).add("file_bytes", store.fileBytes());
+    if (store.external()) o.add("indexes", store.external()->name());  // level 0 lies there
     std::string levels = "[";
     for (size_t k = 0; k < bytesOfLevel.size(); ++k) {
         const BrickLevel& level = store.levels()[k];

@@ -4,8 +4,6 @@
 // what it must refuse by name (a corrupt chunk, a level that is not there, unsupported codecs).
 #include <gtest/gtest.h>
 
-#include <blosc.h>
-#include <zstd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -21,14 +19,18 @@
 #include "io/readers/zarr_reader.h"
 #include "tests/loopback_servers.h"
 #include "tests/reader_test_util.h"
+#include "tests/zarr_test_util.h"
 
 namespace vdiso {
 namespace {
 
 using test::expectIoError;
+using test::ArraySpec;
+using test::Codec;
+using test::writeArray;
 
 // Values of a volume: sample (x, y, z) of an nx x ny x nz u16 volume.
-double value(int64_t x, int64_t y, int64_t z) { return double((x * 7 + y * 131 + z * 1031) % 65536); }
+double value(int64_t x, int64_t y, int64_t z) { return test::zarrTestValue(x, y, z); }
 
 std::vector<double> volumeValues(const Dims3& d, int step = 1) {
     std::vector<double> v;
@@ -36,116 +38,6 @@ std::vector<double> volumeValues(const Dims3& d, int step = 1) {
         for (int64_t y = 0; y < d[1]; ++y)
             for (int64_t x = 0; x < d[0]; ++x) v.push_back(value(x * step, y * step, z * step));
     return v;
-}
-
-enum class Codec { None, Blosc, Zstd, Gzip };
-
-std::string compress(const std::string& raw, Codec codec) {
-    switch (codec) {
-        case Codec::None: return raw;
-        case Codec::Gzip: return test::gzipBytes(raw);
-        case Codec::Zstd: {
-            std::string out(ZSTD_compressBound(raw.size()), '\0');
-            out.resize(ZSTD_compress(out.data(), out.size(), raw.data(), raw.size(), 3));
-            return out;
-        }
-        case Codec::Blosc: {
-            std::string out(raw.size() + BLOSC_MAX_OVERHEAD, '\0');
-            const int n = blosc_compress_ctx(5, BLOSC_SHUFFLE, 2, raw.size(), raw.data(), out.data(),
-                                             out.size(), "lz4", 0, 1);
-            out.resize(size_t(n));
-            return out;
-        }
-    }
-    return raw;
-}
-
-// An array of u16 samples (x, y, z) = value(x*step, ...), shape (z, y, x) with leading axes of
-// size 1 when `extraAxes`, chunked by `chunk` (z, y, x); `skip` says which chunks to leave out.
-struct ArraySpec {
-    int format = 2;
-    Dims3 dims{13, 10, 9};           // x, y, z
-    std::vector<int64_t> chunk{4, 4, 5};  // z, y, x
-    Codec codec = Codec::Blosc;
-    char separator = '.';
-    bool bigEndian = false;
-    int extraAxes = 0;
-    int step = 1;
-    double fill = 0;
-    std::function<bool(int64_t, int64_t, int64_t)> skip;
-};
-
-std::string codecJsonV2(Codec c) {
-    switch (c) {
-        case Codec::None: return "null";
-        case Codec::Blosc: return R"({"id": "blosc", "cname": "lz4", "clevel": 5, "shuffle": 1, "blocksize": 0})";
-        case Codec::Zstd: return R"({"id": "zstd", "level": 3})";
-        case Codec::Gzip: return R"({"id": "gzip", "level": 6})";
-    }
-    return "null";
-}
-
-std::string codecJsonV3(Codec c) {
-    switch (c) {
-        case Codec::None: return "";
-        case Codec::Blosc: return R"(, {"name": "blosc", "configuration": {"cname": "lz4", "clevel": 5, "shuffle": "shuffle", "typesize": 2, "blocksize": 0}})";
-        case Codec::Zstd: return R"(, {"name": "zstd", "configuration": {"level": 3, "checksum": false}})";
-        case Codec::Gzip: return R"(, {"name": "gzip", "configuration": {"level": 6}})";
-    }
-    return "";
-}
-
-std::string joinInts(const std::vector<int64_t>& v) {
-    std::string s;
-    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
-    return s;
-}
-
-void writeArray(const std::filesystem::path& dir, const ArraySpec& a) {
-    std::filesystem::create_directories(dir);
-    std::vector<int64_t> shape(size_t(a.extraAxes), 1), chunks(size_t(a.extraAxes), 1);
-    shape.insert(shape.end(), {a.dims[2], a.dims[1], a.dims[0]});
-    chunks.insert(chunks.end(), a.chunk.begin(), a.chunk.end());
-    if (a.format == 2) {
-        test::writeFile((dir / ".zarray").string(),
-                        std::string(R"({"zarr_format": 2, "shape": [)") + joinInts(shape) +
-                            R"(], "chunks": [)" + joinInts(chunks) + R"(], "dtype": ")" +
-                            (a.bigEndian ? ">u2" : "<u2") + R"(", "compressor": )" +
-                            codecJsonV2(a.codec) + R"(, "fill_value": )" +
-                            std::to_string(int(a.fill)) + R"(, "order": "C", "filters": null, )" +
-                            R"("dimension_separator": ")" + std::string(1, a.separator) + "\"}");
-    } else {
-        test::writeFile((dir / "zarr.json").string(),
-                        std::string(R"({"zarr_format": 3, "node_type": "array", "shape": [)") +
-                            joinInts(shape) + R"(], "data_type": "uint16", "chunk_grid": {"name": )" +
-                            R"("regular", "configuration": {"chunk_shape": [)" + joinInts(chunks) +
-                            R"(]}}, "chunk_key_encoding": {"name": "default", "configuration": )" +
-                            R"({"separator": ")" + std::string(1, a.separator) + R"("}}, "fill_value": )" +
-                            std::to_string(int(a.fill)) + R"(, "codecs": [{"name": "bytes", )" +
-                            R"("configuration": {"endian": ")" + (a.bigEndian ? "big" : "little") +
-                            "\"}}" + codecJsonV3(a.codec) + "]}");
-    }
-    const int64_t cz = a.chunk[0], cy = a.chunk[1], cx = a.chunk[2];
-    for (int64_t kz = 0; kz * cz < a.dims[2]; ++kz)
-        for (int64_t ky = 0; ky * cy < a.dims[1]; ++ky)
-            for (int64_t kx = 0; kx * cx < a.dims[0]; ++kx) {
-                if (a.skip && a.skip(kx, ky, kz)) continue;
-                std::vector<double> samples;
-                for (int64_t z = kz * cz; z < (kz + 1) * cz; ++z)
-                    for (int64_t y = ky * cy; y < (ky + 1) * cy; ++y)
-                        for (int64_t x = kx * cx; x < (kx + 1) * cx; ++x)
-                            samples.push_back(x < a.dims[0] && y < a.dims[1] && z < a.dims[2]
-                                                  ? value(x * a.step, y * a.step, z * a.step)
-                                                  : 0.0);  // padding of edge chunks
-                std::vector<int64_t> index(size_t(a.extraAxes), 0);
-                index.insert(index.end(), {kz, ky, kx});
-                std::string key = a.format == 3 ? "c" : "";
-                for (int64_t i : index) key += (key.empty() ? "" : std::string(1, a.separator)) + std::to_string(i);
-                const std::filesystem::path file = dir / key;
-                std::filesystem::create_directories(file.parent_path());
-                test::writeFile(file.string(),
-                                compress(test::encodeSamples(samples, FileScalar::U16, a.bigEndian), a.codec));
-            }
 }
 
 class ZarrTest : public test::ReaderFileTest {};

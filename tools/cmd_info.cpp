@@ -11,6 +11,7 @@
 #include "core/orientation.h"
 #include "io/json.h"
 #include "io/store/brick_store.h"
+#include "io/store/external_bricks.h"
 #include "tools/commands.h"
 
 namespace vdiso::cli {
@@ -114,8 +115,12 @@ int runInfo(int argc, char** argv) {
         std::printf("\n");
     }
     if (bytesOfLevel.size() == 1) std::printf("  levels       1 (no coarser levels of detail)\n");
-    std::printf("  stored       %.1f MB on disk for %.1f MB of samples (%s, ratio %.2f)\n",
-                store.fileBytes() / 1e6, v.byteSize() / 1e6, compressionName(h.compression), ratio);
+    if (store.external())  // level 0 lies in the indexed array
+        std::printf("  indexes      %s: level 0's samples read from its chunks; this index %.2f MB\n",
+                    store.external()->name().c_str(), store.fileBytes() / 1e6);
+    else
+        std::printf("  stored       %.1f MB on disk for %.1f MB of samples (%s, ratio %.2f)\n",
+                    store.fileBytes() / 1e6, v.byteSize() / 1e6, compressionName(h.compression), ratio);
     std::printf("  values       %g .. %g   1%% %.4g  median %.4g  99%% %.4g\n", h.valueMin,
                 h.valueMax, quantile(0.01), quantile(0.5), quantile(0.99));
     std::printf("  histogram    |%s|  (log scale, %g .. %g)\n",

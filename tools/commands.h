@@ -5,6 +5,7 @@
 namespace vdiso::cli {
 
 int runConvert(int argc, char** argv);  // argv[0] is "convert"
+int runIndex(int argc, char** argv);
 int runSynth(int argc, char** argv);
 int runInfo(int argc, char** argv);
 int runExtract(int argc, char** argv);

@@ -17,6 +17,8 @@ constexpr const char* kUsage =
     "\n"
     "commands:\n"
     "  convert INPUT OUTPUT.vdiso   convert a raw, NRRD, NIfTI or OpenVDB volume into a brick store\n"
+    "  index DATA                   index a Zarr or OME-Zarr array where it lies: then every\n"
+    "                               command opens DATA like a store, without converting it\n"
     "  synth OUTPUT                 generate a test volume (head, turbulence) as raw or a store\n"
     "  info FILE.vdiso              describe a brick store; with --iso, its active bricks\n"
     "  extract FILE.vdiso --iso V   extract an isosurface: mesh, picture, statistics\n"
@@ -38,6 +40,7 @@ int main(int argc, char** argv) {
     const std::string command = argv[1];
     try {
         if (command == "convert") return runConvert(argc - 1, argv + 1);
+        if (command == "index") return runIndex(argc - 1, argv + 1);
         if (command == "synth") return runSynth(argc - 1, argv + 1);
         if (command == "info") return runInfo(argc - 1, argv + 1);
         if (command == "extract") return runExtract(argc - 1, argv + 1);

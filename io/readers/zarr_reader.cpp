@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/interrupt.h"
+#include "io/crc32.h"
 #include "io/error.h"
 #include "io/readers/zarr_array.h"
 #include "io/readers/zarr_keys.h"
@@ -43,10 +44,11 @@ json parseJson(const ZarrKeys& keys, const std::string& key, const std::string& 
     }
 }
 
-ZarrArrayMeta readArrayMeta(const ZarrKeys& keys, const std::string& dir, int format) {
+ZarrArrayMeta readArrayMeta(const ZarrKeys& keys, const std::string& dir, int format, uint32_t* crc = nullptr) {
     const std::string name = format == 2 ? ".zarray" : "zarr.json", key = joinZarrKey(dir, name);
     const auto text = readText(keys, key);
     if (!text) throwIoError(dir.empty() ? keys.name() : keys.where(dir), "holds no " + name + ": not a Zarr array");
+    if (crc) *crc = crc32Of(text->data(), text->size());
     return parseZarrArrayMeta(*text, format, keys.where(key));
 }
 
@@ -96,6 +98,7 @@ void applyTransforms(const json& list, size_t n, glm::dvec3& spacing, glm::dvec3
 struct ZarrImage {
     std::string arrayDir;  // the array's key prefix ("" for the root)
     ZarrArrayMeta meta;
+    uint32_t metadataCrc = 0;  // of the array's metadata document
     glm::dvec3 spacing{1.0}, origin{0.0};
 };
 
@@ -135,7 +138,7 @@ ZarrImage openMultiscale(const ZarrKeys& keys, const json& multiscales, int form
     image.arrayDir = relative.lexically_normal().generic_string();
     while (!image.arrayDir.empty() && image.arrayDir.back() == '/') image.arrayDir.pop_back();
     if (image.arrayDir == ".") image.arrayDir.clear();
-    image.meta = readArrayMeta(keys, image.arrayDir, format);
+    image.meta = readArrayMeta(keys, image.arrayDir, format, &image.metadataCrc);
     const size_t n = image.meta.shape.size();
     const json axes = ms.value("axes", json());
     if (axes.is_array() && axes.size() == n && n >= 3)
@@ -155,6 +158,7 @@ ZarrImage locate(const ZarrKeys& keys, int level) {
             throwIoError(path, "is a plain Zarr array: it has no level " + std::to_string(level));
         ZarrImage image;
         image.meta = parseZarrArrayMeta(text, format, keys.where(format == 2 ? ".zarray" : "zarr.json"));
+        image.metadataCrc = crc32Of(text.data(), text.size());
         return image;
     };
     try {
@@ -180,19 +184,25 @@ ZarrImage locate(const ZarrKeys& keys, int level) {
     throwIoError(path, "holds no Zarr metadata (.zarray, .zattrs or zarr.json)");
 }
 
+// No encoding makes a chunk much larger than its samples: a bigger one is not one.
+uint64_t chunkBound(const ZarrArrayMeta& m) { return m.chunkBytes() + m.chunkBytes() / 8 + 65536; }
+
 class ZarrSliceReader final : public SliceReader {
 public:
-    ZarrSliceReader(std::string name, std::unique_ptr<ZarrKeys> keys, ZarrImage image, const VolumeInfo& info)
-        : mName(std::move(name)), mKeys(std::move(keys)), mImage(std::move(image)), mInfo(info) {}
+    ZarrSliceReader(std::unique_ptr<ZarrVolume> volume, std::vector<ZarrChunkPin>* pins)
+        : mVolume(std::move(volume)), mPins(pins) {
+        if (mPins) mPins->assign(size_t(mVolume->chunkCount()), ZarrChunkPin{});
+    }
 
-    const VolumeInfo& info() const override { return mInfo; }
+    const VolumeInfo& info() const override { return mVolume->info(); }
 
     void read(void* dst, int64_t count) override {
         auto* out = static_cast<unsigned char*>(dst);
-        const size_t sliceBytes = size_t(mInfo.sliceSamples()) * scalarSize(mInfo.type);
-        const int64_t depth = mImage.meta.chunks[mImage.meta.chunks.size() - 3];
+        const VolumeInfo& info = mVolume->info();
+        const size_t sliceBytes = size_t(info.sliceSamples()) * scalarSize(info.type);
+        const int64_t depth = mVolume->chunkShape()[2];
         for (int64_t s = 0; s < count; ++s, ++mNext) {
-            if (mNext >= mInfo.dims[2]) throwIoError(mName, "has fewer slices than asked for");
+            if (mNext >= info.dims[2]) throwIoError(name(), "has fewer slices than asked for");
             const int64_t layer = mNext / depth;
             if (layer != mLayerIndex) loadLayer(layer);
             std::memcpy(out + size_t(s) * sliceBytes,
@@ -202,111 +212,78 @@ public:
 
     // Chunks are loaded by the read that needs them: passing over slices loads none.
     void skip(int64_t count) override {
-        if (count < 0 || count > mInfo.dims[2] - mNext) throwIoError(mName, "has fewer slices than asked for");
+        if (count < 0 || count > mVolume->info().dims[2] - mNext) throwIoError(name(), "has fewer slices than asked for");
         mNext += count;
     }
 
-    std::string name() const override { return mName; }
+    std::string name() const override { return mVolume->name(); }
     // A remote array is no file an output could overwrite.
     std::vector<std::string> files() const override {
-        if (mKeys->isRemote()) return {};
-        return {mImage.arrayDir.empty() ? mKeys->name() : mKeys->where(mImage.arrayDir)};
+        if (mVolume->isRemote()) return {};
+        return {mVolume->where({-1, -1, -1})};
     }
 
 private:
     void loadLayer(int64_t layer) {
-        const ZarrArrayMeta& m = mImage.meta;
-        const size_t n = m.shape.size();
-        const int64_t cz = m.chunks[n - 3], cy = m.chunks[n - 2], cx = m.chunks[n - 1];
-        const int64_t nx = mInfo.dims[0], ny = mInfo.dims[1];
-        const int64_t z0 = layer * cz, depth = std::min(cz, mInfo.dims[2] - z0);
-        const size_t outSize = scalarSize(mInfo.type), inSize = fileScalarSize(m.type);
+        const VolumeInfo& info = mVolume->info();
+        const Dims3& chunk = mVolume->chunkShape();
+        const int64_t cx = chunk[0], cy = chunk[1], cz = chunk[2];
+        const int64_t nx = info.dims[0], ny = info.dims[1];
+        const int64_t z0 = layer * cz, depth = std::min(cz, info.dims[2] - z0);
+        const size_t sampleBytes = scalarSize(info.type);
         try {
-            mLayer.resize(size_t(depth) * size_t(mInfo.sliceSamples()) * outSize);
-            mChunk.resize(size_t(m.chunkBytes()));
+            mLayer.resize(size_t(depth) * size_t(info.sliceSamples()) * sampleBytes);
+            mChunk.resize(mVolume->decodedBytes());
         } catch (const std::bad_alloc&) {
-            throwIoError(mName, "cannot hold a layer of chunks (" + std::to_string(depth) +
-                                    " slices of " + std::to_string(nx) + " x " + std::to_string(ny) + ")");
+            throwIoError(name(), "cannot hold a layer of chunks (" + std::to_string(depth) +
+                                     " slices of " + std::to_string(nx) + " x " + std::to_string(ny) + ")");
         }
-        const bool swap = m.bigEndian != hostIsBigEndian();
-        const std::vector<std::string> keys = layerKeys(layer);
-        const int64_t columns = (nx + cx - 1) / cx;
-        auto decodeChunk = [&](size_t i, const std::optional<std::vector<unsigned char>>& bytes) {
-            const int64_t y0 = int64_t(i) / columns * cy, x0 = int64_t(i) % columns * cx;
+        const std::vector<Dims3> chunks = layerChunks(layer);
+        auto place = [&](const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes) {
+            if (mPins && bytes)
+                (*mPins)[size_t(mVolume->chunkNumber(c))] = {bytes->size(), crc32Of(bytes->data(), bytes->size())};
+            mVolume->decode(c, bytes, mChunk.data());
+            const int64_t x0 = c[0] * cx, y0 = c[1] * cy;
             const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
-            if (!bytes) {
-                fillRegion(depth, x0, y0, cols, rows);
-                return;
-            }
-            decodeZarrChunk(m, bytes->data(), bytes->size(), mChunk.data(), mKeys->where(keys[i]));
             for (int64_t lz = 0; lz < depth; ++lz)
                 for (int64_t ly = 0; ly < rows; ++ly)
-                    decodeSamples(mChunk.data() + size_t((lz * cy + ly) * cx) * inSize, m.type, swap,
-                                  size_t(cols),
-                                  mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * outSize,
-                                  mInfo.type);
+                    std::memcpy(mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * sampleBytes,
+                                mChunk.data() + size_t((lz * cy + ly) * cx) * sampleBytes, size_t(cols) * sampleBytes);
         };
-        if (!mKeys->isRemote()) {  // a chunk at a time: memory stays the layer
-            for (size_t i = 0; i < keys.size(); ++i) {
-                throwIfInterrupted(mName);
-                decodeChunk(i, mKeys->get(keys[i], chunkBound()));
+        if (!mVolume->isRemote()) {  // a chunk at a time: memory stays the layer
+            for (const Dims3& c : chunks) {
+                throwIfInterrupted(name());
+                place(c, mVolume->stored({c})[0]);
             }
         } else {
             // Remote: the layer's chunks were fetched while the layer before was decoded (or
             // are fetched now), and the next layer's are fetched while this one is.
-            ZarrKeys::Values values = mAheadLayer == layer ? mAhead.get() : mKeys->getAll(keys, chunkBound());
+            auto values = mAheadLayer == layer ? mAhead.get() : mVolume->stored(chunks);
             mAheadLayer = -1;
-            if ((layer + 1) * cz < mInfo.dims[2]) {
+            if ((layer + 1) * cz < info.dims[2]) {
                 mAheadLayer = layer + 1;
-                mAhead = std::async(std::launch::async, [this, next = layerKeys(layer + 1)] {
-                    return mKeys->getAll(next, chunkBound());
+                mAhead = std::async(std::launch::async, [this, next = layerChunks(layer + 1)] {
+                    return mVolume->stored(next);
                 });
             }
-            for (size_t i = 0; i < keys.size(); ++i) decodeChunk(i, values[i]);
+            for (size_t i = 0; i < chunks.size(); ++i) place(chunks[i], values[i]);
         }
         mLayerIndex = layer;
     }
 
-    // The layer's chunk keys, a row of chunks after another.
-    std::vector<std::string> layerKeys(int64_t layer) const {
-        const ZarrArrayMeta& m = mImage.meta;
-        const size_t n = m.shape.size();
-        std::vector<int64_t> index(n, 0);
-        index[n - 3] = layer;
-        std::vector<std::string> keys;
-        for (int64_t y = 0; y * m.chunks[n - 2] < mInfo.dims[1]; ++y)
-            for (int64_t x = 0; x * m.chunks[n - 1] < mInfo.dims[0]; ++x) {
-                index[n - 2] = y;
-                index[n - 1] = x;
-                keys.push_back(joinZarrKey(mImage.arrayDir, m.chunkKey(index)));
-            }
-        return keys;
+    // The layer's chunks, a row after another.
+    std::vector<Dims3> layerChunks(int64_t layer) const {
+        std::vector<Dims3> chunks;
+        for (int64_t y = 0; y < mVolume->chunkCounts()[1]; ++y)
+            for (int64_t x = 0; x < mVolume->chunkCounts()[0]; ++x) chunks.push_back({x, y, layer});
+        return chunks;
     }
 
-    // No encoding makes a chunk much larger than its samples: a bigger one is not one.
-    uint64_t chunkBound() const { return mImage.meta.chunkBytes() + mImage.meta.chunkBytes() / 8 + 65536; }
-
-    void fillRegion(int64_t depth, int64_t x0, int64_t y0, int64_t cols, int64_t rows) {
-        const size_t outSize = scalarSize(mInfo.type);
-        unsigned char value[8] = {};
-        double fill = mImage.meta.fill;
-        if (mInfo.type != ScalarType::F32 && !std::isfinite(fill)) fill = 0.0;
-        decodeSamples(&fill, FileScalar::F64, false, 1, value, mInfo.type);
-        const int64_t nx = mInfo.dims[0], ny = mInfo.dims[1];
-        for (int64_t lz = 0; lz < depth; ++lz)
-            for (int64_t ly = 0; ly < rows; ++ly) {
-                unsigned char* row = mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * outSize;
-                for (int64_t i = 0; i < cols; ++i) std::memcpy(row + size_t(i) * outSize, value, outSize);
-            }
-    }
-
-    std::string mName;
-    std::unique_ptr<ZarrKeys> mKeys;
-    ZarrImage mImage;
-    VolumeInfo mInfo;
+    std::unique_ptr<ZarrVolume> mVolume;
+    std::vector<ZarrChunkPin>* mPins;
     std::vector<unsigned char> mLayer, mChunk;
     int64_t mLayerIndex = -1;
-    std::future<ZarrKeys::Values> mAhead;  // remote: the next layer's chunks, being fetched
+    std::future<std::vector<std::optional<std::vector<unsigned char>>>> mAhead;  // remote: the next layer's
     int64_t mAheadLayer = -1;
     int64_t mNext = 0;
 };
@@ -320,18 +297,88 @@ bool looksLikeZarr(const std::string& dir) {
     return false;
 }
 
-std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level, const RemoteOptions& remote) {
-    auto keys = std::make_unique<ZarrKeys>(path, remote);
-    ZarrImage image = locate(*keys, level);
-    const std::string arrayWhere = image.arrayDir.empty() ? keys->name() : keys->where(image.arrayDir);
-    VolumeInfo info;
-    info.dims = spatialDims(image.meta, arrayWhere);
-    requireVolumeDims(keys->name(), info.dims);
-    info.type = storeTypeFor(image.meta.type, false);
-    info.spacing = image.spacing;
-    info.origin = image.origin;
-    const std::string name = level == 0 ? keys->name() : keys->name() + " (level " + std::to_string(level) + ")";
-    return std::make_unique<ZarrSliceReader>(name, std::move(keys), std::move(image), info);
+struct ZarrVolume::Image : ZarrImage {};
+
+ZarrVolume::ZarrVolume(const std::string& path, int level, const RemoteOptions& remote)
+    : mKeys(std::make_unique<ZarrKeys>(path, remote)), mImage(std::make_unique<Image>()) {
+    static_cast<ZarrImage&>(*mImage) = locate(*mKeys, level);
+    const ZarrArrayMeta& m = mImage->meta;
+    const std::string arrayWhere = mImage->arrayDir.empty() ? mKeys->name() : mKeys->where(mImage->arrayDir);
+    mInfo.dims = spatialDims(m, arrayWhere);
+    requireVolumeDims(mKeys->name(), mInfo.dims);
+    mInfo.type = storeTypeFor(m.type, false);
+    mInfo.spacing = mImage->spacing;
+    mInfo.origin = mImage->origin;
+    const size_t n = m.shape.size();
+    for (int a = 0; a < 3; ++a) {
+        mChunkShape[a] = m.chunks[n - 1 - size_t(a)];
+        mChunkCounts[a] = (mInfo.dims[a] + mChunkShape[a] - 1) / mChunkShape[a];
+    }
+    mMetadataCrc = mImage->metadataCrc;
+    mName = level == 0 ? mKeys->name() : mKeys->name() + " (level " + std::to_string(level) + ")";
+}
+
+ZarrVolume::~ZarrVolume() = default;
+
+bool ZarrVolume::isRemote() const { return mKeys->isRemote(); }
+uint64_t ZarrVolume::requests() const { return mKeys->requests(); }
+uint64_t ZarrVolume::bytesFetched() const { return mKeys->bytesFetched(); }
+size_t ZarrVolume::decodedBytes() const {
+    return size_t(mChunkShape[0] * mChunkShape[1] * mChunkShape[2]) * scalarSize(mInfo.type);
+}
+
+// (-1, -1, -1): the array itself.
+std::string ZarrVolume::where(const Dims3& c) const {
+    if (c[0] < 0) return mImage->arrayDir.empty() ? mKeys->name() : mKeys->where(mImage->arrayDir);
+    std::vector<int64_t> index(mImage->meta.shape.size(), 0);
+    for (int a = 0; a < 3; ++a) index[index.size() - 1 - size_t(a)] = c[a];
+    return mKeys->where(joinZarrKey(mImage->arrayDir, mImage->meta.chunkKey(index)));
+}
+
+std::vector<std::optional<std::vector<unsigned char>>> ZarrVolume::stored(const std::vector<Dims3>& chunks) const {
+    std::vector<std::string> keys;
+    keys.reserve(chunks.size());
+    std::vector<int64_t> index(mImage->meta.shape.size(), 0);
+    for (const Dims3& c : chunks) {
+        for (int a = 0; a < 3; ++a) index[index.size() - 1 - size_t(a)] = c[a];
+        keys.push_back(joinZarrKey(mImage->arrayDir, mImage->meta.chunkKey(index)));
+    }
+    if (keys.size() == 1) return {mKeys->get(keys[0], chunkBound(mImage->meta))};
+    return mKeys->getAll(keys, chunkBound(mImage->meta));
+}
+
+void ZarrVolume::decode(const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes,
+                        unsigned char* out) const {
+    const ZarrArrayMeta& m = mImage->meta;
+    const size_t samples = size_t(mChunkShape[0] * mChunkShape[1] * mChunkShape[2]);
+    const size_t sampleBytes = scalarSize(mInfo.type);
+    if (!bytes) {  // the fill value, as the specification says
+        unsigned char value[8] = {};
+        double fill = m.fill;
+        if (mInfo.type != ScalarType::F32 && !std::isfinite(fill)) fill = 0.0;
+        decodeSamples(&fill, FileScalar::F64, false, 1, value, mInfo.type);
+        for (size_t i = 0; i < samples; ++i) std::memcpy(out + i * sampleBytes, value, sampleBytes);
+        return;
+    }
+    const bool swap = m.bigEndian != hostIsBigEndian();
+    if (fileScalarSize(m.type) == sampleBytes && !swap && storeTypeFor(m.type, false) == mInfo.type &&
+        (m.type == FileScalar::U8 || m.type == FileScalar::U16 || m.type == FileScalar::I16 || m.type == FileScalar::F32)) {
+        decodeZarrChunk(m, bytes->data(), bytes->size(), out, where(c));  // already the store's samples
+        return;
+    }
+    thread_local std::vector<unsigned char> raw;
+    raw.resize(size_t(m.chunkBytes()));
+    decodeZarrChunk(m, bytes->data(), bytes->size(), raw.data(), where(c));
+    decodeSamples(raw.data(), m.type, swap, samples, out, mInfo.type);
+}
+
+std::unique_ptr<SliceReader> zarrSliceReader(std::unique_ptr<ZarrVolume> volume, std::vector<ZarrChunkPin>* pins) {
+    return std::make_unique<ZarrSliceReader>(std::move(volume), pins);
+}
+
+std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level, const RemoteOptions& remote,
+                                            std::vector<ZarrChunkPin>* pins) {
+    return zarrSliceReader(std::make_unique<ZarrVolume>(path, level, remote), pins);
 }
 
 }  // namespace vdiso

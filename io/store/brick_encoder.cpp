@@ -166,6 +166,14 @@ void encodeBrick(const SliceWindow& window, const BrickLayout& layout, ScalarTyp
     });
     measureSubBlocks(type, scratch.raw.data(), layout, coord,
                      {out.entry.minValue, out.entry.maxValue}, out.subBlocks);
+    out.entry.external = countSamples && options.externalRecord;
+    if (out.entry.external) {  // an index's level 0: measured, its samples left where they are
+        out.bytes.clear();
+        out.entry.compressed = false;
+        out.entry.storedBytes = 0;
+        out.entry.checksum = 0;
+        return;
+    }
     out.entry.compressed = encodeBrickBytes(scratch.raw, scalarSize(type), options.compression,
                                             storeFilterFor(type, options), options.compressionLevel,
                                             scratch.codec, out.bytes);
@@ -297,6 +305,10 @@ std::vector<uint64_t> BrickEncoder::fineHistogram() const {
 
 uint64_t placeBricks(std::vector<EncodedBrick>& bricks, int64_t count, uint64_t start) {
     for (int64_t b = 0; b < count; ++b) {
+        if (bricks[size_t(b)].entry.external) {  // no bytes in the file
+            bricks[size_t(b)].entry.offset = 0;
+            continue;
+        }
         bricks[size_t(b)].entry.offset = start;
         start = alignToStore(start + bricks[size_t(b)].bytes.size());
     }
@@ -318,7 +330,8 @@ void BrickGroupWriter::write(int64_t count, uint64_t start, uint64_t end) {
     if (mPending.valid()) mPending.get();
     mPending = std::async(std::launch::async, [this, &group, count, start, end] {
         for (int64_t b = 0; b < count; ++b)
-            writeAllAt(mFd, group[size_t(b)].bytes.data(), group[size_t(b)].bytes.size(),
+            if (!group[size_t(b)].bytes.empty())
+                writeAllAt(mFd, group[size_t(b)].bytes.data(), group[size_t(b)].bytes.size(),
                        group[size_t(b)].entry.offset, mPath);
         startWriteback(mFd, start, end - start);
     });

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <new>
 #include <stdexcept>
 
@@ -12,7 +13,10 @@
 
 #include "io/crc32.h"
 #include "io/error.h"
+#include "io/readers/zarr_reader.h"
+#include "io/remote/remote_file.h"
 #include "io/store/brick_codec.h"
+#include "io/store/external_bricks.h"
 #include "io/store/lazy_index.h"
 #include "io/store/store_format.h"
 #include "core/trees/sub_blocks.h"
@@ -25,6 +29,17 @@ namespace {
 // a request): half the default pool of 32 requests, leaving the rest to the bricks a view reads.
 constexpr size_t kCodePartsAtOnce = 16;
 
+// A local folder of Zarr data opens as the index beside it.
+std::string storePathFor(const std::string& path) {
+    if (isRemoteLocation(path) || !looksLikeZarr(path)) return path;
+    const std::string index = defaultIndexPath(path);
+    std::error_code ec;
+    if (!std::filesystem::exists(index, ec))
+        throwIoError(path, "is Zarr data without an index beside it (" + index + "): make one with 'vdiso index " +
+                               path + "', or open an index made elsewhere");
+    return index;
+}
+
 }  // namespace
 
 
@@ -32,7 +47,7 @@ BrickStoreReader::BrickStoreReader(std::string path, ReadMode mode)
     : BrickStoreReader(std::move(path), StoreOpenOptions{mode, {}}) {}
 
 BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& options)
-    : mSource(openByteSource(path, options.mode, options.remote, kStoreHeaderBytes)),
+    : mSource(openByteSource(storePathFor(path), options.mode, options.remote, kStoreHeaderBytes)),
       mPath(mSource->name()),
       mMode(options.mode) {
     mFileBytes = mSource->size();
@@ -83,6 +98,12 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     // (a 2560^3 store's 75 MB are not copied).
     static_assert(sizeof(SubBlockCode) == 2 && alignof(SubBlockCode) == 1);
     mSubBlocks = {reinterpret_cast<const SubBlockCode*>(raw + mCodesAt), size_t(count) * kSubBlocksPerBrick};
+    if (mHeader.externalBytes) {
+        std::vector<unsigned char> record(size_t(mHeader.externalBytes));
+        mSource->read(mHeader.externalOffset, record.size(), record.data(), "record of indexed data");
+        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevel(record.data(), record.size(), mPath),
+                                                     options.remote, options.chunkCacheBytes);
+    }
 }
 
 std::span<const SubBlockCode> BrickStoreReader::subBlockCodes() const {
@@ -139,6 +160,7 @@ std::span<const unsigned char> BrickStoreReader::readStoredBrick(int64_t id) con
 bool BrickStoreReader::nextInFile(int64_t id) const {
     if (id < 0 || id + 1 >= int64_t(mIndex.size())) return false;
     const BrickEntry& e = mIndex[size_t(id)];
+    if (e.external || mIndex[size_t(id) + 1].external) return false;
     return mIndex[size_t(id) + 1].offset == (e.offset + e.storedBytes + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;
 }
 
@@ -149,6 +171,12 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(i
     for (int k = 0; k + 1 < count; ++k)
         if (!nextInFile(first + k)) throw std::logic_error("readStoredBricks: bricks not stored one after another");
     const BrickEntry& firstEntry = mIndex[size_t(first)];
+    if (firstEntry.external) {  // its samples as they are, from the indexed array's chunks
+        thread_local AlignedBuffer buffer;
+        unsigned char* dst = buffer.reserve(brickBytes());
+        mExternal->assemble(first, dst);
+        return {std::span<const unsigned char>(dst, brickBytes())};
+    }
     const BrickEntry& lastEntry = mIndex[size_t(first + count - 1)];
     const size_t bytes = size_t(lastEntry.offset - firstEntry.offset) + lastEntry.storedBytes;
     thread_local AlignedBuffer buffer;

@@ -10,6 +10,11 @@
 //
 // BrickStoreReader opens a store by reading only the header and the index, then returns any
 // brick's (B+3)^3 samples by brick id. It is safe to read bricks from several threads at once.
+//
+// An index (vdiso index: a store whose level 0 stays in the Zarr array it indexes) opens the
+// same way, by its path or by the indexed folder's (whose index is beside it,
+// io/store/external_level.h defaultIndexPath); level 0's bricks are then assembled from the
+// array's chunks (io/store/external_bricks.h), coarser levels read from the index file.
 #pragma once
 
 #include <array>
@@ -30,6 +35,7 @@
 
 namespace vdiso {
 
+class ExternalBricks;
 class LazyIndex;
 
 // How a store is opened: local files by ReadMode (io/store/byte_source.h), remote ones by their URL
@@ -37,13 +43,16 @@ class LazyIndex;
 struct StoreOpenOptions {
     ReadMode mode = ReadMode::Buffered;
     RemoteOptions remote;
+    // An index's (vdiso index) decoded chunks of the indexed array held at most.
+    size_t chunkCacheBytes = size_t(512) << 20;
 };
 
 class BrickStoreReader {
 public:
     // Reads and validates header and index, from a file or a URL (http://, https://, s3://).
     // Throws IoError naming the file and the problem (wrong magic, newer version, bad header
-    // checksum, truncated or corrupt index, a server's refusal, ...).
+    // checksum, truncated or corrupt index, a server's refusal, an index of data that is not
+    // there or not as indexed, ...). A local folder holding Zarr opens the index beside it.
     explicit BrickStoreReader(std::string path, ReadMode mode = ReadMode::Buffered);
     BrickStoreReader(std::string path, const StoreOpenOptions& options);
     ~BrickStoreReader();
@@ -75,6 +84,8 @@ public:
     const char* readMethod() const { return mSource->method(); }
     // The remote object a URL opened, or null for a local file.
     const RemoteFile* remote() const { return mSource->remote(); }
+    // The indexed array of an index (vdiso index), or null for a store holding its data.
+    const ExternalBricks* external() const { return mExternal.get(); }
     // Bytes one decoded brick takes: (B+3)^3 samples.
     size_t brickBytes() const { return size_t(mLayout.samplesPerBrick()) * scalarSize(volume().type); }
 
@@ -112,6 +123,7 @@ private:
     // The raw index, which mSubBlocks points into: as read (before version 5), or unpacked by parts.
     std::unique_ptr<unsigned char[]> mRawIndex;
     std::unique_ptr<LazyIndex> mLazyIndex;
+    std::unique_ptr<ExternalBricks> mExternal;
     uint64_t mCodesAt = 0;  // where the codes start in the raw index
     std::span<const SubBlockCode> mSubBlocks;
 };

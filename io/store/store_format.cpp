@@ -82,6 +82,10 @@ constexpr size_t kHeaderChecksumAt = 160;  // the header's CRC covers bytes [0, 
 // the layout up to it is every version's; a second checksum covers the whole header up to it.
 constexpr size_t kOrientationAt = 164;
 constexpr size_t kWholeHeaderChecksumAt = 240;  // covers bytes [0, 240)
+// Version 6's record of indexed data (offset, size) after the second checksum, and a third
+// covering the header up to it.
+constexpr size_t kExternalAt = 244;
+constexpr size_t kExternalChecksumAt = 260;  // covers bytes [0, 260)
 // How far from unit length a stored direction column may be (they are written normalised).
 constexpr double kUnitTolerance = 1e-9;
 
@@ -157,7 +161,9 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
     std::array<unsigned char, kStoreHeaderBytes> bytes{};
     ByteWriter w(bytes.data());
     w.putBytes(kHeaderMagic, 8);
-    w.put<uint32_t>(kStoreFormatVersion);
+    // The oldest version that holds what is written: a store without indexed data stays
+    // readable by builds that read up to version 5.
+    w.put<uint32_t>(h.externalBytes ? 6u : 5u);
     w.put<uint32_t>(kStoreHeaderBytes);
     for (int a = 0; a < 3; ++a) w.put<uint64_t>(uint64_t(h.volume.dims[a]));
     for (int a = 0; a < 3; ++a) w.put<double>(h.volume.spacing[a]);
@@ -182,6 +188,11 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
     for (int c = 0; c < 3; ++c)
         for (int r = 0; r < 3; ++r) w.put<double>(h.volume.direction[c][r]);
     w.put<uint32_t>(crc32Of(bytes.data(), kWholeHeaderChecksumAt));
+    if (h.externalBytes) {
+        w.put<uint64_t>(h.externalOffset);
+        w.put<uint64_t>(h.externalBytes);
+        w.put<uint32_t>(crc32Of(bytes.data(), kExternalChecksumAt));
+    }
     return bytes;
 }
 
@@ -278,6 +289,17 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
         h.levelCount = int(levelCount);
     }
     if (version >= 4) decodeOrientation(bytes, path, h.volume);
+    if (version >= 6) {
+        uint32_t crc;
+        std::memcpy(&crc, bytes + kExternalChecksumAt, 4);
+        if (crc != crc32Of(bytes, kExternalChecksumAt))
+            throwIoError(path, "header checksum mismatch in its record of indexed data (the header is corrupt)");
+        std::memcpy(&h.externalOffset, bytes + kExternalAt, 8);
+        std::memcpy(&h.externalBytes, bytes + kExternalAt + 8, 8);
+        if (h.externalBytes < 28 || h.externalBytes > (uint64_t(1) << 36) || h.externalOffset < kStoreHeaderBytes ||
+            h.externalOffset > h.indexOffset || h.externalBytes > h.indexOffset - h.externalOffset)
+            throwIoError(path, "header's record of indexed data lies outside the file's bricks");
+    }
     if (brickCount != uint64_t(totalBricks(h)))
         throwIoError(path, "header's brick count does not match its dimensions and levels");
     // Before version 5 the index is stored raw; from 5, in compressed parts (io/store/index_parts.h).
@@ -310,7 +332,7 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
         w.put<uint32_t>(e.checksum);
         w.put<float>(e.minValue);
         w.put<float>(e.maxValue);
-        w.put<uint32_t>(e.compressed ? 1u : 0u);
+        w.put<uint32_t>((e.compressed ? 1u : 0u) | (e.external ? 2u : 0u));
         w.put<uint32_t>(0);
     }
     w.put<double>(histogram.lo);
@@ -361,6 +383,15 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
         const uint32_t flags = r.get<uint32_t>();
         r.skip(4);
         e.compressed = (flags & 1u) != 0;
+        e.external = (flags & 2u) != 0;
+        // An index's level 0, and only that, is external: no bytes in the file.
+        if (e.external != (header.externalBytes > 0 && id < uint64_t(layout.brickCount())) || flags > 3)
+            throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
+        if (e.external) {
+            if (e.offset || e.storedBytes || e.checksum || e.compressed || !(e.minValue <= e.maxValue))
+                throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
+            continue;
+        }
         const bool ok = e.offset >= kStoreHeaderBytes && e.offset % kStoreAlignment == 0 &&
                         e.storedBytes > 0 && e.storedBytes <= maxStored &&
                         e.offset <= header.indexOffset &&

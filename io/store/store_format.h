@@ -19,12 +19,15 @@
 
 namespace vdiso {
 
+// 6: an index of data kept elsewhere (vdiso index; io/store/external_level.h): where its record
+// is, in the header, and level 0's entries flagged external. Stores without one are written as
+// version 5, which older builds read.
 // 5: the index stored in compressed parts (io/store/index_parts.h): several times smaller, which is
 // what a remote store's open fetches. Version 4 stores open as before.
 // 4: the volume's orientation (direction matrix and whether the input had one) in the header.
 // 3: levels of detail (the header's level count; every level's bricks in the index). Version
 // 2 and 3 stores open as before, without orientation; version 2 ones with level 0 only.
-constexpr uint32_t kStoreFormatVersion = 5;
+constexpr uint32_t kStoreFormatVersion = 6;
 constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;
@@ -53,6 +56,7 @@ struct BrickEntry {
     float minValue = 0;        // min and max over the samples of the brick's cells
     float maxValue = 0;        //   (ghosts excluded: they only feed normals)
     bool compressed = false;
+    bool external = false;     // level 0 of an index: the samples are in the indexed array, no bytes here
 };
 
 // A histogram of every sample in the volume, counted once each: bins of equal width over
@@ -79,6 +83,8 @@ struct StoreHeader {
     uint64_t indexOffset = 0, indexBytes = 0;
     double valueMin = 0, valueMax = 0;
     uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded), all levels
+    // An index's record of the data it indexes (version 6; 0, 0 for a store holding its data).
+    uint64_t externalOffset = 0, externalBytes = 0;
 };
 
 }  // namespace vdiso

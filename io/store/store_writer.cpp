@@ -127,8 +127,21 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             throw std::logic_error("store writer: a level of detail was not completed");
     source.finish();
 
-    const StoreTail tail = finishStore(info, options, levelCount, layout.brickCount(), entries, subBlocks,
-                                       encoder.fineHistogram(), fileEnd, source.name());
+    uint64_t externalOffset = 0;
+    std::vector<unsigned char> external;
+    if (options.externalRecord) {
+        external = options.externalRecord();
+        externalOffset = fileEnd;
+        out.writeAt(external.data(), external.size(), fileEnd);
+        fileEnd += external.size();
+    }
+    StoreTail tail = finishStore(info, options, levelCount, layout.brickCount(), entries, subBlocks,
+                                 encoder.fineHistogram(), fileEnd, source.name());
+    if (!external.empty()) {
+        tail.header.externalOffset = externalOffset;
+        tail.header.externalBytes = external.size();
+        tail.headerBytes = store_format::encodeHeader(tail.header);
+    }
     out.writeAt(tail.index.data(), tail.index.size(), fileEnd);
     out.writeAt(tail.headerBytes.data(), tail.headerBytes.size(), 0);
     out.commit();

@@ -17,7 +17,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "core/progress.h"
 #include "io/store/brick_store.h"
@@ -35,6 +37,10 @@ struct StoreWriteOptions {
     // brick (`--levels auto`).
     static constexpr int kLevelsUntilOneBrick = -1;
     int coarseLevels = kLevelsUntilOneBrick;
+    // An index (vdiso index, io/store/zarr_index.h): level 0's bricks are measured (ranges,
+    // sub-block codes, histogram) but not stored, and this gives, once every slice is read,
+    // the record of where they are (io/store/external_level.h), written into the file.
+    std::function<std::vector<unsigned char>()> externalRecord;
 };
 
 struct StoreWriteSummary {

@@ -11,7 +11,9 @@
 #include "core/settings_error.h"
 #include "io/error.h"
 #include "io/readers/slice_reader.h"
+#include "io/store/external_level.h"
 #include "io/store/store_writer.h"
+#include "io/store/zarr_index.h"
 #include "io/readers/volume_open.h"
 #include "released.h"
 
@@ -148,9 +150,27 @@ pyb::dict convertArray(pyb::object source, const std::string& name, const std::v
     return summaryOf(summary);
 }
 
+// vdiso.index: the Zarr array at `data` indexed where it lies (vdiso index).
+pyb::dict indexData(const std::string& data, const std::string& index, int64_t level, int64_t brick,
+                    const std::string& levels, bool overwrite, pyb::object progress) {
+    ZarrIndexOptions options;
+    options.level = int(checkedInt("scale_level", level, 0, 64));
+    options.store = storeOptions(brick, levels, "lz4", overwrite);
+    const std::string out = index.empty() ? defaultIndexPath(data) : index;
+    ZarrIndexSummary summary;
+    runReleased([&](const ProgressFn& fraction) { summary = indexZarr(data, out, options, fraction); }, progress, 0.0);
+    pyb::dict d = summaryOf(summary.store);
+    d["index"] = out;
+    d["chunks"] = summary.chunks;
+    d["missing_chunks"] = summary.missingChunks;
+    d["data_bytes"] = summary.dataBytes;
+    return d;
+}
+
 }  // namespace
 
 void bindConvert(pyb::module_& m) {
+    m.def("_index", &indexData, "data"_a, "index"_a, "level"_a, "brick"_a, "levels"_a, "overwrite"_a, "progress"_a);
     m.def("_convert_files", &convertFiles, "inputs"_a, "output"_a, "spacing"_a, "brick"_a, "levels"_a, "compress"_a,
           "overwrite"_a, "progress"_a);
     m.def("_convert_array", &convertArray, "source"_a, "name"_a, "shape"_a, "dtype"_a, "output"_a, "spacing"_a,

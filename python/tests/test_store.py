@@ -362,3 +362,22 @@ def test_threads_extract_and_post_process_at_once(volume_and_cli_store):
     for t in threads:
         t.join()
     assert not errors and results == [len(alone.faces)] * 4
+
+
+def test_an_indexed_zarr_opens_in_place_like_its_converted_store(tmp_path):
+    v = head()
+    data = tmp_path / "head.zarr"
+    zarr.array(v, chunks=(16, 20, 24), store=str(data))
+    summary = vdiso.index(data, brick=8)
+    assert summary["index"] == str(data) + ".vdiso" and os.path.exists(summary["index"])
+    assert summary["chunks"] == 3 * 3 * 3 and summary["data_bytes"] > 0
+    vdiso.convert(data, tmp_path / "head.vdiso", brick=8)
+    converted = vdiso.open(tmp_path / "head.vdiso")
+    for method in ("octree", "sage"):
+        mine, theirs = vdiso.open(data).extract(500.5, method=method), converted.extract(500.5, method=method)
+        assert len(mine.faces) > 1000
+        assert np.array_equal(mine.vertices, theirs.vertices) and np.array_equal(mine.faces, theirs.faces)
+    with pytest.raises(FileExistsError):
+        vdiso.index(data, brick=8)
+    with pytest.raises(vdiso.Error):
+        vdiso.index("s3://bucket/head.zarr")

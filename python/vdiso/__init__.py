@@ -22,7 +22,7 @@ import threading as _threading
 from . import _vdiso
 from ._vdiso import Error, Mesh
 
-__all__ = ["marching_cubes", "convert", "open", "serve", "Store", "Server", "Mesh", "Camera", "Error"]
+__all__ = ["marching_cubes", "convert", "index", "open", "serve", "Store", "Server", "Mesh", "Camera", "Error"]
 
 
 def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None):
@@ -240,6 +240,20 @@ class Store:
 def open(path, *, s3_endpoint="", anonymous=False, disk_cache=""):  # noqa: A001 (as vdiso.open)
     """open(path) -> Store: a .vdiso store on disk, or at an http(s):// or s3:// URL."""
     return Store(path, s3_endpoint=s3_endpoint, anonymous=anonymous, disk_cache=disk_cache)
+
+
+def index(data, index=None, *, scale_level=0, brick=32, levels="auto", overwrite=False, progress=None):
+    """index(data, index=None, *, scale_level=0, brick=32, levels="auto", overwrite=False, progress=None) -> dict
+
+    Indexes a Zarr array or OME-Zarr image (a folder, or an http(s):// or s3:// URL) where it
+    lies, as `vdiso index` does: then vdiso.open(data) (a folder finds its index beside it,
+    data + ".vdiso") or vdiso.open(index) reads it like a store, without a converted copy.
+    Returns what was written: the index's path and bytes ("index", "file_bytes"), the chunks
+    indexed, and the data's bytes as stored ("data_bytes")."""
+    if index is None and "://" in str(data):
+        raise Error(f"{data}: a URL's index needs a local path: vdiso.index(data, index=...)")
+    return _vdiso._index(str(data), "" if index is None else str(index), _int(scale_level, "scale_level"),
+                         _int(brick, "brick"), str(levels), bool(overwrite), progress)
 
 
 def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto", compress="lz4",

@@ -1,0 +1,128 @@
+#include "io/store/external_level.h"
+
+#include <cstring>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/checked_math.h"
+#include "io/crc32.h"
+#include "io/error.h"
+#include "io/remote/remote_file.h"
+
+namespace vdiso {
+namespace {
+
+constexpr char kMagic[8] = {'V', 'D', 'I', 'S', 'O', 'E', 'X', 'T'};
+constexpr uint32_t kVersion = 1;
+constexpr size_t kPinBytes = 12;
+constexpr size_t kMaxJsonBytes = 1 << 20;
+
+void put(std::vector<unsigned char>& out, const void* p, size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    out.insert(out.end(), b, b + n);
+}
+
+template <class T>
+T get(const unsigned char* bytes, size_t& at) {
+    T v;
+    std::memcpy(&v, bytes + at, sizeof v);
+    at += sizeof v;
+    return v;
+}
+
+}  // namespace
+
+std::vector<unsigned char> encodeExternalLevel(const ExternalLevel& e) {
+    nlohmann::json j;
+    j["kind"] = "zarr";
+    j["location"] = e.location;
+    j["level"] = e.level;
+    j["metadata_crc"] = e.metadataCrc;
+    j["chunk_shape"] = {e.chunkShape[0], e.chunkShape[1], e.chunkShape[2]};
+    j["chunk_counts"] = {e.chunkCounts[0], e.chunkCounts[1], e.chunkCounts[2]};
+    const std::string text = j.dump();
+    std::vector<unsigned char> out;
+    put(out, kMagic, 8);
+    put(out, &kVersion, 4);
+    const uint32_t jsonBytes = uint32_t(text.size());
+    put(out, &jsonBytes, 4);
+    put(out, text.data(), text.size());
+    const uint64_t count = e.pins.size();
+    put(out, &count, 8);
+    for (const ZarrChunkPin& pin : e.pins) {
+        put(out, &pin.bytes, 8);
+        put(out, &pin.crc, 4);
+    }
+    const uint32_t crc = crc32Of(out.data(), out.size());
+    put(out, &crc, 4);
+    return out;
+}
+
+ExternalLevel decodeExternalLevel(const unsigned char* bytes, size_t n, const std::string& path) {
+    auto damaged = [&](const std::string& what) -> void {
+        throwIoError(path, "its record of the indexed data is damaged (" + what + ")");
+    };
+    if (n < 28 || std::memcmp(bytes, kMagic, 8) != 0) damaged("wrong magic");
+    uint32_t storedCrc;
+    std::memcpy(&storedCrc, bytes + n - 4, 4);
+    if (storedCrc != crc32Of(bytes, n - 4)) damaged("checksum mismatch");
+    size_t at = 8;
+    if (get<uint32_t>(bytes, at) != kVersion) damaged("unknown version");
+    const uint32_t jsonBytes = get<uint32_t>(bytes, at);
+    if (jsonBytes > kMaxJsonBytes || jsonBytes > n - at - 12) damaged("its description overruns it");
+    ExternalLevel e;
+    try {
+        const nlohmann::json j = nlohmann::json::parse(bytes + at, bytes + at + jsonBytes);
+        if (j.at("kind").get<std::string>() != "zarr") damaged("kind " + j.at("kind").dump());
+        e.location = j.at("location").get<std::string>();
+        e.level = j.at("level").get<int>();
+        e.metadataCrc = j.at("metadata_crc").get<uint32_t>();
+        for (int a = 0; a < 3; ++a) {
+            e.chunkShape[a] = j.at("chunk_shape").at(size_t(a)).get<int64_t>();
+            e.chunkCounts[a] = j.at("chunk_counts").at(size_t(a)).get<int64_t>();
+            if (e.chunkShape[a] < 1 || e.chunkCounts[a] < 1 || e.chunkCounts[a] > (int64_t(1) << 31))
+                damaged("chunk grid");
+        }
+    } catch (const nlohmann::json::exception& ex) {
+        damaged(ex.what());
+    }
+    at += jsonBytes;
+    const uint64_t count = get<uint64_t>(bytes, at);
+    const uint64_t expected = checkedMul(checkedMul(uint64_t(e.chunkCounts[0]), uint64_t(e.chunkCounts[1])),
+                                         uint64_t(e.chunkCounts[2]));
+    if (count != expected || count > (n - at - 4) / kPinBytes || (n - at - 4) != count * kPinBytes)
+        damaged("its chunk count does not match its chunk grid");
+    e.pins.resize(size_t(count));
+    for (ZarrChunkPin& pin : e.pins) {
+        pin.bytes = get<uint64_t>(bytes, at);
+        pin.crc = get<uint32_t>(bytes, at);
+    }
+    return e;
+}
+
+std::string resolveExternalLocation(const std::string& location, const std::string& indexPath) {
+    if (isRemoteLocation(location) || std::filesystem::path(location).is_absolute()) return location;
+    if (isRemoteLocation(indexPath)) {
+        const std::string base = indexPath.substr(0, indexPath.find('?'));
+        return base.substr(0, base.rfind('/') + 1) + location;
+    }
+    return (std::filesystem::path(indexPath).parent_path() / location).lexically_normal().string();
+}
+
+std::string externalLocationFor(const std::string& dataPath, const std::string& indexPath) {
+    if (isRemoteLocation(dataPath)) return dataPath.substr(0, dataPath.find('?'));
+    const std::filesystem::path data = std::filesystem::absolute(dataPath).lexically_normal();
+    if (isRemoteLocation(indexPath)) return data.string();
+    const std::filesystem::path folder = std::filesystem::absolute(indexPath).lexically_normal().parent_path();
+    std::string relative = data.lexically_relative(folder).string();
+    while (relative.size() > 1 && relative.back() == '/') relative.pop_back();
+    return relative.empty() ? data.string() : relative;
+}
+
+std::string defaultIndexPath(const std::string& dataPath) {
+    std::string base = dataPath.substr(0, dataPath.find('?'));
+    while (base.size() > 1 && base.back() == '/') base.pop_back();
+    return base + ".vdiso";
+}
+
+}  // namespace vdiso

@@ -1,0 +1,30 @@
+#include "io/store/zarr_index.h"
+
+#include "io/readers/zarr_reader.h"
+#include "io/store/external_level.h"
+
+namespace vdiso {
+
+ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& indexPath, const ZarrIndexOptions& options,
+                           const ProgressFn& progress) {
+    auto volume = std::make_unique<ZarrVolume>(dataPath, options.level, options.remote);
+    ExternalLevel record;
+    record.location = externalLocationFor(dataPath, indexPath);
+    record.level = options.level;
+    record.metadataCrc = volume->metadataCrc();
+    record.chunkShape = volume->chunkShape();
+    record.chunkCounts = volume->chunkCounts();
+    const auto reader = zarrSliceReader(std::move(volume), &record.pins);
+    StoreWriteOptions store = options.store;
+    store.externalRecord = [&] { return encodeExternalLevel(record); };
+    ZarrIndexSummary summary;
+    summary.store = writeBrickStore(*reader, indexPath, store, progress);
+    summary.chunks = int64_t(record.pins.size());
+    for (const ZarrChunkPin& pin : record.pins) {
+        if (pin.bytes == ZarrChunkPin::kMissing) ++summary.missingChunks;
+        else summary.dataBytes += pin.bytes;
+    }
+    return summary;
+}
+
+}  // namespace vdiso

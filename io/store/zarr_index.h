@@ -1,0 +1,36 @@
+// vdiso index: an index of a Zarr array (plain, or an OME-Zarr image's level) where it lies,
+// so that every front end opens the array like a store without converting it
+// (io/store/brick_store.h). The array is read once, a layer of chunks at a time (the store
+// writer's pass, io/store/store_writer.h), and the index holds what a store's index holds (each
+// brick's range, sub-block codes, the histogram) and the coarser levels of detail as a store
+// has them, but not level 0's samples: instead, where the array is and each chunk's pin
+// (io/store/external_level.h), so that a changed chunk is refused when read.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/progress.h"
+#include "io/remote/remote_options.h"
+#include "io/store/store_writer.h"
+
+namespace vdiso {
+
+struct ZarrIndexOptions {
+    int level = 0;           // the OME-Zarr multiscale level indexed (0, the finest)
+    StoreWriteOptions store;  // brick size, levels of detail, their compression, overwrite
+    RemoteOptions remote;
+};
+
+struct ZarrIndexSummary {
+    StoreWriteSummary store;   // fileBytes: the index's size
+    int64_t chunks = 0, missingChunks = 0;
+    uint64_t dataBytes = 0;    // the array's chunks as stored
+};
+
+// Indexes the array at `dataPath` (a folder or URL) into `indexPath` (a local file). Throws as
+// writeBrickStore does (no output left, an existing one untouched).
+ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& indexPath, const ZarrIndexOptions& options,
+                           const ProgressFn& progress = {});
+
+}  // namespace vdiso

@@ -1,0 +1,226 @@
+// vdiso index (io/store/zarr_index.h): a Zarr array indexed where it lies opens like the store
+// converted from it, brick for brick at every level (so every extraction gives the same
+// triangles), for Zarr v2 and v3 and chunk shapes that are cubes, not multiples of the brick,
+// and single slices; a chunk or metadata changed since indexing, another array and a damaged
+// index are refused by name; and the command line indexes, describes and extracts.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "cache/brick_cache.h"
+#include "core/camera.h"
+#include "core/extract/extract_full.h"
+#include "core/extract/extract_view.h"
+#include "core/view_presets.h"
+#include "io/error.h"
+#include "io/readers/zarr_reader.h"
+#include "io/store/brick_store.h"
+#include "io/store/external_bricks.h"
+#include "io/store/zarr_index.h"
+#include "tests/mesh_test_readers.h"
+#include "tests/reader_test_util.h"
+#include "tests/test_util.h"
+#include "tests/zarr_test_util.h"
+
+namespace vdiso {
+namespace {
+
+using test::expectIoError;
+
+// A bumpy ball: its surface at 1000 crosses chunks and bricks everywhere.
+double bumpyBall(int64_t x, int64_t y, int64_t z) {
+    const double r = std::hypot(x - 22.3, y - 19.6, z - 18.2);
+    return std::clamp(2200.0 - 70.0 * r + 180.0 * std::sin(x * 0.31) * std::cos(y * 0.27) + 140.0 * std::sin(z * 0.43),
+                      0.0, 65535.0);
+}
+
+constexpr double kIso = 1000.5;
+
+test::ArraySpec ballArray(int format, std::vector<int64_t> chunk, test::Codec codec) {
+    test::ArraySpec a;
+    a.format = format;
+    a.dims = {45, 41, 38};
+    a.chunk = std::move(chunk);
+    a.codec = codec;
+    a.sample = bumpyBall;
+    a.extraAxes = format == 3 ? 2 : 0;
+    a.separator = format == 3 ? '/' : '.';
+    return a;
+}
+
+StoreWriteOptions storeOptions() {
+    StoreWriteOptions o;
+    o.brickSize = 8;
+    return o;
+}
+
+void expectSameStore(const BrickStoreReader& index, const BrickStoreReader& store, const std::string& what) {
+    ASSERT_EQ(index.levels().size(), store.levels().size()) << what;
+    ASSERT_EQ(index.index().size(), store.index().size()) << what;
+    EXPECT_EQ(index.volume().dims, store.volume().dims) << what;
+    EXPECT_EQ(index.histogram().counts, store.histogram().counts) << what;
+    const auto a = index.subBlockCodes(), b = store.subBlockCodes();
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i)
+        ASSERT_TRUE(a[i].lo == b[i].lo && a[i].hi == b[i].hi) << what << ": sub-block " << i;
+    std::vector<unsigned char> x(index.brickBytes()), y(store.brickBytes());
+    for (int64_t id = 0; id < int64_t(store.index().size()); ++id) {
+        EXPECT_EQ(index.index()[size_t(id)].minValue, store.index()[size_t(id)].minValue) << what << ": brick " << id;
+        EXPECT_EQ(index.index()[size_t(id)].maxValue, store.index()[size_t(id)].maxValue) << what << ": brick " << id;
+        index.readBrick(id, x.data());
+        store.readBrick(id, y.data());
+        ASSERT_EQ(x, y) << what << ": brick " << id;
+    }
+}
+
+class ZarrIndex : public test::ReaderFileTest {
+protected:
+    // The array written at `name`, converted into a store and indexed beside it.
+    void writeAndIndex(const std::string& name, const test::ArraySpec& a) {
+        test::writeArray(path(name), a);
+        auto reader = openZarrVolume(path(name), 0);
+        writeBrickStore(*reader, path(name + ".store"), storeOptions());
+        ZarrIndexOptions o;
+        o.store = storeOptions();
+        const ZarrIndexSummary s = indexZarr(path(name), defaultIndexPath(path(name)), o);
+        EXPECT_GT(s.chunks, 0);
+        EXPECT_GT(s.dataBytes, 0u);
+    }
+};
+
+TEST_F(ZarrIndex, OpensAsTheConvertedStoreBrickForBrick) {
+    int n = 0;
+    for (int format : {2, 3})
+        for (const std::vector<int64_t>& chunk : std::vector<std::vector<int64_t>>{{16, 16, 16}, {10, 10, 10}, {1, 32, 32}}) {
+            const std::string name = "a" + std::to_string(n++);
+            writeAndIndex(name, ballArray(format, chunk, n % 2 ? test::Codec::Blosc : test::Codec::Zstd));
+            const std::string what = "v" + std::to_string(format) + " chunks " + std::to_string(chunk[0]) + "x" +
+                                     std::to_string(chunk[1]) + "x" + std::to_string(chunk[2]);
+            // Opened by the data's folder (the index beside it) and by the index's path.
+            const BrickStoreReader index(path(name)), byFile(path(name) + ".vdiso");
+            const BrickStoreReader store(path(name + ".store"));
+            ASSERT_NE(index.external(), nullptr);
+            EXPECT_EQ(store.external(), nullptr);
+            EXPECT_GT(index.levels().size(), 2u);
+            expectSameStore(index, store, what);
+            // No chunk read twice while it stays in the cache.
+            EXPECT_EQ(index.external()->chunksRead(), uint64_t(std::ceil(45.0 / double(chunk[2])) *
+                                                               std::ceil(41.0 / double(chunk[1])) *
+                                                               std::ceil(38.0 / double(chunk[0]))))
+                << what;
+            // The same triangles, full and view-dependent (from an index that read nothing yet).
+            BrickCache indexCache(byFile, 64u << 20), storeCache(store, 64u << 20);
+            TriangleMesh a, b;
+            extractOctree(indexCache, {kIso, 2}, a);
+            extractOctree(storeCache, {kIso, 2}, b);
+            EXPECT_GT(b.triangleCount(), 1000u) << what;
+            test::expectSameMesh(a, b, what + " octree");
+            const VolumeInfo& v = store.volume();
+            const Camera camera = presetCamera(ViewPreset::Normal, v.origin, v.worldMax(), 256, 256);
+            TriangleMesh va, vb;
+            PointSet pa, pb;
+            extractViewDependent(indexCache, camera, ViewExtractOptions::sage(kIso), va, pa);
+            extractViewDependent(storeCache, camera, ViewExtractOptions::sage(kIso), vb, pb);
+            EXPECT_GT(vb.triangleCount(), 100u) << what;
+            test::expectSameMesh(va, vb, what + " sage");
+        }
+}
+
+TEST_F(ZarrIndex, MissingChunksAreTheFillValueAndStayMissing) {
+    test::ArraySpec a = ballArray(2, {16, 16, 16}, test::Codec::Gzip);
+    a.fill = 5;
+    a.skip = [](int64_t x, int64_t y, int64_t z) { return x == 2 && y == 0 && z == 1; };
+    writeAndIndex("holes", a);
+    expectSameStore(BrickStoreReader(path("holes")), BrickStoreReader(path("holes.store")), "holes");
+    // A chunk that appears where none was is a change.
+    test::ArraySpec full = a;
+    full.skip = {};
+    test::writeArray(path("holes"), full);
+    const BrickStoreReader index(path("holes"));
+    std::vector<unsigned char> brick(index.brickBytes());
+    expectIoError([&] { for (int64_t id = 0; id < index.layout().brickCount(); ++id) index.readBrick(id, brick.data()); },
+                  {"holes/1.0.2", "changed since it was indexed", "was missing", "vdiso index"});
+}
+
+TEST_F(ZarrIndex, ChangesSinceIndexingAreRefusedByName) {
+    writeAndIndex("d", ballArray(3, {16, 16, 16}, test::Codec::Blosc));
+    const std::string chunk = path("d") + "/c/0/0/1/1/2";
+    ASSERT_TRUE(std::filesystem::exists(chunk));
+    auto readAll = [&](const BrickStoreReader& index) {
+        std::vector<unsigned char> brick(index.brickBytes());
+        for (int64_t id = 0; id < index.layout().brickCount(); ++id) index.readBrick(id, brick.data());
+    };
+    {  // a chunk rewritten with other samples
+        std::string bytes = test::readText(chunk);
+        bytes[bytes.size() / 2] ^= 0x40;
+        test::writeFile(chunk, bytes);
+        const BrickStoreReader index(path("d"));
+        expectIoError([&] { readAll(index); }, {chunk, "changed since it was indexed", "vdiso index"});
+    }
+    {  // a chunk gone
+        std::filesystem::remove(chunk);
+        const BrickStoreReader index(path("d"));
+        expectIoError([&] { readAll(index); }, {chunk, "is missing"});
+    }
+    // Metadata changed (the fill value), another array in its place, a damaged index.
+    test::ArraySpec other = ballArray(3, {16, 16, 16}, test::Codec::Blosc);
+    other.fill = 3;
+    test::writeArray(path("d"), other);
+    expectIoError([&] { BrickStoreReader{path("d")}; }, {"d.vdiso", "metadata changed", "vdiso index"});
+    other.dims = {44, 41, 38};
+    std::filesystem::remove_all(path("d"));
+    test::writeArray(path("d"), other);
+    expectIoError([&] { BrickStoreReader{path("d")}; }, {"d.vdiso", "is not an index of", "44 x 41 x 38"});
+    std::filesystem::remove_all(path("d"));
+    expectIoError([&] { BrickStoreReader{path("d.vdiso")}; }, {"d.vdiso", "indexes data that cannot be opened"});
+    test::writeArray(path("d"), ballArray(3, {16, 16, 16}, test::Codec::Blosc));
+    ZarrIndexOptions o;
+    o.store = storeOptions();
+    o.store.overwrite = true;
+    indexZarr(path("d"), path("d.vdiso"), o);
+    const BrickStoreReader fresh(path("d"));
+    readAll(fresh);
+    const StoreHeader h = fresh.header();
+    std::string bytes = test::readText(path("d.vdiso"));
+    bytes[size_t(h.externalOffset + h.externalBytes / 2)] ^= 1;
+    test::writeFile(path("d.vdiso"), bytes);
+    expectIoError([&] { BrickStoreReader{path("d")}; }, {"d.vdiso", "record of the indexed data is damaged"});
+    // Zarr data without an index.
+    test::writeArray(path("e"), ballArray(2, {16, 16, 16}, test::Codec::Blosc));
+    expectIoError([&] { BrickStoreReader{path("e")}; }, {"without an index", "vdiso index"});
+}
+
+TEST_F(ZarrIndex, FromTheCommandLine) {
+    test::writeArray(path("img.zarr"), ballArray(2, {10, 10, 10}, test::Codec::Zstd));
+    auto r = test::runVdiso("index " + path("img.zarr") + " --brick 8");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("of the data"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(path("img.zarr.vdiso")));
+    // Not again over it without --force.
+    r = test::runVdiso("index " + path("img.zarr") + " --brick 8 --quiet");
+    EXPECT_NE(r.exitCode, 0) << r.output;
+    r = test::runVdiso("info " + path("img.zarr"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("45"), std::string::npos) << r.output;
+    r = test::runVdiso("convert " + path("img.zarr") + " " + path("img.store") + " --brick 8 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const char* method : {"octree", "sage"}) {
+        const std::string a = path(std::string("a_") + method + ".ply"), b = path(std::string("b_") + method + ".ply");
+        r = test::runVdiso("extract " + path("img.zarr") + " --iso 1000.5 --method " + method + " -o " + a);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        r = test::runVdiso("extract " + path("img.store") + " --iso 1000.5 --method " + method + " -o " + b);
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_GT(test::readFile(a).size(), 10000u) << method;
+        EXPECT_EQ(test::readFile(a), test::readFile(b)) << method;
+    }
+    r = test::runVdiso("index " + path("img.zarr") + " --index http://127.0.0.1:1/x.vdiso");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    r = test::runVdiso("index " + path("nothing.zarr"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("nothing.zarr"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace vdiso

@@ -1,0 +1,43 @@
+// Zarr arrays written by hand after the Zarr v2/v3 specifications, for the Zarr reader's and
+// the index's tests (test_zarr.cpp, test_zarr_index.cpp): u16 samples, any chunk shape, every
+// codec vdiso reads, chunks left out on request.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/volume.h"
+
+namespace vdiso::test {
+
+enum class Codec { None, Blosc, Zstd, Gzip };
+
+// The bytes `raw` compressed as `codec` stores them.
+std::string compress(const std::string& raw, Codec codec);
+
+// The default samples: sample (x, y, z) of a u16 volume, different in every position.
+double zarrTestValue(int64_t x, int64_t y, int64_t z);
+
+// An array of u16 samples (x, y, z) = sample(x*step, ...), shape (z, y, x) with leading axes of
+// size 1 when `extraAxes`, chunked by `chunk` (z, y, x); `skip` says which chunks to leave out.
+struct ArraySpec {
+    int format = 2;
+    Dims3 dims{13, 10, 9};           // x, y, z
+    std::vector<int64_t> chunk{4, 4, 5};  // z, y, x
+    Codec codec = Codec::Blosc;
+    char separator = '.';
+    bool bigEndian = false;
+    int extraAxes = 0;
+    int step = 1;
+    double fill = 0;
+    std::function<bool(int64_t, int64_t, int64_t)> skip;
+    std::function<double(int64_t, int64_t, int64_t)> sample = zarrTestValue;
+};
+
+// Writes the array's metadata and chunks into `dir` (created).
+void writeArray(const std::filesystem::path& dir, const ArraySpec& a);
+
+}  // namespace vdiso::test

@@ -1,0 +1,79 @@
+#include <cstdio>
+
+#include "cli/args.h"
+#include "cli/progress_bar.h"
+#include "io/remote/remote_file.h"
+#include "io/store/external_level.h"
+#include "io/store/zarr_index.h"
+#include "tools/commands.h"
+
+namespace vdiso::cli {
+
+namespace {
+
+constexpr const char* kHelp =
+    "usage: vdiso index DATA [--index OUT] [options]\n"
+    "\n"
+    "Indexes a Zarr array or OME-Zarr image (v2 or v3; a folder, or https://, http://, s3://)\n"
+    "where it lies, so that every command opens it like a store without converting it: DATA is\n"
+    "read once, and the index holds each brick's value range, the sub-block ranges that cull\n"
+    "reads, the histogram and coarser levels of detail, with each chunk's size and checksum:\n"
+    "a chunk that changes afterwards is refused when read. Then 'vdiso extract DATA ...' (a\n"
+    "folder finds its index beside it) or 'vdiso extract OUT ...'.\n"
+    "\n"
+    "  --index OUT             where the index goes (default: DATA.vdiso beside a local DATA;\n"
+    "                          needed for a URL)\n"
+    "  --scale-level N         the OME-Zarr multiscales level to index (default 0, the finest)\n"
+    "  --quiet                 no progress bar or summary\n"
+    "index:\n";
+
+}  // namespace
+
+int runIndex(int argc, char** argv) {
+    Args args(argc, argv, 1);
+    ZarrIndexOptions options;
+    std::string data, index;
+    bool quiet = false;
+    while (!args.done()) {
+        const std::string a = args.take();
+        if (a == "--help" || a == "-h") {
+            std::fputs(kHelp, stdout);
+            std::fputs(kStoreWriteOptionsHelp, stdout);
+            std::fputs(kRemoteOptionsHelp, stdout);
+            return 0;
+        }
+        if (a == "--index") {
+            index = args.value(a);
+        } else if (a == "--scale-level") {
+            options.level = int(parseInt(a, args.value(a), 0, 64));
+        } else if (a == "--quiet") {
+            quiet = true;
+        } else if (takeStoreWriteOption(a, args, options.store) || takeRemoteOption(a, args, options.remote)) {
+        } else if (!a.empty() && a[0] == '-') {
+            throw UsageError("unknown option '" + a + "'");
+        } else if (data.empty()) {
+            data = a;
+        } else {
+            throw UsageError("expects one DATA, and the index's path after --index");
+        }
+    }
+    if (data.empty()) throw UsageError("expects DATA, a Zarr array or OME-Zarr image");
+    if (index.empty()) {
+        if (isRemoteLocation(data)) throw UsageError("DATA is a URL: say where its index goes with --index OUT");
+        index = defaultIndexPath(data);
+    }
+    if (isRemoteLocation(index)) throw UsageError("--index: the index is written to a local file");
+    const ZarrIndexSummary s = indexZarr(data, index, options, progressBar("index", 0, quiet));
+    if (!quiet) {
+        const double ratio = double(s.store.fileBytes) / double(std::max<uint64_t>(s.dataBytes, 1));
+        std::printf("wrote %s: %lld bricks of %d^3 cells in %d level%s over %lld chunks (%lld missing), "
+                    "%.1f MB indexed into %.2f MB (%.2f%% of the data; coarse levels %.2f MB), %.2f s, %.0f MB/s\n",
+                    index.c_str(), (long long)s.store.bricks, options.store.brickSize, s.store.levels,
+                    s.store.levels == 1 ? "" : "s", (long long)s.chunks, (long long)s.missingChunks,
+                    s.dataBytes / 1e6, s.store.fileBytes / 1e6, 100.0 * ratio, s.store.coarseBytes / 1e6,
+                    s.store.seconds, s.store.inputBytes / 1e6 / s.store.seconds);
+    }
+    return 0;
+}
+
+}  // namespace vdiso::cli
