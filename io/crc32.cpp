@@ -1,6 +1,7 @@
 #include "io/crc32.h"
 
 #include <algorithm>
+#include <array>
 
 #include <zlib.h>
 
@@ -16,6 +17,22 @@ uint32_t crc32Of(const void* data, size_t n) {
         n -= chunk;
     }
     return uint32_t(crc);
+}
+
+uint32_t crc32cOf(const void* data, size_t n) {
+    static const auto table = [] {
+        std::array<uint32_t, 256> t{};
+        for (uint32_t i = 0; i < 256; ++i) {
+            uint32_t c = i;
+            for (int k = 0; k < 8; ++k) c = c & 1 ? (c >> 1) ^ 0x82F63B78u : c >> 1;  // reflected 0x1EDC6F41
+            t[i] = c;
+        }
+        return t;
+    }();
+    uint32_t crc = ~0u;
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) crc = table[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
+    return ~crc;
 }
 
 }  // namespace vdiso

@@ -10,4 +10,7 @@ namespace vdiso {
 
 uint32_t crc32Of(const void* data, size_t n);
 
+// CRC-32C (Castagnoli's polynomial, as Zarr v3's crc32c codec appends to a shard's index).
+uint32_t crc32cOf(const void* data, size_t n);
+
 }  // namespace vdiso

@@ -260,8 +260,10 @@ TEST_F(ZarrErrors, UnsupportedAndMalformedMetadataAreNamed) {
     write("h/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "float64", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [550000000, 1000000000, 100]}}, "fill_value": 0, "codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]})");
     expectIoError([&] { openZarrVolume(path("h"), 0); },
                   {path("h"), "550000000 x 1000000000 x 100 samples", "over 2^64", "1 GiB"});
-    write("s/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "uint16", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [9, 10, 13]}}, "fill_value": 0, "codecs": [{"name": "sharding_indexed", "configuration": {}}]})");
-    expectIoError([&] { openZarrVolume(path("s"), 0); }, {"sharded"});
+    write("s/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "uint16", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [9, 10, 13]}}, "fill_value": 0, "codecs": [{"name": "sharding_indexed", "configuration": {}}, {"name": "zstd"}]})");
+    expectIoError([&] { openZarrVolume(path("s"), 0); }, {"codecs after sharding_indexed"});
+    write("s2/zarr.json", R"({"zarr_format": 3, "node_type": "array", "shape": [9, 10, 13], "data_type": "uint16", "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [9, 10, 13]}}, "fill_value": 0, "codecs": [{"name": "sharding_indexed", "configuration": {"chunk_shape": [4, 5, 13], "codecs": [{"name": "bytes"}], "index_codecs": [{"name": "bytes"}]}}]})");
+    expectIoError([&] { openZarrVolume(path("s2"), 0); }, {"inner chunks 4 x 5 x 13 do not divide its shards 9 x 10 x 13"});
     std::filesystem::create_directories(path("empty"));
     expectIoError([&] { openZarrVolume(path("empty"), 0); }, {"no Zarr metadata"});
     write("p/.zarray", R"({"zarr_format": 2, "shape": [9, 10, 13], "chunks": [4, 4, 5], "dtype": "<u2", "compressor": null})");

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -14,11 +15,13 @@
 #include "core/extract/extract_full.h"
 #include "core/extract/extract_view.h"
 #include "core/view_presets.h"
+#include "io/crc32.h"
 #include "io/error.h"
 #include "io/readers/zarr_reader.h"
 #include "io/store/brick_store.h"
 #include "io/store/external_bricks.h"
 #include "io/store/zarr_index.h"
+#include "tests/loopback_servers.h"
 #include "tests/mesh_test_readers.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
@@ -92,11 +95,15 @@ protected:
 
 TEST_F(ZarrIndex, OpensAsTheConvertedStoreBrickForBrick) {
     int n = 0;
-    for (int format : {2, 3})
+    // Zarr v2 and v3 (format 4: v3 sharded, shards of 2 x 2 x 2 inner chunks, 1 x 2 x 2 for slices).
+    for (int format : {2, 3, 4})
         for (const std::vector<int64_t>& chunk : std::vector<std::vector<int64_t>>{{16, 16, 16}, {10, 10, 10}, {1, 32, 32}}) {
             const std::string name = "a" + std::to_string(n++);
-            writeAndIndex(name, ballArray(format, chunk, n % 2 ? test::Codec::Blosc : test::Codec::Zstd));
-            const std::string what = "v" + std::to_string(format) + " chunks " + std::to_string(chunk[0]) + "x" +
+            test::ArraySpec spec = ballArray(std::min(format, 3), chunk, n % 2 ? test::Codec::Blosc : test::Codec::Zstd);
+            if (format == 4) spec.shard = {chunk[0] == 1 ? 1 : 2 * chunk[0], 2 * chunk[1], 2 * chunk[2]};
+            if (format == 4) spec.skip = [](int64_t x, int64_t y, int64_t z) { return x == 0 && y == 0 && z == 0; };
+            writeAndIndex(name, spec);
+            const std::string what = "v" + std::to_string(format) + " (4: sharded) chunks " + std::to_string(chunk[0]) + "x" +
                                      std::to_string(chunk[1]) + "x" + std::to_string(chunk[2]);
             // Opened by the data's folder (the index beside it) and by the index's path.
             const BrickStoreReader index(path(name)), byFile(path(name) + ".vdiso");
@@ -220,6 +227,86 @@ TEST_F(ZarrIndex, FromTheCommandLine) {
     r = test::runVdiso("index " + path("nothing.zarr"));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("nothing.zarr"), std::string::npos) << r.output;
+}
+
+// A shard's index is checked before its offsets are used: entries outside the shard's chunk
+// bytes and a CRC-32C that does not match are refused naming the shard.
+TEST_F(ZarrIndex, HostileShardIndexesAreRefused) {
+    EXPECT_EQ(crc32cOf("123456789", 9), 0xE3069283u);  // the check value of CRC-32C
+    test::ArraySpec a = ballArray(3, {8, 8, 8}, test::Codec::Zstd);
+    a.shard = {16, 16, 16};
+    test::writeArray(path("sh"), a);
+    const std::string shard = path("sh") + "/c/0/0/1/1/0";
+    const std::string good = test::readText(shard);
+    auto readAll = [&] {
+        auto reader = openZarrVolume(path("sh"), 0);
+        std::vector<unsigned char> slice(size_t(reader->info().sliceSamples()) * 2);
+        for (int64_t z = 0; z < reader->info().dims[2]; ++z) reader->read(slice.data(), 1);
+    };
+    readAll();
+    const size_t indexAt = good.size() - 8 * 16 - 4;
+    auto withEntry = [&](size_t k, uint64_t offset, uint64_t n) {
+        std::string bytes = good;
+        std::memcpy(bytes.data() + indexAt + 16 * k, &offset, 8);
+        std::memcpy(bytes.data() + indexAt + 16 * k + 8, &n, 8);
+        const uint32_t crc = crc32cOf(bytes.data() + indexAt, 8 * 16);
+        std::memcpy(bytes.data() + bytes.size() - 4, &crc, 4);
+        return bytes;
+    };
+    test::writeFile(shard, withEntry(3, uint64_t(1) << 40, 100));
+    expectIoError(readAll, {shard, "damaged shard index", "inner chunk 3"});
+    test::writeFile(shard, withEntry(5, 10, good.size()));  // over the index itself
+    expectIoError(readAll, {shard, "damaged shard index", "inner chunk 5"});
+    std::string flipped = good;
+    flipped[indexAt + 2] ^= 1;
+    test::writeFile(shard, flipped);
+    expectIoError(readAll, {shard, "CRC-32C"});
+    test::writeFile(shard, good.substr(0, 100));
+    expectIoError(readAll, {shard, "too short for its shard index"});
+    test::writeFile(shard, withEntry(0, 0, 7));  // a chunk of the wrong size
+    expectIoError(readAll, {shard, "inner chunk 0"});
+}
+
+// Data at a URL, its index a local file: over nginx (HTTP, Zarr v2) and the S3 server whose
+// signature check is botocore's (Zarr v3), the same meshes as the converted store's; a chunk
+// changed at the server is refused naming its URL.
+TEST_F(ZarrIndex, DataAtAUrlIndexedIntoALocalFile) {
+    test::writeArray(path("srv/bkt/v2.zarr"), ballArray(2, {16, 16, 16}, test::Codec::Blosc));
+    test::writeArray(path("srv/bkt/v3.zarr"), ballArray(3, {10, 10, 10}, test::Codec::Zstd));
+    auto extract = [&](const std::string& env, const std::string& store, const std::string& out) {
+        const auto r = test::runCommand(env + VDISO_BINARY + " extract '" + store + "' --iso 1000.5 --method sage -o " +
+                                        path(out));
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        return test::readFile(path(out));
+    };
+    for (const char* name : {"v2", "v3"}) {
+        const auto r = test::runVdiso(std::string("convert ") + path("srv/bkt/") + name + ".zarr " + path(name) +
+                                      ".store --brick 8 --quiet");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+    }
+    {
+        test::LoopbackServer nginx = test::startNginx(path("srv"), path(""), path("nginx.log"));
+        const std::string url = "http://127.0.0.1:" + std::to_string(nginx.port()) + "/bkt/v2.zarr";
+        auto r = test::runVdiso("index " + url + " --index " + path("v2.vdiso") + " --brick 8 --quiet");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_EQ(extract("", path("v2.vdiso"), "v2_index.ply"), extract("", path("v2.store"), "v2_store.ply"));
+        r = test::runVdiso("index " + url);
+        EXPECT_EQ(r.exitCode, 2) << r.output;  // a URL's index needs --index
+        std::string chunk = test::readText(path("srv/bkt/v2.zarr/1.1.1"));
+        chunk[chunk.size() / 2] ^= 0x10;
+        test::writeFile(path("srv/bkt/v2.zarr/1.1.1"), chunk);
+        r = test::runVdiso("extract " + path("v2.vdiso") + " --iso 1000.5 --method octree -o " + path("bad.ply"));
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find(url + "/1.1.1"), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("changed since it was indexed"), std::string::npos) << r.output;
+        EXPECT_FALSE(std::filesystem::exists(path("bad.ply")));
+    }
+    test::LoopbackServer s3 = test::startS3(path("srv"), path("s3.log"));
+    const std::string env = test::s3Env(s3.port());
+    const auto r = test::runCommand(env + VDISO_BINARY + " index s3://bkt/v3.zarr --index " + path("v3.vdiso") +
+                                    " --brick 8 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(extract(env, path("v3.vdiso"), "v3_index.ply"), extract("", path("v3.store"), "v3_store.ply"));
 }
 
 }  // namespace

@@ -3,6 +3,10 @@
 #include <blosc.h>
 #include <zstd.h>
 
+#include <cstring>
+#include <optional>
+
+#include "io/crc32.h"
 #include "io/readers/sample_decode.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
@@ -65,6 +69,17 @@ void writeArray(const std::filesystem::path& dir, const ArraySpec& a) {
     std::vector<int64_t> shape(size_t(a.extraAxes), 1), chunks(size_t(a.extraAxes), 1);
     shape.insert(shape.end(), {a.dims[2], a.dims[1], a.dims[0]});
     chunks.insert(chunks.end(), a.chunk.begin(), a.chunk.end());
+    std::vector<int64_t> grid = chunks;  // the chunk grid's chunks: shards when sharded
+    std::string codecs = R"({"name": "bytes", "configuration": {"endian": ")" +
+                         std::string(a.bigEndian ? "big" : "little") + "\"}}" + codecJsonV3(a.codec);
+    if (!a.shard.empty()) {
+        grid.assign(size_t(a.extraAxes), 1);
+        grid.insert(grid.end(), a.shard.begin(), a.shard.end());
+        codecs = R"({"name": "sharding_indexed", "configuration": {"chunk_shape": [)" + joinInts(chunks) +
+                 R"(], "codecs": [)" + codecs +
+                 R"(], "index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}, {"name": "crc32c"}], )"
+                 R"("index_location": "end"}})";
+    }
     if (a.format == 2) {
         writeFile((dir / ".zarray").string(),
                         std::string(R"({"zarr_format": 2, "shape": [)") + joinInts(shape) +
@@ -77,32 +92,60 @@ void writeArray(const std::filesystem::path& dir, const ArraySpec& a) {
         writeFile((dir / "zarr.json").string(),
                         std::string(R"({"zarr_format": 3, "node_type": "array", "shape": [)") +
                             joinInts(shape) + R"(], "data_type": "uint16", "chunk_grid": {"name": )" +
-                            R"("regular", "configuration": {"chunk_shape": [)" + joinInts(chunks) +
+                            R"("regular", "configuration": {"chunk_shape": [)" + joinInts(grid) +
                             R"(]}}, "chunk_key_encoding": {"name": "default", "configuration": )" +
                             R"({"separator": ")" + std::string(1, a.separator) + R"("}}, "fill_value": )" +
-                            std::to_string(int(a.fill)) + R"(, "codecs": [{"name": "bytes", )" +
-                            R"("configuration": {"endian": ")" + (a.bigEndian ? "big" : "little") +
-                            "\"}}" + codecJsonV3(a.codec) + "]}");
+                            std::to_string(int(a.fill)) + R"(, "codecs": [)" + codecs + "]}");
     }
     const int64_t cz = a.chunk[0], cy = a.chunk[1], cx = a.chunk[2];
-    for (int64_t kz = 0; kz * cz < a.dims[2]; ++kz)
-        for (int64_t ky = 0; ky * cy < a.dims[1]; ++ky)
-            for (int64_t kx = 0; kx * cx < a.dims[0]; ++kx) {
-                if (a.skip && a.skip(kx, ky, kz)) continue;
-                std::vector<double> samples;
-                for (int64_t z = kz * cz; z < (kz + 1) * cz; ++z)
-                    for (int64_t y = ky * cy; y < (ky + 1) * cy; ++y)
-                        for (int64_t x = kx * cx; x < (kx + 1) * cx; ++x)
-                            samples.push_back(x < a.dims[0] && y < a.dims[1] && z < a.dims[2]
-                                                  ? a.sample(x * a.step, y * a.step, z * a.step)
-                                                  : 0.0);  // padding of edge chunks
-                std::vector<int64_t> index(size_t(a.extraAxes), 0);
-                index.insert(index.end(), {kz, ky, kx});
-                std::string key = a.format == 3 ? "c" : "";
-                for (int64_t i : index) key += (key.empty() ? "" : std::string(1, a.separator)) + std::to_string(i);
-                const std::filesystem::path file = dir / key;
-                std::filesystem::create_directories(file.parent_path());
-                writeFile(file.string(), compress(encodeSamples(samples, FileScalar::U16, a.bigEndian), a.codec));
+    // Inner chunk (kx, ky, kz)'s stored bytes, or nullopt when skipped or outside the array.
+    auto encoded = [&](int64_t kx, int64_t ky, int64_t kz) -> std::optional<std::string> {
+        if (kx * cx >= a.dims[0] || ky * cy >= a.dims[1] || kz * cz >= a.dims[2]) return std::nullopt;
+        if (a.skip && a.skip(kx, ky, kz)) return std::nullopt;
+        std::vector<double> samples;
+        for (int64_t z = kz * cz; z < (kz + 1) * cz; ++z)
+            for (int64_t y = ky * cy; y < (ky + 1) * cy; ++y)
+                for (int64_t x = kx * cx; x < (kx + 1) * cx; ++x)
+                    samples.push_back(x < a.dims[0] && y < a.dims[1] && z < a.dims[2]
+                                          ? a.sample(x * a.step, y * a.step, z * a.step)
+                                          : 0.0);  // padding of edge chunks
+        return compress(encodeSamples(samples, FileScalar::U16, a.bigEndian), a.codec);
+    };
+    auto fileOf = [&](int64_t kx, int64_t ky, int64_t kz) {
+        std::vector<int64_t> index(size_t(a.extraAxes), 0);
+        index.insert(index.end(), {kz, ky, kx});
+        std::string key = a.format == 3 ? "c" : "";
+        for (int64_t i : index) key += (key.empty() ? "" : std::string(1, a.separator)) + std::to_string(i);
+        const std::filesystem::path file = dir / key;
+        std::filesystem::create_directories(file.parent_path());
+        return file.string();
+    };
+    if (a.shard.empty()) {
+        for (int64_t kz = 0; kz * cz < a.dims[2]; ++kz)
+            for (int64_t ky = 0; ky * cy < a.dims[1]; ++ky)
+                for (int64_t kx = 0; kx * cx < a.dims[0]; ++kx)
+                    if (const auto bytes = encoded(kx, ky, kz)) writeFile(fileOf(kx, ky, kz), *bytes);
+        return;
+    }
+    const int64_t rz = a.shard[0] / cz, ry = a.shard[1] / cy, rx = a.shard[2] / cx;
+    for (int64_t sz = 0; sz * a.shard[0] < a.dims[2]; ++sz)
+        for (int64_t sy = 0; sy * a.shard[1] < a.dims[1]; ++sy)
+            for (int64_t sx = 0; sx * a.shard[2] < a.dims[0]; ++sx) {
+                std::string shard;
+                std::vector<uint64_t> index;
+                for (int64_t pz = 0; pz < rz; ++pz)
+                    for (int64_t py = 0; py < ry; ++py)
+                        for (int64_t px = 0; px < rx; ++px) {
+                            const auto bytes = encoded(sx * rx + px, sy * ry + py, sz * rz + pz);
+                            index.push_back(bytes ? shard.size() : ~uint64_t(0));
+                            index.push_back(bytes ? bytes->size() : ~uint64_t(0));
+                            if (bytes) shard += *bytes;
+                        }
+                std::string tail(index.size() * 8, '\0');
+                std::memcpy(tail.data(), index.data(), tail.size());
+                const uint32_t crc = crc32cOf(tail.data(), tail.size());
+                tail.append(reinterpret_cast<const char*>(&crc), 4);
+                writeFile(fileOf(sx, sy, sz), shard + tail);
             }
 }
 

@@ -35,6 +35,10 @@ struct ArraySpec {
     double fill = 0;
     std::function<bool(int64_t, int64_t, int64_t)> skip;
     std::function<double(int64_t, int64_t, int64_t)> sample = zarrTestValue;
+    // Zarr v3 only: shards of this shape (z, y, x, a multiple of `chunk`), each holding its
+    // inner chunks (`chunk`) and an index at its end with its CRC-32C; skipped inner chunks are
+    // not stored. Empty: not sharded.
+    std::vector<int64_t> shard;
 };
 
 // Writes the array's metadata and chunks into `dir` (created).

@@ -118,6 +118,29 @@ void parseV2(const json& j, ZarrArrayMeta& m, const std::string& where) {
     m.separator = separator[0];
 }
 
+// A chunk's codecs: bytes, then at most one of blosc, zstd, gzip.
+void parseChunkCodecs(const json& codecs, ZarrArrayMeta& m, const std::string& where) {
+    bool sawBytes = false;
+    if (!codecs.is_array()) throwIoError(where, "codecs is not a list");
+    for (const json& codec : codecs) {
+        const std::string name = codec.is_object() ? codec.value("name", std::string()) : "";
+        const json config = codec.is_object() ? codec.value("configuration", json::object()) : json::object();
+        if (name == "bytes" && !sawBytes) {
+            sawBytes = true;
+            m.bigEndian = config.is_object() && config.value("endian", std::string("little")) == "big";
+        } else if (sawBytes && m.compressor == ZarrCompressor::None &&
+                   (name == "blosc" || name == "zstd" || name == "gzip")) {
+            m.compressor = compressorNamed(name, where);
+        } else if (name == "sharding_indexed") {
+            throwIoError(where, "is sharded inside a shard or after other codecs, which is not supported");
+        } else {
+            throwIoError(where, "codec \"" + name + "\" is not supported here (bytes, then blosc, "
+                                "zstd or gzip)");
+        }
+    }
+    if (!sawBytes) throwIoError(where, "has no \"bytes\" codec");
+}
+
 void parseV3(const json& j, ZarrArrayMeta& m, const std::string& where) {
     if (j.value("node_type", std::string()) != "array") throwIoError(where, "is not a Zarr array");
     m.shape = integers(field(j, "shape", where), "shape", where);
@@ -145,24 +168,43 @@ void parseV3(const json& j, ZarrArrayMeta& m, const std::string& where) {
         }
     }
     m.fill = parseFill(j.value("fill_value", json()), where);
-    bool sawBytes = false;
-    for (const json& codec : field(j, "codecs", where)) {
-        const std::string name = codec.is_object() ? codec.value("name", std::string()) : "";
-        const json config = codec.is_object() ? codec.value("configuration", json::object()) : json::object();
-        if (name == "bytes") {
-            sawBytes = true;
-            m.bigEndian = config.is_object() && config.value("endian", std::string("little")) == "big";
-        } else if (sawBytes && m.compressor == ZarrCompressor::None &&
-                   (name == "blosc" || name == "zstd" || name == "gzip")) {
-            m.compressor = compressorNamed(name, where);
-        } else if (name == "sharding_indexed") {
-            throwIoError(where, "is sharded (codec sharding_indexed), which is not supported yet");
-        } else {
-            throwIoError(where, "codec \"" + name + "\" is not supported here (bytes, then blosc, "
-                                "zstd or gzip)");
+    const json& codecs = field(j, "codecs", where);
+    // Sharding: the only codec, holding the chunk codecs of the inner chunks.
+    if (codecs.is_array() && !codecs.empty() && codecs[0].is_object() &&
+        codecs[0].value("name", std::string()) == "sharding_indexed") {
+        if (codecs.size() != 1) throwIoError(where, "has codecs after sharding_indexed, which is not supported");
+        const json& config = field(codecs[0], "configuration", where);
+        m.shards = m.chunks;
+        m.chunks = integers(field(config, "chunk_shape", where), "chunk_shape", where);
+        if (m.chunks.size() != m.shards.size())
+            throwIoError(where, "its inner chunk_shape and the shard shape differ in length");
+        for (size_t a = 0; a < m.chunks.size(); ++a)
+            if (m.chunks[a] < 1 || m.shards[a] < m.chunks[a] || m.shards[a] % m.chunks[a] != 0)
+                throwIoError(where, "its inner chunks " + chunkShapeText(m.chunks) + " do not divide its shards " +
+                                        chunkShapeText(m.shards));
+        uint64_t inner = 1;
+        for (size_t a = 0; a < m.chunks.size(); ++a)
+            if (__builtin_mul_overflow(inner, uint64_t(m.shards[a] / m.chunks[a]), &inner) || inner > (uint64_t(1) << 24))
+                throwIoError(where, "its shards hold more than 2^24 inner chunks each");
+        const std::string location = config.value("index_location", std::string("end"));
+        if (location != "end" && location != "start") throwIoError(where, "index_location \"" + location + "\" is not end or start");
+        m.indexAtEnd = location == "end";
+        bool indexBytes = false;
+        for (const json& codec : field(config, "index_codecs", where)) {
+            const std::string name = codec.is_object() ? codec.value("name", std::string()) : "";
+            const json c = codec.is_object() ? codec.value("configuration", json::object()) : json::object();
+            if (name == "bytes" && !indexBytes && c.is_object() && c.value("endian", std::string("little")) == "little")
+                indexBytes = true;
+            else if (name == "crc32c" && indexBytes && !m.indexCrc)
+                m.indexCrc = true;
+            else
+                throwIoError(where, "shard index codec \"" + name + "\" is not supported (bytes, little-endian, then crc32c)");
         }
+        if (!indexBytes) throwIoError(where, "its shard index has no \"bytes\" codec");
+        parseChunkCodecs(field(config, "codecs", where), m, where);
+        return;
     }
-    if (!sawBytes) throwIoError(where, "has no \"bytes\" codec");
+    parseChunkCodecs(codecs, m, where);
 }
 
 }  // namespace
@@ -170,6 +212,12 @@ void parseV3(const json& j, ZarrArrayMeta& m, const std::string& where) {
 uint64_t ZarrArrayMeta::chunkBytes() const {
     uint64_t n = fileScalarSize(type);
     for (int64_t c : chunks) n = checkedMul(n, uint64_t(c));
+    return n;
+}
+
+uint64_t ZarrArrayMeta::chunksPerShard() const {
+    uint64_t n = 1;
+    for (size_t a = 0; a < shards.size(); ++a) n = checkedMul(n, uint64_t(shards[a] / chunks[a]));
     return n;
 }
 

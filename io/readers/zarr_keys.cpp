@@ -3,6 +3,13 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <utility>
+
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "core/interrupt.h"
 #include "io/error.h"
@@ -69,6 +76,69 @@ std::optional<std::vector<unsigned char>> ZarrKeys::get(const std::string& key, 
     if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
         throwIoError(where, "cannot be read");
     return bytes;
+}
+
+ZarrKeys::Object::~Object() {
+    if (mFd >= 0) ::close(mFd);
+}
+
+ZarrKeys::Object::Object(Object&& o) noexcept
+    : mRemote(std::move(o.mRemote)), mFd(std::exchange(o.mFd, -1)), mSize(o.mSize), mWhere(std::move(o.mWhere)) {}
+
+void ZarrKeys::Object::read(uint64_t offset, size_t n, unsigned char* dst) const {
+    if (offset > mSize || n > mSize - offset)
+        throwIoError(mWhere, "has no bytes " + std::to_string(offset) + ".." + std::to_string(offset + n) + " (it has " +
+                                 std::to_string(mSize) + ")");
+    if (mRemote) {
+        mRemote->read(offset, n, dst);
+        return;
+    }
+    size_t done = 0;
+    while (done < n) {
+        const ssize_t got = ::pread(mFd, dst + done, n - done, off_t(offset + done));
+        if (got < 0 && errno == EINTR) continue;
+        if (got <= 0) throwIoError(mWhere, got < 0 ? std::string("cannot be read: ") + std::strerror(errno) : "ended early");
+        done += size_t(got);
+    }
+}
+
+std::optional<ZarrKeys::Object> ZarrKeys::open(const std::string& key, size_t headBytes) const {
+    Object o;
+    o.mWhere = where(key);
+    if (mSession) {
+        try {
+            const size_t query = mRoot.find('?');
+            const std::string url = query == std::string::npos
+                                        ? mRoot + "/" + key
+                                        : mRoot.substr(0, query) + "/" + key + mRoot.substr(query);
+            o.mRemote = std::make_unique<RemoteFile>(mSession, url, headBytes);
+        } catch (const RemoteNotFound&) {
+            return std::nullopt;
+        }
+        o.mSize = o.mRemote->size();
+        return o;
+    }
+    std::error_code ec;
+    const auto status = fs::status(o.mWhere, ec);
+    if (!fs::exists(status)) return std::nullopt;
+    if (!fs::is_regular_file(status)) throwIoError(o.mWhere, "is not a file");
+    o.mFd = ::open(o.mWhere.c_str(), O_RDONLY | O_CLOEXEC);
+    if (o.mFd < 0) throwIoError(o.mWhere, std::string("cannot be opened: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(o.mFd, &st) != 0) throwIoError(o.mWhere, std::string("cannot be read: ") + std::strerror(errno));
+    o.mSize = uint64_t(st.st_size);
+    return o;
+}
+
+void ZarrKeys::forEach(size_t n, const std::function<void(size_t)>& fn) const {
+    if (!mSession) {
+        for (size_t i = 0; i < n; ++i) {
+            throwIfInterrupted(mName);
+            fn(i);
+        }
+        return;
+    }
+    mSession->forEach(n, fn);
 }
 
 ZarrKeys::Values ZarrKeys::getAll(const std::vector<std::string>& keys, uint64_t maxBytes) const {

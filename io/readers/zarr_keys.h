@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -16,6 +17,7 @@
 
 namespace vdiso {
 
+class RemoteFile;
 class RemoteSession;
 
 class ZarrKeys {
@@ -33,6 +35,31 @@ public:
     // The key's bytes, or nullopt when there is no such key. Throws IoError naming the key when
     // it holds more than maxBytes, cannot be read, or (local) is not a file.
     std::optional<std::vector<unsigned char>> get(const std::string& key, uint64_t maxBytes) const;
+
+    // A key opened for reads of its parts (a range request each when remote; the open is one
+    // request too, which brings `headBytes` of its start).
+    class Object {
+    public:
+        ~Object();
+        Object(Object&&) noexcept;
+        uint64_t size() const { return mSize; }
+        // Bytes [offset, offset + n) into dst; throws IoError naming the key when they are not there.
+        void read(uint64_t offset, size_t n, unsigned char* dst) const;
+
+    private:
+        friend class ZarrKeys;
+        Object() = default;
+        std::unique_ptr<RemoteFile> mRemote;
+        int mFd = -1;
+        uint64_t mSize = 0;
+        std::string mWhere;
+    };
+    // The key opened, or nullopt when there is no such key.
+    std::optional<Object> open(const std::string& key, size_t headBytes) const;
+
+    // Runs fn(0) .. fn(n - 1): RemoteOptions::connections at a time when remote, in turn when
+    // local. Throws the first error.
+    void forEach(size_t n, const std::function<void(size_t)>& fn) const;
 
     // Every key's bytes (nullopt for a missing key), fetched RemoteOptions::connections at a
     // time when remote, read in turn when local. Throws the first error, as get does.

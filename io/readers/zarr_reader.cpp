@@ -5,6 +5,8 @@
 #include <cstring>
 #include <filesystem>
 #include <future>
+#include <map>
+#include <mutex>
 #include <fstream>
 #include <new>
 #include <nlohmann/json.hpp>
@@ -328,23 +330,125 @@ size_t ZarrVolume::decodedBytes() const {
 }
 
 // (-1, -1, -1): the array itself.
+// A chunk's place: its key (a sharded array's shard) and, sharded, its number in the shard.
+struct ZarrVolume::Place {
+    std::string key;
+    uint64_t inner = 0;
+};
+
+ZarrVolume::Place ZarrVolume::place(const Dims3& c) const {
+    const ZarrArrayMeta& m = mImage->meta;
+    std::vector<int64_t> index(m.shape.size(), 0);
+    for (int a = 0; a < 3; ++a) index[index.size() - 1 - size_t(a)] = c[a];
+    Place p;
+    if (!m.shards.empty())
+        for (size_t a = 0; a < index.size(); ++a) {  // C order inside the shard
+            const int64_t perShard = m.shards[a] / m.chunks[a];
+            p.inner = p.inner * uint64_t(perShard) + uint64_t(index[a] % perShard);
+            index[a] /= perShard;
+        }
+    p.key = joinZarrKey(mImage->arrayDir, m.chunkKey(index));
+    return p;
+}
+
+// (-1, -1, -1): the array itself.
 std::string ZarrVolume::where(const Dims3& c) const {
     if (c[0] < 0) return mImage->arrayDir.empty() ? mKeys->name() : mKeys->where(mImage->arrayDir);
-    std::vector<int64_t> index(mImage->meta.shape.size(), 0);
-    for (int a = 0; a < 3; ++a) index[index.size() - 1 - size_t(a)] = c[a];
-    return mKeys->where(joinZarrKey(mImage->arrayDir, mImage->meta.chunkKey(index)));
+    const Place p = place(c);
+    if (mImage->meta.shards.empty()) return mKeys->where(p.key);
+    return mKeys->where(p.key) + " (inner chunk " + std::to_string(p.inner) + ")";
 }
 
 std::vector<std::optional<std::vector<unsigned char>>> ZarrVolume::stored(const std::vector<Dims3>& chunks) const {
-    std::vector<std::string> keys;
-    keys.reserve(chunks.size());
-    std::vector<int64_t> index(mImage->meta.shape.size(), 0);
-    for (const Dims3& c : chunks) {
-        for (int a = 0; a < 3; ++a) index[index.size() - 1 - size_t(a)] = c[a];
-        keys.push_back(joinZarrKey(mImage->arrayDir, mImage->meta.chunkKey(index)));
+    const ZarrArrayMeta& m = mImage->meta;
+    std::vector<Place> places;
+    places.reserve(chunks.size());
+    for (const Dims3& c : chunks) places.push_back(place(c));
+    if (m.shards.empty()) {
+        if (places.size() == 1) return {mKeys->get(places[0].key, chunkBound(m))};
+        std::vector<std::string> keys;
+        for (const Place& p : places) keys.push_back(p.key);
+        return mKeys->getAll(keys, chunkBound(m));
     }
-    if (keys.size() == 1) return {mKeys->get(keys[0], chunkBound(mImage->meta))};
-    return mKeys->getAll(keys, chunkBound(mImage->meta));
+    // Sharded: each shard opened once, its index read (once, then kept), its inner chunks read
+    // by ranges, neighbours in the shard in one read.
+    std::vector<std::optional<std::vector<unsigned char>>> out(chunks.size());
+    std::map<std::string, std::vector<size_t>> byShard;
+    for (size_t i = 0; i < places.size(); ++i) byShard[places[i].key].push_back(i);
+    std::vector<const std::pair<const std::string, std::vector<size_t>>*> shards;
+    for (const auto& entry : byShard) shards.push_back(&entry);
+    mKeys->forEach(shards.size(), [&](size_t s) {
+        const std::string& key = shards[s]->first;
+        std::optional<ZarrKeys::Object> object = mKeys->open(key, 0);
+        if (!object) return;  // a missing shard: every inner chunk the fill value
+        const std::shared_ptr<const std::vector<uint64_t>> index = shardIndex(key, *object);
+        std::vector<size_t> wanted = shards[s]->second;
+        std::sort(wanted.begin(), wanted.end(), [&](size_t a, size_t b) {
+            return (*index)[2 * places[a].inner] < (*index)[2 * places[b].inner];
+        });
+        for (size_t k = 0; k < wanted.size();) {
+            const uint64_t first = (*index)[2 * places[wanted[k]].inner];
+            if (first == ~uint64_t(0)) {  // not stored
+                ++k;
+                continue;
+            }
+            // A run of inner chunks stored one after another.
+            uint64_t end = first + (*index)[2 * places[wanted[k]].inner + 1];
+            size_t last = k + 1;
+            while (last < wanted.size() && (*index)[2 * places[wanted[last]].inner] == end) {
+                end += (*index)[2 * places[wanted[last]].inner + 1];
+                ++last;
+            }
+            if (end - first > chunkBound(m) * (last - k))
+                throwIoError(where(chunks[wanted[k]]), "is larger than any encoding of its samples");
+            std::vector<unsigned char> run(size_t(end - first));
+            object->read(first, run.size(), run.data());
+            for (size_t j = k; j < last; ++j) {
+                const uint64_t at = (*index)[2 * places[wanted[j]].inner] - first;
+                const uint64_t n = (*index)[2 * places[wanted[j]].inner + 1];
+                out[wanted[j]].emplace(run.begin() + ptrdiff_t(at), run.begin() + ptrdiff_t(at + n));
+            }
+            k = last;
+        }
+    });
+    return out;
+}
+
+std::shared_ptr<const std::vector<uint64_t>> ZarrVolume::shardIndex(const std::string& key,
+                                                                   const ZarrKeys::Object& object) const {
+    {
+        std::lock_guard lock(mShardMutex);
+        if (auto it = mShardIndexes.find(key); it != mShardIndexes.end()) return it->second;
+    }
+    const ZarrArrayMeta& m = mImage->meta;
+    const uint64_t count = m.chunksPerShard(), bytes = m.shardIndexBytes();
+    const std::string where = mKeys->where(key);
+    if (object.size() < bytes)
+        throwIoError(where, "is " + std::to_string(object.size()) + " bytes, too short for its shard index of " +
+                                std::to_string(bytes));
+    std::vector<unsigned char> raw(static_cast<size_t>(bytes));
+    object.read(m.indexAtEnd ? object.size() - bytes : 0, raw.size(), raw.data());
+    if (m.indexCrc) {
+        uint32_t crc;
+        std::memcpy(&crc, raw.data() + count * 16, 4);
+        if (crc != crc32cOf(raw.data(), count * 16))
+            throwIoError(where, "has a damaged shard index (its CRC-32C does not match)");
+    }
+    auto index = std::make_shared<std::vector<uint64_t>>(size_t(2 * count));
+    std::memcpy(index->data(), raw.data(), size_t(count * 16));
+    // Every stored inner chunk lies among the shard's chunk bytes, outside its index.
+    const uint64_t lo = m.indexAtEnd ? 0 : bytes, hi = m.indexAtEnd ? object.size() - bytes : object.size();
+    for (uint64_t i = 0; i < count; ++i) {
+        const uint64_t offset = (*index)[2 * i], n = (*index)[2 * i + 1];
+        if (offset == ~uint64_t(0) && n == ~uint64_t(0)) continue;
+        if (offset < lo || offset > hi || n > hi - offset || n == 0)
+            throwIoError(where, "has a damaged shard index: inner chunk " + std::to_string(i) + " at bytes " +
+                                    std::to_string(offset) + " + " + std::to_string(n) + ", outside its chunks' bytes " +
+                                    std::to_string(lo) + ".." + std::to_string(hi));
+    }
+    std::lock_guard lock(mShardMutex);
+    mShardIndexes.emplace(key, index);
+    return index;
 }
 
 void ZarrVolume::decode(const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes,

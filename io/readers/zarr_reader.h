@@ -16,17 +16,19 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "io/remote/remote_options.h"
 #include "io/readers/slice_reader.h"
+#include "io/readers/zarr_keys.h"
+#include "io/remote/remote_options.h"
 
 namespace vdiso {
 
-class ZarrKeys;
 struct ZarrArrayMeta;
 
 // What pins a chunk to the bytes indexed (vdiso index): its stored size and their CRC-32;
@@ -40,6 +42,7 @@ struct ZarrChunkPin {
 
 // A Zarr volume's array, read a chunk at a time by its position in the chunk grid (x, y, z,
 // the spatial axes; leading axes of size 1 are index 0). Safe to use from several threads.
+// A sharded array's chunks are its inner chunks, read by ranges of their shard.
 class ZarrVolume {
 public:
     // Opens `path` (a folder or URL) at `level` as openZarrVolume does; throws IoError alike.
@@ -79,12 +82,19 @@ public:
 
 private:
     struct Image;
+    struct Place;
+    Place place(const Dims3& c) const;
+    // A shard's index, (offset, size) per inner chunk, read and checked once.
+    std::shared_ptr<const std::vector<uint64_t>> shardIndex(const std::string& key, const ZarrKeys::Object& object) const;
+
     std::unique_ptr<ZarrKeys> mKeys;
     std::unique_ptr<Image> mImage;
     std::string mName;
     VolumeInfo mInfo;
     Dims3 mChunkShape{}, mChunkCounts{};
     uint32_t mMetadataCrc = 0;
+    mutable std::mutex mShardMutex;
+    mutable std::map<std::string, std::shared_ptr<const std::vector<uint64_t>>> mShardIndexes;
 };
 
 // Throws IoError naming the store (and the chunk, for chunk errors) on any problem; for a level
