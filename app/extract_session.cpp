@@ -9,6 +9,7 @@
 #include "core/extract/extract_view.h"
 #include "core/lod/level_source.h"
 #include "core/orientation.h"
+#include "io/store/external_bricks.h"
 #include "app/extract_stats_json.h"
 #include "io/process_stats.h"
 #include "io/remote/remote_file.h"
@@ -34,7 +35,7 @@ ExtractSession::ExtractSession(const BrickStoreReader& store, ExtractSettings se
 
 void ExtractSession::reconfigure(ExtractSettings settings) {
     checked(settings, mStore);  // before anything changes: a bad setting leaves the session as it was
-    if (store().remote())
+    if (store().readsRemotely())
         adaptToRemoteStore(settings);
     else
         adaptToLocalStore(settings, machineThreads());
@@ -135,6 +136,11 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
         s.add("remote_requests", remote->requests()).add("remote_bytes", remote->bytesFetched());
         s.add("remote_stragglers", remote->stragglers());
         s.add("disk_cache_hits", remote->diskCacheHits()).add("disk_cache_bytes", remote->diskCacheBytes());
+    }
+    // An index: the indexed array's chunks read, as stored, and its requests when remote.
+    if (const ExternalBricks* external = store.external()) {
+        s.add("chunks_read", external->chunksRead()).add("chunk_bytes_read", external->chunkBytesRead());
+        s.add("chunk_requests", external->requests());
     }
     s.add("prefetch", f.plan.threads > 1 && !isViewDependent(o.method) ? 0 : f.plan.prefetchBricks);
     s.add("readers", o.readers);

@@ -44,7 +44,7 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
     // Open, partition and extract this rank's part.
     runPhase(comm, [&] {
         store.emplace(options.store, StoreOpenOptions{options.cold ? ReadMode::Cold : ReadMode::Buffered, options.remote});
-        if (store->remote()) adaptToRemoteStore(s);  // read-ahead as vdiso extract's session sets it
+        if (store->readsRemotely()) adaptToRemoteStore(s);  // read-ahead as vdiso extract's session sets it
         cache.emplace(*store, uint64_t(s.cacheMb) << 20);
         level.emplace(*cache, 0);
         const CachePlan plan = planCache(s, *cache, s.threads);

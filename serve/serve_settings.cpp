@@ -19,7 +19,7 @@ SessionSettings sessionSettings(const ServeOptions& o, StoreCatalog& stores) {
     s.view.lodError = o.lodError;
     s.outboxBytes = o.outboxBytes;
     for (size_t i = 0; i < stores.size(); ++i)
-        if (stores[i].reader->remote()) {
+        if (stores[i].reader->readsRemotely()) {
             adaptToRemoteStore(s.view);
             break;
         }
@@ -33,7 +33,7 @@ int frameSlots(StoreCatalog& stores, const SessionSettings& settings) {
     // a whole final one. Where bricks come over the network a frame mostly waits: four a core.
     const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
     bool remote = false;
-    for (size_t i = 0; i < stores.size(); ++i) remote = remote || stores[i].reader->remote() != nullptr;
+    for (size_t i = 0; i < stores.size(); ++i) remote = remote || stores[i].reader->readsRemotely();
     const int perCore = remote ? 4 : 1;
     int slots = std::max(2, perCore * cores);
     for (size_t i = 0; i < stores.size(); ++i) {

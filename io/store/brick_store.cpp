@@ -106,6 +106,8 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     }
 }
 
+bool BrickStoreReader::readsRemotely() const { return remote() || (mExternal && mExternal->isRemote()); }
+
 std::span<const SubBlockCode> BrickStoreReader::subBlockCodes() const {
     if (mLazyIndex) mLazyIndex->need(mCodesAt, mLazyIndex->rawBytes());
     return mSubBlocks;

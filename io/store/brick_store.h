@@ -86,6 +86,9 @@ public:
     const RemoteFile* remote() const { return mSource->remote(); }
     // The indexed array of an index (vdiso index), or null for a store holding its data.
     const ExternalBricks* external() const { return mExternal.get(); }
+    // Whether bricks come over the network (the store, or the array an index indexes, at a
+    // URL): read-ahead is set for round trips then (app/extract_settings.h adaptToRemoteStore).
+    bool readsRemotely() const;
     // Bytes one decoded brick takes: (B+3)^3 samples.
     size_t brickBytes() const { return size_t(mLayout.samplesPerBrick()) * scalarSize(volume().type); }
 

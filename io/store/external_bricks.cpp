@@ -151,6 +151,9 @@ ExternalBricks::~ExternalBricks() = default;
 const std::string& ExternalBricks::name() const { return mImpl->array.name(); }
 uint64_t ExternalBricks::chunksRead() const { return mImpl->chunksRead.load(); }
 uint64_t ExternalBricks::chunkBytesRead() const { return mImpl->chunkBytesRead.load(); }
+bool ExternalBricks::isRemote() const { return mImpl->array.isRemote(); }
+uint64_t ExternalBricks::requests() const { return mImpl->array.requests(); }
+uint64_t ExternalBricks::bytesFetched() const { return mImpl->array.bytesFetched(); }
 
 void ExternalBricks::assemble(int64_t id, unsigned char* dst) const {
     Impl& m = *mImpl;

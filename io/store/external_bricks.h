@@ -35,6 +35,10 @@ public:
     // Chunks fetched and decoded so far; bytes of them as stored.
     uint64_t chunksRead() const;
     uint64_t chunkBytesRead() const;
+    // Whether the array is at a URL; its requests and the bytes they brought (0 for a folder).
+    bool isRemote() const;
+    uint64_t requests() const;
+    uint64_t bytesFetched() const;
 
 private:
     struct Impl;

@@ -235,7 +235,7 @@ int runView(const Communicator& comm, const MpiExtractOptions& m) {
         cache.emplace(*store, o.cacheMb << 20);
         camera = vdiso::cli::extractCameras(o, store->volume(), view).front();
         vdiso::ExtractSettings settings = o;
-        if (store->remote()) vdiso::adaptToRemoteStore(settings);  // read-ahead as vdiso extract's session sets it
+        if (store->readsRemotely()) vdiso::adaptToRemoteStore(settings);  // read-ahead as vdiso extract's session sets it
         run.view = vdiso::viewExtractOptions(settings, vdiso::planCache(settings, *cache, settings.threads));
         run.partition = m.partition;
         run.exchangeBricks = m.exchangeBricks;
