@@ -1,6 +1,7 @@
 // Where a Zarr hierarchy's keys (metadata documents and chunks) are read from: a local folder,
 // or a prefix over HTTP(S) or S3 (https://HOST/PATH.zarr, s3://BUCKET/PATH.zarr) whose keys
-// are objects. Remote keys are fetched whole, as ranged GETs of at most the bound the caller
+// are objects. A key is fetched whole (get, getAll) or opened for reads of its parts (open: a
+// shard's index and inner chunks). Remote keys are fetched as ranged GETs of at most the bound the caller
 // gives (io/remote/remote_file.h: retries, timeouts, signing), through one RemoteSession so
 // their connections are reused, RemoteOptions::connections at a time; an object that does not
 // exist (404) is a missing key, as a missing file is.
