@@ -21,9 +21,13 @@
 #include "io/store/brick_store.h"
 #include "io/store/external_bricks.h"
 #include "io/store/zarr_index.h"
+#include "serve/protocol.h"
+#include "serve/viewer_client.h"
 #include "tests/loopback_servers.h"
 #include "tests/mesh_test_readers.h"
+#include "tests/mpi_test_util.h"
 #include "tests/reader_test_util.h"
+#include "tests/serve_test_util.h"
 #include "tests/test_util.h"
 #include "tests/zarr_test_util.h"
 
@@ -222,11 +226,44 @@ TEST_F(ZarrIndex, FromTheCommandLine) {
         EXPECT_GT(test::readFile(a).size(), 10000u) << method;
         EXPECT_EQ(test::readFile(a), test::readFile(b)) << method;
     }
+#ifdef VDISO_MPI_COMMAND
+    // vdiso-mpi opens the folder like a store too: 3 ranks make the single process's mesh.
+    r = test::runMpi(3, "extract " + path("img.zarr") + " --iso 1000.5 --method octree --quiet -o " + path("mpi.ply"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(test::readFile(path("mpi.ply")), test::readFile(path("b_octree.ply")));
+#endif
     r = test::runVdiso("index " + path("img.zarr") + " --index http://127.0.0.1:1/x.vdiso");
     EXPECT_EQ(r.exitCode, 2) << r.output;
     r = test::runVdiso("index " + path("nothing.zarr"));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("nothing.zarr"), std::string::npos) << r.output;
+}
+
+// vdiso serve opens the indexed folder like a store: a view's frame is the converted store's.
+TEST_F(ZarrIndex, ServedLikeTheConvertedStore) {
+    test::writeArray(path("img.zarr"), ballArray(3, {16, 16, 16}, test::Codec::Zstd));
+    ASSERT_EQ(test::runVdiso("index " + path("img.zarr") + " --brick 8 --quiet").exitCode, 0);
+    ASSERT_EQ(test::runVdiso("convert " + path("img.zarr") + " " + path("img.vdiso") + " --brick 8 --quiet").exitCode, 0);
+    const std::string token = "0123456789abcdef0123";
+    auto frame = [&](const std::string& store) {
+        test::ServeProcess serve({store, "--port", "0", "--threads", "1", "--token", token, "--iso", "1000.5"});
+        EXPECT_NE(serve.port(), 0) << "the server did not start on " << store;
+        if (!serve.port()) return std::string();
+        const BrickStoreReader local(path("img.vdiso"));
+        const VolumeInfo& v = local.volume();
+        Camera camera = presetCamera(ViewPreset::Normal, v.origin, v.worldMax(), 256, 256);
+        serve::ViewerClient viewer("127.0.0.1", serve.port(), token);
+        const serve::ClientFrame f = viewer.requestFrame(serve::viewMessage(camera, 1, 0, 1000.5));
+        EXPECT_EQ(f.status, "complete") << f.frameEnd;
+        EXPECT_GT(f.binaryBytes, 0u) << store;
+        const size_t at = f.frameEnd.find("\"triangles\"");
+        return at == std::string::npos ? f.frameEnd : f.frameEnd.substr(at, f.frameEnd.find_first_of(",}", at) - at);
+    };
+    const std::string a = frame(path("img.zarr")), b = frame(path("img.vdiso"));
+    EXPECT_NE(a.find("triangles"), std::string::npos) << a;
+    EXPECT_EQ(a, b);
+    ASSERT_NE(a.find(':'), std::string::npos) << a;
+    EXPECT_GT(std::stoull(a.substr(a.find(':') + 1)), 1000u) << a;  // a surface, not an empty frame
 }
 
 // A shard's index is checked before its offsets are used: entries outside the shard's chunk
