@@ -305,11 +305,13 @@ TEST_F(ZarrIndex, HostileShardIndexesAreRefused) {
 }
 
 // Data at a URL, its index a local file: over nginx (HTTP, Zarr v2) and the S3 server whose
-// signature check is botocore's (Zarr v3), the same meshes as the converted store's; a chunk
+// signature check is botocore's (Zarr v3, sharded), the same meshes as the converted store's; a chunk
 // changed at the server is refused naming its URL.
 TEST_F(ZarrIndex, DataAtAUrlIndexedIntoALocalFile) {
     test::writeArray(path("srv/bkt/v2.zarr"), ballArray(2, {16, 16, 16}, test::Codec::Blosc));
-    test::writeArray(path("srv/bkt/v3.zarr"), ballArray(3, {10, 10, 10}, test::Codec::Zstd));
+    test::ArraySpec sharded = ballArray(3, {10, 10, 10}, test::Codec::Zstd);
+    sharded.shard = {20, 20, 20};  // read by ranges: the shard's index, then its inner chunks
+    test::writeArray(path("srv/bkt/v3.zarr"), sharded);
     auto extract = [&](const std::string& env, const std::string& store, const std::string& out) {
         const auto r = test::runCommand(env + VDISO_BINARY + " extract '" + store + "' --iso 1000.5 --method sage -o " +
                                         path(out));
