@@ -20,6 +20,7 @@
 #include "io/readers/zarr_reader.h"
 #include "io/store/brick_store.h"
 #include "io/store/external_bricks.h"
+#include "io/store/external_level.h"
 #include "io/store/zarr_index.h"
 #include "serve/protocol.h"
 #include "serve/viewer_client.h"
@@ -237,6 +238,29 @@ TEST_F(ZarrIndex, FromTheCommandLine) {
     r = test::runVdiso("index " + path("nothing.zarr"));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("nothing.zarr"), std::string::npos) << r.output;
+}
+
+// A record whose checksum holds but whose fields do not: refused as damaged, never trusted.
+TEST(ZarrIndexRecord, InconsistentRecordsAreRefused) {
+    ExternalLevel e;
+    e.location = "x.zarr";
+    e.chunkShape = {4, 4, 4};
+    e.chunkCounts = {2, 2, 2};
+    e.pins.resize(8);
+    std::vector<unsigned char> good = encodeExternalLevel(e);
+    EXPECT_EQ(decodeExternalLevel(good.data(), good.size(), "i.vdiso").pins.size(), 8u);
+    e.pins.resize(7);  // fewer pins than chunks
+    std::vector<unsigned char> bytes = encodeExternalLevel(e);
+    expectIoError([&] { decodeExternalLevel(bytes.data(), bytes.size(), "i.vdiso"); }, {"i.vdiso", "damaged", "chunk count"});
+    e.pins.resize(8);
+    e.chunkCounts = {int64_t(1) << 31, int64_t(1) << 31, int64_t(1) << 31};  // a product beyond 64 bits
+    bytes = encodeExternalLevel(e);
+    expectIoError([&] { decodeExternalLevel(bytes.data(), bytes.size(), "i.vdiso"); }, {"i.vdiso", "damaged"});
+    e.chunkCounts = {2, 2, 2};
+    e.level = -1;
+    bytes = encodeExternalLevel(e);
+    expectIoError([&] { decodeExternalLevel(bytes.data(), bytes.size(), "i.vdiso"); }, {"i.vdiso", "out of range"});
+    expectIoError([&] { decodeExternalLevel(good.data(), 20, "i.vdiso"); }, {"i.vdiso", "damaged"});
 }
 
 // vdiso serve opens the indexed folder like a store: a view's frame is the converted store's.

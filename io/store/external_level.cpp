@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "core/checked_math.h"
 #include "io/crc32.h"
 #include "io/error.h"
 #include "io/remote/remote_file.h"
@@ -74,23 +73,27 @@ ExternalLevel decodeExternalLevel(const unsigned char* bytes, size_t n, const st
     try {
         const nlohmann::json j = nlohmann::json::parse(bytes + at, bytes + at + jsonBytes);
         if (j.at("kind").get<std::string>() != "zarr") damaged("kind " + j.at("kind").dump());
+        // Integers checked as JSON before conversion: nlohmann converts a float unchecked.
+        auto integer = [&](const nlohmann::json& v, int64_t lo, int64_t hi) {
+            if (!v.is_number_integer() || v.get<int64_t>() < lo || v.get<int64_t>() > hi) damaged("a field out of range");
+            return v.get<int64_t>();
+        };
         e.location = j.at("location").get<std::string>();
-        e.level = j.at("level").get<int>();
-        e.metadataCrc = j.at("metadata_crc").get<uint32_t>();
+        e.level = int(integer(j.at("level"), 0, 64));
+        e.metadataCrc = uint32_t(integer(j.at("metadata_crc"), 0, 0xffffffffll));
         for (int a = 0; a < 3; ++a) {
-            e.chunkShape[a] = j.at("chunk_shape").at(size_t(a)).get<int64_t>();
-            e.chunkCounts[a] = j.at("chunk_counts").at(size_t(a)).get<int64_t>();
-            if (e.chunkShape[a] < 1 || e.chunkCounts[a] < 1 || e.chunkCounts[a] > (int64_t(1) << 31))
-                damaged("chunk grid");
+            e.chunkShape[a] = integer(j.at("chunk_shape").at(size_t(a)), 1, int64_t(1) << 40);
+            e.chunkCounts[a] = integer(j.at("chunk_counts").at(size_t(a)), 1, int64_t(1) << 31);
         }
     } catch (const nlohmann::json::exception& ex) {
         damaged(ex.what());
     }
     at += jsonBytes;
     const uint64_t count = get<uint64_t>(bytes, at);
-    const uint64_t expected = checkedMul(checkedMul(uint64_t(e.chunkCounts[0]), uint64_t(e.chunkCounts[1])),
-                                         uint64_t(e.chunkCounts[2]));
-    if (count != expected || count > (n - at - 4) / kPinBytes || (n - at - 4) != count * kPinBytes)
+    // The grid's product, compared without overflow: the record is the file's word.
+    const unsigned __int128 expected = (unsigned __int128)e.chunkCounts[0] * uint64_t(e.chunkCounts[1]) *
+                                       uint64_t(e.chunkCounts[2]);
+    if (expected != count || count > (n - at - 4) / kPinBytes || (n - at - 4) != count * kPinBytes)
         damaged("its chunk count does not match its chunk grid");
     e.pins.resize(size_t(count));
     for (ZarrChunkPin& pin : e.pins) {
