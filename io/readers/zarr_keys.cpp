@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <utility>
 
 #include <cerrno>
@@ -40,41 +39,16 @@ std::string ZarrKeys::where(const std::string& key) const {
     return mSession ? mName + "/" + key : (fs::path(mRoot) / key).string();
 }
 
+// Opened with maxBytes + 1 of its head, a remote key within the bound is fetched whole in the
+// open's one request.
 std::optional<std::vector<unsigned char>> ZarrKeys::get(const std::string& key, uint64_t maxBytes) const {
-    const std::string where = this->where(key);
-    auto tooLarge = [&](uint64_t size) {
-        throwIoError(where, "is " + std::to_string(size) + " bytes, more than the " +
-                                std::to_string(maxBytes) + " it may hold");
-    };
-    std::vector<unsigned char> bytes;
-    if (mSession) {
-        std::optional<RemoteFile> object;
-        try {
-            // The query (a presigned URL's signature) stays on the root, not the key.
-            const size_t query = mRoot.find('?');
-            const std::string url = query == std::string::npos
-                                        ? mRoot + "/" + key
-                                        : mRoot.substr(0, query) + "/" + key + mRoot.substr(query);
-            object.emplace(mSession, url, size_t(std::min<uint64_t>(maxBytes, SIZE_MAX - 1) + 1));
-        } catch (const RemoteNotFound&) {
-            return std::nullopt;
-        }
-        if (object->size() > maxBytes) tooLarge(object->size());
-        bytes.resize(size_t(object->size()));
-        object->read(0, bytes.size(), bytes.data());
-        return bytes;
-    }
-    std::error_code ec;
-    const auto status = fs::status(where, ec);
-    if (!fs::exists(status)) return std::nullopt;
-    if (!fs::is_regular_file(status)) throwIoError(where, "is not a file");
-    const uint64_t size = fs::file_size(where, ec);
-    if (ec) throwIoError(where, "cannot be read: " + ec.message());
-    if (size > maxBytes) tooLarge(size);
-    bytes.resize(size_t(size));
-    std::ifstream in(where, std::ios::binary);
-    if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
-        throwIoError(where, "cannot be read");
+    const std::optional<Object> object = open(key, size_t(std::min<uint64_t>(maxBytes, SIZE_MAX - 1) + 1));
+    if (!object) return std::nullopt;
+    if (object->size() > maxBytes)
+        throwIoError(where(key), "is " + std::to_string(object->size()) + " bytes, more than the " +
+                                     std::to_string(maxBytes) + " it may hold");
+    std::vector<unsigned char> bytes(size_t(object->size()));
+    object->read(0, bytes.size(), bytes.data());
     return bytes;
 }
 
@@ -107,6 +81,7 @@ std::optional<ZarrKeys::Object> ZarrKeys::open(const std::string& key, size_t he
     o.mWhere = where(key);
     if (mSession) {
         try {
+            // The query (a presigned URL's signature) stays on the root, not the key.
             const size_t query = mRoot.find('?');
             const std::string url = query == std::string::npos
                                         ? mRoot + "/" + key

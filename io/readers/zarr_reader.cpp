@@ -222,7 +222,7 @@ public:
     // A remote array is no file an output could overwrite.
     std::vector<std::string> files() const override {
         if (mVolume->isRemote()) return {};
-        return {mVolume->where({-1, -1, -1})};
+        return {mVolume->arrayName()};
     }
 
 private:
@@ -305,8 +305,7 @@ ZarrVolume::ZarrVolume(const std::string& path, int level, const RemoteOptions& 
     : mKeys(std::make_unique<ZarrKeys>(path, remote)), mImage(std::make_unique<Image>()) {
     static_cast<ZarrImage&>(*mImage) = locate(*mKeys, level);
     const ZarrArrayMeta& m = mImage->meta;
-    const std::string arrayWhere = mImage->arrayDir.empty() ? mKeys->name() : mKeys->where(mImage->arrayDir);
-    mInfo.dims = spatialDims(m, arrayWhere);
+    mInfo.dims = spatialDims(m, arrayName());
     requireVolumeDims(mKeys->name(), mInfo.dims);
     mInfo.type = storeTypeFor(m.type, false);
     mInfo.spacing = mImage->spacing;
@@ -329,7 +328,6 @@ size_t ZarrVolume::decodedBytes() const {
     return size_t(mChunkShape[0] * mChunkShape[1] * mChunkShape[2]) * scalarSize(mInfo.type);
 }
 
-// (-1, -1, -1): the array itself.
 // A chunk's place: its key (a sharded array's shard) and, sharded, its number in the shard.
 struct ZarrVolume::Place {
     std::string key;
@@ -351,9 +349,11 @@ ZarrVolume::Place ZarrVolume::place(const Dims3& c) const {
     return p;
 }
 
-// (-1, -1, -1): the array itself.
+std::string ZarrVolume::arrayName() const {
+    return mImage->arrayDir.empty() ? mKeys->name() : mKeys->where(mImage->arrayDir);
+}
+
 std::string ZarrVolume::where(const Dims3& c) const {
-    if (c[0] < 0) return mImage->arrayDir.empty() ? mKeys->name() : mKeys->where(mImage->arrayDir);
     const Place p = place(c);
     if (mImage->meta.shards.empty()) return mKeys->where(p.key);
     return mKeys->where(p.key) + " (inner chunk " + std::to_string(p.inner) + ")";

@@ -62,7 +62,9 @@ public:
     // CRC-32 of the array's metadata document (.zarray or zarr.json).
     uint32_t metadataCrc() const { return mMetadataCrc; }
     bool isRemote() const;
-    // The chunk's key as messages show it ("ROOT/0/c/0/1/2").
+    // The array's folder or URL as messages show it ("ROOT/0").
+    std::string arrayName() const;
+    // The chunk's key as messages show it ("ROOT/0/c/0/1/2"; a shard's, with the inner chunk).
     std::string where(const Dims3& c) const;
 
     // The chunks' stored bytes (nullopt where missing), fetched in parallel when remote.
