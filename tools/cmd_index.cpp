@@ -1,9 +1,8 @@
+#include <algorithm>
 #include <cstdio>
 
 #include "cli/args.h"
 #include "cli/progress_bar.h"
-#include "io/remote/remote_file.h"
-#include "io/store/external_level.h"
 #include "io/store/zarr_index.h"
 #include "tools/commands.h"
 
@@ -58,11 +57,7 @@ int runIndex(int argc, char** argv) {
         }
     }
     if (data.empty()) throw UsageError("expects DATA, a Zarr array or OME-Zarr image");
-    if (index.empty()) {
-        if (isRemoteLocation(data)) throw UsageError("DATA is a URL: say where its index goes with --index OUT");
-        index = defaultIndexPath(data);
-    }
-    if (isRemoteLocation(index)) throw UsageError("--index: the index is written to a local file");
+    index = indexPathFor(data, index);
     const ZarrIndexSummary s = indexZarr(data, index, options, progressBar("index", 0, quiet));
     if (!quiet) {
         const double ratio = double(s.store.fileBytes) / double(std::max<uint64_t>(s.dataBytes, 1));

@@ -1,9 +1,20 @@
 #include "io/store/zarr_index.h"
 
+#include "core/settings_error.h"
 #include "io/readers/zarr_reader.h"
+#include "io/remote/remote_file.h"
 #include "io/store/external_level.h"
 
 namespace vdiso {
+
+std::string indexPathFor(const std::string& dataPath, const std::string& indexPath) {
+    if (isRemoteLocation(indexPath))
+        throw SettingsError("index", "expects a local file: an index is written here, then read from anywhere");
+    if (!indexPath.empty()) return indexPath;
+    if (isRemoteLocation(dataPath))
+        throw SettingsError("index", "expects the index's path: data at a URL has no folder beside it here");
+    return defaultIndexPath(dataPath);
+}
 
 ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& indexPath, const ZarrIndexOptions& options,
                            const ProgressFn& progress) {

@@ -28,6 +28,11 @@ struct ZarrIndexSummary {
     uint64_t dataBytes = 0;    // the array's chunks as stored
 };
 
+// Where the index of `dataPath` goes: `indexPath` when given, else beside local data
+// (DATA.vdiso, io/store/external_level.h). Throws SettingsError("index", ...) for data at a URL
+// without an index path, and for an index path that is a URL (an index is written locally).
+std::string indexPathFor(const std::string& dataPath, const std::string& indexPath);
+
 // Indexes the array at `dataPath` (a folder or URL) into `indexPath` (a local file). Throws as
 // writeBrickStore does (no output left, an existing one untouched).
 ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& indexPath, const ZarrIndexOptions& options,

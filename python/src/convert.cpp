@@ -11,7 +11,6 @@
 #include "core/settings_error.h"
 #include "io/error.h"
 #include "io/readers/slice_reader.h"
-#include "io/store/external_level.h"
 #include "io/store/store_writer.h"
 #include "io/store/zarr_index.h"
 #include "io/readers/volume_open.h"
@@ -156,7 +155,7 @@ pyb::dict indexData(const std::string& data, const std::string& index, int64_t l
     ZarrIndexOptions options;
     options.level = int(checkedInt("scale_level", level, 0, 64));
     options.store = storeOptions(brick, levels, "lz4", overwrite);
-    const std::string out = index.empty() ? defaultIndexPath(data) : index;
+    const std::string out = indexPathFor(data, index);
     ZarrIndexSummary summary;
     runReleased([&](const ProgressFn& fraction) { summary = indexZarr(data, out, options, fraction); }, progress, 0.0);
     pyb::dict d = summaryOf(summary.store);

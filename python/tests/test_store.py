@@ -379,5 +379,5 @@ def test_an_indexed_zarr_opens_in_place_like_its_converted_store(tmp_path):
         assert np.array_equal(mine.vertices, theirs.vertices) and np.array_equal(mine.faces, theirs.faces)
     with pytest.raises(FileExistsError):
         vdiso.index(data, brick=8)
-    with pytest.raises(vdiso.Error):
+    with pytest.raises(ValueError, match="index expects the index's path"):
         vdiso.index("s3://bucket/head.zarr")

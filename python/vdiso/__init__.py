@@ -250,8 +250,6 @@ def index(data, index=None, *, scale_level=0, brick=32, levels="auto", overwrite
     data + ".vdiso") or vdiso.open(index) reads it like a store, without a converted copy.
     Returns what was written: the index's path and bytes ("index", "file_bytes"), the chunks
     indexed, and the data's bytes as stored ("data_bytes")."""
-    if index is None and "://" in str(data):
-        raise Error(f"{data}: a URL's index needs a local path: vdiso.index(data, index=...)")
     return _vdiso._index(str(data), "" if index is None else str(index), _int(scale_level, "scale_level"),
                          _int(brick, "brick"), str(levels), bool(overwrite), progress)
 
