@@ -130,30 +130,35 @@ std::string compareStoreWithSamples(const BrickStoreReader& store,
             store.readBrick(first + id, brick.data());
             const Dims3 c = l.brickCoord(id);
             const T* s = reinterpret_cast<const T*>(brick.data());
+            // Per axis, once a brick: each local sample's clamped volume coordinate, and
+            // whether it is a corner of one of the brick's own cells.
+            std::array<std::vector<int64_t>, 3> at;
+            std::array<std::vector<char>, 3> corner;
+            for (int a = 0; a < 3; ++a)
+                for (int k = 0; k < l.side(); ++k) {
+                    at[size_t(a)].push_back(l.clampSample(a, l.firstSample(c[size_t(a)]) + k));
+                    corner[size_t(a)].push_back(k >= 1 && k <= 1 + l.cellsOnAxis(a, c[size_t(a)]));
+                }
             double lo = INFINITY, hi = -INFINITY;
             for (int lz = 0; lz < l.side(); ++lz)
-                for (int ly = 0; ly < l.side(); ++ly)
+                for (int ly = 0; ly < l.side(); ++ly) {
+                    const T* expectedRow = volume + d[0] * (at[1][size_t(ly)] + d[1] * at[2][size_t(lz)]);
+                    const T* gotRow = s + (size_t(lz) * l.side() + ly) * l.side();
+                    const bool cornerRow = corner[1][size_t(ly)] && corner[2][size_t(lz)];
                     for (int lx = 0; lx < l.side(); ++lx) {
-                        const int64_t x = l.clampSample(0, l.firstSample(c[0]) + lx);
-                        const int64_t y = l.clampSample(1, l.firstSample(c[1]) + ly);
-                        const int64_t z = l.clampSample(2, l.firstSample(c[2]) + lz);
-                        const T expected = volume[x + d[0] * (y + d[1] * z)];
-                        const T got = s[(size_t(lz) * l.side() + ly) * l.side() + lx];
+                        const T expected = expectedRow[at[0][size_t(lx)]];
+                        const T got = gotRow[lx];
                         const bool bothNaN = got != got && expected != expected;
                         if (std::memcmp(&got, &expected, sizeof(T)) != 0 && !bothNaN)
-                            return "brick " + std::to_string(id) + " sample " +
-                                   std::to_string(lx) + "," + std::to_string(ly) + "," +
-                                   std::to_string(lz) + ": " + std::to_string(double(got)) +
-                                   " != " + std::to_string(double(expected));
-                        const bool corner = lx >= 1 && ly >= 1 && lz >= 1 &&
-                                            lx <= 1 + l.cellsOnAxis(0, c[0]) &&
-                                            ly <= 1 + l.cellsOnAxis(1, c[1]) &&
-                                            lz <= 1 + l.cellsOnAxis(2, c[2]);
-                        if (corner) {
+                            return "brick " + std::to_string(id) + " sample " + std::to_string(lx) + "," +
+                                   std::to_string(ly) + "," + std::to_string(lz) + ": " +
+                                   std::to_string(double(got)) + " != " + std::to_string(double(expected));
+                        if (cornerRow && corner[0][size_t(lx)]) {
                             lo = std::min(lo, double(expected));
                             hi = std::max(hi, double(expected));
                         }
                     }
+                }
             const BrickEntry& e = store.index()[size_t(first + id)];
             if (double(e.minValue) != double(float(lo)) || double(e.maxValue) != double(float(hi)))
                 return "brick " + std::to_string(id) + " index range [" +
