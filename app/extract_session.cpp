@@ -114,7 +114,7 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
     const BrickStoreReader& store = mStore;
     const VolumeInfo& volume = store.volume();
     JsonObject s;
-    addFrameHeader(s, o, store, f.plan.threads, stats, uint64_t(f.points.size()), meshWritten);
+    addFrameHeader(s, o, frameSourceOf(store), f.plan.threads, stats, uint64_t(f.points.size()), meshWritten);
     s.add("mesh_streamed", f.streamed);
     if (const auto& post = f.post) {
         s.add("smooth", o.post.smoothIterations).add("decimate", o.post.decimateRatio);

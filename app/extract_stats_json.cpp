@@ -4,19 +4,23 @@
 
 namespace vdiso {
 
-void addFrameHeader(JsonObject& s, const ExtractSettings& o, const BrickStoreReader& store, int threads,
+FrameSource frameSourceOf(const BrickStoreReader& store) {
+    return {store.path(), store.header().levelCount, store.volume().hasOrientation};
+}
+
+void addFrameHeader(JsonObject& s, const ExtractSettings& o, const FrameSource& source, int threads,
                     const ExtractStats& stats, uint64_t points, bool meshWritten) {
-    s.add("file", store.path()).add("method", o.method).add("iso", *o.iso);
+    s.add("file", source.file).add("method", o.method).add("iso", *o.iso);
     s.add("metacell", o.metaCellSize).add("threads", threads);
     if (isViewDependent(o.method))
         s.add("lod_error", o.lodError).add("coarse_bricks", stats.view.coarseBricks)
             .add("capped_faces", stats.view.cappedFaces);
     else
         s.add("level", o.level);
-    s.add("levels", store.header().levelCount);
+    s.add("levels", source.levels);
     if (meshWritten)
         s.add("mesh_space",
-              o.physicalMeshes.value_or(true) && store.volume().hasOrientation ? "physical" : "volume");
+              o.physicalMeshes.value_or(true) && source.hasOrientation ? "physical" : "volume");
     s.add("triangles", stats.triangles).add("points", points).add("vertices", stats.vertices);
 }
 

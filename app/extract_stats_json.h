@@ -12,10 +12,18 @@
 
 namespace vdiso {
 
+// The store a frame came from, as its statistics name it.
+struct FrameSource {
+    std::string file;
+    int levels = 1;
+    bool hasOrientation = false;
+};
+FrameSource frameSourceOf(const BrickStoreReader& store);
+
 // What every frame's statistics open with: file, method, iso, metacell, threads; lod_error,
 // coarse_bricks and capped_faces (sage, wise) or level (octree, noise); levels; mesh_space
 // when a mesh or points were written; triangles, points, vertices.
-void addFrameHeader(JsonObject& s, const ExtractSettings& o, const BrickStoreReader& store, int threads,
+void addFrameHeader(JsonObject& s, const ExtractSettings& o, const FrameSource& source, int threads,
                     const ExtractStats& stats, uint64_t points, bool meshWritten);
 
 // The traversal's counts: bricks_active, nodes_visited, meta_cells_active, cells_active, and

@@ -100,17 +100,16 @@ RanksExtractResult extractOctreeAcrossRanks(const Communicator& comm, const Rank
 
     RanksExtractResult result;
     result.ranks = comm.size();
-    result.triangles = numbering.totalTriangles;
-    result.vertices = numbering.totalVertices;
-    result.bricksActive = int64_t(partition.bricks.size());
-    result.nodesVisited = stats.nodesVisited;
-    result.metaCellsActive = comm.sum(uint64_t(stats.metaCellsActive));
-    result.cellsActive = comm.sum(uint64_t(stats.cellsActive));
+    result.stats.triangles = numbering.totalTriangles;
+    result.stats.vertices = numbering.totalVertices;
+    result.stats.bricksActive = int64_t(partition.bricks.size());
+    result.stats.nodesVisited = stats.nodesVisited;
+    result.stats.metaCellsActive = int64_t(comm.sum(uint64_t(stats.metaCellsActive)));
+    result.stats.cellsActive = int64_t(comm.sum(uint64_t(stats.cellsActive)));
     result.bricksLoaded = comm.sum(io.misses);
     result.bytesRead = comm.sum(io.bytesRead);
     result.readMethod = store->readMethod();
-    result.levels = store->header().levelCount;
-    result.hasOrientation = store->volume().hasOrientation;
+    result.source = frameSourceOf(*store);
     // Rank 0 collects every rank's figures.
     const auto u = [&](uint64_t v) { return comm.gather(v, 0); };
     const auto d = [&](double v) { return comm.gather(v, 0); };

@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "app/extract_settings.h"
+#include "app/extract_stats_json.h"
+#include "core/extract/extract_stats.h"
 #include "io/remote/remote_options.h"
 #include "mpi/communicator.h"
 
@@ -45,14 +47,13 @@ struct RankExtractFigures {
 
 struct RanksExtractResult {
     int ranks = 1;
-    uint64_t triangles = 0, vertices = 0;
-    int64_t bricksActive = 0, nodesVisited = 0;
-    uint64_t metaCellsActive = 0, cellsActive = 0;
+    // The job's surface as one extraction's: triangles, vertices, bricks_active (all ranks'),
+    // nodes_visited (rank 0's, the same tree on every rank), meta_cells_active and cells_active.
+    ExtractStats stats;
+    FrameSource source;
     uint64_t bricksLoaded = 0, bytesRead = 0;
     double seconds = 0;  // the whole job, on rank 0
     std::string readMethod;
-    int levels = 1;
-    bool hasOrientation = false;
     std::vector<RankExtractFigures> perRank;  // rank 0 only: one per rank
 };
 

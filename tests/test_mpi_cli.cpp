@@ -32,7 +32,9 @@ void expectSameAsSingleProcess(const std::string& synthArgs, double iso, const s
                       stats = dir.file("s.json");
     ASSERT_EQ(test::runVdiso("synth " + store + " " + synthArgs + " --quiet").exitCode, 0);
     const std::string isoText = std::to_string(iso);
-    auto r = test::runVdiso("extract " + store + " --iso " + isoText + " --quiet -o " + one);
+    const std::string oneStats = dir.file("one.json");
+    auto r = test::runVdiso("extract " + store + " --iso " + isoText + " --method octree --quiet -o " + one +
+                            " --stats " + oneStats);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     r = runMpi(3, "extract " + store + " --iso " + isoText + " --method octree --quiet -o " + three + " --stats " +
                       stats + extra);
@@ -69,6 +71,17 @@ void expectSameAsSingleProcess(const std::string& synthArgs, double iso, const s
     EXPECT_EQ(bricks[0] + bricks[1] + bricks[2], active.at(0));
     // Each rank reads its own bricks only: together, each active brick once.
     EXPECT_EQ(loaded[1] + loaded[2] + loaded[3], active.at(0));
+    // The header and the traversal's counts are the single process's, by the same writer.
+    const std::string single = readText(oneStats);
+    const auto firstValue = [](const std::string& text, const std::string& key) {
+        const size_t at = text.find("\"" + key + "\": ");
+        if (at == std::string::npos) return std::string("(missing)");
+        const size_t begin = at + key.size() + 4;
+        return text.substr(begin, text.find_first_of(",}", begin) - begin);
+    };
+    for (const char* key : {"file", "method", "iso", "metacell", "level", "levels", "mesh_space", "triangles",
+                            "points", "vertices", "bricks_active", "meta_cells_active", "cells_active"})
+        EXPECT_EQ(firstValue(json, key), firstValue(single, key)) << key << "\n" << json << "\n" << single;
 }
 
 TEST(MpiExtract, HeadIsByteIdenticalToOneProcess) {

@@ -128,16 +128,11 @@ MpiExtractOptions parse(int argc, char** argv) {
 
 std::string octreeStats(const ExtractOptions& o, const RanksExtractResult& r) {
     JsonObject s;
-    s.add("file", o.input).add("method", "octree").add("iso", *o.iso);
-    s.add("metacell", o.metaCellSize).add("threads", o.threads).add("ranks", r.ranks);
-    s.add("level", 0).add("levels", r.levels);
-    if (!o.meshPath.empty())
-        s.add("mesh_space", o.physicalMeshes.value_or(true) && r.hasOrientation ? "physical" : "volume");
-    s.add("triangles", r.triangles).add("vertices", r.vertices);
+    addFrameHeader(s, o, r.source, o.threads, r.stats, 0, !o.meshPath.empty());
+    s.add("ranks", r.ranks);
     s.add("extract_s", r.seconds).add("read_method", r.readMethod);
-    s.add("bricks_loaded", r.bricksLoaded).add("bricks_active", r.bricksActive);
-    s.add("bytes_read", r.bytesRead).add("nodes_visited", r.nodesVisited);
-    s.add("meta_cells_active", r.metaCellsActive).add("cells_active", r.cellsActive);
+    s.add("bricks_loaded", r.bricksLoaded).add("bytes_read", r.bytesRead);
+    addTraversalCounters(s, o.method, r.stats);
     s.add("partition_weight", "active sub-blocks");
     std::string perRank = "[";
     for (size_t k = 0; k < r.perRank.size(); ++k) {
@@ -163,7 +158,7 @@ std::string viewStats(const MpiExtractOptions& m, const BrickStoreReader& store,
     const ExtractOptions& o = m.extract;
     const ExtractStats& stats = r.stats;
     JsonObject s;
-    addFrameHeader(s, o, store, threads, stats, stats.view.points, !o.meshPath.empty() || !o.pointsPath.empty());
+    addFrameHeader(s, o, frameSourceOf(store), threads, stats, stats.view.points, !o.meshPath.empty() || !o.pointsPath.empty());
     s.add("ranks", r.ranks).add("partition", r.partition == ViewPartition::Image ? "image" : "object");
     if (r.partition == ViewPartition::Object) {
         s.add("slab_axis", std::string(1, "xyz"[r.axis])).add("eye_slab", r.eyeSlab);
@@ -216,7 +211,7 @@ int runOctree(const Communicator& comm, const ExtractOptions& o) {
         char line[256];
         std::snprintf(line, sizeof line,
                       "octree iso %g on %d ranks: %llu triangles, %llu vertices, %.3f s, %llu bricks read (%.1f MB)",
-                      *o.iso, r.ranks, (unsigned long long)r.triangles, (unsigned long long)r.vertices, r.seconds,
+                      *o.iso, r.ranks, (unsigned long long)r.stats.triangles, (unsigned long long)r.stats.vertices, r.seconds,
                       (unsigned long long)r.bricksLoaded, double(r.bytesRead) / 1e6);
         report(o, octreeStats(o, r), line);
     }, exitCodeOf, vdiso::cli::messageOf);
