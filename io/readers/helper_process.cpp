@@ -27,6 +27,7 @@
 namespace vdiso {
 namespace {
 
+#if !VDISO_HELPER_HAS_ASAN  // under ASan the helper keeps the parent's bounds (prepareChild)
 constexpr uint64_t kMetadataMemory = uint64_t(1) << 30;
 
 // The process's data memory now, from /proc/self/status (VmData, in kB); 0 if unknown.
@@ -37,6 +38,7 @@ uint64_t dataBytes() {
         if (line.rfind("VmData:", 0) == 0) return std::strtoull(line.c_str() + 7, nullptr, 10) * 1024;
     return 0;
 }
+#endif
 
 void prepareChild() {
     for (int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGILL, SIGFPE}) std::signal(sig, SIG_DFL);
