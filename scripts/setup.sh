@@ -7,7 +7,7 @@ set -euo pipefail
 # What the vdiso command and the Python module build against and run with: all the demo needs
 # (`scripts/setup.sh demo`).
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libglm-dev libtbb-dev zlib1g-dev libzstd-dev liblz4-dev libpng-dev
   libopenvdb-dev libboost-iostreams-dev   # OpenVDB's Find module needs boost-iostreams and TBB
   libosmesa6-dev nlohmann-json3-dev
