@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/synth/synth.h"
 #include "io/store/brick_store.h"
 #include "io/render/image_compare.h"
@@ -72,16 +74,12 @@ void expectSameAsSingleProcess(const std::string& synthArgs, double iso, const s
     // Each rank reads its own bricks only: together, each active brick once.
     EXPECT_EQ(loaded[1] + loaded[2] + loaded[3], active.at(0));
     // The header and the traversal's counts are the single process's, by the same writer.
-    const std::string single = readText(oneStats);
-    const auto firstValue = [](const std::string& text, const std::string& key) {
-        const size_t at = text.find("\"" + key + "\": ");
-        if (at == std::string::npos) return std::string("(missing)");
-        const size_t begin = at + key.size() + 4;
-        return text.substr(begin, text.find_first_of(",}", begin) - begin);
-    };
+    const nlohmann::json ranks = nlohmann::json::parse(json), single = nlohmann::json::parse(readText(oneStats));
     for (const char* key : {"file", "method", "iso", "metacell", "level", "levels", "mesh_space", "triangles",
-                            "points", "vertices", "bricks_active", "meta_cells_active", "cells_active"})
-        EXPECT_EQ(firstValue(json, key), firstValue(single, key)) << key << "\n" << json << "\n" << single;
+                            "points", "vertices", "bricks_active", "meta_cells_active", "cells_active"}) {
+        ASSERT_TRUE(single.contains(key) && ranks.contains(key)) << key << "\n" << json << "\n" << single;
+        EXPECT_EQ(ranks[key], single[key]) << key;
+    }
 }
 
 TEST(MpiExtract, HeadIsByteIdenticalToOneProcess) {
