@@ -1,6 +1,7 @@
 #include "io/mesh/mesh_output.h"
 
 #include <algorithm>
+#include <memory>
 
 #include <unistd.h>
 
@@ -31,11 +32,14 @@ std::vector<unsigned char> SideFile::readAll() {
 
 void SideFile::copyTo(BufferedAppender& out) {
     mWriter.flush();
-    std::vector<unsigned char> buffer(8u << 20);
+    // As large as the file up to 8 MiB, and not zeroed: a small mesh's faces made a whole 8 MiB
+    // buffer be cleared and faulted in (a sixth of the process time of a CT closeup's mesh).
+    const size_t size = size_t(std::min<uint64_t>(mFile.size(), 8u << 20));
+    const std::unique_ptr<unsigned char[]> buffer(new unsigned char[std::max<size_t>(size, 1)]);
     for (uint64_t at = 0; at < mFile.size();) {
-        const size_t n = size_t(std::min<uint64_t>(buffer.size(), mFile.size() - at));
-        read(buffer.data(), n, at);
-        out.put(buffer.data(), n);
+        const size_t n = size_t(std::min<uint64_t>(size, mFile.size() - at));
+        read(buffer.get(), n, at);
+        out.put(buffer.get(), n);
         at += n;
     }
 }
