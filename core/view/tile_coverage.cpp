@@ -1,6 +1,7 @@
 #include "core/view/tile_coverage.h"
 
 #include <algorithm>
+#include <cmath>
 
 #if VDISO_HAS_AVX2_PATHS
 #include <immintrin.h>
@@ -133,12 +134,52 @@ VDISO_TARGET_AVX2 bool coverTileRowAvx2(const TileRow& t, OcclusionPyramid& pyra
 }
 #endif
 
+// A polygon whose centres lie in one or two rows of one tile (most of them, where cells are a
+// pixel or two; taller ones go four rows at a time in the paths above): each row's crossings made straight from the outline, every edge every row, with no branch on the
+// data. The rows' rules and arithmetic are scanRow's (an edge counts for a row when
+// yTop <= yc < yBottom, its crossing xTop + (yc - yTop) * dx / dy from its upper end) and the
+// winding counters the baseline's, so the bits are the same; for such polygons the branches
+// that sort edges and crossings mispredicted more than the arithmetic cost.
+bool coverPolygonInTile(const glm::dvec2* v, int n, const PixelRect& rect, OcclusionPyramid& pyramid) {
+    const int tx = rect.x0 >> 3, ty = rect.y0 >> 3;
+    const uint64_t word = pyramid.tileWord(tx, ty);
+    if (word == kFull) return false;
+    bool finite = true;
+    for (int k = 0; k < n; ++k) finite &= std::isfinite(v[k].x) & std::isfinite(v[k].y);
+    if (!finite) return false;  // as buildScanEdges: such a polygon covers nothing
+    const int width = pyramid.width(), column0 = tx * 8;
+    uint64_t mask = 0;
+    for (int row = rect.y0; row <= rect.y1; ++row) {
+        const double yc = row + 0.5;
+        uint64_t counters = kByteZero;
+        for (int e = 0; e < n; ++e) {
+            const glm::dvec2 a = v[e], b = v[e + 1 == n ? 0 : e + 1];
+            const bool down = a.y < b.y;
+            const double xTop = down ? a.x : b.x, yTop = down ? a.y : b.y;
+            const double xBottom = down ? b.x : a.x, yBottom = down ? b.y : a.y;
+            const bool active = yTop <= yc && yc < yBottom;  // never a horizontal edge
+            // An inactive edge's quotient may be inf or NaN: replaced before any rounding.
+            const double x = active ? xTop + (yc - yTop) * (xBottom - xTop) / (yBottom - yTop) : 0.0;
+            const int at = std::clamp(detail::firstCentreAtOrAfter(x, width) - column0, 0, 8);
+            uint64_t step = at < 8 ? kByteOnes << (8 * (at & 7)) : 0;
+            step = active ? step : 0;
+            counters += down ? step : uint64_t(0) - step;
+        }
+        mask |= nonzeroBytes(counters ^ kByteZero) << (8 * (row & 7));
+    }
+    return (mask & ~word) != 0 && pyramid.coverTile(tx, ty, mask);
+}
+
 }  // namespace
 
 bool coverPolygonTiles(const glm::dvec2* v, int n, const PixelRect& rect, OcclusionPyramid& pyramid,
                        bool& newCentres, SimdLevel simd) {
     newCentres = false;
     if (n > kTileCoverageEdges) return false;
+    if ((rect.x0 >> 3) == (rect.x1 >> 3) && (rect.y0 >> 3) == (rect.y1 >> 3) && rect.y1 - rect.y0 < 2) {
+        newCentres = coverPolygonInTile(v, n, rect, pyramid);
+        return true;
+    }
     detail::ScanEdge edges[kTileCoverageEdges];
     double yMin, yMax;
     const int edgeCount = detail::buildScanEdges(v, size_t(n), edges, yMin, yMax);

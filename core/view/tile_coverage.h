@@ -18,7 +18,9 @@
 // a centre not covered before was covered. The caller runs pyramid.propagate() before the next
 // query. `simd` (core/simd.h): the baseline makes each row's crossings and a tile's rows one by
 // one; AVX2 four rows at once, each crossing and each tile's counters in one register. Both
-// give the same bits.
+// give the same bits. Either way, a polygon whose centres lie in one or two rows of one tile
+// (most, where cells are a pixel or two) takes a path of its own: every edge on every row, no
+// branch on the data, the same bits again.
 #pragma once
 
 #include <cstdint>
