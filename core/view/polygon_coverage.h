@@ -44,6 +44,7 @@ public:
 
 private:
     bool uncoveredCentresInBox(const ScreenBox& box, PixelRect& r) const;
+    bool coverCentres(const glm::dvec2* v, int count, const PixelRect& r, bool keepOnlyNew);
     // Covers the outline's centres (within r, its box's or a larger one's) tile by tile
     // (core/view/tile_coverage.h), or by rows beyond kTileCoverageEdges vertices; whether one was new.
     bool coverOutline(const glm::dvec2* v, int count, const PixelRect& r) {
@@ -64,7 +65,12 @@ private:
     SimdLevel mSimd;  // chosen once (core/simd.h)
 };
 
-// Inline: called for every polygon, and most are answered by the box test.
+// Inline: called for every polygon, and most are answered by the box test. With keepOnlyNew
+// the rectangle of centres within the rounding slack of the box, which holds the box's own, is
+// asked first: a polygon with no uncovered centre there covers nothing new and lies near none
+// (most hidden polygons: one query), and where the two rectangles are the same (most
+// polygons) the box's needs no query of its own. A polygon that then covers nothing new left
+// the pyramid as it was, so the slack still holds an uncovered centre.
 inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnlyNew) {
     bool coversNew = false;
     const ScreenBox box = boxOfPoints(v, count);
@@ -73,32 +79,46 @@ inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnly
             const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
             coversNew |= mPyramid.insertTriangleTopDown(triangle);
         }
-    } else if (PixelRect r; uncoveredCentresInBox(box, r)) {
-        if (mScanPolygons) {
-            coversNew = coverOutline(v, count, r);
-            // Where a non-planar polygon's projection folds over itself its winding cancels,
-            // yet its fan triangles, which are what gets drawn, cover those centres: before
-            // dropping it, ask them (they mark only what they draw).
-            const bool askFans = keepOnlyNew && !coversNew && folds(v, count);
-            for (int k = 2; k < count && !coversNew && askFans; ++k) {
-                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                coversNew |= coverOutline(triangle, 3, r);
-            }
-        } else {
-            for (int k = 2; k < count; ++k) {
-                const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
-                coversNew |= coverOutline(triangle, 3, r);
-            }
-        }
+        if (!keepOnlyNew) return true;
+        if (coversNew || !uncoveredCentreIn(slackRect(box))) return coversNew;
+    } else if (!keepOnlyNew) {
+        if (PixelRect r; uncoveredCentresInBox(box, r)) coverCentres(v, count, r, false);
+        return true;
+    } else {
+        const PixelRect slack = slackRect(box);
+        if (!uncoveredCentreIn(slack)) return false;
+        const PixelRect r = centresOfBox(box, mPyramid.width(), mPyramid.height());
+        const bool sameRect = r.x0 == slack.x0 && r.y0 == slack.y0 && r.x1 == slack.x1 && r.y1 == slack.y1;
+        if (sameRect || uncoveredCentreIn(r)) coversNew = coverCentres(v, count, r, true);
+        if (coversNew) return true;
     }
-    if (!keepOnlyNew) return true;
     // The rasterizer works in float on snapped coordinates, so a centre within a hair of an
     // edge may fall the other way there: such a polygon is kept as well (it marks nothing; only
     // coverage this side of the rounding is ever marked).
-    // Each fan triangle's rectangle lies in the polygon's: one query answers for all of them
-    // when it is covered, as it is for most polygons that covered nothing new.
-    if (coversNew || !uncoveredCentreIn(slackRect(box))) return coversNew;
     for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
+    return coversNew;
+}
+
+// Covers the centres of r (the polygon's box's, with one uncovered) that the polygon covers;
+// whether one was new.
+inline bool PolygonCoverage::coverCentres(const glm::dvec2* v, int count, const PixelRect& r, bool keepOnlyNew) {
+    bool coversNew = false;
+    if (mScanPolygons) {
+        coversNew = coverOutline(v, count, r);
+        // Where a non-planar polygon's projection folds over itself its winding cancels,
+        // yet its fan triangles, which are what gets drawn, cover those centres: before
+        // dropping it, ask them (they mark only what they draw).
+        const bool askFans = keepOnlyNew && !coversNew && folds(v, count);
+        for (int k = 2; k < count && !coversNew && askFans; ++k) {
+            const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+            coversNew |= coverOutline(triangle, 3, r);
+        }
+    } else {
+        for (int k = 2; k < count; ++k) {
+            const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
+            coversNew |= coverOutline(triangle, 3, r);
+        }
+    }
     return coversNew;
 }
 
