@@ -144,8 +144,8 @@ bool coverPolygonInTile(const glm::dvec2* v, int n, const PixelRect& rect, Occlu
     const int tx = rect.x0 >> 3, ty = rect.y0 >> 3;
     const uint64_t word = pyramid.tileWord(tx, ty);
     if (word == kFull) return false;
-    bool finite = true;
-    for (int k = 0; k < n; ++k) finite &= std::isfinite(v[k].x) & std::isfinite(v[k].y);
+    int finite = 1;  // ints, not bools: no branch per vertex
+    for (int k = 0; k < n; ++k) finite &= int(std::isfinite(v[k].x)) & int(std::isfinite(v[k].y));
     if (!finite) return false;  // as buildScanEdges: such a polygon covers nothing
     const int width = pyramid.width(), column0 = tx * 8;
     uint64_t mask = 0;
