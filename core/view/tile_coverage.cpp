@@ -1,6 +1,7 @@
 #include "core/view/tile_coverage.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #if VDISO_HAS_AVX2_PATHS
@@ -155,9 +156,13 @@ bool coverPolygonInTile(const glm::dvec2* v, int n, const PixelRect& rect, Occlu
         for (int e = 0; e < n; ++e) {
             const glm::dvec2 a = v[e], b = v[e + 1 == n ? 0 : e + 1];
             const bool down = a.y < b.y;
-            const double xTop = down ? a.x : b.x, yTop = down ? a.y : b.y;
-            const double xBottom = down ? b.x : a.x, yBottom = down ? b.y : a.y;
-            const bool active = yTop <= yc && yc < yBottom;  // never a horizontal edge
+            // The upper end's x by a mask, not a branch (the compiler made one of `down ? :`).
+            const uint64_t pickA = uint64_t(0) - uint64_t(down);
+            const uint64_t ax = std::bit_cast<uint64_t>(a.x), bx = std::bit_cast<uint64_t>(b.x);
+            const double xTop = std::bit_cast<double>((ax & pickA) | (bx & ~pickA));
+            const double xBottom = std::bit_cast<double>((bx & pickA) | (ax & ~pickA));
+            const double yTop = std::min(a.y, b.y), yBottom = std::max(a.y, b.y);
+            const bool active = (yTop <= yc) & (yc < yBottom);  // never a horizontal edge
             // An inactive edge's quotient may be inf or NaN: replaced before any rounding.
             const double x = active ? xTop + (yc - yTop) * (xBottom - xTop) / (yBottom - yTop) : 0.0;
             const int at = std::clamp(detail::firstCentreAtOrAfter(x, width) - column0, 0, 8);
