@@ -87,6 +87,21 @@ bool OcclusionPyramid::isOccluded(int x0, int y0, int x1, int y1) const {
         mStats.queryWords += 1 + twoX + twoY + (twoX & twoY);
         return missing == 0;
     }
+    // Within 4x4 tiles (meta-cells' and small nodes' boxes): the bottom words row by row, up to
+    // the first with an uncovered pixel of the rectangle. From the top such a query read four
+    // levels and cost about 550 instructions (cachegrind, ch2better's normal view).
+    if (tx1 - tx0 <= 3 && ty1 - ty0 <= 3 && levels() > 2) {
+        const size_t stride = size_t(mWordsX[0]);
+        for (int ty = ty0; ty <= ty1; ++ty) {
+            const uint64_t rows = rowsMask(ty == ty0 ? y0 & 7 : 0, ty == ty1 ? y1 & 7 : 7);
+            const uint64_t* w = mWords.data() + size_t(ty) * stride;
+            for (int tx = tx0; tx <= tx1; ++tx) {
+                ++mStats.queryWords;
+                if (rows & columnsMask(tx == tx0 ? x0 & 7 : 0, tx == tx1 ? x1 & 7 : 7) & ~w[tx]) return false;
+            }
+        }
+        return true;
+    }
     return queryWord(levels() - 1, 0, 0, x0, y0, x1, y1);
 }
 
