@@ -6,7 +6,7 @@
 # -DVDISO_BUILD_TESTS=OFF); --target builds only those targets (scripts/demo.sh: vdiso _vdiso).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-configure=(-DVDISO_BUILD_TESTS=ON -DVDISO_BUILD_BENCH=ON -DVDISO_BUILD_MPI=ON)
+configure=(-DVDISO_BUILD_TESTS=ON -DVDISO_BUILD_BENCH=ON -DVDISO_BUILD_MPI=ON -DVDISO_READER_MODULES=ON)
 targets=()
 while [ $# -gt 0 ]; do
   if [ "$1" = --target ]; then

@@ -5,16 +5,13 @@
 set -euo pipefail
 
 # What the vdiso command and the Python module build against and run with: all the demo needs
-# (`scripts/setup.sh demo`).
+# (`scripts/setup.sh demo`), all but the reader modules' libraries.
 packages=(
   build-essential cmake ninja-build pkg-config
   libglm-dev libtbb-dev zlib1g-dev libzstd-dev liblz4-dev libpng-dev
-  libopenvdb-dev libboost-iostreams-dev   # OpenVDB's Find module needs boost-iostreams and TBB
   libosmesa6-dev nlohmann-json3-dev
   libboost-dev libmeshoptimizer-dev       # vdiso serve: Beast (HTTP, WebSocket), geometry codecs
   libtiff-dev                             # TIFF stacks (io/readers/tiff_reader.h)
-  libgdcm-dev                             # DICOM series (io/readers/dicom_reader.h)
-  libhdf5-dev                             # HDF5 datasets (io/readers/hdf5_reader.h)
   libblosc-dev                            # Zarr chunks (io/readers/zarr_array.h)
   libcurl4-openssl-dev                    # remote stores over HTTP(S) and S3 (io/remote)
   pybind11-dev python3-dev python3-numpy  # the Python module (python/)
@@ -25,6 +22,10 @@ packages=(
 profile=${1:-all}
 if [ "$profile" != demo ]; then
   packages+=(
+    # The reader modules (-DVDISO_READER_MODULES, on but in the demo, which reads NIfTI):
+    libopenvdb-dev libboost-iostreams-dev   # OpenVDB; its Find module needs boost-iostreams and TBB
+    libgdcm-dev                             # DICOM series (io/readers/dicom_reader.h)
+    libhdf5-dev                             # HDF5 datasets (io/readers/hdf5_reader.h)
     libgtest-dev libbenchmark-dev
     chromium                                # the viewer's end-to-end test (headless)
     libjpeg-turbo-progs                     # bench/serve.sh: JPEG sizes of frames

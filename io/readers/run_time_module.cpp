@@ -61,11 +61,17 @@ void* runTimeModuleSymbol(const char* fileName, const char* symbol, const std::s
             why = m.why;
         }
     }
+#if VDISO_READER_MODULES_BUILT
+    constexpr const char* kWhere = " (the build puts it beside vdiso; VDISO_MODULE_DIR says where else to look)";
+#else
+    constexpr const char* kWhere =
+        " (this vdiso was built without its reader modules, -DVDISO_READER_MODULES=OFF, as "
+        "scripts/demo.sh builds it: scripts/setup.sh, then scripts/build.sh, builds them; "
+        "VDISO_MODULE_DIR says where else to look)";
+#endif
     if (!address)
-        throwIoError(path, purpose + " needs the module " + fileName +
-                               ", which was not found or did not load (the build puts it beside "
-                               "vdiso; VDISO_MODULE_DIR says where else to look)" +
-                               (why.empty() ? std::string() : ": " + why));
+        throwIoError(path, purpose + " needs the module " + fileName + ", which was not found or did not load" +
+                               kWhere + (why.empty() ? std::string() : ": " + why));
     return address;
 }
 
