@@ -16,51 +16,55 @@ namespace vdiso {
 namespace {
 
 // Ranges of all meta-cells of one brick ((B+3)^3 samples, `cells` cells per axis) at once,
-// separably, whole rows at a time: first, for each z-slab of meta-cells, the elementwise
-// min/max over the slab's planes (rows contiguous in x, so these loops vectorise); then over
-// each y-run of those rows; last over the x-runs of what is left, a small array. Each sample
-// is read about once. Meta-cells beyond the brick's cells (n per axis in all) get an empty
-// range.
+// separably: first, for each z-slab of meta-cells, the elementwise min/max over the slab's
+// planes, each plane whole (ghost samples too: one long loop that vectorises, where a loop per
+// row of 33 samples spent more on its set-up than on the samples); then over each y-run of that
+// plane's corner rows; last over the x-runs of what is left, a small array. Each sample is read
+// about once. Meta-cells beyond the brick's cells (n per axis in all) get an empty range.
 template <class T>
 void computeMetaCellRanges(const T* s, int side, const int cells[3], int M, int n,
                            std::vector<BrickRange>& out) {
-    thread_local std::vector<T> lo, hi;
-    const int rowX = cells[0] + 1, rowsY = cells[1] + 1;
-    const size_t slab = size_t(rowsY) * rowX;  // pass 1: n slabs of rowsY rows
-    const size_t plane = size_t(n) * rowX;     // pass 2: n x n rows, after the slabs
-    lo.resize(size_t(n) * slab + size_t(n) * plane);
+    thread_local std::vector<T> slabLo, slabHi, lo, hi;
+    const int rowX = cells[0] + 1;
+    const size_t plane = size_t(side) * size_t(side);
+    const size_t rows = size_t(n) * rowX;  // pass 2: n x n rows of rowX
+    slabLo.resize(plane);
+    slabHi.resize(plane);
+    lo.resize(size_t(n) * rows);
     hi.resize(lo.size());
-    T* lo2 = lo.data() + size_t(n) * slab;
-    T* hi2 = hi.data() + size_t(n) * slab;
+    T* lo2 = lo.data();
+    T* hi2 = hi.data();
     const int slabs = (cells[2] + M - 1) / M, runsY = (cells[1] + M - 1) / M;
     for (int mz = 0; mz < slabs; ++mz) {
         const int z0 = mz * M, z1 = std::min(z0 + M, cells[2]);
-        for (int y = 0; y < rowsY; ++y) {
-            T* l = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
-            T* h = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
-            const T* first = s + BrickLayout::cornerIndex(side, 0, y, z0);
+        {
+            T* __restrict l = slabLo.data();
+            T* __restrict h = slabHi.data();
+            const T* __restrict first = s + size_t(z0 + kGhostBefore) * plane;  // corner plane z0, whole
             // NaN samples count as -inf (core/kernel/iso.h).
-            for (int i = 0; i < rowX; ++i) l[i] = h[i] = rangeValue(first[i]);
+            for (size_t i = 0; i < plane; ++i) l[i] = h[i] = rangeValue(first[i]);
             for (int z = z0 + 1; z <= z1; ++z) {
-                const T* row = s + BrickLayout::cornerIndex(side, 0, y, z);
-                for (int i = 0; i < rowX; ++i) {
-                    const T v = rangeValue(row[i]);
+                const T* __restrict p = first + size_t(z - z0) * plane;
+                for (size_t i = 0; i < plane; ++i) {
+                    const T v = rangeValue(p[i]);
                     l[i] = v < l[i] ? v : l[i];
                     h[i] = v > h[i] ? v : h[i];
                 }
             }
         }
+        // Corner row y of the slab, in slabLo/slabHi (laid out as a plane of samples).
+        auto rowAt = [&](const std::vector<T>& v, int y) {
+            return v.data() + size_t(y + kGhostBefore) * size_t(side) + size_t(kGhostBefore);
+        };
         for (int my = 0; my < runsY; ++my) {
             const int y0 = my * M, y1 = std::min(y0 + M, cells[1]);
             T* l = lo2 + (size_t(mz) * n + my) * rowX;
             T* h = hi2 + (size_t(mz) * n + my) * rowX;
-            const T* firstLo = lo.data() + size_t(mz) * slab + size_t(y0) * rowX;
-            const T* firstHi = hi.data() + size_t(mz) * slab + size_t(y0) * rowX;
-            std::copy(firstLo, firstLo + rowX, l);
-            std::copy(firstHi, firstHi + rowX, h);
+            std::copy(rowAt(slabLo, y0), rowAt(slabLo, y0) + rowX, l);
+            std::copy(rowAt(slabHi, y0), rowAt(slabHi, y0) + rowX, h);
             for (int y = y0 + 1; y <= y1; ++y) {
-                const T* rowLo = lo.data() + size_t(mz) * slab + size_t(y) * rowX;
-                const T* rowHi = hi.data() + size_t(mz) * slab + size_t(y) * rowX;
+                const T* rowLo = rowAt(slabLo, y);
+                const T* rowHi = rowAt(slabHi, y);
                 for (int i = 0; i < rowX; ++i) {
                     l[i] = rowLo[i] < l[i] ? rowLo[i] : l[i];
                     h[i] = rowHi[i] > h[i] ? rowHi[i] : h[i];
