@@ -445,16 +445,9 @@ struct BrickKernel {
                 const CellRow cellRow{above[rz][ry], above[rz][ry + 1], above[rz + 1][ry], above[rz + 1][ry + 1]};
                 const uint64_t mixed = cellRow.crossed(cellBits);
                 if (mixed == 0) continue;
-                // The row's crossed cells in order, listed without a branch on each cell's bit
-                // (a third of those branches went the unexpected way).
-                int crossed[kMaxMetaCellSize], crossedCount = 0;
                 for (int ix = 0; ix < nx; ++ix) {
-                    const int rx = order[0][ix] - lo[0];
-                    crossed[crossedCount] = rx;
-                    crossedCount += int(mixed >> rx & 1);
-                }
-                for (int j = 0; j < crossedCount; ++j) {
-                    const int rx = crossed[j], cx = lo[0] + rx;
+                    const int cx = order[0][ix], rx = cx - lo[0];
+                    if (!(mixed >> rx & 1)) continue;
                     const int caseIndex = cellRow.caseOf(rx);
                     if constexpr (Cells::kTestsCells)
                         if (!cellPolicy.keepCell(corner0[0] + cx, corner0[1] + cy, corner0[2] + cz)) continue;
