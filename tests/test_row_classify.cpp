@@ -1,6 +1,7 @@
 // The SSE2 row classification (core/kernel/row_classify.h) gives the bits IsoThreshold::above
 // gives sample by sample: every type, row lengths 1 to 64, thresholds inside, at and beyond the
-// type's range, floats with NaN, infinities and isovalues between two floats.
+// type's range, floats with NaN, infinities and isovalues between two floats. The rows lie in a
+// longer array, as a brick's do: the last group of 16 is read whole.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,7 +1,10 @@
 // Which samples of a row lie above an isovalue, as one word: bit i set when s[i] > iso
 // (core/kernel/iso.h), for rows of at most 64 samples. SSE2, which every x86-64 has, compares
-// 16 samples at a time; what is left of the row goes one by one. Exactly IsoThreshold::above
-// for every sample, NaN and infinities included.
+// 16 samples at a time, the last group too (its bits past the row dropped): so the samples
+// s[0, 16 * ceil(n / 16)) are read, and must lie in one array. The kernel's rows do: a brick's
+// samples ((B+3)^3, core/brick_layout.h) go on for a ghost plane past the last row it classifies.
+// (A meta-cell's rows are 5 corners: one by one, they were the classification's whole cost.)
+// Exactly IsoThreshold::above for every sample, NaN and infinities included.
 #pragma once
 
 #include <cmath>
@@ -60,11 +63,10 @@ inline int bitCount(uint64_t x) {
     return int((x * 0x0101010101010101ull) >> 56);
 }
 
-// Bits of s[0..n) above the threshold (n <= 64).
+// Bits of s[0..n) above the threshold (n <= 64; reads up to the 16-sample group that holds s[n - 1]).
 template <class T>
 [[gnu::always_inline]] inline uint64_t aboveBits(const T* s, int n, const IsoThreshold<T>& threshold) {
     using namespace row_classify_detail;
-    int i = 0;
     uint64_t bits = 0;
     // The threshold in the lanes' terms; where every sample, or none, of the type is above it,
     // the whole row is known at once.
@@ -86,9 +88,8 @@ template <class T>
         if (double(f) > threshold.value) f = std::nextafter(f, -INFINITY);
         t = _mm_castps_si128(_mm_set1_ps(f));
     }
-    for (; i + 16 <= n; i += 16) bits |= uint64_t(above16(s + i, t)) << i;
-    for (; i < n; ++i) bits |= uint64_t(threshold.above(s[i])) << i;
-    return bits;
+    for (int i = 0; i < n; i += 16) bits |= uint64_t(above16(s + i, t)) << i;
+    return n == 64 ? bits : bits & ((uint64_t(1) << n) - 1);
 }
 
 }  // namespace vdiso
