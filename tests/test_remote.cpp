@@ -162,6 +162,21 @@ TEST_F(RemoteStore, S3SignedWithEnvironmentOrProfilePathOrVirtualHost) {
     expectSameAsLocal("profile");
 }
 
+// libcurl is loaded when remote data is first read (io/remote/curl_library.h): a local store
+// needs none, and a URL without it is an error naming the URL and what is missing.
+TEST_F(RemoteStore, LocalDataNeedsNoLibcurlAndAUrlWithoutItIsNamed) {
+    const std::string noCurl = "VDISO_CURL_LIBRARY=/nonexistent/libcurl.so.4 ";
+    test::CommandResult r = test::runCommand(noCurl + VDISO_BINARY + " info " + file("bkt/head.vdiso"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    for (const std::string url : {"http://127.0.0.1:9/head.vdiso", "s3://bkt/head.vdiso", "http://127.0.0.1:9/z.zarr"}) {
+        r = test::runCommand(noCurl + VDISO_BINARY + " extract " + url + " --iso 600.5 --png " + file("none.png"));
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find(url + ": cannot load /nonexistent/libcurl.so.4"), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("remote data cannot be read"), std::string::npos) << r.output;
+        EXPECT_FALSE(std::filesystem::exists(file("none.png")));
+    }
+}
+
 TEST_F(RemoteStore, S3RefusalsAreNamed) {
     LoopbackServer server = s3({"--public", "open"});
     const int port = server.port();

@@ -12,6 +12,7 @@
 
 #include "core/interrupt.h"
 #include "io/error.h"
+#include "io/remote/curl_library.h"
 #include "io/remote/remote_file.h"
 #include "io/remote/remote_session.h"
 
@@ -27,6 +28,7 @@ ZarrKeys::ZarrKeys(const std::string& root, const RemoteOptions& remote) : mRoot
     if (isRemoteLocation(root)) {
         while (mRoot.size() > 1 && mRoot.back() == '/') mRoot.pop_back();
         mName = displayLocation(mRoot);
+        curlLibraryFor(mName);  // a failure to load libcurl names the data
         mSession = std::make_shared<RemoteSession>(remote);
     } else {
         mName = root;

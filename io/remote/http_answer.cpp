@@ -1,12 +1,12 @@
 #include "io/remote/http_answer.h"
 
-#include <curl/curl.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <ctime>
 #include <new>
+
+#include "io/remote/curl_library.h"
 
 namespace vdiso::http_answer {
 
@@ -50,26 +50,26 @@ const char* statusReason(long status) {
 }
 
 std::optional<std::string> originOf(const std::string& url, bool* hasUser) {
-    CURLU* u = curl_url();
+    CURLU* u = curlLibrary().url();
     if (!u) throw std::bad_alloc();
     std::optional<std::string> origin;
-    if (curl_url_set(u, CURLUPART_URL, url.c_str(), 0) == CURLUE_OK) {
+    if (curlLibrary().url_set(u, CURLUPART_URL, url.c_str(), 0) == CURLUE_OK) {
         char *scheme = nullptr, *host = nullptr, *port = nullptr, *user = nullptr;
-        if (curl_url_get(u, CURLUPART_SCHEME, &scheme, 0) == CURLUE_OK &&
-            curl_url_get(u, CURLUPART_HOST, &host, 0) == CURLUE_OK &&
-            curl_url_get(u, CURLUPART_PORT, &port, CURLU_DEFAULT_PORT) == CURLUE_OK) {
+        if (curlLibrary().url_get(u, CURLUPART_SCHEME, &scheme, 0) == CURLUE_OK &&
+            curlLibrary().url_get(u, CURLUPART_HOST, &host, 0) == CURLUE_OK &&
+            curlLibrary().url_get(u, CURLUPART_PORT, &port, CURLU_DEFAULT_PORT) == CURLUE_OK) {
             std::string text = std::string(scheme) + "://" + host + ":" + port;
             std::transform(text.begin(), text.end(), text.begin(),
                            [](unsigned char c) { return char(std::tolower(c)); });
             origin = text;
         }
-        if (hasUser) *hasUser = curl_url_get(u, CURLUPART_USER, &user, 0) == CURLUE_OK;
-        curl_free(scheme);
-        curl_free(host);
-        curl_free(port);
-        curl_free(user);
+        if (hasUser) *hasUser = curlLibrary().url_get(u, CURLUPART_USER, &user, 0) == CURLUE_OK;
+        curlLibrary().free(scheme);
+        curlLibrary().free(host);
+        curlLibrary().free(port);
+        curlLibrary().free(user);
     }
-    curl_url_cleanup(u);
+    curlLibrary().url_cleanup(u);
     return origin;
 }
 
@@ -78,7 +78,7 @@ int64_t retryAfterMs(const std::string& value) {
     if (value.empty()) return 0;
     if (std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); }))
         return value.size() > 8 ? kDayMs : std::min(kDayMs, int64_t(std::stoll(value)) * 1000);
-    const time_t at = curl_getdate(value.c_str(), nullptr);
+    const time_t at = curlLibrary().getdate(value.c_str(), nullptr);
     const time_t now = std::time(nullptr);
     return at > now ? std::min<int64_t>(int64_t(at - now), 86400) * 1000 : 0;
 }

@@ -1,7 +1,5 @@
 #include "io/remote/remote_file.h"
 
-#include <curl/curl.h>
-
 #include <algorithm>
 #include <cstdlib>
 #include <chrono>
@@ -14,6 +12,7 @@
 
 #include "core/interrupt.h"
 #include "io/error.h"
+#include "io/remote/curl_library.h"
 #include "io/remote/disk_cache.h"
 #include "io/remote/http_answer.h"
 #include "io/remote/s3_location.h"
@@ -35,6 +34,17 @@ std::string displayLocation(const std::string& location) {
     }
     return shown;
 }
+
+namespace {
+
+// A session for reading `location`, libcurl loaded first so that a failure to load it names the
+// location.
+std::shared_ptr<RemoteSession> sessionFor(const std::string& location, const RemoteOptions& options) {
+    curlLibraryFor(displayLocation(location));
+    return std::make_shared<RemoteSession>(options);
+}
+
+}  // namespace
 
 namespace {
 
@@ -124,7 +134,7 @@ int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
 size_t onBody(char* data, size_t size, size_t count, void* user) {
     auto& t = *static_cast<Transfer*>(user);
     const size_t n = size * count;
-    curl_easy_getinfo(t.curl, CURLINFO_RESPONSE_CODE, &t.status);
+    curlLibrary().easy_getinfo(t.curl, CURLINFO_RESPONSE_CODE, &t.status);
     if (t.status == 200 && t.opening) t.wholeObject = true;  // ranges ignored: the whole object
     if (t.status != 206 && !t.wholeObject) {
         // An error's body says why (S3's XML); a whole object where a range was asked is refused
@@ -170,11 +180,11 @@ struct RemoteFile::Impl {
     std::mutex failureLock;
     std::string failure;  // the last one's message, which the reads it ended repeat
 
-    ~Impl() { curl_slist_free_all(headers); }
+    ~Impl() { curlLibrary().slist_free_all(headers); }
 };
 
 RemoteFile::RemoteFile(const std::string& location, const RemoteOptions& options, size_t headBytes)
-    : RemoteFile(std::make_shared<RemoteSession>(options), location, headBytes) {}
+    : RemoteFile(sessionFor(location, options), location, headBytes) {}
 
 RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string& location,
                        size_t headBytes)
@@ -189,9 +199,9 @@ RemoteFile::RemoteFile(std::shared_ptr<RemoteSession> session, const std::string
             d.sigv4 = "aws:amz:" + d.s3->region + ":s3";
             d.userPassword = d.s3->accessKey + ":" + d.s3->secretKey;
             // S3 wants the payload's hash in a header of its own; a GET has none to sign.
-            d.headers = curl_slist_append(d.headers, "x-amz-content-sha256: UNSIGNED-PAYLOAD");
+            d.headers = curlLibrary().slist_append(d.headers, "x-amz-content-sha256: UNSIGNED-PAYLOAD");
             if (!d.s3->sessionToken.empty())
-                d.headers = curl_slist_append(d.headers, ("x-amz-security-token: " + d.s3->sessionToken).c_str());
+                d.headers = curlLibrary().slist_append(d.headers, ("x-amz-security-token: " + d.s3->sessionToken).c_str());
         }
     } else {
         d.url = location;
@@ -309,44 +319,44 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         if (!opening) t.session = d.session.get();
         t.stallMs = options.stallTimeoutMs;
         curl_slist* headers = nullptr;
-        for (const curl_slist* h = d.headers; h; h = h->next) headers = curl_slist_append(headers, h->data);
-        if (!d.condition.empty()) headers = curl_slist_append(headers, d.condition.c_str());
-        curl_easy_setopt(curl, CURLOPT_URL, url.c_str());
-        curl_easy_setopt(curl, CURLOPT_RANGE, range.c_str());
-        curl_easy_setopt(curl, CURLOPT_HTTPHEADER, headers);
-        curl_easy_setopt(curl, CURLOPT_PROTOCOLS_STR, "http,https");
+        for (const curl_slist* h = d.headers; h; h = h->next) headers = curlLibrary().slist_append(headers, h->data);
+        if (!d.condition.empty()) headers = curlLibrary().slist_append(headers, d.condition.c_str());
+        curlLibrary().easy_setopt(curl, CURLOPT_URL, url.c_str());
+        curlLibrary().easy_setopt(curl, CURLOPT_RANGE, range.c_str());
+        curlLibrary().easy_setopt(curl, CURLOPT_HTTPHEADER, headers);
+        curlLibrary().easy_setopt(curl, CURLOPT_PROTOCOLS_STR, "http,https");
         // Redirects are followed here, not by libcurl: it drops Authorization on another host but
         // sends every other header, S3's session token among them, wherever it is sent.
-        curl_easy_setopt(curl, CURLOPT_FOLLOWLOCATION, 0L);
-        curl_easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
-        curl_easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
-        curl_easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(std::min(options.connectTimeoutMs, remainingMs)));
-        curl_easy_setopt(curl, CURLOPT_TIMEOUT_MS, long(remainingMs));
-        curl_easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
-        curl_easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, options.stallTimeoutMs / 1000)));
-        curl_easy_setopt(curl, CURLOPT_HEADERFUNCTION, onHeader);
-        curl_easy_setopt(curl, CURLOPT_HEADERDATA, &t);
-        curl_easy_setopt(curl, CURLOPT_WRITEFUNCTION, onBody);
-        curl_easy_setopt(curl, CURLOPT_WRITEDATA, &t);
-        curl_easy_setopt(curl, CURLOPT_NOPROGRESS, 0L);
-        curl_easy_setopt(curl, CURLOPT_XFERINFOFUNCTION, onProgress);
-        curl_easy_setopt(curl, CURLOPT_XFERINFODATA, &t);
-        curl_easy_setopt(curl, CURLOPT_USERAGENT, "vdiso");
-        if (!options.caFile.empty()) curl_easy_setopt(curl, CURLOPT_CAINFO, options.caFile.c_str());
+        curlLibrary().easy_setopt(curl, CURLOPT_FOLLOWLOCATION, 0L);
+        curlLibrary().easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
+        curlLibrary().easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
+        curlLibrary().easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(std::min(options.connectTimeoutMs, remainingMs)));
+        curlLibrary().easy_setopt(curl, CURLOPT_TIMEOUT_MS, long(remainingMs));
+        curlLibrary().easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
+        curlLibrary().easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, options.stallTimeoutMs / 1000)));
+        curlLibrary().easy_setopt(curl, CURLOPT_HEADERFUNCTION, onHeader);
+        curlLibrary().easy_setopt(curl, CURLOPT_HEADERDATA, &t);
+        curlLibrary().easy_setopt(curl, CURLOPT_WRITEFUNCTION, onBody);
+        curlLibrary().easy_setopt(curl, CURLOPT_WRITEDATA, &t);
+        curlLibrary().easy_setopt(curl, CURLOPT_NOPROGRESS, 0L);
+        curlLibrary().easy_setopt(curl, CURLOPT_XFERINFOFUNCTION, onProgress);
+        curlLibrary().easy_setopt(curl, CURLOPT_XFERINFODATA, &t);
+        curlLibrary().easy_setopt(curl, CURLOPT_USERAGENT, "vdiso");
+        if (!options.caFile.empty()) curlLibrary().easy_setopt(curl, CURLOPT_CAINFO, options.caFile.c_str());
         if (!d.sigv4.empty()) {
-            curl_easy_setopt(curl, CURLOPT_AWS_SIGV4, d.sigv4.c_str());
-            curl_easy_setopt(curl, CURLOPT_USERPWD, d.userPassword.c_str());
+            curlLibrary().easy_setopt(curl, CURLOPT_AWS_SIGV4, d.sigv4.c_str());
+            curlLibrary().easy_setopt(curl, CURLOPT_USERPWD, d.userPassword.c_str());
         }
         char curlError[CURL_ERROR_SIZE] = {};
-        curl_easy_setopt(curl, CURLOPT_ERRORBUFFER, curlError);
-        const CURLcode rc = curl_easy_perform(curl);
-        curl_easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
+        curlLibrary().easy_setopt(curl, CURLOPT_ERRORBUFFER, curlError);
+        const CURLcode rc = curlLibrary().easy_perform(curl);
+        curlLibrary().easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
         curl_off_t firstByteUs = 0;
-        curl_easy_getinfo(curl, CURLINFO_STARTTRANSFER_TIME_T, &firstByteUs);
+        curlLibrary().easy_getinfo(curl, CURLINFO_STARTTRANSFER_TIME_T, &firstByteUs);
         std::string redirectTo;
-        if (const char* to = nullptr; curl_easy_getinfo(curl, CURLINFO_REDIRECT_URL, &to) == CURLE_OK && to)
+        if (const char* to = nullptr; curlLibrary().easy_getinfo(curl, CURLINFO_REDIRECT_URL, &to) == CURLE_OK && to)
             redirectTo = to;
-        curl_slist_free_all(headers);
+        curlLibrary().slist_free_all(headers);
         d.session->give(curl);
         ++d.session->requests;
         d.session->bytesFetched += t.got;
@@ -380,7 +390,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
             throw abandoned();
         }
         if (rc != CURLE_OK) {
-            const std::string what = curlError[0] ? curlError : curl_easy_strerror(rc);
+            const std::string what = curlError[0] ? curlError : curlLibrary().easy_strerror(rc);
             // libcurl's whole-transfer timeout (the deadline's remainder) rather than its stall one.
             if (rc == CURLE_OPERATION_TIMEDOUT && Clock::now() + std::chrono::milliseconds(100) >= deadline)
                 throw fail("no whole answer to range " + range + " within " + deadlineText +

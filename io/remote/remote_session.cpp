@@ -1,7 +1,5 @@
 #include "io/remote/remote_session.h"
 
-#include <curl/curl.h>
-
 #include <algorithm>
 #include <condition_variable>
 #include <atomic>
@@ -14,6 +12,7 @@
 #include <new>
 
 #include "io/error.h"
+#include "io/remote/curl_library.h"
 
 namespace vdiso {
 
@@ -33,33 +32,29 @@ struct RemoteSession::Impl {
 };
 
 RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_unique<Impl>()) {
-    static std::once_flag once;
-    std::call_once(once, [] {
-        if (curl_global_init(CURL_GLOBAL_DEFAULT) != CURLE_OK)
-            throw IoError("libcurl cannot be initialised: remote data cannot be read");
-    });
+    curlLibrary();  // loaded and initialised once (io/remote/curl_library.h), or an IoError
     Impl& d = *mImpl;
     d.options = options;
     d.options.connections = std::clamp(options.connections, 1, 256);
     d.options.attempts = std::clamp(options.attempts, 1, 16);
     if (d.options.caFile.empty() && std::getenv("AWS_CA_BUNDLE")) d.options.caFile = std::getenv("AWS_CA_BUNDLE");
-    d.share = curl_share_init();
+    d.share = curlLibrary().share_init();
     if (!d.share) throw std::bad_alloc();
-    curl_share_setopt(d.share, CURLSHOPT_LOCKFUNC,
+    curlLibrary().share_setopt(d.share, CURLSHOPT_LOCKFUNC,
                       +[](CURL*, curl_lock_data data, curl_lock_access, void* user) {
                           static_cast<Impl*>(user)->shareLocks[data].lock();
                       });
-    curl_share_setopt(d.share, CURLSHOPT_UNLOCKFUNC, +[](CURL*, curl_lock_data data, void* user) {
+    curlLibrary().share_setopt(d.share, CURLSHOPT_UNLOCKFUNC, +[](CURL*, curl_lock_data data, void* user) {
         static_cast<Impl*>(user)->shareLocks[data].unlock();
     });
-    curl_share_setopt(d.share, CURLSHOPT_USERDATA, &d);
-    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_CONNECT);
-    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_DNS);
-    curl_share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_SSL_SESSION);
+    curlLibrary().share_setopt(d.share, CURLSHOPT_USERDATA, &d);
+    curlLibrary().share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_CONNECT);
+    curlLibrary().share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_DNS);
+    curlLibrary().share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_SSL_SESSION);
 }
 
 RemoteSession::~RemoteSession() {
-    if (mImpl->share) curl_share_cleanup(mImpl->share);
+    if (mImpl->share) curlLibrary().share_cleanup(mImpl->share);
 }
 
 const RemoteOptions& RemoteSession::options() const { return mImpl->options; }
@@ -109,18 +104,18 @@ CURL* RemoteSession::take() {
         d.poolFree.wait(lock, [&] { return d.inUse < d.options.connections; });
         ++d.inUse;
     }
-    CURL* c = curl_easy_init();
+    CURL* c = curlLibrary().easy_init();
     if (!c) {
         give(nullptr);
         throw std::bad_alloc();
     }
-    curl_easy_setopt(c, CURLOPT_SHARE, d.share);
+    curlLibrary().easy_setopt(c, CURLOPT_SHARE, d.share);
     return c;
 }
 
 void RemoteSession::give(CURL* c) {
     Impl& d = *mImpl;
-    if (c) curl_easy_cleanup(c);
+    if (c) curlLibrary().easy_cleanup(c);
     {
         std::lock_guard lock(d.poolLock);
         --d.inUse;
