@@ -13,14 +13,11 @@ namespace vdiso {
 namespace {
 
 constexpr uint64_t kFull = ~uint64_t(0);
-constexpr uint64_t kColumnBits = 0x0101010101010101ull;  // bit 0 of every row
 
-// Bits of columns c0..c1 of every row of an 8x8 word, and of every column of rows r0..r1
-// (inclusive, 0..7, non-empty).
-inline uint64_t columnsMask(int c0, int c1) { return ((uint64_t(0xFF) >> (7 - (c1 - c0))) << c0) * kColumnBits; }
-inline uint64_t rowsMask(int r0, int r1) { return (kFull >> ((7 - r1) * 8)) & (kFull << (r0 * 8)); }
 // Bits of columns c0..c1 and rows r0..r1.
-inline uint64_t rectMask(int c0, int c1, int r0, int r1) { return columnsMask(c0, c1) & rowsMask(r0, r1); }
+inline uint64_t rectMask(int c0, int c1, int r0, int r1) {
+    return OcclusionPyramid::columnsMask(c0, c1) & OcclusionPyramid::rowsMask(r0, r1);
+}
 
 }  // namespace
 
@@ -60,33 +57,9 @@ void OcclusionPyramid::clear() {
     mFilledTiles.clear();
 }
 
-bool OcclusionPyramid::isOccluded(int x0, int y0, int x1, int y1) const {
-    ++mStats.queries;
-    x0 = std::max(x0, 0);
-    y0 = std::max(y0, 0);
-    x1 = std::min(x1, mWidth - 1);
-    y1 = std::min(y1, mHeight - 1);
-    if (x0 > x1 || y0 > y1) return true;
-    // A rectangle within 2x2 tiles (the per-cell and small-node queries, most of them): the
-    // bottom level alone answers, at most four words read directly instead of one per level
-    // from the top (when there are more than two levels, so that this reads fewer). Its columns
-    // in the left and right tile and its rows in the top and bottom one are masks made once.
+// Beyond 2x2 tiles (isOccluded in the header answers those); the rectangle is clamped already.
+bool OcclusionPyramid::isOccludedBeyond2x2(int x0, int y0, int x1, int y1) const {
     const int tx0 = x0 >> 3, tx1 = x1 >> 3, ty0 = y0 >> 3, ty1 = y1 >> 3;
-    if (tx1 - tx0 <= 1 && ty1 - ty0 <= 1 && levels() > 2) {
-        const bool twoX = tx1 > tx0, twoY = ty1 > ty0;
-        const uint64_t left = columnsMask(x0 & 7, twoX ? 7 : x1 & 7), right = columnsMask(0, x1 & 7);
-        const uint64_t top = rowsMask(y0 & 7, twoY ? 7 : y1 & 7), bottom = rowsMask(0, y1 & 7);
-        const size_t stride = size_t(mWordsX[0]);
-        const uint64_t* w = mWords.data() + size_t(ty0) * stride + size_t(tx0);
-        uint64_t missing = left & top & ~w[0];
-        if (twoX) missing |= right & top & ~w[1];
-        if (twoY) {
-            missing |= left & bottom & ~w[stride];
-            if (twoX) missing |= right & bottom & ~w[stride + 1];
-        }
-        mStats.queryWords += 1 + twoX + twoY + (twoX & twoY);
-        return missing == 0;
-    }
     // Within 4x4 tiles (meta-cells' and small nodes' boxes): the bottom words row by row, up to
     // the first with an uncovered pixel of the rectangle. From the top such a query read four
     // levels and cost about 550 instructions (cachegrind, ch2better's normal view).

@@ -22,6 +22,7 @@
 // concurrent queries (they count the words they touch): one pyramid per extraction.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -62,8 +63,42 @@ public:
 
     // True when every pixel of the inclusive rectangle [x0, x1] x [y0, y1], clamped to the
     // image, is covered; true as well when nothing of it is left after clamping (no pixel of
-    // it can be seen). Needs propagate() after the last coverSpan().
-    bool isOccluded(int x0, int y0, int x1, int y1) const;
+    // it can be seen). Needs propagate() after the last coverSpan() for rectangles beyond 4x4
+    // tiles; smaller ones are answered from the bottom words.
+    // Inline for a rectangle within 2x2 tiles (the per-cell and per-polygon queries, most of
+    // them): at most four words read directly, its columns in the left and right tile and its
+    // rows in the top and bottom one as masks made once.
+    bool isOccluded(int x0, int y0, int x1, int y1) const {
+        ++mStats.queries;
+        x0 = std::max(x0, 0);
+        y0 = std::max(y0, 0);
+        x1 = std::min(x1, mWidth - 1);
+        y1 = std::min(y1, mHeight - 1);
+        if (x0 > x1 || y0 > y1) return true;
+        const int tx0 = x0 >> 3, tx1 = x1 >> 3, ty0 = y0 >> 3, ty1 = y1 >> 3;
+        // (With two levels or fewer the top-down walk reads as few words.)
+        if (tx1 - tx0 > 1 || ty1 - ty0 > 1 || levels() <= 2) return isOccludedBeyond2x2(x0, y0, x1, y1);
+        const bool twoX = tx1 > tx0, twoY = ty1 > ty0;
+        const uint64_t left = columnsMask(x0 & 7, twoX ? 7 : x1 & 7), right = columnsMask(0, x1 & 7);
+        const uint64_t top = rowsMask(y0 & 7, twoY ? 7 : y1 & 7), bottom = rowsMask(0, y1 & 7);
+        const size_t stride = size_t(mWordsX[0]);
+        const uint64_t* w = mWords.data() + size_t(ty0) * stride + size_t(tx0);
+        uint64_t missing = left & top & ~w[0];
+        if (twoX) missing |= right & top & ~w[1];
+        if (twoY) {
+            missing |= left & bottom & ~w[stride];
+            if (twoX) missing |= right & bottom & ~w[stride + 1];
+        }
+        mStats.queryWords += 1 + twoX + twoY + (twoX & twoY);
+        return missing == 0;
+    }
+
+    // Bits of columns c0..c1 of every row of an 8x8 word, and of every column of rows r0..r1
+    // (inclusive, 0..7, c0 <= c1, r0 <= r1).
+    static uint64_t columnsMask(int c0, int c1) {
+        return ((uint64_t(0xFF) >> (7 - (c1 - c0))) << c0) * 0x0101010101010101ull;
+    }
+    static uint64_t rowsMask(int r0, int r1) { return (~uint64_t(0) >> ((7 - r1) * 8)) & (~uint64_t(0) << (r0 * 8)); }
 
     // Covers pixels x0..x1 (inclusive, clamped to the image) of row y; returns whether any of
     // them was not covered before.
@@ -125,6 +160,7 @@ private:
         return mWords[mLevelOffset[size_t(level)] + size_t(wy) * mWordsX[size_t(level)] +
                       size_t(wx)];
     }
+    bool isOccludedBeyond2x2(int x0, int y0, int x1, int y1) const;
     bool queryWord(int level, int wx, int wy, int x0, int y0, int x1, int y1) const;
     bool insertWord(const TopDownTriangle& t, int level, int wx, int wy);
     void fillSubtree(int level, int wx, int wy);
