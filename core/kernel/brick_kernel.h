@@ -127,14 +127,26 @@ struct BrickKernel {
     // Without `withNormal` its normal is left zero, for ensureNormal() to fill once the cell
     // is known to be kept: the view-dependent traversal drops about half the vertices it
     // makes, and the normal is most of a vertex's cost.
-    uint32_t edgeVertex(int cx, int cy, int cz, int e, bool withNormal) {
-        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
-        const int p[3] = {cx + o[0], cy + o[1], cz + o[2]}, axis = mcEdgeAxis(e);
-        const int n = x.mLayout.brickSize + 1;
-        const size_t local = ((size_t(p[2]) * n + p[1]) * n + p[0]) * 3 + axis;
+    // `local`: the edge's slot in x.mEdgeVertex, cornerSlot(cx, cy, cz) + edgeSlots()[e].
+    uint32_t edgeVertex(size_t local, int cx, int cy, int cz, int e, bool withNormal) {
         uint32_t& slot = x.mEdgeVertex[local];
         if (slot > x.mBrickFirstVertex) return slot - 1;
-        return makeEdgeVertex(p[0], p[1], p[2], axis, withNormal, &slot);
+        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+        return makeEdgeVertex(cx + o[0], cy + o[1], cz + o[2], mcEdgeAxis(e), withNormal, &slot);
+    }
+    // The first of the three vertex slots (x, y and z edges) of local corner (cx, cy, cz).
+    size_t cornerSlot(int cx, int cy, int cz) const {
+        const size_t n = size_t(x.mLayout.brickSize) + 1;
+        return ((size_t(cz) * n + size_t(cy)) * n + size_t(cx)) * 3;
+    }
+    // Edge e of a cell has its slot at cornerSlot(the cell) + slots[e]: the index arithmetic
+    // once a meta-cell instead of once an edge (kept out of the kernel's members: a larger
+    // kernel changed what GCC inlines into emitBrick, 11 M instructions on a full extraction).
+    void edgeSlots(uint32_t (&slots)[kMcEdgeCount]) const {
+        for (int e = 0; e < kMcEdgeCount; ++e) {
+            const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
+            slots[e] = uint32_t(cornerSlot(o[0], o[1], o[2])) + uint32_t(mcEdgeAxis(e));
+        }
     }
 
     // The vertex on the edge from local corner (px, py, pz) along `axis`, asked for once per brick: an
@@ -435,6 +447,8 @@ struct BrickKernel {
             }
         classifyCorners(lo, hi, above);
         const uint64_t cellBits = (uint64_t(1) << nx) - 1;
+        uint32_t slotOffset[kMcEdgeCount];
+        edgeSlots(slotOffset);
         KernelCounters& counters = x.mCounters;
         ++counters.metaCellsActive;
         counters.cellsVisited += int64_t(nx) * ny * nz;
@@ -453,12 +467,14 @@ struct BrickKernel {
                         if (!cellPolicy.keepCell(corner0[0] + cx, corner0[1] + cy, corner0[2] + cz)) continue;
                     ++counters.cellsActive;
                     const McPolygonCase& pc = mcPolygonCase(caseIndex);
+                    const size_t cellSlot = cornerSlot(cx, cy, cz);
                     uint32_t outline[kMcEdgeCount];  // every polygon's, one after another
                     bool wanted = !Cells::kTestsPolygons;
                     int outlineLength = 0;
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
                         for (int k = 0; k < pc.vertexCount[p]; ++k)
-                            outline[at + k] = edgeVertex(cx, cy, cz, pc.edges[at + k], !Cells::kTestsPolygons);
+                            outline[at + k] = edgeVertex(cellSlot + slotOffset[pc.edges[at + k]], cx, cy, cz, pc.edges[at + k],
+                                                         !Cells::kTestsPolygons);
                         if constexpr (Cells::kTestsPolygons)
                             wanted |= cellPolicy.keepPolygon(outline + at, pc.vertexCount[p]);
                         outlineLength = at + pc.vertexCount[p];
