@@ -71,7 +71,19 @@ private:
     // The pixel position of vertex v (a mesh vertex number), projected the first time it is
     // asked for: a vertex is shared by up to four cells' polygons. False when it cannot be
     // placed on the image plane (behind the eye, clipped, or beyond what a double holds).
-    bool screenPosition(uint32_t v, glm::dvec2& out);
+    // Inline for the vertices projected already (two in three); the rest go to placeVertex.
+    bool screenPosition(uint32_t v, glm::dvec2& out) {
+        const size_t i = v - mMesh.firstVertex;
+        if (i < mScreen.size()) {
+            const glm::dvec2 s = mScreen[i];
+            if (!std::isnan(s.x)) {
+                out = s;
+                return !std::isinf(s.x);
+            }
+        }
+        return placeVertex(i, out);
+    }
+    bool placeVertex(size_t i, glm::dvec2& out);
     // The pixel a point falls on; false when it is off the image or not on the image plane.
     bool pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const;
     // Adds to mThinParts the points of coarse brick `at`'s lost thin parts that fall on pixels
@@ -302,19 +314,17 @@ void ViewTraversal::count(Cull cull) {
     }
 }
 
-bool ViewTraversal::screenPosition(uint32_t v, glm::dvec2& out) {
-    const size_t i = v - mMesh.firstVertex;
+// Vertex i (counted from mMesh.firstVertex) not projected yet: projected and kept.
+bool ViewTraversal::placeVertex(size_t i, glm::dvec2& out) {
     if (i >= mScreen.size())  // grown geometrically: vertices arrive one by one
         mScreen.resize(std::max(mMesh.positions.size(), 2 * mScreen.size()),
                        glm::dvec2(std::numeric_limits<double>::quiet_NaN()));
     glm::dvec2& s = mScreen[i];
-    if (std::isnan(s.x)) {
-        const glm::dvec3 p = mPixels.project(glm::dvec3(mMesh.positions[i]));
-        const bool placed = p.z >= 0.0 && p.z <= 1.0 && std::isfinite(p.x) && std::isfinite(p.y);
-        s = placed ? glm::dvec2(p.x, p.y) : glm::dvec2(std::numeric_limits<double>::infinity());
-    }
+    const glm::dvec3 p = mPixels.project(glm::dvec3(mMesh.positions[i]));
+    const bool placed = p.z >= 0.0 && p.z <= 1.0 && std::isfinite(p.x) && std::isfinite(p.y);
+    s = placed ? glm::dvec2(p.x, p.y) : glm::dvec2(std::numeric_limits<double>::infinity());
     out = s;
-    return !std::isinf(s.x);
+    return placed;
 }
 
 bool ViewTraversal::pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const {
