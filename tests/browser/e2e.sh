@@ -43,8 +43,10 @@ done
 echo '{"eye": [338, 736, 170], "target": [150, 199.25, 9.25], "up": [0, 0, 1], "fov": 30}' > "$work/cam.json"
 page=()
 [ -n "${2:-}" ] && page=(--page "$out/viewer_page.png")
+# --timeout: a hang guard, not a speed bound (bench/ measures the viewer): the sanitized build's
+# server on 2 busy cores took the session past e2e.mjs's 60 s once (2026-11-29).
 node "$here/e2e.mjs" --url "$url" --camera "$work/cam.json" --size 800x800 --out "$out/viewer_frame.png" \
-  --follow-out "$out/follower_frame.png" "${page[@]}" | tee "$work/stats.json"
+  --follow-out "$out/follower_frame.png" --timeout 180 "${page[@]}" | tee "$work/stats.json"
 "$vdiso" extract "$work/ch2better.vdiso" --iso 40.5 --method sage --camera "$work/cam.json" \
   --size 800x800 --png "$out/extract_sage.png" --force --quiet
 echo -n "colour (tolerance 24): "
