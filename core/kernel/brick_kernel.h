@@ -127,7 +127,7 @@ struct BrickKernel {
     // Without `withNormal` its normal is left zero, for ensureNormal() to fill once the cell
     // is known to be kept: the view-dependent traversal drops about half the vertices it
     // makes, and the normal is most of a vertex's cost.
-    // `local`: the edge's slot in x.mEdgeVertex, cornerSlot(cx, cy, cz) + edgeSlots()[e].
+    // `local`: the edge's slot in x.mEdgeVertex, cornerSlot(cx, cy, cz) + the edgeSlots() offset of e.
     uint32_t edgeVertex(size_t local, int cx, int cy, int cz, int e, bool withNormal) {
         uint32_t& slot = x.mEdgeVertex[local];
         if (slot > x.mBrickFirstVertex) return slot - 1;
@@ -472,9 +472,10 @@ struct BrickKernel {
                     bool wanted = !Cells::kTestsPolygons;
                     int outlineLength = 0;
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
-                        for (int k = 0; k < pc.vertexCount[p]; ++k)
-                            outline[at + k] = edgeVertex(cellSlot + slotOffset[pc.edges[at + k]], cx, cy, cz, pc.edges[at + k],
-                                                         !Cells::kTestsPolygons);
+                        for (int k = 0; k < pc.vertexCount[p]; ++k) {
+                            const int e = pc.edges[at + k];
+                            outline[at + k] = edgeVertex(cellSlot + slotOffset[e], cx, cy, cz, e, !Cells::kTestsPolygons);
+                        }
                         if constexpr (Cells::kTestsPolygons)
                             wanted |= cellPolicy.keepPolygon(outline + at, pc.vertexCount[p]);
                         outlineLength = at + pc.vertexCount[p];

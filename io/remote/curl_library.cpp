@@ -38,27 +38,10 @@ const CurlLibrary& curlLibrary() {
             return;
         }
         const char* missing = nullptr;
-#define VDISO_BIND(member) \
-    if (!missing && !bind(library, "curl_" #member, curl.member)) missing = "curl_" #member
-        VDISO_BIND(global_init);
-        VDISO_BIND(easy_init);
-        VDISO_BIND(easy_setopt);
-        VDISO_BIND(easy_perform);
-        VDISO_BIND(easy_getinfo);
-        VDISO_BIND(easy_cleanup);
-        VDISO_BIND(easy_strerror);
-        VDISO_BIND(share_init);
-        VDISO_BIND(share_setopt);
-        VDISO_BIND(share_cleanup);
-        VDISO_BIND(slist_append);
-        VDISO_BIND(slist_free_all);
-        VDISO_BIND(url);
-        VDISO_BIND(url_set);
-        VDISO_BIND(url_get);
-        VDISO_BIND(url_cleanup);
-        VDISO_BIND(free);
-        VDISO_BIND(getdate);
-#undef VDISO_BIND
+#define VDISO_CURL_BIND(name) \
+    if (!missing && !bind(library, "curl_" #name, curl.name)) missing = "curl_" #name;
+        VDISO_CURL_FUNCTIONS(VDISO_CURL_BIND)
+#undef VDISO_CURL_BIND
         if (missing) {
             failure = soname + " has no " + missing + " (libcurl 7.85 or newer is needed)";
             return;

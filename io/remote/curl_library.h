@@ -5,7 +5,9 @@
 //
 // curlLibrary() opens libcurl.so.4 (the library Debian's libcurl4-openssl-dev builds against),
 // or the file VDISO_CURL_LIBRARY names, once, thread-safely, and runs curl_global_init; it
-// throws IoError when either fails, saying what remote reading needs. Each member has the type of the libcurl function of its name.
+// throws IoError when either fails, saying what remote reading needs. Each member has the type
+// of the libcurl function of its name (curl_ and the member's name), as the renderer's table of
+// OSMesa's functions does (io/render/renderer.cpp).
 #pragma once
 
 #include <curl/curl.h>
@@ -14,25 +16,15 @@
 
 namespace vdiso {
 
+#define VDISO_CURL_FUNCTIONS(X)                                                                    \
+    X(global_init) X(easy_init) X(easy_setopt) X(easy_perform) X(easy_getinfo) X(easy_cleanup)     \
+    X(easy_strerror) X(share_init) X(share_setopt) X(share_cleanup) X(slist_append)               \
+    X(slist_free_all) X(url) X(url_set) X(url_get) X(url_cleanup) X(free) X(getdate)
+
 struct CurlLibrary {
-    decltype(&::curl_global_init) global_init;
-    decltype(&::curl_easy_init) easy_init;
-    decltype(&::curl_easy_setopt) easy_setopt;
-    decltype(&::curl_easy_perform) easy_perform;
-    decltype(&::curl_easy_getinfo) easy_getinfo;
-    decltype(&::curl_easy_cleanup) easy_cleanup;
-    decltype(&::curl_easy_strerror) easy_strerror;
-    decltype(&::curl_share_init) share_init;
-    decltype(&::curl_share_setopt) share_setopt;
-    decltype(&::curl_share_cleanup) share_cleanup;
-    decltype(&::curl_slist_append) slist_append;
-    decltype(&::curl_slist_free_all) slist_free_all;
-    decltype(&::curl_url) url;
-    decltype(&::curl_url_set) url_set;
-    decltype(&::curl_url_get) url_get;
-    decltype(&::curl_url_cleanup) url_cleanup;
-    decltype(&::curl_free) free;
-    decltype(&::curl_getdate) getdate;
+#define VDISO_CURL_MEMBER(name) decltype(&::curl_##name) name = nullptr;
+    VDISO_CURL_FUNCTIONS(VDISO_CURL_MEMBER)
+#undef VDISO_CURL_MEMBER
 };
 
 const CurlLibrary& curlLibrary();
