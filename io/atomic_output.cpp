@@ -76,6 +76,22 @@ AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite,
     }
 }
 
+AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs,
+                                   std::string partialPath, bool resume)
+    : mPath(std::move(path)), mTempPath(std::move(partialPath)), mOverwrite(overwrite), mKeepPartial(true) {
+    checkOutputReplaceable(mPath, mOverwrite, inputs);
+    checkOutputReplaceable(mTempPath, true, inputs);  // a regular file, if anything
+    mFd = ::open(mTempPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | (resume ? 0 : O_TRUNC), 0644);
+    if (mFd < 0) {
+        const int error = errno;
+        const std::string partial = mTempPath;
+        mTempPath.clear();
+        throwSystemError(partial, "cannot write", error);
+    }
+    struct stat st;
+    if (::fstat(mFd, &st) == 0) mSize = uint64_t(st.st_size);
+}
+
 std::string AtomicOutputFile::temporaryName() const {
     // Unique per process and per object: two writers of one path never share a temporary.
     static std::atomic<unsigned> counter{0};
@@ -84,7 +100,16 @@ std::string AtomicOutputFile::temporaryName() const {
 
 AtomicOutputFile::~AtomicOutputFile() {
     if (mFd >= 0) ::close(mFd);
-    if (!mTempPath.empty()) ::unlink(mTempPath.c_str());
+    if (!mTempPath.empty() && !mKeepPartial) ::unlink(mTempPath.c_str());
+}
+
+void AtomicOutputFile::truncate(uint64_t size) {
+    if (::ftruncate(mFd, off_t(size)) != 0) throwSystemError(mTempPath.empty() ? mPath : mTempPath, "cannot truncate", errno);
+    mSize = size;
+}
+
+void AtomicOutputFile::flush() {
+    if (::fdatasync(mFd) != 0) throwSystemError(mTempPath.empty() ? mPath : mTempPath, "cannot flush", errno);
 }
 
 void AtomicOutputFile::writeAt(const void* data, size_t n, uint64_t offset) {

@@ -47,6 +47,12 @@ public:
     // a directory; through a symbolic link too) or a file that is one of `inputs` under another
     // name (compared by device and inode: "./vol.nrrd", a link to it, a header's data file).
     AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs = {});
+    // A resumable output (vdiso index): written under `partialPath`, which outlives a failure,
+    // an interrupt or a kill so that a later run can go on with it. With `resume` the partial
+    // file there is opened as it is (its bytes are the interrupted run's), else it is created
+    // empty. commit() renames it into place; `path` is checked as above, up front and at commit.
+    AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs,
+                     std::string partialPath, bool resume);
     ~AtomicOutputFile();
     AtomicOutputFile(const AtomicOutputFile&) = delete;
     AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
@@ -64,6 +70,11 @@ public:
     // flush has little left to do. A hint: failures surface at commit().
     void startWriteback(uint64_t offset, uint64_t n);
 
+    // Cuts the file to `size` bytes (a resumed output, back to its checkpoint's end).
+    void truncate(uint64_t size);
+    // Makes what was written so far durable (fdatasync): a resumable output's checkpoint.
+    void flush();
+
     // Flushes, closes and renames into place. Throws on failure, leaving no output.
     void commit();
 
@@ -73,6 +84,7 @@ private:
     std::string mPath;
     std::string mTempPath;  // empty while the file is unnamed (O_TMPFILE)
     bool mOverwrite;
+    bool mKeepPartial = false;  // a resumable output's partial file stays after a failure
     int mFd = -1;
     uint64_t mSize = 0;
 };

@@ -7,8 +7,10 @@
 
 namespace vdiso {
 
-uint32_t crc32Of(const void* data, size_t n) {
-    uLong crc = crc32(0L, Z_NULL, 0);
+uint32_t crc32Of(const void* data, size_t n) { return crc32Update(uint32_t(crc32(0L, Z_NULL, 0)), data, n); }
+
+uint32_t crc32Update(uint32_t start, const void* data, size_t n) {
+    uLong crc = start;
     const auto* p = static_cast<const Bytef*>(data);
     while (n > 0) {  // zlib takes at most 4 GB a call
         const uInt chunk = uInt(std::min<size_t>(n, size_t(1) << 30));

@@ -240,6 +240,85 @@ TEST_F(ZarrIndex, FromTheCommandLine) {
     EXPECT_NE(r.output.find("nothing.zarr"), std::string::npos) << r.output;
 }
 
+// An index pass that stops (here, a chunk that cannot be decoded) leaves INDEX.partial and
+// INDEX.resume; the next run goes on from the checkpoint and writes the very bytes of an
+// uninterrupted run. A chunk the interrupted run read that changed since is refused by name;
+// a checkpoint of other options is not gone on from; a damaged one is refused.
+TEST_F(ZarrIndex, AnInterruptedIndexGoesOnWhereItStopped) {
+    test::ArraySpec a = ballArray(2, {8, 16, 16}, test::Codec::Blosc);  // 5 layers of chunks, 5 of bricks
+    test::writeArray(path("r.zarr"), a);
+    ZarrIndexOptions o;
+    o.store = storeOptions();
+    o.checkpointSeconds = 0;  // a checkpoint at every layer of bricks
+    indexZarr(path("r.zarr"), path("whole.vdiso"), o);
+    const std::string whole = test::readText(path("whole.vdiso"));
+    const std::string index = path("r.vdiso"), chunk = path("r.zarr/3.0.1");
+    const std::string good = test::readText(chunk);
+    auto interrupted = [&] {
+        test::writeFile(chunk, "not blosc");
+        expectIoError([&] { indexZarr(path("r.zarr"), index, o); }, {chunk});
+        test::writeFile(chunk, good);
+        EXPECT_FALSE(std::filesystem::exists(index));
+        EXPECT_TRUE(std::filesystem::exists(indexPartialPath(index)));
+        ASSERT_TRUE(std::filesystem::exists(indexCheckpointPath(index)));
+    };
+    interrupted();
+    ZarrIndexSummary s = indexZarr(path("r.zarr"), index, o);
+    EXPECT_EQ(s.store.layers, 5);
+    EXPECT_EQ(s.store.resumedLayers, 1);  // layer 2 needs chunk layer 3: the last checkpoint was before layer 1
+    EXPECT_TRUE(s.startedOver.empty()) << s.startedOver;
+    EXPECT_EQ(s.chunks, 5 * 3 * 3);
+    EXPECT_EQ(test::readText(index), whole);  // the pins of the chunks read before, the ranges, the levels
+    EXPECT_FALSE(std::filesystem::exists(indexPartialPath(index)));
+    EXPECT_FALSE(std::filesystem::exists(indexCheckpointPath(index)));
+    expectSameStore(BrickStoreReader(index), BrickStoreReader(path("whole.vdiso")), "resumed");
+
+    // The array changed between the runs: a chunk read again is refused, naming it.
+    std::filesystem::remove(index);
+    interrupted();
+    test::ArraySpec other = a;
+    other.sample = [](int64_t x, int64_t y, int64_t z) { return bumpyBall(x, y, z) + 1; };
+    test::writeArray(path("r.zarr"), other);
+    expectIoError([&] { indexZarr(path("r.zarr"), index, o); },
+                  {"r.zarr/0.0.0", "changed since the interrupted run", "--restart"});
+    ZarrIndexOptions restart = o;
+    restart.restart = true;
+    s = indexZarr(path("r.zarr"), index, restart);
+    EXPECT_EQ(s.store.resumedLayers, 0);
+    EXPECT_NE(test::readText(index), whole);
+
+    // Other options: started over, not gone on from. A damaged checkpoint: refused.
+    test::writeArray(path("r.zarr"), a);
+    std::filesystem::remove(index);
+    interrupted();
+    ZarrIndexOptions coarser = o;
+    coarser.store.brickSize = 16;
+    s = indexZarr(path("r.zarr"), index, coarser);
+    EXPECT_EQ(s.store.resumedLayers, 0);
+    EXPECT_NE(s.startedOver.find("other options"), std::string::npos) << s.startedOver;
+    EXPECT_EQ(BrickStoreReader(index).layout().brickSize, 16);
+    std::filesystem::remove(index);
+    interrupted();
+    std::string checkpoint = test::readText(indexCheckpointPath(index));
+    checkpoint[checkpoint.size() / 2] ^= 1;
+    test::writeFile(indexCheckpointPath(index), checkpoint);
+    expectIoError([&] { indexZarr(path("r.zarr"), index, o); }, {indexCheckpointPath(index), "damaged", "--restart"});
+    s = indexZarr(path("r.zarr"), index, restart);
+    EXPECT_EQ(test::readText(index), whole);
+
+    // From the command line: the failed run says how to go on, the next one says it did.
+    std::filesystem::remove(index);
+    test::writeFile(chunk, "not blosc");
+    auto r = test::runVdiso("index " + path("r.zarr") + " --index " + index + " --brick 8 --checkpoint-seconds 0");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("r.vdiso.resume keeps where the pass stood"), std::string::npos) << r.output;
+    test::writeFile(chunk, good);
+    r = test::runVdiso("index " + path("r.zarr") + " --index " + index + " --brick 8");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("went on from an interrupted run: 1 of 5 layers"), std::string::npos) << r.output;
+    EXPECT_EQ(test::readText(index), whole);
+}
+
 // A record whose checksum holds but whose fields do not: refused as damaged, never trusted.
 TEST(ZarrIndexRecord, InconsistentRecordsAreRefused) {
     ExternalLevel e;

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include "cli/args.h"
 #include "cli/progress_bar.h"
@@ -20,9 +21,16 @@ constexpr const char* kHelp =
     "a chunk that changes afterwards is refused when read. Then 'vdiso extract DATA ...' (a\n"
     "folder finds its index beside it) or 'vdiso extract OUT ...'.\n"
     "\n"
+    "The index is written as OUT.partial, and where the pass stands is saved as OUT.resume\n"
+    "every half minute or so: a run that stops (Ctrl-C, a failed read, a kill) is gone on\n"
+    "with by running the same command again. Both files go once OUT is written.\n"
+    "\n"
     "  --index OUT             where the index goes (default: DATA.vdiso beside a local DATA;\n"
     "                          needed for a URL)\n"
     "  --scale-level N         the OME-Zarr multiscales level to index (default 0, the finest)\n"
+    "  --restart               start over, not from an interrupted run's OUT.resume\n"
+    "  --checkpoint-seconds S  save where the pass stands at least S seconds apart (default 30;\n"
+    "                          never more often than ten times the time a save takes)\n"
     "  --quiet                 no progress bar or summary\n"
     "index:\n";
 
@@ -45,6 +53,11 @@ int runIndex(int argc, char** argv) {
             index = args.value(a);
         } else if (a == "--scale-level") {
             options.level = int(parseInt(a, args.value(a), 0, 64));
+        } else if (a == "--checkpoint-seconds") {
+            options.checkpointSeconds = parseDouble(a, args.value(a));
+            if (!(options.checkpointSeconds >= 0)) throw UsageError(a + " expects seconds, 0 or more");
+        } else if (a == "--restart") {
+            options.restart = true;
         } else if (a == "--quiet") {
             quiet = true;
         } else if (takeStoreWriteOption(a, args, options.store) || takeRemoteOption(a, args, options.remote)) {
@@ -58,8 +71,20 @@ int runIndex(int argc, char** argv) {
     }
     if (data.empty()) throw UsageError("expects DATA, a Zarr array or OME-Zarr image");
     index = indexPathFor(data, index);
-    const ZarrIndexSummary s = indexZarr(data, index, options, progressBar("index", 0, quiet));
+    ZarrIndexSummary s;
+    try {
+        s = indexZarr(data, index, options, progressBar("index", 0, quiet));
+    } catch (...) {
+        if (std::filesystem::exists(indexCheckpointPath(index)))
+            std::fprintf(stderr, "\nvdiso index: %s keeps where the pass stood; the same command goes on from there\n",
+                         indexCheckpointPath(index).c_str());
+        throw;
+    }
     if (!quiet) {
+        if (!s.startedOver.empty()) std::printf("started over: %s\n", s.startedOver.c_str());
+        if (s.store.resumedLayers > 0)
+            std::printf("went on from an interrupted run: %lld of %lld layers of bricks were done\n",
+                        (long long)s.store.resumedLayers, (long long)s.store.layers);
         const double ratio = double(s.store.fileBytes) / double(std::max<uint64_t>(s.dataBytes, 1));
         std::printf("wrote %s: %lld bricks of %d^3 cells in %d level%s over %lld chunks (%lld missing), "
                     "%.1f MB indexed into %.2f MB (%.2f%% of the data; coarse levels %.2f MB), %.2f s, %.0f MB/s\n",

@@ -7,6 +7,7 @@
 #include <future>
 #include <map>
 #include <mutex>
+#include <stdexcept>
 #include <fstream>
 #include <new>
 #include <nlohmann/json.hpp>
@@ -191,9 +192,11 @@ uint64_t chunkBound(const ZarrArrayMeta& m) { return m.chunkBytes() + m.chunkByt
 
 class ZarrSliceReader final : public SliceReader {
 public:
-    ZarrSliceReader(std::unique_ptr<ZarrVolume> volume, std::vector<ZarrChunkPin>* pins)
-        : mVolume(std::move(volume)), mPins(pins) {
-        if (mPins) mPins->assign(size_t(mVolume->chunkCount()), ZarrChunkPin{});
+    ZarrSliceReader(std::unique_ptr<ZarrVolume> volume, std::vector<ZarrChunkPin>* pins, int64_t pinnedLayers)
+        : mVolume(std::move(volume)), mPins(pins), mPinnedLayers(pinnedLayers) {
+        if (mPins && mPinnedLayers == 0) mPins->assign(size_t(mVolume->chunkCount()), ZarrChunkPin{});
+        if (mPins && mPins->size() != size_t(mVolume->chunkCount()))
+            throw std::logic_error("zarr reader: pins of another chunk grid");
     }
 
     const VolumeInfo& info() const override { return mVolume->info(); }
@@ -242,8 +245,15 @@ private:
         }
         const std::vector<Dims3> chunks = layerChunks(layer);
         auto place = [&](const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes) {
-            if (mPins && bytes)
-                (*mPins)[size_t(mVolume->chunkNumber(c))] = {bytes->size(), crc32Of(bytes->data(), bytes->size())};
+            if (mPins) {
+                const ZarrChunkPin pin = bytes ? ZarrChunkPin{bytes->size(), crc32Of(bytes->data(), bytes->size())}
+                                               : ZarrChunkPin{};
+                ZarrChunkPin& slot = (*mPins)[size_t(mVolume->chunkNumber(c))];
+                if (c[2] < mPinnedLayers && slot != pin)
+                    throwIoError(mVolume->where(c), "changed since the interrupted run that is being resumed read "
+                                                    "it; run vdiso index again with --restart");
+                slot = pin;
+            }
             mVolume->decode(c, bytes, mChunk.data());
             const int64_t x0 = c[0] * cx, y0 = c[1] * cy;
             const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
@@ -283,6 +293,7 @@ private:
 
     std::unique_ptr<ZarrVolume> mVolume;
     std::vector<ZarrChunkPin>* mPins;
+    int64_t mPinnedLayers;
     std::vector<unsigned char> mLayer, mChunk;
     int64_t mLayerIndex = -1;
     std::future<std::vector<std::optional<std::vector<unsigned char>>>> mAhead;  // remote: the next layer's
@@ -476,8 +487,9 @@ void ZarrVolume::decode(const Dims3& c, const std::optional<std::vector<unsigned
     decodeSamples(raw.data(), m.type, swap, samples, out, mInfo.type);
 }
 
-std::unique_ptr<SliceReader> zarrSliceReader(std::unique_ptr<ZarrVolume> volume, std::vector<ZarrChunkPin>* pins) {
-    return std::make_unique<ZarrSliceReader>(std::move(volume), pins);
+std::unique_ptr<SliceReader> zarrSliceReader(std::unique_ptr<ZarrVolume> volume, std::vector<ZarrChunkPin>* pins,
+                                             int64_t pinnedLayers) {
+    return std::make_unique<ZarrSliceReader>(std::move(volume), pins, pinnedLayers);
 }
 
 std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level, const RemoteOptions& remote,

@@ -107,9 +107,11 @@ private:
 std::unique_ptr<SliceReader> openZarrVolume(const std::string& path, int level,
                                             const RemoteOptions& remote = {},
                                             std::vector<ZarrChunkPin>* pins = nullptr);
-// The same over an opened array.
+// The same over an opened array. With `pinnedLayers` > 0 (a resumed index), `pins` already
+// holds the pins of the chunks in layers below it, read by an earlier run: a chunk of those
+// read again must match its pin, else IoError naming it.
 std::unique_ptr<SliceReader> zarrSliceReader(std::unique_ptr<ZarrVolume> volume,
-                                             std::vector<ZarrChunkPin>* pins = nullptr);
+                                             std::vector<ZarrChunkPin>* pins = nullptr, int64_t pinnedLayers = 0);
 
 // True if `dir` holds Zarr metadata (.zarray, .zgroup, .zattrs or zarr.json).
 bool looksLikeZarr(const std::string& dir);

@@ -5,13 +5,17 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
+
+#include <unistd.h>
 
 #include "core/brick_levels.h"
 #include "core/interrupt.h"
 #include "io/atomic_output.h"
 #include "io/store/brick_encoder.h"
+#include "io/store/store_checkpoint.h"
 
 namespace vdiso {
 
@@ -26,11 +30,32 @@ struct LevelInProgress {
     int64_t nextLayer = 0;
 };
 
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
 }  // namespace
+
+std::string storeResumeIdentity(const VolumeInfo& volume, const std::string& sourceName,
+                                const StoreWriteOptions& options, const std::string& sourceIdentity) {
+    const VolumeInfo info = storeVolumeFor(volume, options, sourceName);
+    std::ostringstream s;
+    s << std::hexfloat << "store " << kStoreFormatVersion << "; dims " << info.dims[0] << ' ' << info.dims[1] << ' '
+      << info.dims[2] << "; type " << int(info.type) << "; spacing " << info.spacing.x << ' ' << info.spacing.y << ' '
+      << info.spacing.z << "; origin " << info.origin.x << ' ' << info.origin.y << ' ' << info.origin.z
+      << "; direction";
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) s << ' ' << info.direction[c][r];
+    s << ' ' << info.hasOrientation << "; brick " << options.brickSize << "; levels "
+      << storeLevelCount(BrickLayout(info.dims, options.brickSize), options) << "; compression "
+      << int(options.compression) << ' ' << options.compressionLevel << ' ' << options.shuffle << "; external "
+      << bool(options.externalRecord) << "; " << sourceIdentity;
+    return s.str();
+}
 
 StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPath,
                                   const StoreWriteOptions& options, const ProgressFn& progress) {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = Clock::now();
     const VolumeInfo info = storeVolumeFor(source.info(), options, source.name());
     const BrickLayout layout(info.dims, options.brickSize);
     const size_t sampleBytes = scalarSize(info.type);
@@ -38,7 +63,14 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     const int levelCount = storeLevelCount(layout, options);
     const std::vector<BrickLevel> levels = brickLevels(info, B, levelCount);
 
-    AtomicOutputFile out(outPath, options.overwrite, source.files());
+    const StoreResume* resume = options.resume;
+    const StoreCheckpoint* from = resume ? resume->from : nullptr;
+    const std::string identity = resume ? storeResumeIdentity(source.info(), source.name(), options, resume->sourceIdentity) : "";
+    if (from && from->identity != identity)
+        throw std::logic_error("store writer: a checkpoint of another conversion to go on from");
+    const auto out = resume ? std::make_unique<AtomicOutputFile>(outPath, options.overwrite, source.files(),
+                                                                 resume->partialPath, from != nullptr)
+                            : std::make_unique<AtomicOutputFile>(outPath, options.overwrite, source.files());
     uint64_t fileEnd = kStoreHeaderBytes;  // the header is written last, at offset 0
 
     // Level 0 holds 2B+3 slices: a layer's B+3 and B more that the reader fills meanwhile; each
@@ -55,7 +87,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     std::vector<BrickEntry> entries(static_cast<size_t>(totalBricks));
     std::vector<SubBlockCode> subBlocks(entries.size() * kSubBlocksPerBrick);
     BrickEncoder encoder(info.type, options);
-    BrickGroupWriter writer(out.fd(), out.path());
+    BrickGroupWriter writer(out->fd(), out->path());
 
     // Encodes and writes layer `bk` of a level, its slices in `window`, a group of rows at a
     // time, each written in the order made while the next is encoded.
@@ -102,11 +134,78 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         }
     };
 
+    // Where an earlier run stopped (StoreResume::from): what it made, and its coarse levels'
+    // slices; level 0 reads again the slices of the layer it goes on with.
+    int64_t firstLayer = 0, fedSlices = 0;  // fedSlices: level-0 slices handed to level 1
+    std::vector<uint64_t> fineBefore(size_t(kFineHistogramBins), 0);
+    if (from) {
+        bool fits = from->entries.size() == entries.size() && from->subBlocks.size() == subBlocks.size() &&
+                    from->fineHistogram.size() == fineBefore.size() && from->levels.size() == coarse.size() &&
+                    from->nextLayer > 0 && from->nextLayer < layout.brickCounts[2] && from->fileEnd >= fileEnd;
+        for (size_t l = 0; fits && l < coarse.size(); ++l) {
+            const SliceWindow w = coarse[l].ring->window();
+            fits = from->levels[l].ring.size() == w.sliceBytes * size_t(w.slots);
+        }
+        if (!fits) throwIoError(resume->checkpointPath, "does not fit the conversion it names; run again with --restart");
+        if (out->size() < from->fileEnd)
+            throwIoError(resume->partialPath, "is shorter than its checkpoint says; run again with --restart");
+        entries = from->entries;
+        subBlocks = from->subBlocks;
+        fineBefore = from->fineHistogram;
+        fileEnd = from->fileEnd;
+        fedSlices = from->fedSlices;
+        firstLayer = from->nextLayer;
+        for (size_t l = 0; l < coarse.size(); ++l) {
+            coarse[l].nextSlice = from->levels[l].nextSlice;
+            coarse[l].nextLayer = from->levels[l].nextLayer;
+            std::copy(from->levels[l].ring.begin(), from->levels[l].ring.end(), coarse[l].ring->window().bytes);
+        }
+        out->truncate(fileEnd);
+    }
+
+    // Level 0's samples counted so far, by earlier runs too.
+    auto fineHistogram = [&] {
+        std::vector<uint64_t> fine = encoder.fineHistogram();
+        for (size_t i = 0; i < fine.size(); ++i) fine[i] += fineBefore[i];
+        return fine;
+    };
+
+    // Saves where the run stands before level 0's layer `bk`, its slices read (StoreResume).
+    auto lastSave = Clock::now();
+    double saveSeconds = 0;
+    auto saveCheckpoint = [&](int64_t bk) {
+        const auto t0 = Clock::now();
+        writer.finish();
+        out->truncate(fileEnd);  // the bricks' end, though the last bytes are alignment or the header's place
+        out->flush();
+        StoreCheckpoint c;
+        c.identity = identity;
+        c.nextLayer = bk;
+        c.fedSlices = fedSlices;
+        c.fileEnd = fileEnd;
+        c.entries = entries;
+        c.subBlocks = subBlocks;
+        c.fineHistogram = fineHistogram();
+        std::vector<CheckpointRing> rings;
+        for (const LevelInProgress& level : coarse) {
+            c.levels.push_back({level.nextSlice, level.nextLayer, {}});
+            const SliceWindow w = level.ring->window();
+            rings.push_back({w.bytes, w.sliceBytes * size_t(w.slots)});
+        }
+        if (resume->sourceState) c.source = resume->sourceState(lastSliceOfLayer(layout, bk) + 1);
+        writeStoreCheckpoint(resume->checkpointPath, c, rings);
+        lastSave = Clock::now();
+        saveSeconds = secondsSince(t0);
+    };
+
     const SliceWindow window = ring.window();
-    readSlices(source, window, 0, lastSliceOfLayer(layout, 0) + 1);
-    int64_t fedSlices = 0;  // level-0 slices handed to level 1
-    for (int64_t bk = 0; bk < layout.brickCounts[2]; ++bk) {
+    const int64_t firstSlice = std::max<int64_t>(0, layout.firstSample(firstLayer));
+    source.skip(firstSlice);
+    readSlices(source, window, firstSlice, lastSliceOfLayer(layout, firstLayer) + 1);
+    for (int64_t bk = firstLayer; bk < layout.brickCounts[2]; ++bk) {
         throwIfInterrupted(source.name());  // also without a progress callback
+        if (resume && bk > firstLayer && secondsSince(lastSave) >= std::max(resume->everySeconds, 10 * saveSeconds))
+            saveCheckpoint(bk);
         std::future<void> prefetch;
         if (bk + 1 < layout.brickCounts[2])
             prefetch = std::async(std::launch::async, readSlices, std::ref(source), window,
@@ -132,19 +231,20 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     if (options.externalRecord) {
         external = options.externalRecord();
         externalOffset = fileEnd;
-        out.writeAt(external.data(), external.size(), fileEnd);
+        out->writeAt(external.data(), external.size(), fileEnd);
         fileEnd += external.size();
     }
-    StoreTail tail = finishStore(info, options, levelCount, layout.brickCount(), entries, subBlocks,
-                                 encoder.fineHistogram(), fileEnd, source.name());
+    StoreTail tail = finishStore(info, options, levelCount, layout.brickCount(), entries, subBlocks, fineHistogram(),
+                                 fileEnd, source.name());
     if (!external.empty()) {
         tail.header.externalOffset = externalOffset;
         tail.header.externalBytes = external.size();
         tail.headerBytes = store_format::encodeHeader(tail.header);
     }
-    out.writeAt(tail.index.data(), tail.index.size(), fileEnd);
-    out.writeAt(tail.headerBytes.data(), tail.headerBytes.size(), 0);
-    out.commit();
+    out->writeAt(tail.index.data(), tail.index.size(), fileEnd);
+    out->writeAt(tail.headerBytes.data(), tail.headerBytes.size(), 0);
+    out->commit();
+    if (resume) ::unlink(resume->checkpointPath.c_str());  // done: nothing to go on from
 
     StoreWriteSummary summary;
     summary.bricks = totalBricks;
@@ -153,7 +253,9 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     summary.coarseBytes = tail.header.storedBrickBytes - tail.level0Bytes;
     summary.inputBytes = info.byteSize();
     summary.fileBytes = fileEnd + tail.index.size();
-    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.seconds = secondsSince(start);
+    summary.layers = layout.brickCounts[2];
+    summary.resumedLayers = firstLayer;
     return summary;
 }
 

@@ -27,6 +27,9 @@
 
 namespace vdiso {
 
+struct StoreCheckpoint;
+struct StoreResume;
+
 struct StoreWriteOptions {
     int brickSize = 32;                       // B, cells per brick side (2..512)
     Compression compression = Compression::Lz4;  // the faster first frame (io/store/brick_store.h)
@@ -41,7 +44,30 @@ struct StoreWriteOptions {
     // sub-block codes, histogram) but not stored, and this gives, once every slice is read,
     // the record of where they are (io/store/external_level.h), written into the file.
     std::function<std::vector<unsigned char>()> externalRecord;
+    // Resumable (vdiso index): StoreResume below. Null: the output is written unnamed.
+    const StoreResume* resume = nullptr;
 };
+
+// A resumable conversion (vdiso index): the output is written under `partialPath`, and the
+// writer's state is saved at `checkpointPath` (io/store/store_checkpoint.h) between level 0's
+// layers, at least `everySeconds` apart and ten times as long apart as the last save took, so
+// that saving costs a tenth of the run at most. A failure, an interrupt or a kill leaves both;
+// success removes the checkpoint. With `from`, the run goes on from that checkpoint, whose
+// identity must be storeResumeIdentity's: the caller has put its source's state back (as
+// `sourceState` saved it) and the writer skips the slices before the layer it resumes at.
+struct StoreResume {
+    std::string partialPath, checkpointPath;
+    double everySeconds = 60;
+    std::string sourceIdentity;  // what the source is (the caller's words)
+    // The caller's state to save with a checkpoint, once `slicesRead` level-0 slices are read.
+    std::function<std::vector<unsigned char>(int64_t slicesRead)> sourceState;
+    const StoreCheckpoint* from = nullptr;
+};
+
+// The identity of a checkpoint that writing a source of `volume` (named `sourceName`) with
+// `options` can go on from: the volume, the options that shape the output, `sourceIdentity`.
+std::string storeResumeIdentity(const VolumeInfo& volume, const std::string& sourceName,
+                                const StoreWriteOptions& options, const std::string& sourceIdentity);
 
 struct StoreWriteSummary {
     int64_t bricks = 0;        // all levels
@@ -51,6 +77,8 @@ struct StoreWriteSummary {
     uint64_t inputBytes = 0;   // samples read, at the store's sample size
     uint64_t fileBytes = 0;    // size of the written store
     double seconds = 0;
+    int64_t layers = 0;         // level 0's layers of bricks
+    int64_t resumedLayers = 0;  // of them, made by an earlier run (StoreResume::from)
 };
 
 // Converts everything `source` delivers into a store at `outPath`. Throws IoError (from the

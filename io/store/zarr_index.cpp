@@ -1,9 +1,16 @@
 #include "io/store/zarr_index.h"
 
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <sstream>
+
 #include "core/settings_error.h"
+#include "io/error.h"
 #include "io/readers/zarr_reader.h"
 #include "io/remote/remote_file.h"
 #include "io/store/external_level.h"
+#include "io/store/store_checkpoint.h"
 
 namespace vdiso {
 
@@ -16,6 +23,44 @@ std::string indexPathFor(const std::string& dataPath, const std::string& indexPa
     return defaultIndexPath(dataPath);
 }
 
+std::string indexPartialPath(const std::string& indexPath) { return indexPath + ".partial"; }
+std::string indexCheckpointPath(const std::string& indexPath) { return indexPath + ".resume"; }
+
+namespace {
+
+// A checkpoint's source state: the chunk layers read so far and their chunks' pins.
+//   u64 layers, u64 pins [each: u64 bytes, u32 crc]
+std::vector<unsigned char> encodePinnedLayers(const ExternalLevel& record, int64_t layers) {
+    const size_t count = size_t(layers * record.chunkCounts[0] * record.chunkCounts[1]);
+    std::vector<unsigned char> out(16 + count * 12);
+    const uint64_t header[2] = {uint64_t(layers), count};
+    std::memcpy(out.data(), header, 16);
+    for (size_t i = 0; i < count; ++i) {
+        std::memcpy(out.data() + 16 + 12 * i, &record.pins[i].bytes, 8);
+        std::memcpy(out.data() + 24 + 12 * i, &record.pins[i].crc, 4);
+    }
+    return out;
+}
+
+// Puts the pins back into `record`; returns the layers they cover. Throws IoError naming
+// `checkpointPath` when they do not fit the array.
+int64_t decodePinnedLayers(const std::vector<unsigned char>& bytes, ExternalLevel& record,
+                           const std::string& checkpointPath) {
+    uint64_t header[2] = {0, 0};
+    if (bytes.size() >= 16) std::memcpy(header, bytes.data(), 16);
+    const uint64_t layerChunks = uint64_t(record.chunkCounts[0] * record.chunkCounts[1]);
+    if (bytes.size() < 16 || header[0] > uint64_t(record.chunkCounts[2]) || header[1] != header[0] * layerChunks ||
+        bytes.size() != 16 + header[1] * 12)
+        throwIoError(checkpointPath, "holds pins that do not fit the array; run again with --restart");
+    for (size_t i = 0; i < size_t(header[1]); ++i) {
+        std::memcpy(&record.pins[i].bytes, bytes.data() + 16 + 12 * i, 8);
+        std::memcpy(&record.pins[i].crc, bytes.data() + 24 + 12 * i, 4);
+    }
+    return int64_t(header[0]);
+}
+
+}  // namespace
+
 ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& indexPath, const ZarrIndexOptions& options,
                            const ProgressFn& progress) {
     auto volume = std::make_unique<ZarrVolume>(dataPath, options.level, options.remote);
@@ -25,10 +70,44 @@ ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& index
     record.metadataCrc = volume->metadataCrc();
     record.chunkShape = volume->chunkShape();
     record.chunkCounts = volume->chunkCounts();
-    const auto reader = zarrSliceReader(std::move(volume), &record.pins);
+    record.pins.assign(size_t(volume->chunkCount()), ZarrChunkPin{});
+
+    // An earlier run's checkpoint of this array, these options, and its partial index: go on.
+    StoreResume resume;
+    resume.partialPath = indexPartialPath(indexPath);
+    resume.checkpointPath = indexCheckpointPath(indexPath);
+    resume.everySeconds = options.checkpointSeconds;
+    std::ostringstream source;
+    source << "zarr " << record.location << " level " << record.level << " metadata " << record.metadataCrc
+           << " chunks " << record.chunkShape[0] << ' ' << record.chunkShape[1] << ' ' << record.chunkShape[2];
+    resume.sourceIdentity = source.str();
+    const int64_t depth = record.chunkShape[2];
+    resume.sourceState = [&record, depth](int64_t slicesRead) {
+        return encodePinnedLayers(record, (slicesRead + depth - 1) / depth);
+    };
     StoreWriteOptions store = options.store;
     store.externalRecord = [&] { return encodeExternalLevel(record); };
+    store.resume = &resume;
     ZarrIndexSummary summary;
+    std::optional<StoreCheckpoint> checkpoint;
+    if (options.restart) std::filesystem::remove(resume.checkpointPath);
+    else checkpoint = readStoreCheckpoint(resume.checkpointPath);
+    int64_t pinnedLayers = 0;
+    if (checkpoint) {
+        std::error_code error;
+        const auto partialBytes = std::filesystem::file_size(resume.partialPath, error);
+        if (checkpoint->identity != storeResumeIdentity(volume->info(), volume->name(), store, resume.sourceIdentity))
+            summary.startedOver = "the interrupted run indexed another array, or with other options";
+        else if (error || partialBytes < checkpoint->fileEnd)
+            summary.startedOver = resume.partialPath + " is missing or shorter than the checkpoint says";
+        else {
+            pinnedLayers = decodePinnedLayers(checkpoint->source, record, resume.checkpointPath);
+            resume.from = &*checkpoint;
+        }
+        // Starting over writes the partial index afresh: its old checkpoint would no longer fit.
+        if (!resume.from) std::filesystem::remove(resume.checkpointPath);
+    }
+    const auto reader = zarrSliceReader(std::move(volume), &record.pins, pinnedLayers);
     summary.store = writeBrickStore(*reader, indexPath, store, progress);
     summary.chunks = int64_t(record.pins.size());
     for (const ZarrChunkPin& pin : record.pins) {

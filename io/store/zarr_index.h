@@ -20,12 +20,20 @@ struct ZarrIndexOptions {
     int level = 0;           // the OME-Zarr multiscale level indexed (0, the finest)
     StoreWriteOptions store;  // brick size, levels of detail, their compression, overwrite
     RemoteOptions remote;
+    // Resuming: the index is written as INDEX.partial, with where the pass stands saved as
+    // INDEX.resume (io/store/store_checkpoint.h) at least this many seconds apart; a run that
+    // finds both goes on from there (unless `restart`), provided it indexes the same array
+    // with the same options.
+    double checkpointSeconds = 30;
+    bool restart = false;
 };
 
 struct ZarrIndexSummary {
-    StoreWriteSummary store;   // fileBytes: the index's size
+    StoreWriteSummary store;   // fileBytes: the index's size; resumedLayers: from an earlier run
     int64_t chunks = 0, missingChunks = 0;
     uint64_t dataBytes = 0;    // the array's chunks as stored
+    // Why a checkpoint found was not gone on from (empty if none was found, or it was).
+    std::string startedOver;
 };
 
 // Where the index of `dataPath` goes: `indexPath` when given, else beside local data
@@ -33,8 +41,15 @@ struct ZarrIndexSummary {
 // without an index path, and for an index path that is a URL (an index is written locally).
 std::string indexPathFor(const std::string& dataPath, const std::string& indexPath);
 
+// Where an index at `indexPath` is written until done (INDEX.partial), and where the pass's
+// checkpoint is kept (INDEX.resume).
+std::string indexPartialPath(const std::string& indexPath);
+std::string indexCheckpointPath(const std::string& indexPath);
+
 // Indexes the array at `dataPath` (a folder or URL) into `indexPath` (a local file). Throws as
-// writeBrickStore does (no output left, an existing one untouched).
+// writeBrickStore does (no index left, an existing one untouched), but leaves INDEX.partial
+// and INDEX.resume for the next run to go on from; both go once the index is written. Throws
+// IoError naming the chunk when a chunk an interrupted run read has changed since.
 ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& indexPath, const ZarrIndexOptions& options,
                            const ProgressFn& progress = {});
 
