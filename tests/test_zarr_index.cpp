@@ -449,6 +449,21 @@ TEST_F(ZarrIndex, DataAtAUrlIndexedIntoALocalFile) {
                                     " --brick 8 --quiet");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(extract(env, path("v3.vdiso"), "v3_index.ply"), extract("", path("v3.store"), "v3_store.ply"));
+    // The bucket refuses the third layer of shards' chunks: the index stops, naming the URL,
+    // and the next run goes on from its checkpoint, to the uninterrupted index's bytes.
+    ASSERT_TRUE(test::controlS3(s3.port(), R"({"op":"fault","action":"status","status":403,"code":"AccessDenied",)"
+                                           R"("key":"/bkt/v3.zarr/c/0/0/1/*","count":-1})"));
+    const std::string index = VDISO_BINARY + std::string(" index s3://bkt/v3.zarr --index ") + path("v3r.vdiso") +
+                              " --brick 8 --checkpoint-seconds 0";
+    auto stopped = test::runCommand(env + index);
+    EXPECT_EQ(stopped.exitCode, 1) << stopped.output;
+    EXPECT_NE(stopped.output.find("s3://bkt/v3.zarr/c/0/0/1/"), std::string::npos) << stopped.output;
+    EXPECT_NE(stopped.output.find("v3r.vdiso.resume keeps where the pass stood"), std::string::npos) << stopped.output;
+    ASSERT_TRUE(test::controlS3(s3.port(), R"({"op":"clear_faults"})"));
+    const auto resumed = test::runCommand(env + index);
+    ASSERT_EQ(resumed.exitCode, 0) << resumed.output;
+    EXPECT_NE(resumed.output.find("went on from an interrupted run: 1 of 5 layers"), std::string::npos) << resumed.output;
+    EXPECT_EQ(test::readFile(path("v3r.vdiso")), test::readFile(path("v3.vdiso")));
 }
 
 }  // namespace
