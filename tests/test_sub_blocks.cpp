@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include "cache/brick_cache.h"
@@ -12,6 +13,7 @@
 #include "core/extract/extract_view.h"
 #include "core/kernel/iso.h"
 #include "core/trees/sub_blocks.h"
+#include "core/brick_levels.h"
 #include "core/synth/synth.h"
 #include "core/view_presets.h"
 #include "io/store/brick_store.h"
@@ -118,6 +120,63 @@ TEST(SubBlocks, StoreCodesContainEachSubBlocksCells) {
     }
     EXPECT_GT(withCells, 0);
     EXPECT_GT(without, 0);
+}
+
+// The writer measures bricks where they lie in its slices (io/store/brick_measure.h): every
+// level's ranges and codes are those of the gathered brick measured directly (its cells'
+// corners, NaN as -inf; measureSubBlocks), for every sample type, NaN and infinities among
+// f32's, brick sizes whose sub-blocks end early and volumes whose bricks end early.
+TEST(SubBlocks, MeasuredInPlaceAsTheGatheredBrick) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    for (const ScalarType type : {ScalarType::U8, ScalarType::U16, ScalarType::I16, ScalarType::F32})
+        for (const int brickSize : {7, 12}) {
+            const Dims3 dims{41, 30, 27};
+            test::MemoryVolume volume(dims, type);
+            if (type == ScalarType::F32) {
+                auto* f = reinterpret_cast<float*>(volume.bytes().data());
+                for (size_t i = 0; i < volume.bytes().size() / 4; i += 97) f[i] = i % 3 == 0 ? nan : i % 3 == 1 ? inf : -inf;
+                f[0] = nan;
+            }
+            test::ScratchDir dir;
+            StoreWriteOptions o;
+            o.brickSize = brickSize;
+            writeBrickStore(volume, dir.file("m.vdiso"), o);
+            const BrickStoreReader store(dir.file("m.vdiso"));
+            ASSERT_GT(store.levels().size(), 1u);
+            std::vector<unsigned char> brick(store.brickBytes());
+            const size_t sampleBytes = scalarSize(type);
+            const std::string what = std::string(scalarTypeName(type)) + " B " + std::to_string(brickSize);
+            for (const BrickLevel& level : store.levels())
+                for (int64_t i = 0; i < level.layout.brickCount(); ++i) {
+                    const int64_t id = level.firstBrick + i;
+                    const Dims3 coord = level.layout.brickCoord(i);
+                    store.readBrick(id, brick.data());
+                    const int side = level.layout.side();
+                    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+                    for (int z = 0; z <= level.layout.cellsOnAxis(2, coord[2]); ++z)
+                        for (int y = 0; y <= level.layout.cellsOnAxis(1, coord[1]); ++y)
+                            for (int x = 0; x <= level.layout.cellsOnAxis(0, coord[0]); ++x) {
+                                const size_t at = BrickLayout::cornerIndex(side, x, y, z) * sampleBytes;
+                                double v = 0;
+                                visitScalarType(type, [&](auto zero) {
+                                    decltype(zero) s;
+                                    std::memcpy(&s, brick.data() + at, sizeof s);
+                                    v = double(rangeValue(s));
+                                });
+                                lo = std::min(lo, v);
+                                hi = std::max(hi, v);
+                            }
+                    const BrickEntry& e = store.index()[size_t(id)];
+                    ASSERT_EQ(double(e.minValue), lo) << what << " brick " << id;
+                    ASSERT_EQ(double(e.maxValue), hi) << what << " brick " << id;
+                    SubBlockCode want[kSubBlocksPerBrick];
+                    measureSubBlocks(type, brick.data(), level.layout, coord, {e.minValue, e.maxValue}, want);
+                    for (int sb = 0; sb < kSubBlocksPerBrick; ++sb) {
+                        const SubBlockCode got = store.subBlockCodes()[size_t(id) * kSubBlocksPerBrick + size_t(sb)];
+                        ASSERT_TRUE(got.lo == want[sb].lo && got.hi == want[sb].hi) << what << " brick " << id << " sub-block " << sb;
+                    }
+                }
+        }
 }
 
 TEST(SubBlocks, FormatOneStoresAreRefusedWithAReason) {

@@ -21,6 +21,7 @@
 #include "core/orientation.h"
 #include "io/atomic_output.h"
 #include "io/store/brick_codec.h"
+#include "io/store/brick_measure.h"
 #include "io/crc32.h"
 #include "io/error.h"
 #include "io/store/store_format.h"
@@ -29,24 +30,9 @@ namespace vdiso {
 
 namespace {
 
-// A fine histogram of 65536 bins, keyed so that key order is value order for every type:
-// exact for 8- and 16-bit integers; for floats, the top 16 bits of an order-preserving
-// remapping of the IEEE bits. Coarsened to kHistogramBins over [min, max] at the end.
+// A fine histogram of 65536 bins (io/store/brick_measure.h fineKey), coarsened to
+// kHistogramBins over [min, max] at the end.
 constexpr int kFineBins = kFineHistogramBins;
-
-inline uint32_t fineKey(uint8_t v) { return v; }
-inline uint32_t fineKey(uint16_t v) { return v; }
-inline uint32_t fineKey(int16_t v) { return uint32_t(int32_t(v) + 32768); }
-// Floats: every NaN goes to key 0 (a bin that otherwise holds only NaN bit patterns), so that
-// the keys of -inf (0x7f) and +inf (0xff80) hold nothing but infinities.
-constexpr uint32_t kNanKey = 0;
-constexpr uint32_t kNegativeInfinityKey = 0x7f;
-constexpr uint32_t kPositiveInfinityKey = 0xff80;
-inline uint32_t fineKey(float v) {
-    if (v != v) return kNanKey;
-    const uint32_t u = std::bit_cast<uint32_t>(v);
-    return ((u & 0x80000000u) ? ~u : (u | 0x80000000u)) >> 16;
-}
 
 // The float whose remapped bits are k.
 double remappedFloat(uint32_t k) {
@@ -100,47 +86,6 @@ void gatherBrick(const SliceWindow& window, const BrickLayout& layout, int64_t b
     }
 }
 
-// Min and max over the samples of the brick's cells, and the histogram of the samples the
-// brick owns (each volume sample is owned by exactly one brick). Separate loops per row: the
-// min/max reduction vectorises; the histogram alternates two tables so that runs of equal
-// values (smooth data) do not wait on the same counter.
-template <class T>
-void measureBrick(const T* brick, const BrickLayout& layout, const Dims3& coord, float& minValue,
-                  float& maxValue, uint64_t* histogramEven, uint64_t* histogramOdd) {
-    const int side = layout.side();
-    int cells[3], owned[3];
-    for (int a = 0; a < 3; ++a) {
-        cells[a] = layout.cellsOnAxis(a, coord[a]);
-        owned[a] = layout.ownedSamplesOnAxis(a, coord[a]);
-    }
-    // NaN samples count as -inf in the range (core/kernel/iso.h), so a range is never NaN.
-    T lo = rangeValue(brick[(size_t(kGhostBefore) * side + kGhostBefore) * side + kGhostBefore]);
-    T hi = lo;
-    for (int lz = kGhostBefore; lz <= kGhostBefore + cells[2]; ++lz) {
-        for (int ly = kGhostBefore; ly <= kGhostBefore + cells[1]; ++ly) {
-            const T* row = brick + (size_t(lz) * side + ly) * side + kGhostBefore;
-            T rowLo = rangeValue(row[0]), rowHi = rowLo;
-            for (int i = 1; i <= cells[0]; ++i) {
-                const T v = rangeValue(row[i]);
-                rowLo = v < rowLo ? v : rowLo;
-                rowHi = v > rowHi ? v : rowHi;
-            }
-            lo = std::min(lo, rowLo);
-            hi = std::max(hi, rowHi);
-            if (!histogramEven) continue;  // a coarse level: the histogram is level 0's
-            if (lz >= kGhostBefore + owned[2] || ly >= kGhostBefore + owned[1]) continue;
-            int i = 0;
-            for (; i + 1 < owned[0]; i += 2) {
-                ++histogramEven[fineKey(row[i])];
-                ++histogramOdd[fineKey(row[i + 1])];
-            }
-            if (i < owned[0]) ++histogramEven[fineKey(row[i])];
-        }
-    }
-    minValue = float(lo);
-    maxValue = float(hi);
-}
-
 struct BrickScratch {
     std::vector<unsigned char> raw;
     std::vector<uint64_t> histogramEven = std::vector<uint64_t>(kFineBins, 0);
@@ -154,18 +99,9 @@ void encodeBrick(const SliceWindow& window, const BrickLayout& layout, ScalarTyp
                  const StoreWriteOptions& options, int64_t id, bool countSamples, BrickScratch& scratch,
                  EncodedBrick& out) {
     const Dims3 coord = layout.brickCoord(id);
-    const size_t rawBytes = size_t(layout.samplesPerBrick()) * scalarSize(type);
-    scratch.raw.resize(rawBytes);
-    visitScalarType(type, [&](auto zero) {
-        using T = decltype(zero);
-        T* brick = reinterpret_cast<T*>(scratch.raw.data());
-        gatherBrick<T>(window, layout, coord[0], coord[1], coord[2], brick);
-        measureBrick<T>(brick, layout, coord, out.entry.minValue, out.entry.maxValue,
-                        countSamples ? scratch.histogramEven.data() : nullptr,
-                        countSamples ? scratch.histogramOdd.data() : nullptr);
-    });
-    measureSubBlocks(type, scratch.raw.data(), layout, coord,
-                     {out.entry.minValue, out.entry.maxValue}, out.subBlocks);
+    measureBrickInSlices(type, window, layout, coord, out.entry, out.subBlocks,
+                         countSamples ? scratch.histogramEven.data() : nullptr,
+                         countSamples ? scratch.histogramOdd.data() : nullptr);
     out.entry.external = countSamples && options.externalRecord;
     if (out.entry.external) {  // an index's level 0: measured, its samples left where they are
         out.bytes.clear();
@@ -174,6 +110,11 @@ void encodeBrick(const SliceWindow& window, const BrickLayout& layout, ScalarTyp
         out.entry.checksum = 0;
         return;
     }
+    scratch.raw.resize(size_t(layout.samplesPerBrick()) * scalarSize(type));
+    visitScalarType(type, [&](auto zero) {
+        using T = decltype(zero);
+        gatherBrick<T>(window, layout, coord[0], coord[1], coord[2], reinterpret_cast<T*>(scratch.raw.data()));
+    });
     out.entry.compressed = encodeBrickBytes(scratch.raw, scalarSize(type), options.compression,
                                             storeFilterFor(type, options), options.compressionLevel,
                                             scratch.codec, out.bytes);
