@@ -7,11 +7,14 @@
 #include <future>
 #include <map>
 #include <mutex>
-#include <stdexcept>
 #include <fstream>
 #include <new>
-#include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <vector>
+
+#include <nlohmann/json.hpp>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "core/interrupt.h"
 #include "io/crc32.h"
@@ -238,13 +241,13 @@ private:
         const size_t sampleBytes = scalarSize(info.type);
         try {
             mLayer.resize(size_t(depth) * size_t(info.sliceSamples()) * sampleBytes);
-            mChunk.resize(mVolume->decodedBytes());
         } catch (const std::bad_alloc&) {
             throwIoError(name(), "cannot hold a layer of chunks (" + std::to_string(depth) +
                                      " slices of " + std::to_string(nx) + " x " + std::to_string(ny) + ")");
         }
         const std::vector<Dims3> chunks = layerChunks(layer);
-        auto place = [&](const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes) {
+        auto place = [&](const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes,
+                         std::vector<unsigned char>& decoded) {
             if (mPins) {
                 const ZarrChunkPin pin = bytes ? ZarrChunkPin{bytes->size(), crc32Of(bytes->data(), bytes->size())}
                                                : ZarrChunkPin{};
@@ -254,19 +257,24 @@ private:
                                                     "it; run vdiso index again with --restart");
                 slot = pin;
             }
-            mVolume->decode(c, bytes, mChunk.data());
+            try {
+                decoded.resize(mVolume->decodedBytes());
+            } catch (const std::bad_alloc&) {
+                throwIoError(name(), "cannot hold a decoded chunk (" + std::to_string(mVolume->decodedBytes()) + " bytes)");
+            }
+            mVolume->decode(c, bytes, decoded.data());
             const int64_t x0 = c[0] * cx, y0 = c[1] * cy;
             const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
             for (int64_t lz = 0; lz < depth; ++lz)
                 for (int64_t ly = 0; ly < rows; ++ly)
                     std::memcpy(mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * sampleBytes,
-                                mChunk.data() + size_t((lz * cy + ly) * cx) * sampleBytes, size_t(cols) * sampleBytes);
+                                decoded.data() + size_t((lz * cy + ly) * cx) * sampleBytes, size_t(cols) * sampleBytes);
         };
-        if (!mVolume->isRemote()) {  // a chunk at a time: memory stays the layer
-            for (const Dims3& c : chunks) {
+        if (!mVolume->isRemote()) {  // a chunk at a time on each core: memory stays the layer
+            tbb::parallel_for(size_t(0), chunks.size(), [&](size_t i) {
                 throwIfInterrupted(name());
-                place(c, mVolume->stored({c})[0]);
-            }
+                place(chunks[i], mVolume->stored({chunks[i]})[0], mChunks.local());
+            });
         } else {
             // Remote: the layer's chunks were fetched while the layer before was decoded (or
             // are fetched now), and the next layer's are fetched while this one is.
@@ -278,7 +286,7 @@ private:
                     return mVolume->stored(next);
                 });
             }
-            for (size_t i = 0; i < chunks.size(); ++i) place(chunks[i], values[i]);
+            for (size_t i = 0; i < chunks.size(); ++i) place(chunks[i], values[i], mChunks.local());
         }
         mLayerIndex = layer;
     }
@@ -294,7 +302,8 @@ private:
     std::unique_ptr<ZarrVolume> mVolume;
     std::vector<ZarrChunkPin>* mPins;
     int64_t mPinnedLayers;
-    std::vector<unsigned char> mLayer, mChunk;
+    std::vector<unsigned char> mLayer;
+    tbb::enumerable_thread_specific<std::vector<unsigned char>> mChunks;  // a decoded chunk
     int64_t mLayerIndex = -1;
     std::future<std::vector<std::optional<std::vector<unsigned char>>>> mAhead;  // remote: the next layer's
     int64_t mAheadLayer = -1;
