@@ -364,6 +364,26 @@ def test_threads_extract_and_post_process_at_once(volume_and_cli_store):
     assert not errors and results == [len(alone.faces)] * 4
 
 
+def test_an_interrupted_index_goes_on_where_it_stopped(tmp_path):
+    v = head()
+    data = tmp_path / "head.zarr"
+    zarr.array(v, chunks=(8, 20, 24), store=str(data))
+    whole = vdiso.index(data, tmp_path / "whole.vdiso", brick=8)
+    chunk = data / "3.0.0"
+    good = chunk.read_bytes()
+    chunk.write_bytes(b"not a chunk")
+    with pytest.raises(OSError, match="3.0.0"):
+        vdiso.index(data, brick=8, checkpoint_seconds=0)
+    assert os.path.exists(str(data) + ".vdiso.resume") and not os.path.exists(str(data) + ".vdiso")
+    chunk.write_bytes(good)
+    summary = vdiso.index(data, brick=8)
+    assert 0 < summary["resumed_layers"] < summary["layers"]
+    assert open(summary["index"], "rb").read() == open(whole["index"], "rb").read()
+    assert not os.path.exists(str(data) + ".vdiso.resume")
+    with pytest.raises(ValueError, match="checkpoint_seconds"):
+        vdiso.index(data, tmp_path / "x.vdiso", checkpoint_seconds=-1)
+
+
 def test_an_indexed_zarr_opens_in_place_like_its_converted_store(tmp_path):
     v = head()
     data = tmp_path / "head.zarr"
