@@ -156,7 +156,7 @@ int main(int argc, char** argv) {
         summary.add("first_frame_points", firstEnd["points"].get<uint64_t>());
         summary.add("bytes_per_triangle_first_frame",
                     double(measured[0].binaryBytes) / double(std::max<uint64_t>(1, firstEnd["triangles"].get<uint64_t>())));
-        if (!store.remote() && fullSurface) {
+        if (!store.readsRemotely() && fullSurface) {
             // The full surface through the same codec, in one piece.
             BrickCache cache(store, options.cacheBytes);
             TriangleMesh full;
