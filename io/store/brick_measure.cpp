@@ -19,6 +19,8 @@ inline int blocksOfCorner(int t, int cells, int C, int out[2]) {
     return n;
 }
 
+constexpr int kRowsAhead = 4;
+
 template <class T>
 void measure(const SliceWindow& window, const BrickLayout& layout, const Dims3& coord, BrickEntry& entry,
              SubBlockCode codes[kSubBlocksPerBrick], uint64_t* histogramEven, uint64_t* histogramOdd) {
@@ -36,14 +38,22 @@ void measure(const SliceWindow& window, const BrickLayout& layout, const Dims3& 
     T lo[N][N][N], hi[N][N][N];  // [c][b][a]
     std::fill_n(&lo[0][0][0], N * N * N, kHighest);
     std::fill_n(&hi[0][0][0], N * N * N, kLowest);
-    const int64_t nx = layout.dims[0];
+    const int64_t nx = layout.dims[0], ny = layout.dims[1];
     const int64_t x0 = coord[0] * B, y0 = coord[1] * B, z0 = coord[2] * B;
     for (int lz = 0; lz <= cells[2]; ++lz) {
         const T* slice = reinterpret_cast<const T*>(window.slice(z0 + lz));
         int zb[2];
         const int zn = blocksOfCorner(lz, cells[2], C, zb);
+        const T* nextSlice = lz < cells[2] ? reinterpret_cast<const T*>(window.slice(z0 + lz + 1)) : slice;
         for (int ly = 0; ly <= cells[1]; ++ly) {
             const T* row = slice + (y0 + ly) * nx + x0;
+            // Rows lie a slice's width apart: each is a cache miss the hardware does not see
+            // coming. The one a few rows on (or at the next slice's start) is asked for now.
+            const T* ahead = ly + kRowsAhead <= cells[1]
+                                 ? row + kRowsAhead * nx
+                                 : nextSlice + std::min(y0 + ly + kRowsAhead - cells[1] - 1, ny - 1) * nx + x0;
+            __builtin_prefetch(ahead);
+            __builtin_prefetch(ahead + cells[0]);
             T segmentLo[N], segmentHi[N];
             for (int a = 0; a < blocks[0]; ++a) {
                 const int first = a * C, last = std::min(first + C, cells[0]);
