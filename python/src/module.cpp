@@ -27,6 +27,8 @@ int64_t checkedInt(const char* name, int64_t value, int64_t lo, int64_t hi) {
 
 void bindErrors(pyb::module_& m) {
     static pyb::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);
+    error.doc() = "What vdiso raises when neither a bad argument (ValueError, TypeError) nor I/O (OSError)\n"
+                  "is the cause: a RuntimeError with the library's message.";
     pyb::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
@@ -60,6 +62,7 @@ PYBIND11_MODULE(_vdiso, m) {
     vdiso::py::bindConvert(m);
     vdiso::py::bindServe(m);
     m.attr("_web_root") = VDISO_WEB_DIR;
+    m.attr("__version__") = VDISO_VERSION;  // the project's (CMakeLists.txt)
     // The image sides a camera may have (core/camera.h), for the arguments' checks in Python.
     m.attr("_min_image_side") = vdiso::kMinImageSide;
     m.attr("_max_image_side") = vdiso::kMaxImageSide;

@@ -5,11 +5,13 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <array>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <string_view>
 
 #include "app/extract_session.h"
 #include "app/store_info.h"
@@ -155,6 +157,42 @@ ExtractSettings settingsOf(const std::string& method, double iso, std::optional<
 
 pyb::tuple vec(const glm::dvec3& v) { return pyb::make_tuple(v.x, v.y, v.z); }
 
+// A Mesh as pickle keeps it: its arrays' bytes and its stats.
+template <class Array>
+pyb::bytes bytesOf(const Array& a) {
+    return pyb::bytes(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(a[0]));
+}
+
+pyb::tuple meshState(const Mesh& m) {
+    return pyb::make_tuple(bytesOf(m.mesh.positions), bytesOf(m.mesh.normals), bytesOf(m.mesh.indices),
+                           bytesOf(m.points.positions), bytesOf(m.points.normals), m.stats);
+}
+
+template <class Array>
+void fill(Array& a, const pyb::bytes& b, const char* what) {
+    const std::string_view v = b;
+    if (v.size() % sizeof(a[0]) != 0) throw std::invalid_argument(std::string("Mesh state: ") + what + " of a partial item");
+    a.resize(v.size() / sizeof(a[0]));
+    if (!v.empty()) std::memcpy(a.data(), v.data(), v.size());
+}
+
+std::shared_ptr<Mesh> meshFromState(const pyb::tuple& state) {
+    if (state.size() != 6) throw std::invalid_argument("Mesh state: expects 6 items, not " + std::to_string(state.size()));
+    auto m = std::make_shared<Mesh>();
+    fill(m->mesh.positions, state[0].cast<pyb::bytes>(), "vertices");
+    fill(m->mesh.normals, state[1].cast<pyb::bytes>(), "normals");
+    fill(m->mesh.indices, state[2].cast<pyb::bytes>(), "faces");
+    fill(m->points.positions, state[3].cast<pyb::bytes>(), "points");
+    fill(m->points.normals, state[4].cast<pyb::bytes>(), "point normals");
+    m->stats = state[5].cast<pyb::dict>();
+    const size_t n = m->mesh.positions.size();
+    bool fits = m->mesh.normals.size() == n && m->mesh.indices.size() % 3 == 0 &&
+                m->points.normals.size() == m->points.positions.size();
+    for (const uint32_t i : m->mesh.indices) fits = fits && i < n;
+    if (!fits) throw std::invalid_argument("Mesh state: arrays that do not make a mesh");
+    return m;
+}
+
 }  // namespace
 
 void bindStore(pyb::module_& m) {
@@ -183,6 +221,10 @@ void bindStore(pyb::module_& m) {
                  writePointsPly(path.string(), mesh.points, overwrite, SpaceTransform{});
              },
              "path"_a, pyb::kw_only(), "overwrite"_a = false, "Writes the sub-pixel points as a .ply file.")
+        .def("__len__", [](const Mesh& mesh) { return mesh.mesh.triangleCount(); }, "The number of triangles.")
+        .def(pyb::pickle([](const Mesh& mesh) { return meshState(mesh); }, [](const pyb::tuple& state) {
+            return meshFromState(state);
+        }))
         .def("__repr__", [](const Mesh& mesh) {
             return "<vdiso.Mesh: " + std::to_string(mesh.mesh.triangleCount()) + " triangles, " +
                    std::to_string(mesh.mesh.vertexCount()) + " vertices, " + std::to_string(mesh.points.size()) +

@@ -401,3 +401,48 @@ def test_an_indexed_zarr_opens_in_place_like_its_converted_store(tmp_path):
         vdiso.index(data, brick=8)
     with pytest.raises(ValueError, match="index expects the index's path"):
         vdiso.index("s3://bucket/head.zarr")
+
+
+def test_everyday_conveniences(tmp_path, volume_and_cli_store):
+    import pickle
+
+    import meshio
+    _, cli = volume_and_cli_store
+    assert vdiso.__version__ == "0.1" and vdiso.Error.__doc__ and vdiso.Store.shape.__doc__
+    with vdiso.open(cli) as store:
+        mesh = store.extract(500.5)
+        assert len(mesh) == len(mesh.faces) > 1000
+        # Pickled (for Dask and multiprocessing): the mesh's arrays, the store where it lies.
+        again = pickle.loads(pickle.dumps(mesh))
+        assert len(again) == len(mesh) and again.stats == mesh.stats
+        for name in ("vertices", "normals", "faces"):
+            assert np.array_equal(getattr(again, name), getattr(mesh, name))
+        reopened = pickle.loads(pickle.dumps(store))
+        assert reopened.shape == store.shape and len(reopened.extract(500.5)) == len(mesh)
+        # An isovalue outside the values is refused alike everywhere, as marching_cubes does.
+        for call in (lambda: store.extract(5000), lambda: store.render(-1), lambda: list(store.frames(5000, ["normal"]))):
+            with pytest.raises(ValueError, match="iso: .* outside the store's values, 0.0 to 977.0"):
+                call()
+        with pytest.raises(ValueError, match="level"):
+            vdiso.marching_cubes(head(), 5000)
+        # Typos are named with the public method; a wrong-length spacing says so in a line.
+        with pytest.raises(TypeError, match=r"Store.render\(\) got an unexpected keyword argument 'lodd_error'"):
+            store.render(500.5, lodd_error=2)
+        with pytest.raises(ValueError, match=r"^spacing: expects 3 numbers \(z, y, x\), not 2$"):
+            vdiso.marching_cubes(head(), 500.5, spacing=(1, 2))
+        # Hand-offs: meshio (Debian's), napari's surface tuple.
+        m = mesh.to_meshio()
+        assert isinstance(m, meshio.Mesh) and np.array_equal(m.cells_dict["triangle"], mesh.faces)
+        m.write(tmp_path / "skin.vtu")
+        assert len(meshio.read(tmp_path / "skin.vtu").cells_dict["triangle"]) == len(mesh)
+        verts, faces, values = mesh.napari_surface()
+        assert np.array_equal(verts[:, ::-1], mesh.vertices) and faces is not None and len(values) == len(verts)
+    with pytest.raises(ValueError, match="closed"):
+        store.extract(500.5)
+    assert "closed" in repr(store)
+    store.close()  # twice is allowed
+    # A state whose faces name a vertex the mesh does not have is refused.
+    state = mesh.__getstate__()
+    bad = vdiso.Mesh.__new__(vdiso.Mesh)
+    with pytest.raises(ValueError, match="Mesh state: arrays that do not make a mesh"):
+        bad.__setstate__((state[0], state[1], np.array([0, 1, 1 << 30], np.uint32).tobytes(), b"", b"", {}))

@@ -7,8 +7,11 @@
     mesh = store.extract(600, method="sage", view="normal")               # the visible surface
     image = store.render(600)                                             # (H, W, 3) uint8
 
-Long calls release the GIL, stop on Ctrl-C (KeyboardInterrupt, nothing written) and take
-progress=callable(done, total). Errors: ValueError for a bad argument (naming it), TypeError for
+Conventions: marching_cubes answers as scikit-image (vertices z, y, x in index units times
+spacing, faces int32); a Mesh from a Store is in world space (vertices x, y, z in physical
+units, faces uint32; napari_surface() gives z, y, x). An isovalue outside the data is a
+ValueError everywhere. Long calls release the GIL, stop on Ctrl-C (KeyboardInterrupt, nothing
+written) and take progress=callable(done, total). Errors: ValueError for a bad argument (naming it), TypeError for
 an argument of the wrong type (naming it), OSError for I/O (naming the file or URL),
 FileExistsError for an output that exists, vdiso.Error for the rest.
 """
@@ -20,9 +23,10 @@ import errno as _errno
 import threading as _threading
 
 from . import _vdiso
-from ._vdiso import Error, Mesh
+from ._vdiso import Error, Mesh, __version__
 
-__all__ = ["marching_cubes", "convert", "index", "open", "serve", "Store", "Server", "Mesh", "Camera", "Error"]
+__all__ = ["marching_cubes", "convert", "index", "open", "serve", "Store", "Server", "Mesh", "Camera", "Error",
+           "__version__"]
 
 
 def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None):
@@ -47,6 +51,12 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)
     if level is None and volume.size == 0:
         raise ValueError("volume: an empty array has no isosurface")
     # level None: the library takes the middle of the values, after its checks of the array.
+    try:
+        spacing = tuple(spacing)
+    except TypeError:
+        raise TypeError(f"spacing: expects 3 numbers (z, y, x), not {type(spacing).__name__}") from None
+    if len(spacing) != 3:
+        raise ValueError(f"spacing: expects 3 numbers (z, y, x), not {len(spacing)}")
     return _vdiso.marching_cubes(volume, None if level is None else _float(level, "level"),
                                  tuple(_float(s, "spacing") for s in spacing),
                                  threads=None if threads is None else _int(threads, "threads"))
@@ -140,32 +150,68 @@ def _local_input(path, what):
     return path
 
 
+def _reopen(path, s3_endpoint, anonymous, disk_cache):
+    """What unpickling a Store calls: the store opened again where it lies."""
+    return Store(path, s3_endpoint=s3_endpoint, anonymous=anonymous, disk_cache=disk_cache)
+
+
 class Store:
     """A brick store opened for extraction (vdiso.open). shape, spacing: NumPy's axis order (z, y, x),
-    as convert() and marching_cubes take them; origin and mesh vertices: world (x, y, z)."""
+    as convert() and marching_cubes take them; origin and mesh vertices: world (x, y, z).
+    A context manager (close() on leaving); pickled as where it lies, and opened again there."""
 
     def __init__(self, path, *, s3_endpoint="", anonymous=False, disk_cache=""):
-        self._store = _vdiso._Store(_local_input(path, "store"), s3_endpoint, anonymous, _os.fspath(disk_cache))
+        self._opened = (_local_input(path, "store"), str(s3_endpoint), bool(anonymous), _os.fspath(disk_cache))
+        self._store = _vdiso._Store(*self._opened)
         self._live = None  # the session extract() and render() share (_shared)
         self._lock = _threading.Lock()
 
-    path = property(lambda self: self._store.path)
-    shape = property(lambda self: tuple(reversed(self._store.dims)), doc="(z, y, x) samples")
-    dtype = property(lambda self: self._store.dtype)
-    spacing = property(lambda self: tuple(reversed(self._store.spacing_xyz)), doc="(z, y, x) sample spacing")
-    origin = property(lambda self: self._store.origin_xyz, doc="world (x, y, z) of sample 0")
-    orientation = property(lambda self: self._store.direction,
+    def _open(self):
+        if self._store is None:
+            raise ValueError(f"vdiso.Store {self._opened[0]}: closed")
+        return self._store
+
+    def close(self):
+        """Lets go of the store: its file or connections, its brick cache. Calls after it raise
+        ValueError; closing twice is allowed."""
+        with self._lock:
+            self._live = None
+            self._store = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __reduce__(self):
+        return _reopen, self._opened
+
+    path = property(lambda self: self._open().path, doc="the store's path or URL")
+    shape = property(lambda self: tuple(reversed(self._open().dims)), doc="(z, y, x) samples")
+    dtype = property(lambda self: self._open().dtype, doc="the samples' NumPy dtype")
+    spacing = property(lambda self: tuple(reversed(self._open().spacing_xyz)), doc="(z, y, x) sample spacing")
+    origin = property(lambda self: self._open().origin_xyz, doc="world (x, y, z) of sample 0")
+    orientation = property(lambda self: self._open().direction,
                            doc="3x3 LPS directions of the x, y, z axes (columns), or None")
-    levels = property(lambda self: self._store.levels, doc="levels of detail, the full resolution included")
-    value_range = property(lambda self: self._store.value_range)
+    levels = property(lambda self: self._open().levels, doc="levels of detail, the full resolution included")
+    value_range = property(lambda self: self._open().value_range, doc="(min, max) of the samples")
+
+    def _check_iso(self, iso):
+        """An isovalue outside the samples is a ValueError, as marching_cubes and scikit-image say."""
+        iso = _float(iso, "iso")
+        low, high = self.value_range
+        if not low <= iso <= high:
+            raise ValueError(f"iso: {iso} lies outside the store's values, {low} to {high}")
+        return iso
 
     def histogram(self):
         """(counts, edges): the store's 256-bin histogram of sample values."""
-        return self._store.histogram()
+        return self._open().histogram()
 
     def info(self, iso=None):
         """What `vdiso info --json` prints, as a dict."""
-        return _json.loads(self._store.info_json(iso))
+        return _json.loads(self._open().info_json(iso))
 
     @staticmethod
     def _settings(iso, method="octree", lod_error=None, threads=None, cache_mb=None, largest=False,
@@ -178,7 +224,7 @@ class Store:
 
     def _session(self, iso, method="octree", **settings):
         """A session of its own (a path of frames keeps its settings)."""
-        return _vdiso._Session(self._store, *self._settings(iso, method, **settings))
+        return _vdiso._Session(self._open(), *self._settings(iso, method, **settings))
 
     def _shared(self, iso, method="octree", **settings):
         """The store's one session, set to these settings: its brick cache and tree are kept from
@@ -186,7 +232,7 @@ class Store:
         self._lock held: one extraction at a time per Store (open the store twice to run two)."""
         values = self._settings(iso, method, **settings)
         if self._live is None:
-            self._live = _vdiso._Session(self._store, *values)
+            self._live = _vdiso._Session(self._open(), *values)
         else:
             self._live.configure(*values)
         return self._live
@@ -200,14 +246,15 @@ class Store:
         The isosurface `iso` as `vdiso extract` makes it. method: "octree" or "noise" (the whole
         surface), "sage" or "wise" (what `camera` sees, at the levels of detail `lod_error`
         pixels allow). camera: a dict with eye, target, up, fov or a vdiso.Camera; view: the
-        --view words ("normal", "distant", "closeup", with a side: "normal:left"); neither: the
-        normal view. size: (width, height) of the picture the view is for, by default the
+        --view words ("normal", "distant", "closeup", with a side: "normal,left"); neither: the
+        normal view. An iso outside the store's values is a ValueError. size: (width, height) of the picture the view is for, by default the
         command line's (800, 800); lod_error and cache_mb default to the command line's too.
         largest, min_piece, smooth, decimate: post-processing of the full surface.
         Calls on one Store share its brick cache and tree (a second call reads no brick the first
         left in the cache) and run one at a time; open the store twice to extract in parallel.
         """
         width, height = _size(size)
+        iso = self._check_iso(iso)
         with self._lock:
             session = self._shared(iso, method, lod_error=lod_error, threads=threads, cache_mb=cache_mb, largest=largest,
                                    min_piece=min_piece, smooth=smooth, decimate=decimate)
@@ -217,8 +264,9 @@ class Store:
         """A generator of Meshes, one per camera (dicts, vdiso.Camera or view words), over one
         brick cache, as `vdiso extract --path`. Takes extract()'s settings."""
         width, height = _size(size)
+        _check_settings(settings, "frames")
         settings.setdefault("method", "sage")
-        session = self._session(iso, **settings)
+        session = self._session(self._check_iso(iso), **settings)
         for camera in cameras:
             if isinstance(camera, str):
                 yield session.extract(None, camera, width, height)
@@ -226,15 +274,50 @@ class Store:
                 yield session.extract(_camera(camera, width, height), "normal", width, height)
 
     def render(self, iso, camera=None, view="normal", size=None, method="sage", **settings):
-        """render(iso, camera=None, view="normal", size=None, method="sage") -> (H, W, 3) uint8
+        """render(iso, camera=None, view="normal", size=None, method="sage", **settings) -> (H, W, 3) uint8
 
-        The surface drawn as `vdiso extract --png` draws it (OSMesa), for a notebook."""
+        The surface drawn as `vdiso extract --png` draws it (OSMesa), for a notebook. settings:
+        extract()'s (lod_error, threads, cache_mb, ...)."""
         width, height = _size(size)
+        _check_settings(settings, "render")
+        iso = self._check_iso(iso)
         with self._lock:
             return self._shared(iso, method, **settings).render(_camera(camera, width, height), view or "normal", width, height)
 
     def __repr__(self):
+        if self._store is None:
+            return f"<vdiso.Store {self._opened[0]}: closed>"
         return f"<vdiso.Store {self.path}: {self.shape} {self.dtype}, {self.levels} levels>"
+
+
+_SETTINGS = ("method", "lod_error", "threads", "cache_mb", "largest", "min_piece", "smooth", "decimate")
+
+
+def _check_settings(settings, function):
+    """Keywords a Store method passes on, checked against extract()'s so that a typo is named
+    with the public method it was given to."""
+    for name in settings:
+        if name not in _SETTINGS:
+            raise TypeError(f"Store.{function}() got an unexpected keyword argument {name!r} "
+                            f"(it takes {', '.join(_SETTINGS)})")
+
+
+def _mesh_to_meshio(self):
+    """The triangles as a meshio.Mesh (points world (x, y, z), "triangle" cells, point data
+    "Normals"), for meshio's writers and readers of other formats. Needs meshio."""
+    import meshio
+    return meshio.Mesh(self.vertices, [("triangle", self.faces)], point_data={"Normals": self.normals})
+
+
+def _mesh_napari(self):
+    """(vertices, faces, values) as napari's add_surface takes them: vertices in napari's axis order
+    (z, y, x), world units; values zeros (one per vertex)."""
+    import numpy as np
+    return (np.ascontiguousarray(self.vertices[:, ::-1]), self.faces, np.zeros(len(self.vertices), np.float32))
+
+
+Mesh.to_meshio = _mesh_to_meshio
+Mesh.napari_surface = _mesh_napari
 
 
 def open(path, *, s3_endpoint="", anonymous=False, disk_cache=""):  # noqa: A001 (as vdiso.open)
