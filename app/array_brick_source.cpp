@@ -9,6 +9,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "core/interrupt.h"
+
 namespace vdiso {
 
 namespace {
@@ -78,6 +80,7 @@ ArrayBrickSource::ArrayBrickSource(const StridedSamples& samples, int brickSize,
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     arena.execute([&] {
         tbb::parallel_for(int64_t(0), mLayout.brickCount(), [&](int64_t id) {
+            throwIfInterrupted("the array");  // a pass over all of it: stopped within a brick
             mRanges[size_t(id)] = visitFileScalar(samples.type, [&](auto zero) {
                 return measure<decltype(zero)>(mSamples, mLayout, mLayout.brickCoord(id));
             });

@@ -43,7 +43,7 @@ void cellMaxima(const StridedSamples& s, const TriangleMesh& mesh, const glm::dv
 }
 
 pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLevel, std::array<double, 3> spacing,
-                         std::optional<int64_t> threads) {
+                         std::optional<int64_t> threads, pyb::object progress) {
     // Every check on the arguments and the array's size comes before any pass over its samples.
     const StridedSamples samples = stridedSamplesOf(volume, "volume");
     if (givenLevel && !std::isfinite(*givenLevel))
@@ -56,7 +56,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     // The kernel's x, y, z are NumPy's axes 2, 1, 0.
     const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
     TriangleMesh mesh;
-    runReleased([&](const ProgressFn& progress) {
+    runReleased([&](const ProgressFn& fraction) {
         ArrayBrickSource source(samples, 32, xyzSpacing, threadCount);
         // As scikit-image: a level outside the values is a mistake, not an empty surface.
         float lo = INFINITY, hi = -INFINITY;
@@ -74,8 +74,8 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
             throw std::invalid_argument("level: " + std::to_string(level) + " is outside the volume's values (" +
                                         std::to_string(lo) + " to " + std::to_string(hi) + ")");
         FullExtractOptions options{level, kDefaultMetaCellSize, threadCount};
-        extractOctree(source, options, mesh, progress);
-    });
+        extractOctree(source, options, mesh, fraction);
+    }, progress, double(samples.dims[0]) * double(samples.dims[1]) * double(samples.dims[2]));
     // The mesh's own buffers become the arrays (owned by a capsule): peak memory is the output
     // once, not twice. NumPy's axis order is z, y, x: each row is reversed in place.
     auto* owned = new TriangleMesh(std::move(mesh));
@@ -115,7 +115,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
 void bindMarchingCubes(pyb::module_& m) {
     m.def("marching_cubes", &marchingCubes, pyb::arg("volume"), pyb::arg("level") = pyb::none(),
           pyb::arg("spacing") = std::array<double, 3>{1.0, 1.0, 1.0}, pyb::kw_only(),
-          pyb::arg("threads") = pyb::none(),
+          pyb::arg("threads") = pyb::none(), pyb::arg("progress") = pyb::none(),
           "The isosurface of a 3-D array (see vdiso.marching_cubes).");
 }
 

@@ -26,7 +26,12 @@ void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object
         pyb::gil_scoped_release release;
         std::thread worker([&] {
             try {
-                work([&](double f) { fraction.store(f, std::memory_order_relaxed); });
+                // The library's loops report progress often (every few bricks or MB): each
+                // report is also where a Ctrl-C seen by the waiting thread stops the work.
+                work([&](double f) {
+                    fraction.store(f, std::memory_order_relaxed);
+                    throwIfInterrupted("vdiso");
+                });
             } catch (...) {
                 failure = std::current_exception();
             }

@@ -219,19 +219,49 @@ def test_a_dask_array_larger_than_the_memory_limit_converts(tmp_path):
     assert store.shape == (n, n, n) and store.value_range == (0.0, 254.0)
 
 
-def test_ctrl_c_stops_within_a_second_and_writes_nothing(tmp_path):
-    out = tmp_path / "never.vdiso"
-    child = python_child(LAZY.format(limit=-1, n=2048, out=str(out)))
-    assert child.stdout.readline().strip() == "ready"
-    time.sleep(1.5)
+def interrupt(child):
+    """Ctrl-C to a child mid-call: it must end by KeyboardInterrupt before printing "done".
+    Returns the seconds it took."""
     sent = time.monotonic()
     child.send_signal(signal.SIGINT)
     stdout, stderr = child.communicate(timeout=60)
     waited = time.monotonic() - sent
     assert child.returncode != 0 and "KeyboardInterrupt" in stderr, stderr
     assert "done" not in stdout
+    return waited
+
+
+def test_ctrl_c_stops_within_a_second_and_writes_nothing(tmp_path):
+    out = tmp_path / "never.vdiso"
+    child = python_child(LAZY.format(limit=-1, n=2048, out=str(out)))
+    assert child.stdout.readline().strip() == "ready"
+    time.sleep(1.5)
+    waited = interrupt(child)
     assert not out.exists() and not any(p.name.startswith("never") for p in tmp_path.iterdir())
     assert waited < 5, f"stopped {waited:.1f} s after Ctrl-C"
+
+
+MC_CHILD = """
+import sys
+import numpy as np
+import vdiso
+a = (np.sin(np.arange(640) / 40.0) * 60 + 70).astype(np.uint16)
+v = a[:, None, None] + a[None, :, None] + a[None, None, :]
+said = []
+def progress(done, total):
+    if not said:
+        said.append(1)
+        print("working", done <= total, flush=True)
+vdiso.marching_cubes(v, 210.5, threads=1, progress=progress)
+print("done", flush=True)
+"""
+
+
+def test_marching_cubes_reports_progress_and_stops_within_a_second():
+    child = python_child(MC_CHILD)
+    assert child.stdout.readline().strip() == "working True"
+    waited = interrupt(child)
+    assert waited < 1, f"stopped {waited:.2f} s after Ctrl-C"
 
 
 def test_serve_shows_the_viewer_and_stops(volume_and_cli_store):

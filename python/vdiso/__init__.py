@@ -29,8 +29,8 @@ __all__ = ["marching_cubes", "convert", "index", "open", "serve", "Store", "Serv
            "__version__"]
 
 
-def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None):
-    """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)
+def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None, progress=None):
+    """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None, progress=None)
     -> (verts, faces, normals, values)
 
     The isosurface `level` of a 3-D array, as skimage.measure.marching_cubes returns it: verts
@@ -43,7 +43,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)
     range (NaN left out), found by the library after its checks of the array; a level outside
     the values is a ValueError (as scikit-image), a level with no
     surface gives empty arrays (scikit-image raises RuntimeError). The triangles of
-    `vdiso extract --method octree`, on `threads` threads (None: all cores).
+    `vdiso extract --method octree`, on `threads` threads (None: all cores). progress:
+    callable(done, total) in samples; Ctrl-C stops the call within a fraction of a second.
     """
     import numpy as np
     if not isinstance(volume, np.ndarray):
@@ -59,7 +60,7 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None)
         raise ValueError(f"spacing: expects 3 numbers (z, y, x), not {len(spacing)}")
     return _vdiso.marching_cubes(volume, None if level is None else _float(level, "level"),
                                  tuple(_float(s, "spacing") for s in spacing),
-                                 threads=None if threads is None else _int(threads, "threads"))
+                                 threads=None if threads is None else _int(threads, "threads"), progress=progress)
 
 
 def _int(value, name):
