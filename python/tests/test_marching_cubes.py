@@ -185,3 +185,15 @@ print('after:', len(f))
     assert "MemoryError: cannot allocate the surface:" in out and " MB" in out, out
     before = [l for l in out.splitlines() if l.startswith("before:")]
     assert before and before[0].replace("before", "after") in out, out
+
+
+def test_the_case_table_is_lorensens_as_the_docstring_says():
+    # Noise makes ambiguous cells everywhere: as many triangles and vertices as scikit-image's
+    # method="lorensen", not its default "lewiner", which resolves them apart.
+    volume = np.random.default_rng(3).random((20, 22, 24)).astype(np.float32)
+    verts, faces, _, _ = vdiso.marching_cubes(volume, 0.5)
+    lorensen = skimage.measure.marching_cubes(volume, 0.5, method="lorensen")
+    lewiner = skimage.measure.marching_cubes(volume, 0.5)
+    assert (len(verts), len(faces)) == (len(lorensen[0]), len(lorensen[1]))
+    assert len(faces) != len(lewiner[1])
+    assert 'method="lorensen"' in vdiso.marching_cubes.__doc__

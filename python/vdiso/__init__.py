@@ -43,7 +43,9 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None,
     range (NaN left out), found by the library after its checks of the array; a level outside
     the values is a ValueError (as scikit-image), a level with no
     surface gives empty arrays (scikit-image raises RuntimeError). The triangles of
-    `vdiso extract --method octree`, on `threads` threads (None: all cores). progress:
+    `vdiso extract --method octree`, on `threads` threads (None: all cores): Lorensen and Cline's
+    case table, so the triangles are scikit-image's method="lorensen", not its default "lewiner"
+    (which resolves ambiguous cells apart and makes a few more triangles). progress:
     callable(done, total) in samples; Ctrl-C stops the call within a fraction of a second.
     """
     import numpy as np
