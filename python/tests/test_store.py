@@ -476,3 +476,26 @@ def test_everyday_conveniences(tmp_path, volume_and_cli_store):
     bad = vdiso.Mesh.__new__(vdiso.Mesh)
     with pytest.raises(ValueError, match="Mesh state: arrays that do not make a mesh"):
         bad.__setstate__((state[0], state[1], np.array([0, 1, 1 << 30], np.uint32).tobytes(), b"", b"", {}))
+
+
+def test_a_store_mesh_in_volume_space_is_marching_cubes_reversed(tmp_path):
+    v = head()
+    vdiso.convert(v, tmp_path / "o.vdiso", spacing=(1.5, 0.75, 1.0), origin=(10.0, -4.0, 2.0))
+    store = vdiso.open(tmp_path / "o.vdiso")
+    verts, faces, _, _ = vdiso.marching_cubes(v, 500.5, spacing=(1.5, 0.75, 1.0))
+    mesh = store.extract(500.5, mesh_space="volume")
+    assert len(mesh) == len(faces) and len(mesh.vertices) == len(verts)
+    ours = (mesh.vertices - np.array(store.origin, np.float32))[:, ::-1]
+
+    def triangles(vv, ff):
+        """Each face as its three corners (rounded), corners sorted within it, faces sorted."""
+        t = np.round(vv[ff].astype(np.float64), 3)
+        t = np.array([sorted(map(tuple, tri)) for tri in t]).reshape(len(ff), 9)
+        return t[np.lexsort(t.T[::-1])]
+    assert np.array_equal(triangles(ours, mesh.faces), triangles(verts, faces))
+    physical = store.extract(500.5)
+    assert np.allclose(physical.vertices, mesh.vertices, atol=1e-4)  # no orientation: the same
+    frames = list(store.frames(500.5, ["normal"], mesh_space="volume"))
+    assert len(frames) == 1
+    with pytest.raises(ValueError, match="mesh_space"):
+        store.extract(500.5, mesh_space="world")

@@ -218,12 +218,13 @@ class Store:
 
     @staticmethod
     def _settings(iso, method="octree", lod_error=None, threads=None, cache_mb=None, largest=False,
-                  min_piece=0, smooth=0, decimate=None, volume_space=False):
+                  min_piece=0, smooth=0, decimate=None, mesh_space="physical"):
         # None: the library's default (lod_error 1, cache_mb 1024: app/extract_settings.h).
         return (method, _float(iso, "iso"), None if lod_error is None else _float(lod_error, "lod_error"),
                 _int(0 if threads is None else threads, "threads"),
                 None if cache_mb is None else _int(cache_mb, "cache_mb"), bool(largest), _int(min_piece, "min_piece"),
-                _int(smooth, "smooth"), 1.0 if decimate is None else _float(decimate, "decimate"), bool(volume_space))
+                _int(smooth, "smooth"), 1.0 if decimate is None else _float(decimate, "decimate"),
+                _mesh_space_is_volume(mesh_space))
 
     def _session(self, iso, method="octree", **settings):
         """A session of its own (a path of frames keeps its settings)."""
@@ -241,10 +242,11 @@ class Store:
         return self._live
 
     def extract(self, iso, *, method="octree", camera=None, view=None, size=None, lod_error=None,
-                threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None):
+                threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None,
+                mesh_space="physical", progress=None):
         """extract(iso, *, method="octree", camera=None, view=None, size=None, lod_error=None,
-        threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None, progress=None)
-        -> Mesh
+        threads=None, cache_mb=None, largest=False, min_piece=0, smooth=0, decimate=None,
+        mesh_space="physical", progress=None) -> Mesh
 
         The isosurface `iso` as `vdiso extract` makes it. method: "octree" or "noise" (the whole
         surface), "sage" or "wise" (what `camera` sees, at the levels of detail `lod_error`
@@ -252,15 +254,18 @@ class Store:
         --view words ("normal", "distant", "closeup", with a side: "normal,left"); neither: the
         normal view. An iso outside the store's values is a ValueError. size: (width, height) of the picture the view is for, by default the
         command line's (800, 800); lod_error and cache_mb default to the command line's too.
-        largest, min_piece, smooth, decimate: post-processing of the full surface.
-        Calls on one Store share its brick cache and tree (a second call reads no brick the first
+        largest, min_piece, smooth, decimate: post-processing of the full surface. mesh_space:
+        "physical" (world x, y, z: the store's origin, spacing and orientation applied) or
+        "volume" (origin + (x, y, z) sample indices times spacing, the store's own axes, as
+        `vdiso extract --mesh-space volume`): marching_cubes's vertices of the same array are
+        then (mesh.vertices - store.origin)[:, ::-1]. Calls on one Store share its brick cache and tree (a second call reads no brick the first
         left in the cache) and run one at a time; open the store twice to extract in parallel.
         """
         width, height = _size(size)
         iso = self._check_iso(iso)
         with self._lock:
             session = self._shared(iso, method, lod_error=lod_error, threads=threads, cache_mb=cache_mb, largest=largest,
-                                   min_piece=min_piece, smooth=smooth, decimate=decimate)
+                                   min_piece=min_piece, smooth=smooth, decimate=decimate, mesh_space=mesh_space)
             return session.extract(_camera(camera, width, height), view or "normal", width, height, progress)
 
     def frames(self, iso, cameras, *, size=None, **settings):
@@ -293,7 +298,13 @@ class Store:
         return f"<vdiso.Store {self.path}: {self.shape} {self.dtype}, {self.levels} levels>"
 
 
-_SETTINGS = ("method", "lod_error", "threads", "cache_mb", "largest", "min_piece", "smooth", "decimate")
+_SETTINGS = ("method", "lod_error", "threads", "cache_mb", "largest", "min_piece", "smooth", "decimate", "mesh_space")
+
+
+def _mesh_space_is_volume(mesh_space):
+    if mesh_space not in ("physical", "volume"):
+        raise ValueError(f"mesh_space: expects \"physical\" or \"volume\", not {mesh_space!r}")
+    return mesh_space == "volume"
 
 
 def _check_settings(settings, function):
