@@ -13,7 +13,6 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "core/interrupt.h"
@@ -208,13 +207,26 @@ public:
         auto* out = static_cast<unsigned char*>(dst);
         const VolumeInfo& info = mVolume->info();
         const size_t sliceBytes = size_t(info.sliceSamples()) * scalarSize(info.type);
-        const int64_t depth = mVolume->chunkShape()[2];
+        const Dims3& chunk = mVolume->chunkShape();
+        const int64_t cx = chunk[0], cy = chunk[1], cz = chunk[2];
+        const int64_t nx = info.dims[0], ny = info.dims[1];
+        const size_t sampleBytes = scalarSize(info.type), chunkBytes = mVolume->decodedBytes();
         for (int64_t s = 0; s < count; ++s, ++mNext) {
             if (mNext >= info.dims[2]) throwIoError(name(), "has fewer slices than asked for");
-            const int64_t layer = mNext / depth;
+            const int64_t layer = mNext / cz, lz = mNext - layer * cz;
             if (layer != mLayerIndex) loadLayer(layer);
-            std::memcpy(out + size_t(s) * sliceBytes,
-                        mLayer.data() + size_t(mNext - layer * depth) * sliceBytes, sliceBytes);
+            // The slice's rows from the layer's decoded chunks, each chunk's part of a row at once.
+            unsigned char* slice = out + size_t(s) * sliceBytes;
+            const unsigned char* decoded = mLayer.data();
+            for (int64_t y0 = 0; y0 < ny; y0 += cy) {
+                const int64_t rows = std::min(cy, ny - y0);
+                for (int64_t x0 = 0; x0 < nx; x0 += cx, decoded += chunkBytes) {
+                    const size_t cols = size_t(std::min(cx, nx - x0)) * sampleBytes;
+                    for (int64_t ly = 0; ly < rows; ++ly)
+                        std::memcpy(slice + size_t((y0 + ly) * nx + x0) * sampleBytes,
+                                    decoded + size_t((lz * cy + ly) * cx) * sampleBytes, cols);
+                }
+            }
         }
     }
 
@@ -232,22 +244,21 @@ public:
     }
 
 private:
+    // Decodes the layer's chunks (in parallel) into mLayer, one after another in layerChunks'
+    // order, each whole (edge chunks padded as stored): read() takes slices from them.
     void loadLayer(int64_t layer) {
         const VolumeInfo& info = mVolume->info();
-        const Dims3& chunk = mVolume->chunkShape();
-        const int64_t cx = chunk[0], cy = chunk[1], cz = chunk[2];
-        const int64_t nx = info.dims[0], ny = info.dims[1];
-        const int64_t z0 = layer * cz, depth = std::min(cz, info.dims[2] - z0);
-        const size_t sampleBytes = scalarSize(info.type);
-        try {
-            mLayer.resize(size_t(depth) * size_t(info.sliceSamples()) * sampleBytes);
-        } catch (const std::bad_alloc&) {
-            throwIoError(name(), "cannot hold a layer of chunks (" + std::to_string(depth) +
-                                     " slices of " + std::to_string(nx) + " x " + std::to_string(ny) + ")");
-        }
+        const int64_t cz = mVolume->chunkShape()[2];
         const std::vector<Dims3> chunks = layerChunks(layer);
-        auto place = [&](const Dims3& c, const std::optional<std::vector<unsigned char>>& bytes,
-                         std::vector<unsigned char>& decoded) {
+        const size_t chunkBytes = mVolume->decodedBytes();
+        try {
+            mLayer.resize(chunks.size() * chunkBytes);
+        } catch (const std::bad_alloc&) {
+            throwIoError(name(), "cannot hold a layer of chunks (" + std::to_string(chunks.size()) + " chunks of " +
+                                     std::to_string(chunkBytes) + " bytes)");
+        }
+        auto place = [&](size_t i, const std::optional<std::vector<unsigned char>>& bytes) {
+            const Dims3& c = chunks[i];
             if (mPins) {
                 const ZarrChunkPin pin = bytes ? ZarrChunkPin{bytes->size(), crc32Of(bytes->data(), bytes->size())}
                                                : ZarrChunkPin{};
@@ -257,23 +268,12 @@ private:
                                                     "it; run vdiso index again with --restart");
                 slot = pin;
             }
-            try {
-                decoded.resize(mVolume->decodedBytes());
-            } catch (const std::bad_alloc&) {
-                throwIoError(name(), "cannot hold a decoded chunk (" + std::to_string(mVolume->decodedBytes()) + " bytes)");
-            }
-            mVolume->decode(c, bytes, decoded.data());
-            const int64_t x0 = c[0] * cx, y0 = c[1] * cy;
-            const int64_t rows = std::min(cy, ny - y0), cols = std::min(cx, nx - x0);
-            for (int64_t lz = 0; lz < depth; ++lz)
-                for (int64_t ly = 0; ly < rows; ++ly)
-                    std::memcpy(mLayer.data() + size_t((lz * ny + y0 + ly) * nx + x0) * sampleBytes,
-                                decoded.data() + size_t((lz * cy + ly) * cx) * sampleBytes, size_t(cols) * sampleBytes);
+            mVolume->decode(c, bytes, mLayer.data() + i * chunkBytes);
         };
-        if (!mVolume->isRemote()) {  // a chunk at a time on each core: memory stays the layer
+        if (!mVolume->isRemote()) {  // a chunk read at a time on each core
             tbb::parallel_for(size_t(0), chunks.size(), [&](size_t i) {
                 throwIfInterrupted(name());
-                place(chunks[i], mVolume->stored({chunks[i]})[0], mChunks.local());
+                place(i, mVolume->stored({chunks[i]})[0]);
             });
         } else {
             // Remote: the layer's chunks were fetched while the layer before was decoded (or
@@ -286,7 +286,7 @@ private:
                     return mVolume->stored(next);
                 });
             }
-            for (size_t i = 0; i < chunks.size(); ++i) place(chunks[i], values[i], mChunks.local());
+            tbb::parallel_for(size_t(0), chunks.size(), [&](size_t i) { place(i, values[i]); });
         }
         mLayerIndex = layer;
     }
@@ -302,8 +302,7 @@ private:
     std::unique_ptr<ZarrVolume> mVolume;
     std::vector<ZarrChunkPin>* mPins;
     int64_t mPinnedLayers;
-    std::vector<unsigned char> mLayer;
-    tbb::enumerable_thread_specific<std::vector<unsigned char>> mChunks;  // a decoded chunk
+    std::vector<unsigned char> mLayer;  // the layer's chunks, decoded
     int64_t mLayerIndex = -1;
     std::future<std::vector<std::optional<std::vector<unsigned char>>>> mAhead;  // remote: the next layer's
     int64_t mAheadLayer = -1;
