@@ -102,7 +102,6 @@ def test_threads_give_the_same_mesh():
     (np.zeros((4, 0, 4), dtype=np.float32), 1.0, "at least 2"),
     (np.zeros((4, 1, 4), dtype=np.float32), 1.0, "at least 2"),
     (np.zeros((4, 4, 4), dtype=np.complex64), 1.0, "not supported"),
-    (np.zeros((4, 4, 4), dtype=bool), 1.0, "not supported"),
     (np.zeros((4, 4, 4), dtype=">f4"), 1.0, "byte order"),
     (np.zeros((4, 4, 4), dtype=np.float32), float("nan"), "level"),
     (np.zeros((4, 4, 4), dtype=np.float32), float("inf"), "level"),
@@ -188,12 +187,38 @@ print('after:', len(f))
 
 
 def test_the_case_table_is_lorensens_as_the_docstring_says():
-    # Noise makes ambiguous cells everywhere: as many triangles and vertices as scikit-image's
-    # method="lorensen", not its default "lewiner", which resolves them apart.
+    # Noise makes ambiguous cells everywhere: the same vertices and as many triangles as
+    # scikit-image's method="lorensen", not its default "lewiner", which resolves them apart.
     volume = np.random.default_rng(3).random((20, 22, 24)).astype(np.float32)
     verts, faces, _, _ = vdiso.marching_cubes(volume, 0.5)
     lorensen = skimage.measure.marching_cubes(volume, 0.5, method="lorensen")
     lewiner = skimage.measure.marching_cubes(volume, 0.5)
     assert (len(verts), len(faces)) == (len(lorensen[0]), len(lorensen[1]))
+    assert nearest(verts, lorensen[0])[1].max() < 1e-4
     assert len(faces) != len(lewiner[1])
     assert 'method="lorensen"' in vdiso.marching_cubes.__doc__
+
+
+@pytest.mark.parametrize("dtype", [np.bool_, np.float16, np.int64, np.uint64], ids=lambda d: np.dtype(d).name)
+def test_the_other_dtypes_scikit_image_takes(dtype):
+    # bool (a mask), float16, and 64-bit integers such as skimage.measure.label's labels.
+    volume = blob(dtype=np.float32)
+    if dtype is np.bool_:
+        volume, level = volume > 40, 0.5
+    else:
+        volume, level = volume.astype(dtype), 40.5
+    ours = vdiso.marching_cubes(volume, level)
+    # A mask's cells are often ambiguous: compared with lorensen's, the same vertices and as many
+    # triangles (an ambiguous cell may be cut along the other diagonal: area within 1 %).
+    theirs = skimage.measure.marching_cubes(volume, level, method="lorensen")
+    assert len(ours[1]) == len(theirs[1]) > 100
+    assert abs(area(ours[0], ours[1]) / area(theirs[0], theirs[1]) - 1) < 0.01
+    assert nearest(ours[0], theirs[0].astype(np.float32))[1].max() < 1e-3
+    # The same surface as the dtype the library reads it as.
+    as_read = volume.view(np.uint8) if dtype is np.bool_ else volume.astype(np.float32)
+    assert np.array_equal(ours[1], vdiso.marching_cubes(as_read, level)[1])
+    # A label beyond 32 bits goes through float64.
+    if dtype is np.int64:
+        wide = volume.copy()
+        wide[0, 0, 0] = 1 << 40
+        assert len(vdiso.marching_cubes(wide, level)[1]) > 100

@@ -39,18 +39,22 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None,
     (V, 3) float32 pointing away from the values above `level` (outward for a bright object),
     values (V,) float32 (the largest sample of the cell each vertex lies in). `volume`: any 3-D
     array of uint8, int8, uint16, int16, uint32, int32, float32 or float64, C- or F-ordered or
-    strided, read in place (never copied to float). `level` None: the middle of the array's
+    strided, read in place (never copied to float); bool is read as uint8 in place; float16 is
+    copied to float32, and int64 and uint64 (what skimage.measure.label returns) to the 32-bit
+    integers when their values fit, else to float64. `level` None: the middle of the array's
     range (NaN left out), found by the library after its checks of the array; a level outside
     the values is a ValueError (as scikit-image), a level with no
     surface gives empty arrays (scikit-image raises RuntimeError). The triangles of
     `vdiso extract --method octree`, on `threads` threads (None: all cores): Lorensen and Cline's
-    case table, so the triangles are scikit-image's method="lorensen", not its default "lewiner"
-    (which resolves ambiguous cells apart and makes a few more triangles). progress:
+    cases, ambiguous cells not resolved, as scikit-image's method="lorensen" (the same vertices
+    and as many triangles, an ambiguous cell sometimes cut along its other diagonal), not its
+    default "lewiner" (which resolves them and makes a few more triangles). progress:
     callable(done, total) in samples; Ctrl-C stops the call within a fraction of a second.
     """
     import numpy as np
     if not isinstance(volume, np.ndarray):
         volume = np.asarray(volume)
+    volume = _readable_samples(volume)
     if level is None and volume.size == 0:
         raise ValueError("volume: an empty array has no isosurface")
     # level None: the library takes the middle of the values, after its checks of the array.
@@ -63,6 +67,28 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None,
     return _vdiso.marching_cubes(volume, None if level is None else _float(level, "level"),
                                  tuple(_float(s, "spacing") for s in spacing),
                                  threads=None if threads is None else _int(threads, "threads"), progress=progress)
+
+
+def _readable_samples(volume):
+    """`volume` itself when the library reads its dtype in place; bool as uint8 (a view), float16
+    as float32, and 64-bit integers as the 32-bit ones when every value fits (else float64):
+    copies, as scikit-image makes (it takes float64 throughout)."""
+    import numpy as np
+    kind, size = volume.dtype.kind, volume.dtype.itemsize
+    if kind == "b":
+        return volume.view(np.uint8)
+    if kind == "f" and size == 2:
+        return volume.astype(np.float32)
+    if kind in "iu" and size == 8:
+        narrow = np.int32 if kind == "i" else np.uint32
+        if volume.size:
+            info = np.iinfo(narrow)
+            if volume.min() >= info.min and volume.max() <= info.max:
+                return volume.astype(narrow)
+        else:
+            return volume.astype(narrow)
+        return volume.astype(np.float64)
+    return volume
 
 
 def _int(value, name):
