@@ -119,7 +119,8 @@ def test_bad_spacing_and_threads_are_value_errors():
 
 
 def test_help_reads_well():
-    assert ("marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None, progress=None)"
+    assert ("marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction=\"descent\",\n"
+            "    step_size=1, allow_degenerate=True, method=\"lorensen\", mask=None, threads=None, progress=None)"
             in vdiso.marching_cubes.__doc__)
     assert "extract(iso, *, method=" in vdiso.Store.extract.__doc__
 
@@ -194,7 +195,8 @@ def test_the_case_table_is_lorensens_as_the_docstring_says():
     lorensen = skimage.measure.marching_cubes(volume, 0.5, method="lorensen")
     lewiner = skimage.measure.marching_cubes(volume, 0.5)
     assert (len(verts), len(faces)) == (len(lorensen[0]), len(lorensen[1]))
-    assert nearest(verts, lorensen[0])[1].max() < 1e-4
+    rounded = [np.unique(np.round(v.astype(np.float64), 3), axis=0) for v in (verts, lorensen[0])]
+    assert np.array_equal(rounded[0], rounded[1])
     assert len(faces) != len(lewiner[1])
     assert 'method="lorensen"' in vdiso.marching_cubes.__doc__
 
@@ -222,3 +224,50 @@ def test_the_other_dtypes_scikit_image_takes(dtype):
         wide = volume.copy()
         wide[0, 0, 0] = 1 << 40
         assert len(vdiso.marching_cubes(wide, level)[1]) > 100
+
+
+def test_scikit_images_keywords():
+    volume = blob(shape=(23, 27, 31))
+    lorensen = dict(method="lorensen")
+
+    def same(ours, theirs):
+        assert len(ours[0]) == len(theirs[0]) and len(ours[1]) == len(theirs[1]) > 50
+        assert ours[0].dtype == theirs[0].dtype and ours[1].dtype == theirs[1].dtype
+        assert nearest(ours[0], theirs[0])[1].max() < 1e-4
+        assert abs(area(ours[0], ours[1]) / area(theirs[0], theirs[1]) - 1) < 0.005
+
+    for step in (2, 3):
+        for spacing in ((1, 1, 1), (0.5, 1.0, 2.0)):
+            same(vdiso.marching_cubes(volume, 30.5, spacing, step_size=step),
+                 skimage.measure.marching_cubes(volume, 30.5, spacing=spacing, step_size=step, **lorensen))
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        mask = rng.random(volume.shape) > 0.4
+        same(vdiso.marching_cubes(volume, 30.5, mask=mask),
+             skimage.measure.marching_cubes(volume, 30.5, mask=mask, **lorensen))
+    # Integer samples at the level make triangles of no area, which allow_degenerate=False drops
+    # with the vertices that coincide. (scikit-image's float32 interpolation leaves some of its
+    # coincident vertices a rounding apart, so it drops fewer: 4784 triangles against 4724 here.)
+    whole = np.round(volume).astype(np.int16)
+    every = vdiso.marching_cubes(whole, 30)
+    kept = vdiso.marching_cubes(whole, 30, allow_degenerate=False)
+    assert len(kept[1]) < len(every[1])
+    assert len(np.unique(kept[0], axis=0)) == len(kept[0])
+    f = kept[1]
+    assert ((f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])).all()
+    assert abs(area(kept[0], kept[1]) / area(every[0], every[1]) - 1) < 1e-6
+    theirs = skimage.measure.marching_cubes(whole, 30, allow_degenerate=False, **lorensen)
+    assert abs(area(kept[0], kept[1]) / area(theirs[0], theirs[1]) - 1) < 0.005
+    # ascent: the winding reversed against the normals, as scikit-image's.
+    ours = vdiso.marching_cubes(volume, 30.5, gradient_direction="ascent")
+    theirs = skimage.measure.marching_cubes(volume, 30.5, gradient_direction="ascent", **lorensen)
+    for v, f, n, _ in (ours, theirs):
+        t = v[f]
+        assert (np.sum(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]) * n[f[:, 0]], axis=1) > 0).mean() > 0.99
+    # What it cannot do is refused by name, never answered with another surface.
+    for keywords, message in ((dict(method="lewiner"), "method: 'lewiner' is not implemented"),
+                              (dict(gradient_direction="up"), "gradient_direction"),
+                              (dict(step_size=0), "step_size"),
+                              (dict(mask=np.ones((2, 2, 2), bool)), "mask: expects the volume's shape")):
+        with pytest.raises(ValueError, match=message):
+            vdiso.marching_cubes(volume, 30.5, **keywords)

@@ -29,8 +29,10 @@ __all__ = ["marching_cubes", "convert", "index", "open", "serve", "Store", "Serv
            "__version__"]
 
 
-def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None, progress=None):
-    """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None, progress=None)
+def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent", step_size=1,
+                   allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None):
+    """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent",
+    step_size=1, allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None)
     -> (verts, faces, normals, values)
 
     The isosurface `level` of a 3-D array, as skimage.measure.marching_cubes returns it: verts
@@ -50,6 +52,14 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None,
     and as many triangles, an ambiguous cell sometimes cut along its other diagonal), not its
     default "lewiner" (which resolves them and makes a few more triangles). progress:
     callable(done, total) in samples; Ctrl-C stops the call within a fraction of a second.
+
+    scikit-image's keywords: gradient_direction "descent" (its default and this winding) or
+    "ascent" (the faces' winding reversed); step_size, the cells' side in samples (the array read
+    as a strided view, no copy); allow_degenerate=False merges vertices that coincide and drops
+    the triangles that then have no area; mask, a boolean array of the volume's shape: only the
+    triangles of the cells whose far corner (of highest indices) it marks are kept, as
+    scikit-image's (the whole volume is meshed first: a mask saves no time here). method: "lorensen" only; "lewiner" is refused
+    (its ambiguity resolution is not implemented), never answered with another surface.
     """
     import numpy as np
     if not isinstance(volume, np.ndarray):
@@ -64,9 +74,55 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, threads=None,
         raise TypeError(f"spacing: expects 3 numbers (z, y, x), not {type(spacing).__name__}") from None
     if len(spacing) != 3:
         raise ValueError(f"spacing: expects 3 numbers (z, y, x), not {len(spacing)}")
-    return _vdiso.marching_cubes(volume, None if level is None else _float(level, "level"),
-                                 tuple(_float(s, "spacing") for s in spacing),
-                                 threads=None if threads is None else _int(threads, "threads"), progress=progress)
+    if method != "lorensen":
+        raise ValueError(f"method: {method!r} is not implemented: vdiso's surface is scikit-image's "
+                         "method=\"lorensen\" (ambiguous cells not resolved); pass method=\"lorensen\"")
+    if gradient_direction not in ("descent", "ascent"):
+        raise ValueError(f"gradient_direction: expects \"descent\" or \"ascent\", not {gradient_direction!r}")
+    step = _int(step_size, "step_size")
+    if step < 1:
+        raise ValueError(f"step_size: expects 1 or more, not {step}")
+    if mask is not None:
+        mask = np.asarray(mask)
+        if mask.shape != volume.shape:
+            raise ValueError(f"mask: expects the volume's shape {volume.shape}, not {mask.shape}")
+        mask = mask.astype(bool, copy=False)
+    if step > 1:
+        volume = volume[::step, ::step, ::step]
+        mask = None if mask is None else mask[::step, ::step, ::step]
+        spacing = tuple(_float(s, "spacing") * step for s in spacing)
+    verts, faces, normals, values = _vdiso.marching_cubes(
+        volume, None if level is None else _float(level, "level"), tuple(_float(s, "spacing") for s in spacing),
+        threads=None if threads is None else _int(threads, "threads"), progress=progress)
+    if mask is not None:
+        # A triangle lies in one cell, its centroid inside it (or on its faces): the cell's
+        # first corner is the centroid's floor, in samples. scikit-image tests a cell's far
+        # corner (the one of highest indices).
+        cells = np.floor(verts[faces].mean(axis=1) / np.asarray(spacing)).astype(np.int64)
+        np.clip(cells, 0, np.array(volume.shape) - 2, out=cells)
+        faces = faces[mask[cells[:, 0] + 1, cells[:, 1] + 1, cells[:, 2] + 1]]
+        verts, faces, normals, values = _used_vertices(verts, faces, normals, values)
+    if not allow_degenerate:
+        _, first, inverse = np.unique(verts, axis=0, return_index=True, return_inverse=True)
+        faces = first[inverse.reshape(-1)][faces].astype(np.int32)
+        faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
+        verts, faces, normals, values = _used_vertices(verts, faces, normals, values)
+    if step > 1 and all(_float(s, "spacing") == step for s in spacing):
+        verts = verts.astype(np.float32)  # scikit-image's type for a unit spacing, whatever the step
+    if gradient_direction == "ascent":
+        faces = np.ascontiguousarray(faces[:, ::-1])
+    return verts, faces, normals, values
+
+
+def _used_vertices(verts, faces, normals, values):
+    """The vertices the faces use, in their order, and the faces renumbered."""
+    import numpy as np
+    used = np.unique(faces)
+    if len(used) == len(verts):
+        return verts, faces, normals, values
+    number = np.full(len(verts), -1, np.int32)
+    number[used] = np.arange(len(used), dtype=np.int32)
+    return verts[used], number[faces], normals[used], values[used]
 
 
 def _readable_samples(volume):
