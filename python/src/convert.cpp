@@ -3,6 +3,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cstring>
 #include <optional>
 #include <stdexcept>
 
@@ -27,8 +29,18 @@ namespace {
 // and checks what comes back before converting it to the store type.
 class ArraySlices final : public SliceReader {
 public:
-    ArraySlices(pyb::object source, const VolumeInfo& info, FileScalar type, std::string name)
-        : mSource(std::move(source)), mInfo(info), mType(type), mName(std::move(name)) {}
+    // `bounds`: where the source's chunks begin along axis 0, and its end (empty: not chunked).
+    // Then whole chunks' slabs are read, so that a chunk is computed or decoded once however the
+    // writer's reads cut it, unless a chunk's slab would exceed kSlabBytes (then reads go
+    // through as asked, the writer's bounded memory first).
+    ArraySlices(pyb::object source, const VolumeInfo& info, FileScalar type, std::string name,
+                std::vector<int64_t> bounds)
+        : mSource(std::move(source)), mInfo(info), mType(type), mName(std::move(name)), mBounds(std::move(bounds)) {
+        const size_t sliceBytes = size_t(info.sliceSamples()) * scalarSize(info.type);
+        for (size_t k = 0; k + 1 < mBounds.size(); ++k)
+            if (size_t(mBounds[k + 1] - mBounds[k]) * sliceBytes > kSlabBytes) mBounds.clear();
+    }
+    static constexpr size_t kSlabBytes = size_t(512) << 20;
     ~ArraySlices() override {
         pyb::gil_scoped_acquire acquire;
         mSource = pyb::object();
@@ -37,9 +49,40 @@ public:
     std::string name() const override { return mName; }
 
     void read(void* dst, int64_t count) override {
+        if (mBounds.empty()) {
+            readSource(dst, mNext, count);
+            mNext += count;
+            return;
+        }
+        auto* out = static_cast<unsigned char*>(dst);
+        const size_t sliceBytes = size_t(mInfo.sliceSamples()) * scalarSize(mInfo.type);
+        for (int64_t s = 0; s < count;) {
+            const int64_t z = mNext + s;
+            if (z < mSlabFirst || z >= mSlabEnd) loadSlab(z);
+            const int64_t n = std::min(count - s, mSlabEnd - z);
+            std::memcpy(out + size_t(s) * sliceBytes, mSlab.data() + size_t(z - mSlabFirst) * sliceBytes,
+                        size_t(n) * sliceBytes);
+            s += n;
+        }
+        mNext += count;
+    }
+
+private:
+    // The chunk holding slice z, whole, into mSlab.
+    void loadSlab(int64_t z) {
+        const auto after = std::upper_bound(mBounds.begin(), mBounds.end(), z);
+        if (after == mBounds.begin() || after == mBounds.end())
+            throwIoError(mName, "has no chunk holding slice " + std::to_string(z));
+        mSlabFirst = *(after - 1);
+        mSlabEnd = *after;
+        mSlab.resize(size_t(mSlabEnd - mSlabFirst) * size_t(mInfo.sliceSamples()) * scalarSize(mInfo.type));
+        readSource(mSlab.data(), mSlabFirst, mSlabEnd - mSlabFirst);
+    }
+
+    // Slices [z, z + count) of the source into dst, in the store's type.
+    void readSource(void* dst, int64_t z, int64_t count) {
         pyb::gil_scoped_acquire acquire;
         const pyb::module_ np = pyb::module_::import("numpy");
-        const int64_t z = mNext;
         pyb::object got = mSource[pyb::slice(pyb::int_(z), pyb::int_(z + count), pyb::none())];
         const std::string range = "slices " + std::to_string(z) + " to " + std::to_string(z + count);
         // A Dask slab of the store's own type is computed chunk by chunk into the destination
@@ -49,7 +92,6 @@ public:
             const pyb::array target(dtypeOf(mInfo.type), std::vector<pyb::ssize_t>{count, mInfo.dims[1], mInfo.dims[0]},
                                     dst, pyb::capsule(dst, [](void*) {}));
             got.attr("store")(target, "lock"_a = false);
-            mNext += count;
             return;
         }
         const pyb::array slab = np.attr("ascontiguousarray")(np.attr("asarray")(got));
@@ -58,10 +100,8 @@ public:
             throwIoError(mName, range + " came back as " + pyb::str(pyb::handle(slab.dtype())).cast<std::string>() +
                                     ", not the array's dtype");
         decodeSamples(slab.data(), mType, false, size_t(slab.size()), dst, mInfo.type);
-        mNext += count;
     }
 
-private:
     void checkShape(const pyb::tuple& shape, int64_t count, const std::string& range) const {
         if (shape.size() != 3 || shape[0].cast<int64_t>() != count || shape[1].cast<int64_t>() != mInfo.dims[1] ||
             shape[2].cast<int64_t>() != mInfo.dims[0])
@@ -74,6 +114,9 @@ private:
     VolumeInfo mInfo;
     FileScalar mType;
     std::string mName;
+    std::vector<int64_t> mBounds;
+    std::vector<unsigned char> mSlab;  // slices [mSlabFirst, mSlabEnd): one chunk's
+    int64_t mSlabFirst = 0, mSlabEnd = 0;
     int64_t mNext = 0;
 };
 
@@ -124,7 +167,8 @@ pyb::dict convertFiles(const std::vector<std::string>& inputs, const std::string
 pyb::dict convertArray(pyb::object source, const std::string& name, const std::vector<int64_t>& shape,
                        const pyb::dtype& dtype, const std::string& output, std::array<double, 3> spacing,
                        std::array<double, 3> origin, int64_t brick, const std::string& levels,
-                       const std::string& compress, bool overwrite, pyb::object progress) {
+                       const std::string& compress, bool overwrite, std::vector<int64_t> bounds,
+                       pyb::object progress) {
     if (shape.size() != 3)
         throw std::invalid_argument(name + ": expects a 3-D array, not one of " + std::to_string(shape.size()) +
                                     " dimensions");
@@ -142,7 +186,10 @@ pyb::dict convertArray(pyb::object source, const std::string& name, const std::v
     info.spacing = glm::dvec3(spacing[2], spacing[1], spacing[0]);
     info.origin = glm::dvec3(origin[0], origin[1], origin[2]);  // world x, y, z
     const StoreWriteOptions options = storeOptions(brick, levels, compress, overwrite);
-    ArraySlices slices(std::move(source), info, type, name);
+    bool ordered = bounds.empty() || (bounds.front() == 0 && bounds.back() == shape[0]);
+    for (size_t k = 1; ordered && k < bounds.size(); ++k) ordered = bounds[k] > bounds[k - 1];
+    if (!ordered) throw std::invalid_argument(name + ": chunks along axis 0 that do not add up to its shape");
+    ArraySlices slices(std::move(source), info, type, name, std::move(bounds));
     StoreWriteSummary summary;
     runReleased([&](const ProgressFn& fraction) { summary = writeBrickStore(slices, output, options, fraction); },
                 progress, double(info.byteSize()));
@@ -180,7 +227,7 @@ void bindConvert(pyb::module_& m) {
     m.def("_convert_files", &convertFiles, "inputs"_a, "output"_a, "spacing"_a, "brick"_a, "levels"_a, "compress"_a,
           "overwrite"_a, "progress"_a);
     m.def("_convert_array", &convertArray, "source"_a, "name"_a, "shape"_a, "dtype"_a, "output"_a, "spacing"_a,
-          "origin"_a, "brick"_a, "levels"_a, "compress"_a, "overwrite"_a, "progress"_a);
+          "origin"_a, "brick"_a, "levels"_a, "compress"_a, "overwrite"_a, "bounds"_a, "progress"_a);
 }
 
 }  // namespace vdiso::py

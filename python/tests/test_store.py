@@ -499,3 +499,23 @@ def test_a_store_mesh_in_volume_space_is_marching_cubes_reversed(tmp_path):
     assert len(frames) == 1
     with pytest.raises(ValueError, match="mesh_space"):
         store.extract(500.5, mesh_space="world")
+
+
+def test_convert_computes_each_dask_chunk_once(tmp_path, volume_and_cli_store):
+    # Chunks 9 deep against the writer's slabs of 32 and more: each chunk is computed once.
+    import dask
+    v, cli = volume_and_cli_store
+    computed = []
+
+    def block(x, block_info=None):
+        computed.append(tuple(block_info[0]["chunk-location"]))
+        return x
+
+    source = da.from_array(v, chunks=(9, 25, 60)).map_blocks(block, dtype=v.dtype)
+    with dask.config.set(scheduler="synchronous"):
+        vdiso.convert(source, tmp_path / "once.vdiso")
+    assert (tmp_path / "once.vdiso").read_bytes() == cli.read_bytes()
+    assert len(computed) == len(set(computed)) == 5 * 2 * 1, computed
+    # A Zarr array's chunks are read whole too (the same bytes).
+    vdiso.convert(zarr.array(v, chunks=(7, 50, 60)), tmp_path / "z.vdiso")
+    assert (tmp_path / "z.vdiso").read_bytes() == cli.read_bytes()

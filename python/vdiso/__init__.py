@@ -448,7 +448,8 @@ def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto",
     Writes a brick store at `path` from `source`: a file or folder in any format `vdiso convert`
     reads (a list of slice files too), or a NumPy, Zarr or Dask array, or any object with shape,
     dtype and slicing along axis 0. An array is read slab by slab along axis 0, so one larger
-    than memory converts in the converter's bounded memory. spacing: (z, y, x) as
+    than memory converts in the converter's bounded memory; a Dask or Zarr array a whole chunk's
+    slab at a time, so that no chunk is computed or decoded twice. spacing: (z, y, x) as
     marching_cubes takes it; origin: world (x, y, z) (arrays only). The store appears only when
     complete. Returns what was written (bricks, levels, bytes, seconds)."""
     path = _os.fspath(path)
@@ -472,7 +473,31 @@ def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto",
     spacing = (1.0, 1.0, 1.0) if spacing is None else tuple(float(s) for s in spacing)
     origin = (0.0, 0.0, 0.0) if origin is None else tuple(float(s) for s in origin)
     return _vdiso._convert_array(source, name, shape, np.dtype(source.dtype), path, spacing, origin,
-                                 _int(brick, "brick"), levels, compress, bool(overwrite), progress)
+                                 _int(brick, "brick"), levels, compress, bool(overwrite), _z_chunk_bounds(source, shape),
+                                 progress)
+
+
+def _z_chunk_bounds(source, shape):
+    """Where a chunked array's chunks begin along axis 0, and its end (Dask: a size per chunk;
+    Zarr: one size): convert reads whole chunks, so none is computed or decoded twice. [] for an
+    array without chunks."""
+    chunks = getattr(source, "chunks", None)
+    if not isinstance(chunks, tuple) or not chunks:
+        return []
+    first = chunks[0]
+    try:
+        sizes = [int(c) for c in first] if isinstance(first, tuple) else None
+        depth = None if sizes is not None else int(first)
+    except (TypeError, ValueError):
+        return []
+    if sizes is None:
+        if depth <= 0:
+            return []
+        sizes = [min(depth, shape[0] - z) for z in range(0, shape[0], depth)]
+    bounds = [0]
+    for size in sizes:
+        bounds.append(bounds[-1] + size)
+    return bounds
 
 
 class Server:
