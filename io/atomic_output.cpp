@@ -78,7 +78,7 @@ AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite,
 
 AtomicOutputFile::AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs,
                                    std::string partialPath, bool resume)
-    : mPath(std::move(path)), mTempPath(std::move(partialPath)), mOverwrite(overwrite), mKeepPartial(true) {
+    : mPath(std::move(path)), mTempPath(std::move(partialPath)), mOverwrite(overwrite), mKeepPartial(resume) {
     checkOutputReplaceable(mPath, mOverwrite, inputs);
     checkOutputReplaceable(mTempPath, true, inputs);  // a regular file, if anything
     mFd = ::open(mTempPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | (resume ? 0 : O_TRUNC), 0644);

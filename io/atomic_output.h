@@ -49,8 +49,10 @@ public:
     AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs = {});
     // A resumable output (vdiso index): written under `partialPath`, which outlives a failure,
     // an interrupt or a kill so that a later run can go on with it. With `resume` the partial
-    // file there is opened as it is (its bytes are the interrupted run's), else it is created
-    // empty. commit() renames it into place; `path` is checked as above, up front and at commit.
+    // file there is opened as it is (its bytes are the interrupted run's) and kept on failure;
+    // else it is created empty and removed on a failure unless keepOnFailure() was called (a
+    // checkpoint names it). commit() renames it into place; `path` is checked as above, up front
+    // and at commit.
     AtomicOutputFile(std::string path, bool overwrite, const std::vector<std::string>& inputs,
                      std::string partialPath, bool resume);
     ~AtomicOutputFile();
@@ -69,6 +71,9 @@ public:
     // Starts writing [offset, offset + n) back to disk without waiting, so that commit()'s
     // flush has little left to do. A hint: failures surface at commit().
     void startWriteback(uint64_t offset, uint64_t n);
+
+    // A resumable output's partial file stays if this object goes without commit().
+    void keepOnFailure() { mKeepPartial = true; }
 
     // Cuts the file to `size` bytes (a resumed output, back to its checkpoint's end).
     void truncate(uint64_t size);

@@ -262,6 +262,14 @@ TEST_F(ZarrIndex, AnInterruptedIndexGoesOnWhereItStopped) {
         EXPECT_TRUE(std::filesystem::exists(indexPartialPath(index)));
         ASSERT_TRUE(std::filesystem::exists(indexCheckpointPath(index)));
     };
+    // A failure before the first checkpoint leaves nothing to go on from, and no partial file.
+    ZarrIndexOptions rare = o;
+    rare.checkpointSeconds = 3600;
+    test::writeFile(chunk, "not blosc");
+    expectIoError([&] { indexZarr(path("r.zarr"), index, rare); }, {chunk});
+    test::writeFile(chunk, good);
+    EXPECT_FALSE(std::filesystem::exists(indexPartialPath(index)));
+    EXPECT_FALSE(std::filesystem::exists(indexCheckpointPath(index)));
     interrupted();
     ZarrIndexSummary s = indexZarr(path("r.zarr"), index, o);
     EXPECT_EQ(s.store.layers, 5);

@@ -194,6 +194,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         }
         if (resume->sourceState) c.source = resume->sourceState(lastSliceOfLayer(layout, bk) + 1);
         writeStoreCheckpoint(resume->checkpointPath, c, rings);
+        out->keepOnFailure();  // the checkpoint goes on from the partial file
         lastSave = Clock::now();
         saveSeconds = secondsSince(t0);
     };

@@ -51,8 +51,9 @@ struct StoreWriteOptions {
 // A resumable conversion (vdiso index): the output is written under `partialPath`, and the
 // writer's state is saved at `checkpointPath` (io/store/store_checkpoint.h) between level 0's
 // layers, at least `everySeconds` apart and ten times as long apart as the last save took, so
-// that saving costs a tenth of the run at most. A failure, an interrupt or a kill leaves both;
-// success removes the checkpoint. With `from`, the run goes on from that checkpoint, whose
+// that saving costs a tenth of the run at most. A failure, an interrupt or a kill leaves both
+// (a failure before the first checkpoint of a fresh run leaves neither); success removes the
+// checkpoint. With `from`, the run goes on from that checkpoint, whose
 // identity must be storeResumeIdentity's: the caller has put its source's state back (as
 // `sourceState` saved it) and the writer skips the slices before the layer it resumes at.
 struct StoreResume {
