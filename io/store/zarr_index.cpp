@@ -28,17 +28,15 @@ std::string indexCheckpointPath(const std::string& indexPath) { return indexPath
 
 namespace {
 
-// A checkpoint's source state: the chunk layers read so far and their chunks' pins.
-//   u64 layers, u64 pins [each: u64 bytes, u32 crc]
+// A checkpoint's source state: the chunk layers read so far, then the record with their
+// chunks' pins (io/store/external_level.h; the others not read yet).
+//   u64 layers, [external record]
 std::vector<unsigned char> encodePinnedLayers(const ExternalLevel& record, int64_t layers) {
-    const size_t count = size_t(layers * record.chunkCounts[0] * record.chunkCounts[1]);
-    std::vector<unsigned char> out(16 + count * 12);
-    const uint64_t header[2] = {uint64_t(layers), count};
-    std::memcpy(out.data(), header, 16);
-    for (size_t i = 0; i < count; ++i) {
-        std::memcpy(out.data() + 16 + 12 * i, &record.pins[i].bytes, 8);
-        std::memcpy(out.data() + 24 + 12 * i, &record.pins[i].crc, 4);
-    }
+    std::vector<unsigned char> out(8);
+    const uint64_t n = uint64_t(layers);
+    std::memcpy(out.data(), &n, 8);
+    const std::vector<unsigned char> pins = encodeExternalLevel(record);
+    out.insert(out.end(), pins.begin(), pins.end());
     return out;
 }
 
@@ -46,17 +44,15 @@ std::vector<unsigned char> encodePinnedLayers(const ExternalLevel& record, int64
 // `checkpointPath` when they do not fit the array.
 int64_t decodePinnedLayers(const std::vector<unsigned char>& bytes, ExternalLevel& record,
                            const std::string& checkpointPath) {
-    uint64_t header[2] = {0, 0};
-    if (bytes.size() >= 16) std::memcpy(header, bytes.data(), 16);
-    const uint64_t layerChunks = uint64_t(record.chunkCounts[0] * record.chunkCounts[1]);
-    if (bytes.size() < 16 || header[0] > uint64_t(record.chunkCounts[2]) || header[1] != header[0] * layerChunks ||
-        bytes.size() != 16 + header[1] * 12)
+    uint64_t layers = ~uint64_t(0);
+    if (bytes.size() >= 8) std::memcpy(&layers, bytes.data(), 8);
+    if (layers > uint64_t(record.chunkCounts[2]))
         throwIoError(checkpointPath, "holds pins that do not fit the array; run again with --restart");
-    for (size_t i = 0; i < size_t(header[1]); ++i) {
-        std::memcpy(&record.pins[i].bytes, bytes.data() + 16 + 12 * i, 8);
-        std::memcpy(&record.pins[i].crc, bytes.data() + 24 + 12 * i, 4);
-    }
-    return int64_t(header[0]);
+    ExternalLevel saved = decodeExternalLevel(bytes.data() + 8, bytes.size() - 8, checkpointPath);
+    if (saved.pins.size() != record.pins.size())
+        throwIoError(checkpointPath, "holds pins that do not fit the array; run again with --restart");
+    record.pins = std::move(saved.pins);
+    return int64_t(layers);
 }
 
 }  // namespace
