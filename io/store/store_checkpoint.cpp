@@ -17,7 +17,7 @@ namespace vdiso {
 namespace {
 
 constexpr char kMagic[8] = {'V', 'D', 'I', 'S', 'O', 'C', 'K', 'P'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: entries as the store's index holds them
 
 // Appends to the file and to its running CRC.
 class CheckpointOut {
@@ -88,20 +88,9 @@ void writeStoreCheckpoint(const std::string& path, const StoreCheckpoint& c,
     out.value(c.nextLayer);
     out.value(c.fedSlices);
     out.value(c.fileEnd);
-    std::vector<unsigned char> packed;
-    packed.reserve(c.entries.size() * 25);
-    auto put = [&packed](const auto& v) {
-        const auto* p = reinterpret_cast<const unsigned char*>(&v);
-        packed.insert(packed.end(), p, p + sizeof v);
-    };
-    for (const BrickEntry& e : c.entries) {
-        put(e.offset);
-        put(e.storedBytes);
-        put(e.checksum);
-        put(e.minValue);
-        put(e.maxValue);
-        put(uint8_t(uint8_t(e.compressed) | uint8_t(e.external) << 1));
-    }
+    std::vector<unsigned char> packed(c.entries.size() * store_format::kEntryBytes);
+    for (size_t i = 0; i < c.entries.size(); ++i)
+        store_format::encodeEntry(c.entries[i], packed.data() + i * store_format::kEntryBytes);
     out.value(uint64_t(c.entries.size()));
     out.bytes(packed.data(), packed.size());
     static_assert(sizeof(SubBlockCode) == 2);
@@ -150,16 +139,11 @@ std::optional<StoreCheckpoint> readStoreCheckpoint(const std::string& path) {
     c.nextLayer = in.value<int64_t>();
     c.fedSlices = in.value<int64_t>();
     c.fileEnd = in.value<uint64_t>();
-    c.entries.resize(size_t(in.count(25)));
+    c.entries.resize(size_t(in.count(store_format::kEntryBytes)));
     for (BrickEntry& e : c.entries) {
-        e.offset = in.value<uint64_t>();
-        e.storedBytes = in.value<uint32_t>();
-        e.checksum = in.value<uint32_t>();
-        e.minValue = in.value<float>();
-        e.maxValue = in.value<float>();
-        const uint8_t flags = in.value<uint8_t>();
-        e.compressed = flags & 1;
-        e.external = flags & 2;
+        uint32_t flags = 0;
+        e = store_format::decodeEntry(in.take(store_format::kEntryBytes), flags);
+        if (flags > 3) in.damaged("an entry's flags");
     }
     c.subBlocks.resize(size_t(in.count(sizeof(SubBlockCode))));
     std::memcpy(c.subBlocks.data(), in.take(c.subBlocks.size() * sizeof(SubBlockCode)),

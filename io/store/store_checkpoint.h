@@ -2,9 +2,9 @@
 // it had made when level 0's layer `nextLayer` was next, so that a run that failed, was
 // interrupted or killed goes on from there instead of reading everything again.
 //
-//   "VDISOCKP" u32 version (1) u32 identityBytes [identity] i64 nextLayer i64 fedSlices
-//   u64 fileEnd u64 entries [each: u64 offset u32 storedBytes u32 checksum f32 min f32 max
-//   u8 flags] u64 subBlocks [each: u8 lo u8 hi] u64 bins [u64 count each] u32 levels [each:
+//   "VDISOCKP" u32 version (2) u32 identityBytes [identity] i64 nextLayer i64 fedSlices
+//   u64 fileEnd u64 entries [each as the store's index holds it: store_format::encodeEntry]
+//   u64 subBlocks [each: u8 lo u8 hi] u64 bins [u64 count each] u32 levels [each:
 //   i64 nextSlice i64 nextLayer u64 ringBytes [ring]] u64 sourceBytes [source] u32 CRC-32
 //
 // The file is the writer's scratch beside its partial output, read back by the same program:

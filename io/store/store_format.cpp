@@ -101,6 +101,7 @@ public:
         std::memcpy(mOut + mAt, p, n);
         mAt += n;
     }
+    void skip(size_t n) { mAt += n; }
     size_t at() const { return mAt; }
 
 private:
@@ -319,6 +320,31 @@ uint64_t indexBytes(uint64_t brickCount) {
     return checkedAdd(checkedAdd(subBlockCodesAt(brickCount), checkedMul(brickCount, uint64_t(kSubBlocksPerBrick) * 2)), 4);
 }
 
+void encodeEntry(const BrickEntry& e, unsigned char* out) {
+    ByteWriter w(out);
+    w.put<uint64_t>(e.offset);
+    w.put<uint32_t>(e.storedBytes);
+    w.put<uint32_t>(e.checksum);
+    w.put<float>(e.minValue);
+    w.put<float>(e.maxValue);
+    w.put<uint32_t>((e.compressed ? 1u : 0u) | (e.external ? 2u : 0u));
+    w.put<uint32_t>(0);
+}
+
+BrickEntry decodeEntry(const unsigned char* in, uint32_t& flags) {
+    ByteReader r(in, kEntryBytes);
+    BrickEntry e;
+    e.offset = r.get<uint64_t>();
+    e.storedBytes = r.get<uint32_t>();
+    e.checksum = r.get<uint32_t>();
+    e.minValue = r.get<float>();
+    e.maxValue = r.get<float>();
+    flags = r.get<uint32_t>();
+    e.compressed = (flags & 1u) != 0;
+    e.external = (flags & 2u) != 0;
+    return e;
+}
+
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
                                        const ValueHistogram& histogram,
                                        const std::vector<SubBlockCode>& subBlocks) {
@@ -327,13 +353,8 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
     w.putBytes(kIndexMagic, 8);
     w.put<uint64_t>(entries.size());
     for (const BrickEntry& e : entries) {
-        w.put<uint64_t>(e.offset);
-        w.put<uint32_t>(e.storedBytes);
-        w.put<uint32_t>(e.checksum);
-        w.put<float>(e.minValue);
-        w.put<float>(e.maxValue);
-        w.put<uint32_t>((e.compressed ? 1u : 0u) | (e.external ? 2u : 0u));
-        w.put<uint32_t>(0);
+        encodeEntry(e, bytes.data() + w.at());
+        w.skip(kEntryBytes);
     }
     w.put<double>(histogram.lo);
     w.put<double>(histogram.hi);
@@ -374,16 +395,9 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
     const uint64_t maxStored = maxStoredBrickBytes(rawBytes);
     entries.resize(count);
     for (uint64_t id = 0; id < count; ++id) {
-        BrickEntry& e = entries[id];
-        e.offset = r.get<uint64_t>();
-        e.storedBytes = r.get<uint32_t>();
-        e.checksum = r.get<uint32_t>();
-        e.minValue = r.get<float>();
-        e.maxValue = r.get<float>();
-        const uint32_t flags = r.get<uint32_t>();
-        r.skip(4);
-        e.compressed = (flags & 1u) != 0;
-        e.external = (flags & 2u) != 0;
+        uint32_t flags = 0;
+        BrickEntry& e = entries[id] = decodeEntry(bytes + r.at(), flags);
+        r.skip(kEntryBytes);
         // An index's level 0, and only that, is external: no bytes in the file.
         if (e.external != (header.externalBytes > 0 && id < uint64_t(layout.brickCount())) || flags > 3)
             throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");

@@ -102,6 +102,12 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& hea
 // Validates and decodes; throws IoError("<path>: ...") on anything wrong.
 StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string& path);
 
+// One entry as the raw index stores it, kEntryBytes bytes: offset u64, stored bytes u32,
+// CRC-32 u32, min f32, max f32, flags u32 (1 compressed, 2 external), 4 zero bytes. decodeEntry
+// gives the flags too, for the caller's checks (bits beyond 3 are not a valid entry).
+void encodeEntry(const BrickEntry& entry, unsigned char* out);
+BrickEntry decodeEntry(const unsigned char* in, uint32_t& flags);
+
 // `subBlocks`: kSubBlocksPerBrick codes per entry. The index as the current version stores it
 // (packed).
 std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
