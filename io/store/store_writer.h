@@ -58,7 +58,7 @@ struct StoreWriteOptions {
 // `sourceState` saved it) and the writer skips the slices before the layer it resumes at.
 struct StoreResume {
     std::string partialPath, checkpointPath;
-    double everySeconds = 60;
+    double everySeconds = 30;
     std::string sourceIdentity;  // what the source is (the caller's words)
     // The caller's state to save with a checkpoint, once `slicesRead` level-0 slices are read.
     std::function<std::vector<unsigned char>(int64_t slicesRead)> sourceState;

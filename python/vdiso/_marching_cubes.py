@@ -34,8 +34,9 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     as a strided view, no copy); allow_degenerate=False merges vertices that coincide and drops
     the triangles that then have no area; mask, a boolean array of the volume's shape: only the
     triangles of the cells whose far corner (of highest indices) it marks are kept, as
-    scikit-image's (the whole volume is meshed first: a mask saves no time here). method: "lorensen" only; "lewiner" is refused
-    (its ambiguity resolution is not implemented), never answered with another surface.
+    scikit-image's (the whole volume is meshed first: a mask saves no time here). method:
+    "lorensen" only; "lewiner" is refused (its ambiguity resolution is not implemented), never
+    answered with another surface.
     """
     import numpy as np
     if not isinstance(volume, np.ndarray):
@@ -50,6 +51,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         raise TypeError(f"spacing: expects 3 numbers (z, y, x), not {type(spacing).__name__}") from None
     if len(spacing) != 3:
         raise ValueError(f"spacing: expects 3 numbers (z, y, x), not {len(spacing)}")
+    spacing = tuple(_float(s, "spacing") for s in spacing)
+    unit = spacing == (1.0, 1.0, 1.0)
     if method != "lorensen":
         raise ValueError(f"method: {method!r} is not implemented: vdiso's surface is scikit-image's "
                          "method=\"lorensen\" (ambiguous cells not resolved); pass method=\"lorensen\"")
@@ -66,9 +69,9 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     if step > 1:
         volume = volume[::step, ::step, ::step]
         mask = None if mask is None else mask[::step, ::step, ::step]
-        spacing = tuple(_float(s, "spacing") * step for s in spacing)
+        spacing = tuple(s * step for s in spacing)
     verts, faces, normals, values = _vdiso.marching_cubes(
-        volume, None if level is None else _float(level, "level"), tuple(_float(s, "spacing") for s in spacing),
+        volume, None if level is None else _float(level, "level"), spacing,
         threads=None if threads is None else _int(threads, "threads"), progress=progress)
     if mask is not None:
         # A triangle lies in one cell, its centroid inside it (or on its faces): the cell's
@@ -83,7 +86,7 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         faces = first[inverse.reshape(-1)][faces].astype(np.int32)
         faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
         verts, faces, normals, values = _used_vertices(verts, faces, normals, values)
-    if step > 1 and all(_float(s, "spacing") == step for s in spacing):
+    if step > 1 and unit:
         verts = verts.astype(np.float32)  # scikit-image's type for a unit spacing, whatever the step
     if gradient_direction == "ascent":
         faces = np.ascontiguousarray(faces[:, ::-1])
