@@ -143,15 +143,16 @@ void BrickCache::abandonLocked(size_t slot) {
     }
 }
 
-std::vector<BrickHandle> BrickCache::acquireRun(int64_t first, int count) {
+std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> ids) {
+    const int count = int(ids.size());
     std::vector<size_t> slots;
     {
         std::unique_lock lock(mMutex);
         bool anyHeld = false;
-        for (int k = 0; k < count; ++k) anyHeld = anyHeld || mSlotOfBrick.count(first + k) > 0;
+        for (const int64_t id : ids) anyHeld = anyHeld || mSlotOfBrick.count(id) > 0;
         if (!anyHeld && count > 1) {
             try {
-                for (int k = 0; k < count; ++k) slots.push_back(claimLocked(first + k));
+                for (const int64_t id : ids) slots.push_back(claimLocked(id));
             } catch (...) {
                 for (const size_t slot : slots) abandonLocked(slot);
                 mLoaded.notify_all();
@@ -161,18 +162,18 @@ std::vector<BrickHandle> BrickCache::acquireRun(int64_t first, int count) {
             mCounters.misses += uint64_t(count);
         }
     }
-    if (slots.empty()) return BrickSource::acquireRun(first, count);  // one by one, as they are
+    if (slots.empty()) return BrickSource::acquireTogether(ids);  // one by one, as they are
 
     double readSeconds = 0, decodeSeconds = 0;
     size_t storedBytes = 0;
     try {
         auto start = Clock::now();
-        const std::vector<std::span<const unsigned char>> stored = mStore.readStoredBricks(first, count);
+        const std::vector<std::span<const unsigned char>> stored = mStore.readStoredBricks(ids);
         readSeconds = secondsSince(start);
         start = Clock::now();
         for (int k = 0; k < count; ++k) {
             storedBytes += stored[size_t(k)].size();
-            mStore.decodeBrick(first + k, stored[size_t(k)], mSlots[slots[size_t(k)]].samples);
+            mStore.decodeBrick(ids[size_t(k)], stored[size_t(k)], mSlots[slots[size_t(k)]].samples);
         }
         decodeSeconds = secondsSince(start);
     } catch (...) {
@@ -185,7 +186,7 @@ std::vector<BrickHandle> BrickCache::acquireRun(int64_t first, int count) {
     std::lock_guard lock(mMutex);
     for (int k = 0; k < count; ++k) {
         mSlots[slots[size_t(k)]].loading = false;
-        handles.emplace_back(this, first + k, mSlots[slots[size_t(k)]].samples);
+        handles.emplace_back(this, ids[size_t(k)], mSlots[slots[size_t(k)]].samples);
     }
     mCounters.readSeconds += readSeconds;
     mCounters.decodeSeconds += decodeSeconds;

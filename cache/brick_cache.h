@@ -50,10 +50,10 @@ public:
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
     std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override;
     BrickHandle acquire(int64_t id) override;
-    // Neighbours in the store's file (BrickStoreReader::nextInFile): a run none of whose bricks is
-    // held is read in one request (over a network, one GET where there were several).
-    bool readsWithNext(int64_t id) const override { return mStore.nextInFile(id); }
-    std::vector<BrickHandle> acquireRun(int64_t first, int count) override;
+    // Near each other in the store's file (BrickStoreReader::readsTogether): bricks none of which
+    // is held are read in one request (over a network, one GET where there were several).
+    bool readsTogether(int64_t a, int64_t b) const override { return mStore.readsTogether(a, b); }
+    std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids) override;
     bool isResident(int64_t id) const override;
     int64_t brickCapacity() const override { return int64_t(mSlotCount); }
 

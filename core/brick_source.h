@@ -69,12 +69,14 @@ public:
     virtual std::span<const SubBlockCode> subBlockCodesOf(int64_t) const { return {}; }
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
     virtual BrickHandle acquire(int64_t id) = 0;
-    // Whether brick id + 1 is best acquired together with brick id (acquireRun): they lie next to
-    // each other where the source reads them, so one read brings both. False by default.
-    virtual bool readsWithNext(int64_t) const { return false; }
-    // Bricks first .. first + count - 1, each readsWithNext the one before, acquired at once: one
-    // read where none is in memory yet. By default, one acquire after another.
-    virtual std::vector<BrickHandle> acquireRun(int64_t first, int count);
+    // Whether bricks a and b are best acquired together (acquireTogether): they lie near each
+    // other where the source reads them (in a store's file, at most a short gap apart), so one
+    // read brings both. False by default.
+    virtual bool readsTogether(int64_t, int64_t) const { return false; }
+    // Bricks `ids` (distinct, none in memory yet), each readsTogether with another of them,
+    // acquired at once: one read where the source can. Handles in the order of `ids`. By
+    // default, one acquire after another.
+    virtual std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids);
     // Whether acquire(id) would find the brick in memory now (a hint: it may be gone by then).
     // Readers ahead skip such bricks. False when the source cannot tell.
     virtual bool isResident(int64_t) const { return false; }
@@ -99,10 +101,10 @@ inline BrickHandle& BrickHandle::operator=(BrickHandle&& o) noexcept {
     return *this;
 }
 
-inline std::vector<BrickHandle> BrickSource::acquireRun(int64_t first, int count) {
+inline std::vector<BrickHandle> BrickSource::acquireTogether(std::span<const int64_t> ids) {
     std::vector<BrickHandle> handles;
-    handles.reserve(size_t(count));
-    for (int k = 0; k < count; ++k) handles.push_back(acquire(first + k));
+    handles.reserve(ids.size());
+    for (const int64_t id : ids) handles.push_back(acquire(id));
     return handles;
 }
 

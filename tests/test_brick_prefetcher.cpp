@@ -2,7 +2,9 @@
 // together (neighbours in a store's file) are gathered from the next items into one read.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <chrono>
 #include <mutex>
 #include <string>
@@ -32,11 +34,13 @@ public:
     // the reader gathers its next run, however the threads are scheduled.
     void hold(int64_t id) { mHeld = id; }
     void releaseHeld() { mRelease = true; }
-    bool readsWithNext(int64_t id) const override { return id % 4 != 3; }
-    std::vector<BrickHandle> acquireRun(int64_t first, int count) override {
-        record("run " + std::to_string(first) + "+" + std::to_string(count));
+    bool readsTogether(int64_t a, int64_t b) const override { return std::abs(a - b) == 1 && std::min(a, b) % 4 != 3; }
+    std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids) override {
+        std::string what = "run";
+        for (const int64_t id : ids) what += " " + std::to_string(id);
+        record(what);
         std::vector<BrickHandle> handles;
-        for (int k = 0; k < count; ++k) handles.push_back(mInner.acquire(first + k));
+        for (const int64_t id : ids) handles.push_back(mInner.acquire(id));
         return handles;
     }
     std::vector<std::string> reads() const {
@@ -75,7 +79,29 @@ TEST(BrickPrefetcher, ReadsNeighboursInTheFileTogether) {
         for (int k = 0; k < 200 && source.reads().size() < 5; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
         prefetcher.consumed(11);
     }
-    EXPECT_EQ(source.reads(), (std::vector<std::string>{"brick 15", "run 4+4", "run 8+3", "brick 12", "brick 2"}));
+    EXPECT_EQ(source.reads(), (std::vector<std::string>{"brick 15", "run 5 4 6 7", "run 9 8 10", "brick 12", "brick 2"}));
+    EXPECT_EQ(memory.pinned(), 0);
+}
+
+// Bricks found ahead but not yet known to show (offered) are read with a run they join, and
+// left in the source unpinned; those that join nothing are not read.
+TEST(BrickPrefetcher, ReadsOfferedNeighboursWithTheirRun) {
+    test::MemoryBrickSource memory({129, 9, 9}, ScalarType::U16, 8, [](int64_t x, int64_t, int64_t) { return double(x); });
+    RowSource source(memory);
+    size_t offeredLoaded = 0;
+    {
+        BrickPrefetcher prefetcher(source, 16, 1);
+        prefetcher.push(0);  // the extraction's own
+        prefetcher.push(5);
+        prefetcher.offer({4, 6, 12});
+        prefetcher.close();
+        for (int k = 0; k < 200 && source.reads().empty(); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        for (int k = 0; k < 200 && prefetcher.offeredLoaded() < 2; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        offeredLoaded = prefetcher.offeredLoaded();
+        prefetcher.consumed(2);
+    }
+    EXPECT_EQ(source.reads(), (std::vector<std::string>{"run 5 4 6"}));
+    EXPECT_EQ(offeredLoaded, 2u);
     EXPECT_EQ(memory.pinned(), 0);
 }
 

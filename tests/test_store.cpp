@@ -182,25 +182,30 @@ TEST_F(DamagedStore, CorruptBrickIsReportedWithItsOffset) {
 }
 
 // Neighbours in the file (x-neighbours in a row of bricks) read in one request give each
-// brick's own bytes; a corrupt one in the run is named as when read alone.
+// brick's own bytes, in the order asked for; a corrupt one in the run is named as when read alone.
 TEST_F(DamagedStore, NeighboursInTheFileReadTogether) {
     BrickStoreReader store(path);
+    EXPECT_EQ(store.readGap(), kStoreAlignment - 1);  // a local file: padding only
     int runs = 0;
     for (int64_t id = 0; id + 1 < int64_t(store.index().size()); ++id) {
-        if (!store.nextInFile(id)) continue;
+        if (!store.readsTogether(id, id + 1)) continue;
+        EXPECT_TRUE(store.readsTogether(id + 1, id));
         ++runs;
         const std::vector<unsigned char> first(store.readStoredBrick(id).begin(), store.readStoredBrick(id).end());
         const std::vector<unsigned char> second(store.readStoredBrick(id + 1).begin(), store.readStoredBrick(id + 1).end());
-        const auto both = store.readStoredBricks(id, 2);
-        EXPECT_TRUE(std::equal(both[0].begin(), both[0].end(), first.begin(), first.end())) << id;
-        EXPECT_TRUE(std::equal(both[1].begin(), both[1].end(), second.begin(), second.end())) << id;
+        const int64_t backwards[2] = {id + 1, id};
+        const auto both = store.readStoredBricks(backwards);
+        EXPECT_TRUE(std::equal(both[0].begin(), both[0].end(), second.begin(), second.end())) << id;
+        EXPECT_TRUE(std::equal(both[1].begin(), both[1].end(), first.begin(), first.end())) << id;
     }
     EXPECT_GE(runs, 6);  // 3 x 2 x 2 bricks, rows of 3 (layers are written in brick order)
-    EXPECT_FALSE(store.nextInFile(int64_t(store.index().size()) - 1));
+    EXPECT_FALSE(store.readsTogether(int64_t(store.index().size()) - 1, int64_t(store.index().size())));
+    EXPECT_FALSE(store.readsTogether(0, 0));
     int64_t apart = 0;  // a brick whose successor is elsewhere (levels are written interleaved)
-    while (apart + 1 < int64_t(store.index().size()) && store.nextInFile(apart)) ++apart;
+    while (apart + 1 < int64_t(store.index().size()) && store.readsTogether(apart, apart + 1)) ++apart;
     ASSERT_LT(apart + 1, int64_t(store.index().size()));
-    EXPECT_THROW(store.readStoredBricks(apart, 2), std::logic_error);
+    const int64_t far[2] = {apart, apart + 1};
+    EXPECT_THROW(store.readStoredBricks(far), std::logic_error);
 
     const BrickEntry& e = store.index()[1];
     auto b = bytes;
@@ -208,7 +213,8 @@ TEST_F(DamagedStore, NeighboursInTheFileReadTogether) {
     test::writeFile(dir.file("bad.vdiso"), b.data(), b.size());
     BrickStoreReader bad(dir.file("bad.vdiso"));
     try {
-        bad.readStoredBricks(0, 2);
+        const int64_t pair[2] = {0, 1};
+        bad.readStoredBricks(pair);
         ADD_FAILURE() << "a corrupt brick in a run was read";
     } catch (const IoError& error) {
         EXPECT_NE(std::string(error.what()).find("brick 1"), std::string::npos) << error.what();

@@ -63,6 +63,15 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         if (!settled && (k >= mNear || mostlyBehind(ahead.rect, current))) break;
         ahead.item = mPrefetcher.push(ahead.brick);
     }
+    mPrefetcher.publish();  // read from here on, gathered into runs among themselves
+    // Where a read waits a round trip, the bricks found but not settled ride along with a run
+    // they lie near in the file.
+    if (mNear > kNearBricks) {
+        std::vector<int64_t> unsettled;
+        for (const AheadBrick& ahead : mAhead)
+            if (ahead.item == kNotPushed) unsettled.push_back(ahead.brick);
+        mPrefetcher.offer(std::move(unsettled));
+    }
 }
 
 }  // namespace vdiso

@@ -40,14 +40,22 @@ size_t BrickPrefetcher::push(int64_t id) {
             mTaken.push_back(0);
         }
     }
-    mChanged.notify_all();
     return index;
+}
+
+void BrickPrefetcher::publish() {
+    {
+        std::lock_guard lock(mMutex);
+        mPublished = mItems.size();
+    }
+    mChanged.notify_all();
 }
 
 void BrickPrefetcher::close() {
     {
         std::lock_guard lock(mMutex);
         mClosed = true;
+        mPublished = mItems.size();
     }
     mChanged.notify_all();
 }
@@ -72,6 +80,16 @@ void BrickPrefetcher::cancel(size_t i) {
     if (i < mItems.size()) mItems[i] = kCancelled;
 }
 
+void BrickPrefetcher::offer(std::vector<int64_t> ids) {
+    std::lock_guard lock(mMutex);
+    mOffered = std::move(ids);
+}
+
+size_t BrickPrefetcher::offeredLoaded() const {
+    std::lock_guard lock(mMutex);
+    return mOfferedLoaded;
+}
+
 size_t BrickPrefetcher::skippedLoaded() const {
     std::lock_guard lock(mMutex);
     return mSkippedLoaded;
@@ -84,43 +102,67 @@ void BrickPrefetcher::run() {
         // could only read it a second time.
         auto target = [&] { return std::max(mNext, mConsumed + 1); };
         mChanged.wait(lock, [&] {
-            return mStop || (target() < mItems.size() && target() < mConsumed + 1 + mLookahead) ||
+            return mStop || (target() < mPublished && target() < mConsumed + 1 + mLookahead) ||
                    (mClosed && target() >= mItems.size());
         });
         if (mStop || target() >= mItems.size()) return;
         const size_t i = target();
         mNext = i + 1;
         if (mItems[i] == kCancelled || mTaken[i]) continue;
-        // With it, the bricks it is read with (x-neighbours in a store's file) found among the
-        // next items: one read for the run, where the source can.
+        // With it, the bricks it is read with (near it in a store's file) found among the next
+        // items: one read for them all, where the source can. A brick joins when it reads
+        // together with one already in (BrickSource::readsTogether), so the run is a chain.
         std::vector<std::pair<int64_t, size_t>> run{{mItems[i], i}};  // brick, item
-        const size_t end = std::min({mItems.size(), i + kRunWindow, mConsumed + 1 + mLookahead});
+        auto joins = [&](int64_t id) {
+            for (const auto& [brick, item] : run)
+                if (id == brick) return false;
+            for (const auto& [brick, item] : run)
+                if (mSource.readsTogether(brick, id)) return true;
+            return false;
+        };
+        const size_t end = std::min({mPublished, i + kRunWindow, mConsumed + 1 + mLookahead});
         for (bool grew = true; grew && run.size() < kMaxRun;) {
             grew = false;
-            const int64_t lo = run.front().first, hi = run.back().first;
-            for (size_t j = i + 1; j < end && !grew; ++j) {
+            for (size_t j = i + 1; j < end && run.size() < kMaxRun; ++j) {
                 if (mTaken[j] || mItems[j] == kCancelled) continue;
-                if (mItems[j] == hi + 1 && mSource.readsWithNext(hi)) {
+                if (joins(mItems[j])) {
                     run.emplace_back(mItems[j], j);
-                    grew = true;
-                } else if (mItems[j] == lo - 1 && mSource.readsWithNext(lo - 1)) {
-                    run.emplace(run.begin(), mItems[j], j);
+                    mTaken[j] = 1;
                     grew = true;
                 }
-                if (grew) mTaken[j] = 1;
             }
+        }
+        // Then offered bricks that join it, not in memory already (one would make the source
+        // read them one by one).
+        for (bool grew = true; grew && run.size() < kMaxRun;) {
+            grew = false;
+            for (size_t k = 0; k < mOffered.size() && run.size() < kMaxRun; ++k)
+                if (mOffered[k] != kCancelled && joins(mOffered[k]) && !mSource.isResident(mOffered[k])) {
+                    run.emplace_back(mOffered[k], kOfferedItem);
+                    mOffered[k] = kCancelled;  // read once
+                    grew = true;
+                }
         }
         lock.unlock();
         std::vector<BrickHandle> bricks;
         try {
-            if (run.size() == 1) bricks.push_back(mSource.acquire(run[0].first));
-            else bricks = mSource.acquireRun(run.front().first, int(run.size()));
+            if (run.size() == 1) {
+                bricks.push_back(mSource.acquire(run[0].first));
+            } else {
+                std::vector<int64_t> ids;
+                for (const auto& [brick, item] : run) ids.push_back(brick);
+                bricks = mSource.acquireTogether(ids);
+            }
         } catch (...) {
             return;
         }
         lock.lock();
         for (size_t k = 0; k < run.size(); ++k) {
             const size_t item = run[k].second;
+            if (item == kOfferedItem) {  // in the source now; its pin goes with `bricks`
+                ++mOfferedLoaded;
+                continue;
+            }
             // The extraction may have got there meanwhile and acquired the brick itself.
             if (item < mConsumed) {
                 mSkippedLoaded += !mUsed[item];

@@ -32,7 +32,7 @@ class BrickPrefetcher {
 public:
     // lookahead 0: no thread; every call does nothing. Items are taken in list order by
     // `readers` threads, each loading one brick at a time, or with it the bricks among the next
-    // items that the source reads with it (BrickSource::readsWithNext: neighbours in a store's
+    // items that the source reads with it (BrickSource::readsTogether: near it in a store's
     // file), in one read.
     BrickPrefetcher(BrickSource& source, size_t lookahead, int readers = kDefaultReaders);
     static constexpr int kDefaultReaders = 2;
@@ -40,9 +40,18 @@ public:
     BrickPrefetcher(const BrickPrefetcher&) = delete;
     BrickPrefetcher& operator=(const BrickPrefetcher&) = delete;
 
-    // Appends brick `id` to the list; returns its index in it.
+    // Appends brick `id` to the list; returns its index in it. Readers take it once it is
+    // published: the bricks pushed between two publish() calls are gathered into runs among
+    // themselves before any is read (a reader woken at the first push would read it alone).
     size_t push(int64_t id);
-    // No more pushes: the thread ends once it has loaded what is left.
+    void publish();
+    // Bricks likely wanted soon but not pushed (found ahead, not yet known to show): a reader
+    // reads those the source reads together with its run in the same request, into the source
+    // (its cache), unpinned. Replaces the last offer. Where a request waits a round trip, the
+    // neighbours in the file come for the bytes of the gap instead of a request of their own.
+    void offer(std::vector<int64_t> ids);
+    // No more pushes (what was pushed is published): the thread ends once it has loaded what
+    // is left.
     void close();
     // The extraction is about to use item i (it acquires that brick itself): the pins of
     // earlier items are released, whether they were used or skipped.
@@ -55,6 +64,8 @@ public:
 
     // Items loaded by the thread and released unused (skipped by consumed, or left at stop).
     size_t skippedLoaded() const;
+    // Offered bricks read along with a run.
+    size_t offeredLoaded() const;
 
 private:
     void run();
@@ -63,15 +74,19 @@ private:
     size_t mLookahead;
     std::vector<int64_t> mItems;  // brick ids; kCancelled for cancelled items
     static constexpr int64_t kCancelled = -1;
-    // A run of bricks read together (BrickSource::acquireRun) gathers them from the next
+    static constexpr size_t kOfferedItem = SIZE_MAX;  // a run's offered brick: no item
+    // A run of bricks read together (BrickSource::acquireTogether) gathers them from the next
     // kRunWindow items, at most kMaxRun.
     static constexpr size_t kRunWindow = 32, kMaxRun = 8;
     std::vector<uint8_t> mUsed;   // consumed() named it
     std::vector<uint8_t> mTaken;  // read with an earlier item's brick, in one run
     size_t mConsumed = 0;
     size_t mNext = 0;             // the next item a reader takes
+    size_t mPublished = 0;        // items readers may take: [0, mPublished)
     bool mClosed = false, mStop = false;
     size_t mSkippedLoaded = 0;
+    std::vector<int64_t> mOffered;
+    size_t mOfferedLoaded = 0;
     std::deque<std::pair<size_t, BrickHandle>> mPinned;  // by item index, ascending
     mutable std::mutex mMutex;
     std::condition_variable mChanged;

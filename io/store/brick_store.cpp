@@ -51,6 +51,7 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
       mPath(mSource->name()),
       mMode(options.mode) {
     mFileBytes = mSource->size();
+    if (mSource->remote()) mReadGap = kRemoteReadGap;
     if (mFileBytes < kStoreHeaderBytes) {
         unsigned char magic[8] = {};
         if (mFileBytes >= 8) mSource->read(0, 8, magic, "header");
@@ -156,53 +157,65 @@ void BrickStoreReader::failBrick(int64_t id, const std::string& what) const {
 }
 
 std::span<const unsigned char> BrickStoreReader::readStoredBrick(int64_t id) const {
-    return readStoredBricks(id, 1)[0];
+    return readStoredBricks(std::span<const int64_t>(&id, 1))[0];
 }
 
-bool BrickStoreReader::nextInFile(int64_t id) const {
-    if (id < 0 || id + 1 >= int64_t(mIndex.size())) return false;
-    const BrickEntry& e = mIndex[size_t(id)];
-    if (e.external || mIndex[size_t(id) + 1].external) return false;
-    return mIndex[size_t(id) + 1].offset == (e.offset + e.storedBytes + kStoreAlignment - 1) / kStoreAlignment * kStoreAlignment;
+bool BrickStoreReader::readsTogether(int64_t a, int64_t b) const {
+    const int64_t n = int64_t(mIndex.size());
+    if (a < 0 || b < 0 || a >= n || b >= n || a == b) return false;
+    const BrickEntry* x = &mIndex[size_t(a)];
+    const BrickEntry* y = &mIndex[size_t(b)];
+    if (x->external || y->external) return false;
+    if (y->offset < x->offset) std::swap(x, y);
+    const uint64_t end = x->offset + x->storedBytes;
+    return y->offset >= end && y->offset - end <= mReadGap;
 }
 
-std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(int64_t first, int count) const {
-    if (first < 0 || count < 1 || first > int64_t(mIndex.size()) - count)
-        throwIoError(mPath, "no brick " + std::to_string(first < 0 || first >= int64_t(mIndex.size()) ? first : first + count - 1) +
-                                " (the store has " + std::to_string(mIndex.size()) + ")");
-    for (int k = 0; k + 1 < count; ++k)
-        if (!nextInFile(first + k)) throw std::logic_error("readStoredBricks: bricks not stored one after another");
-    const BrickEntry& firstEntry = mIndex[size_t(first)];
-    if (firstEntry.external) {  // its samples as they are, from the indexed array's chunks
+std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(std::span<const int64_t> ids) const {
+    for (const int64_t id : ids)
+        if (id < 0 || id >= int64_t(mIndex.size()))
+            throwIoError(mPath, "no brick " + std::to_string(id) + " (the store has " + std::to_string(mIndex.size()) + ")");
+    if (ids.empty()) throw std::logic_error("readStoredBricks: no bricks");
+    const size_t count = ids.size();
+    if (mIndex[size_t(ids[0])].external) {  // its samples as they are, from the indexed array's chunks
+        if (count > 1) throw std::logic_error("readStoredBricks: an indexed array's bricks are read one at a time");
         thread_local AlignedBuffer buffer;
         unsigned char* dst = buffer.reserve(brickBytes());
-        mExternal->assemble(first, dst);
+        mExternal->assemble(ids[0], dst);
         return {std::span<const unsigned char>(dst, brickBytes())};
     }
-    const BrickEntry& lastEntry = mIndex[size_t(first + count - 1)];
+    // In file order, each within readGap() of the one before.
+    std::vector<size_t> order(count);
+    for (size_t k = 0; k < count; ++k) order[k] = k;
+    std::sort(order.begin(), order.end(),
+              [&](size_t i, size_t j) { return mIndex[size_t(ids[i])].offset < mIndex[size_t(ids[j])].offset; });
+    for (size_t k = 0; k + 1 < count; ++k)
+        if (!readsTogether(ids[order[k]], ids[order[k + 1]]))
+            throw std::logic_error("readStoredBricks: bricks not stored near one another");
+    const BrickEntry& firstEntry = mIndex[size_t(ids[order.front()])];
+    const BrickEntry& lastEntry = mIndex[size_t(ids[order.back()])];
     const size_t bytes = size_t(lastEntry.offset - firstEntry.offset) + lastEntry.storedBytes;
     thread_local AlignedBuffer buffer;
     unsigned char* dst = buffer.reserve(bytes);
-    std::vector<ByteRange> pieces;
-    for (int k = 0; k < count; ++k) {
-        const BrickEntry& e = mIndex[size_t(first + k)];
+    std::vector<ByteRange> pieces;  // in the order of ids
+    for (const int64_t id : ids) {
+        const BrickEntry& e = mIndex[size_t(id)];
         pieces.push_back({e.offset, e.storedBytes, dst + (e.offset - firstEntry.offset)});
     }
     // A remote source's disk cache keeps a brick only once its checksum passes; what its last
     // check of a piece found (the bytes as read) is not computed again below.
-    std::vector<int8_t> intact(size_t(count), -1);  // -1: not checked by the source
+    std::vector<int8_t> intact(count, -1);  // -1: not checked by the source
     auto check = [&](size_t k) {
-        intact[k] = crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(first) + k].checksum;
+        intact[k] = crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(ids[k])].checksum;
         return intact[k] == 1;
     };
     mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data", check);
     std::vector<std::span<const unsigned char>> stored;
-    stored.reserve(size_t(count));
-    for (int k = 0; k < count; ++k) {
-        const BrickEntry& e = mIndex[size_t(first + k)];
-        stored.emplace_back(buffer.data + (e.offset - firstEntry.offset), e.storedBytes);
-        if (intact[size_t(k)] == 0 || (intact[size_t(k)] < 0 && !check(size_t(k))))
-            failBrick(first + k, "checksum mismatch (the brick is corrupt)");
+    stored.reserve(count);
+    for (size_t k = 0; k < count; ++k) {
+        stored.emplace_back(static_cast<const unsigned char*>(pieces[k].dst), pieces[k].bytes);
+        if (intact[k] == 0 || (intact[k] < 0 && !check(k)))
+            failBrick(ids[k], "checksum mismatch (the brick is corrupt)");
     }
     return stored;
 }
