@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Remote stores: the distant, normal and closeup views of a generated head read over HTTP with
 # a round-trip delay, against the same views read cold from the local disk and against
-# downloading the whole store first. The server is tests/remote/s3_server.py on loopback (a
-# public bucket, no signature, so the server's own signature check does not count), which
-# holds each request's first byte for DELAY_MS: the delay is in user space, as this kernel has
-# no netem. No bandwidth limit is applied (loopback); see bench/log.md for what that means.
+# downloading the whole store first. The endpoint is bench/bucket_server.sh's (by default nginx
+# behind tests/remote/link_proxy.cpp, which holds each request DELAY_MS and caps the answers at
+# RATE_MBIT: the delay is in user space, as this kernel has no netem; BUCKET_ENDPOINT=s3 for the
+# Python S3 server), a public bucket, no signature.
 #
 #   bench/remote.sh [SIZE] [DELAY_MS] [ISO] [RATE_MBIT]   (default 512, 20, 600.5 and 0: no
 #                                          limit; the store is kept in data/bench/)
@@ -34,8 +34,8 @@ echo "| view | local cold s | local MB read | remote s | remote MB fetched | req
 echo "|---|---|---|---|---|---|---|---|---|"
 # Downloading first: the store's bytes at 1 Gbit/s plus one round trip (loopback is faster).
 download=$(python3 -c "print(round($bytes / 125e6 + $delay / 1000, 2))")
-# The test server hashes the whole object once for its ETag (S3 has it stored): done here first,
-# with time for it (a minute for 28 GB).
+# The Python test server hashes the whole object once for its ETag (S3 has it stored): done here
+# first, with time for it (a minute for 28 GB).
 $vdiso info "$url" "${remote[@]}" --remote-timeout 900 > /dev/null
 for view in distant normal closeup; do
   # Remote first, the server's file in its page cache (an object store's own caching and disks
@@ -54,4 +54,4 @@ for view in distant normal closeup; do
     "$(python3 -c "print($(number "$work/remote.json" remote_bytes)/1e6)")" "$(number "$work/remote.json" remote_requests)" \
     "$cached_s" "$(number "$work/cached.json" remote_requests)" "$download"
 done
-echo "($name with levels, sage, 1 frame, ${delay} ms before each answer's first byte, bodies capped at ${rate} Mbit/s (0: none), $(nproc) cores; $cold local runs; remote runs with the server's file in its page cache)"
+echo "($name with levels, sage, 1 frame, against $endpoint, $(nproc) cores; $cold local runs; remote runs with the file in the page cache)"

@@ -96,6 +96,12 @@ LoopbackServer startS3(const std::string& root, const std::string& log, const st
     return LoopbackServer(argv, log);
 }
 
+LoopbackServer startLinkProxy(int upstreamPort, int delayMs, int rateMbit, const std::string& log) {
+    return LoopbackServer({VDISO_LINK_PROXY, "--upstream", std::to_string(upstreamPort), "--delay-ms",
+                           std::to_string(delayMs), "--rate-mbit", std::to_string(rateMbit), "--lifetime", "300"},
+                          log);
+}
+
 std::string s3Env(int port) {
     return "env AWS_ACCESS_KEY_ID=" + std::string(kS3Key) + " AWS_SECRET_ACCESS_KEY=" + kS3Secret +
            " AWS_SESSION_TOKEN=" + kS3Token + " AWS_ENDPOINT_URL=http://127.0.0.1:" + std::to_string(port) +

@@ -39,6 +39,9 @@ LoopbackServer startNginx(const std::string& root, const std::string& tmpdir, co
 // The S3 server over `root` (ROOT/BUCKET/KEY) with the credentials above.
 LoopbackServer startS3(const std::string& root, const std::string& log,
                        const std::vector<std::string>& extra = {});
+// tests/remote/link_proxy.cpp on 127.0.0.1 in front of `upstreamPort`: each request held
+// `delayMs`, answers capped at `rateMbit` (0: none).
+LoopbackServer startLinkProxy(int upstreamPort, int delayMs, int rateMbit, const std::string& log);
 // "env ..." that gives a command the S3 server's endpoint and the credentials above.
 std::string s3Env(int port);
 // Posts `json` to the S3 server's /__control (faults, tests/remote/README.md); false on failure.

@@ -105,6 +105,26 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     expectError(r, {"/missing.vdiso", "HTTP 404 (Not Found)"});
 }
 
+// The benches' link (tests/remote/link_proxy.cpp) in front of nginx: what crosses it is what
+// nginx sent (the same pictures and meshes, ranges and ETags), each request held its delay.
+TEST_F(RemoteStore, TheBenchLinkPassesAnswersAsSentAfterItsDelay) {
+    LoopbackServer server = nginx();
+    LoopbackServer link = test::startLinkProxy(server.port(), 150, 100, file("link.log"));
+    const std::string url = "http://127.0.0.1:" + std::to_string(link.port()) + "/head.vdiso";
+    const test::CommandResult r = extract("", url, "link");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    expectSameAsLocal("link");
+    const auto start = std::chrono::steady_clock::now();
+    const test::CommandResult range =
+        test::runCommand("curl -sf -D - -o /dev/null -r 4096-8191 " + url);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_EQ(range.exitCode, 0) << range.output;
+    EXPECT_NE(range.output.find("206"), std::string::npos) << range.output;
+    EXPECT_NE(range.output.find("Content-Range: bytes 4096-8191/"), std::string::npos) << range.output;
+    EXPECT_NE(range.output.find("ETag: \""), std::string::npos) << range.output;
+    EXPECT_GE(seconds, 0.15);  // the request was held its delay
+}
+
 // A store at a URL reads its index's entries at open and its sub-block codes as views need
 // them (io/store/lazy_index.h). A corrupt part of codes: the local open refuses the store, the
 // remote `info` never reads that part, and a view that needs it (a distant one, whose coarse
