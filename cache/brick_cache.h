@@ -50,7 +50,7 @@ public:
     std::span<const BrickRange> brickRanges() const override { return mRanges; }
     std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const override;
     BrickHandle acquire(int64_t id) override;
-    // Near each other in the store's file (BrickStoreReader::readsTogether): bricks none of which
+    // Next to each other in the store's file (BrickStoreReader::readsTogether): bricks none of which
     // is held are read in one request (over a network, one GET where there were several).
     bool readsTogether(int64_t a, int64_t b) const override { return mStore.readsTogether(a, b); }
     std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids) override;

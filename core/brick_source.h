@@ -70,7 +70,7 @@ public:
     // The samples of brick `id`, pinned until the handle is released. Throws on I/O failure.
     virtual BrickHandle acquire(int64_t id) = 0;
     // Whether bricks a and b are best acquired together (acquireTogether): they lie near each
-    // other where the source reads them (in a store's file, at most a short gap apart), so one
+    // other where the source reads them (in a store's file, one right after the other), so one
     // read brings both. False by default.
     virtual bool readsTogether(int64_t, int64_t) const { return false; }
     // Bricks `ids` (distinct, none in memory yet), each readsTogether with another of them,

@@ -65,7 +65,7 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     }
     mPrefetcher.publish();  // read from here on, gathered into runs among themselves
     // Where a read waits a round trip, the bricks found but not settled ride along with a run
-    // they lie near in the file.
+    // they lie next to in the file.
     if (mNear > kNearBricks) {
         std::vector<int64_t> unsettled;
         for (const AheadBrick& ahead : mAhead)

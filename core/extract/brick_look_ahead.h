@@ -19,8 +19,8 @@
 // warm cache would otherwise wake a reader per brick, and re-test the bricks ahead at every
 // brick, for nothing); if it is evicted before its turn, the traversal reads it itself.
 // Where a read waits a round trip (`near` beyond kNearBricks), the bricks found but not settled
-// are offered to the readers (BrickPrefetcher::offer): read with a run they lie near in the
-// file, for the bytes of the gap rather than a request of their own later.
+// are offered to the readers (BrickPrefetcher::offer): read with a run they lie next to in the
+// file, in its request rather than one of their own later.
 // One look-ahead per traversal thread.
 #pragma once
 

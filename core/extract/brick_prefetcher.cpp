@@ -109,7 +109,7 @@ void BrickPrefetcher::run() {
         const size_t i = target();
         mNext = i + 1;
         if (mItems[i] == kCancelled || mTaken[i]) continue;
-        // With it, the bricks it is read with (near it in a store's file) found among the next
+        // With it, the bricks it is read with (next to it in a store's file) found among the next
         // items: one read for them all, where the source can. A brick joins when it reads
         // together with one already in (BrickSource::readsTogether), so the run is a chain.
         std::vector<std::pair<int64_t, size_t>> run{{mItems[i], i}};  // brick, item

@@ -32,7 +32,7 @@ class BrickPrefetcher {
 public:
     // lookahead 0: no thread; every call does nothing. Items are taken in list order by
     // `readers` threads, each loading one brick at a time, or with it the bricks among the next
-    // items that the source reads with it (BrickSource::readsTogether: near it in a store's
+    // items that the source reads with it (BrickSource::readsTogether: next to it in a store's
     // file), in one read.
     BrickPrefetcher(BrickSource& source, size_t lookahead, int readers = kDefaultReaders);
     static constexpr int kDefaultReaders = 2;
@@ -48,7 +48,7 @@ public:
     // Bricks likely wanted soon but not pushed (found ahead, not yet known to show): a reader
     // reads those the source reads together with its run in the same request, into the source
     // (its cache), unpinned. Replaces the last offer. Where a request waits a round trip, the
-    // neighbours in the file come for the bytes of the gap instead of a request of their own.
+    // neighbours in the file come with it instead of in a request of their own.
     void offer(std::vector<int64_t> ids);
     // No more pushes (what was pushed is published): the thread ends once it has loaded what
     // is left.

@@ -51,7 +51,6 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
       mPath(mSource->name()),
       mMode(options.mode) {
     mFileBytes = mSource->size();
-    if (mSource->remote()) mReadGap = kRemoteReadGap;
     if (mFileBytes < kStoreHeaderBytes) {
         unsigned char magic[8] = {};
         if (mFileBytes >= 8) mSource->read(0, 8, magic, "header");
@@ -168,7 +167,7 @@ bool BrickStoreReader::readsTogether(int64_t a, int64_t b) const {
     if (x->external || y->external) return false;
     if (y->offset < x->offset) std::swap(x, y);
     const uint64_t end = x->offset + x->storedBytes;
-    return y->offset >= end && y->offset - end <= mReadGap;
+    return y->offset >= end && y->offset - end < kStoreAlignment;  // only alignment padding between
 }
 
 std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(std::span<const int64_t> ids) const {
@@ -184,14 +183,14 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(s
         mExternal->assemble(ids[0], dst);
         return {std::span<const unsigned char>(dst, brickBytes())};
     }
-    // In file order, each within readGap() of the one before.
+    // In file order, each stored right after the one before.
     std::vector<size_t> order(count);
     for (size_t k = 0; k < count; ++k) order[k] = k;
     std::sort(order.begin(), order.end(),
               [&](size_t i, size_t j) { return mIndex[size_t(ids[i])].offset < mIndex[size_t(ids[j])].offset; });
     for (size_t k = 0; k + 1 < count; ++k)
         if (!readsTogether(ids[order[k]], ids[order[k + 1]]))
-            throw std::logic_error("readStoredBricks: bricks not stored near one another");
+            throw std::logic_error("readStoredBricks: bricks not stored one after another");
     const BrickEntry& firstEntry = mIndex[size_t(ids[order.front()])];
     const BrickEntry& lastEntry = mIndex[size_t(ids[order.back()])];
     const size_t bytes = size_t(lastEntry.offset - firstEntry.offset) + lastEntry.storedBytes;

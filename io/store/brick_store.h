@@ -103,18 +103,15 @@ public:
     // in it, aligned, and is decoded from there without a copy.
     std::span<const unsigned char> readStoredBrick(int64_t id) const;
     // Whether bricks a and b are read in one request (readStoredBricks): both stored in this
-    // file, and the bytes between them at most readGap(). Bricks near each other in the volume
-    // are near in the file where the writer put them so (docs/store-format.md).
+    // file, one right after the other (only alignment padding between), in either order:
+    // x-neighbours in a row of bricks are. (Reading across other bricks' bytes too was measured
+    // and cost more than the requests it saved: bench/log.md, "Remote views at the speed of the
+    // link".)
     bool readsTogether(int64_t a, int64_t b) const;
-    // The bytes between two bricks that one read spans rather than making two: alignment
-    // padding only for a local file (where a second read costs little), kRemoteReadGap for a
-    // store at a URL (where it costs a round trip; 64 KiB take half a millisecond at 1 Gbit/s).
-    uint64_t readGap() const { return mReadGap; }
-    static constexpr uint64_t kRemoteReadGap = uint64_t(64) << 10;
-    // Bricks `ids` (distinct), read in one request covering them all, the gaps between them
-    // included: the stored bytes of each, in the order of `ids` (checksums verified), in the
-    // calling thread's buffer as readStoredBrick says. In file order each must lie at most
-    // readGap() after the one before (readsTogether chains them); std::logic_error otherwise.
+    // Bricks `ids` (distinct), read in one request covering them all: the stored bytes of each,
+    // in the order of `ids` (checksums verified), in the calling thread's buffer as
+    // readStoredBrick says. In file order each must follow the one before (readsTogether chains
+    // them); std::logic_error otherwise.
     std::vector<std::span<const unsigned char>> readStoredBricks(std::span<const int64_t> ids) const;
     void decodeBrick(int64_t id, std::span<const unsigned char> stored, void* dst) const;
 
@@ -135,7 +132,6 @@ private:
     std::unique_ptr<LazyIndex> mLazyIndex;
     std::unique_ptr<ExternalBricks> mExternal;
     uint64_t mCodesAt = 0;  // where the codes start in the raw index
-    uint64_t mReadGap = kStoreAlignment - 1;
     std::span<const SubBlockCode> mSubBlocks;
 };
 
