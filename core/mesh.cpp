@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -42,23 +43,41 @@ void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex) {
 void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle) {
     const size_t end = mesh.indices.size();
     if (3 * firstTriangle >= end) return;
+    const size_t corners = end - 3 * firstTriangle;
     uint32_t lo = UINT32_MAX, hi = 0;
     for (size_t i = 3 * firstTriangle; i < end; ++i) {
         lo = std::min(lo, mesh.indices[i]);
         hi = std::max(hi, mesh.indices[i]);
     }
-    std::vector<glm::vec3> faces(size_t(hi - lo) + 1, glm::vec3(0.0f));
+    // The vertices these triangles made lie at the top of the numbers; a few welded from far
+    // earlier (a brick's seams) would stretch an array over every vertex between, each brick
+    // of a view paying for the whole mesh made before it. So the top numbers, as many as four
+    // times the corners, are summed in an array and the rest in a list sorted by vertex; each
+    // vertex's sum is added up in triangle order either way.
+    const uint32_t dense = uint32_t(std::max<int64_t>(int64_t(lo), int64_t(hi) + 1 - int64_t(4 * corners)));
+    std::vector<glm::vec3> faces(size_t(hi - dense) + 1, glm::vec3(0.0f));
+    std::vector<std::pair<uint32_t, glm::vec3>> far;  // (vertex, a triangle's face) below `dense`
     auto held = [&](uint32_t v) { return size_t(v - mesh.firstVertex); };
     for (size_t i = 3 * firstTriangle; i < end; i += 3) {
         const uint32_t* t = &mesh.indices[i];
         const glm::vec3 a = mesh.positions[held(t[0])], b = mesh.positions[held(t[1])], c = mesh.positions[held(t[2])];
         const glm::vec3 n = glm::cross(b - a, c - a);  // twice the area, along the face normal
-        for (int k = 0; k < 3; ++k) faces[t[k] - lo] += n;
+        for (int k = 0; k < 3; ++k) {
+            if (t[k] >= dense) faces[t[k] - dense] += n;
+            else far.emplace_back(t[k], n);
+        }
     }
-    for (size_t k = 0; k < faces.size(); ++k) {
-        const glm::vec3 f = faces[k];
-        glm::vec3& n = mesh.normals[held(lo + uint32_t(k))];
+    auto orient = [&](uint32_t v, const glm::vec3& f) {
+        glm::vec3& n = mesh.normals[held(v)];
         if (glm::dot(n, f) < 0.0f) n = glm::normalize(f);
+    };
+    for (size_t k = 0; k < faces.size(); ++k) orient(dense + uint32_t(k), faces[k]);
+    std::stable_sort(far.begin(), far.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (size_t k = 0; k < far.size();) {
+        const uint32_t v = far[k].first;
+        glm::vec3 f(0.0f);
+        for (; k < far.size() && far[k].first == v; ++k) f += far[k].second;
+        orient(v, f);
     }
 }
 
