@@ -53,6 +53,7 @@ struct Transfer {
     CURL* curl = nullptr;
     const std::atomic<uint64_t>* failures = nullptr;  // the object's permanent failures so far
     const std::atomic<bool>* stop = nullptr;          // RemoteOptions::stop
+    const std::atomic<bool>* cancel = nullptr;        // the read's own (RemoteFile::read)
     uint64_t failuresAtStart = 0;
     unsigned char* dst = nullptr;
     size_t capacity = 0;
@@ -128,7 +129,8 @@ int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
             return 1;
         }
     }
-    return interruptRequested() || t.failures->load() != t.failuresAtStart || (t.stop && t.stop->load());
+    return interruptRequested() || t.failures->load() != t.failuresAtStart || (t.stop && t.stop->load()) ||
+           (t.cancel && t.cancel->load());
 }
 
 size_t onBody(char* data, size_t size, size_t count, void* user) {
@@ -243,7 +245,8 @@ uint64_t RemoteFile::stragglers() const { return mImpl->session->stragglers.load
 uint64_t RemoteFile::diskCacheHits() const { return mDiskCache ? mDiskCache->hits() : 0; }
 uint64_t RemoteFile::diskCacheBytes() const { return mDiskCache ? mDiskCache->hitBytes() : 0; }
 
-void RemoteFile::read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact) const {
+void RemoteFile::read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact,
+                      const std::atomic<bool>* cancel) const {
     if (n == 0) return;
     if (offset > mSize || n > mSize - offset)
         throwIoError(mName, "has " + std::to_string(mSize) + " bytes: no range " + std::to_string(offset) +
@@ -257,11 +260,12 @@ void RemoteFile::read(uint64_t offset, size_t n, void* dst, const RangeCheck& in
         if (!intact || intact(0)) return;
         mDiskCache->drop(offset, n);  // kept damaged (by an older vdiso): fetched anew
     }
-    fetch(offset, n, dst, false);
+    fetch(offset, n, dst, false, cancel);
     if (mDiskCache && (!intact || intact(0))) mDiskCache->write(offset, n, dst);
 }
 
-RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening) const {
+RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool opening,
+                                     const std::atomic<bool>* cancel) const {
     Impl& d = *mImpl;
     const RemoteOptions& options = d.session->options();
     const std::string range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
@@ -283,6 +287,8 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
     };
     auto stopping = [&] { return options.stop && options.stop->load(); };
     auto stopped = [&] { return IoError(mName + ": read ended: the server is stopping"); };
+    auto cancelled = [&] { return cancel && cancel->load(); };
+    auto cancelledError = [&] { return IoError(mName + ": read of range " + range + " cancelled by its reader"); };
     std::string url = d.url;  // where this read goes: the location, or where it was redirected
     int redirects = 0;
     std::string lastProblem;
@@ -293,12 +299,14 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
                 throw fail(lastProblem + "; waiting " + std::to_string(pauseMs) + " ms to try again would pass the " +
                            deadlineText + " a read may take (--remote-deadline)");
             const auto until = Clock::now() + std::chrono::milliseconds(pauseMs);
-            while (Clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested() && !stopping())
+            while (Clock::now() < until && d.failures.load() == failuresAtStart && !interruptRequested() && !stopping() &&
+                   !cancelled())
                 std::this_thread::sleep_for(std::chrono::milliseconds(10));
             pauseMs = 0;
         }
         throwIfInterrupted(mName);
         if (stopping()) throw stopped();
+        if (cancelled()) throw cancelledError();
         if (d.failures.load() != failuresAtStart)
             throw abandoned();
         const int64_t remainingMs =
@@ -312,6 +320,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         t.failures = &d.failures;
         t.failuresAtStart = failuresAtStart;
         t.stop = options.stop.get();
+        t.cancel = cancel;
         t.dst = static_cast<unsigned char*>(dst);
         t.capacity = n;
         t.opening = opening;
@@ -387,6 +396,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         if (rc == CURLE_ABORTED_BY_CALLBACK) {
             throwIfInterrupted(mName);
             if (stopping()) throw stopped();
+            if (cancelled()) throw cancelledError();
             throw abandoned();
         }
         if (rc != CURLE_OK) {
@@ -512,10 +522,11 @@ void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<co
         if (intactPiece(k)) mDiskCache->write(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
 }
 
-void RemoteFile::readMany(std::span<const ByteRange> ranges, const RangeCheck& intact) const {
+void RemoteFile::readMany(std::span<const ByteRange> ranges, const RangeCheck& intact,
+                          const std::atomic<bool>* cancel) const {
     mImpl->session->forEach(ranges.size(), [&](size_t i) {
         read(ranges[i].offset, ranges[i].bytes, ranges[i].dst,
-             intact ? RangeCheck([&](size_t) { return intact(i); }) : RangeCheck());
+             intact ? RangeCheck([&](size_t) { return intact(i); }) : RangeCheck(), cancel);
     });
 }
 

@@ -80,10 +80,13 @@ public:
     const char* scheme() const { return mScheme; }
 
     // Exactly n bytes at `offset` into dst. Throws IoError naming the URL and what is wrong.
-    // `intact(0)` checks them (RangeCheck).
-    void read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact = {}) const;
+    // `intact(0)` checks them (RangeCheck). Once `cancel` (if given) is set, the transfer ends
+    // and an IoError saying so is thrown; unlike a failure, it ends no other read.
+    void read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact = {},
+              const std::atomic<bool>* cancel = nullptr) const;
     // The ranges at once, as many in flight as the pool allows; throws the first error.
-    void readMany(std::span<const ByteRange> ranges, const RangeCheck& intact = {}) const;
+    void readMany(std::span<const ByteRange> ranges, const RangeCheck& intact = {},
+                  const std::atomic<bool>* cancel = nullptr) const;
     // n bytes at `offset` in one GET, of which `pieces` (within dst) are wanted: with a disk
     // cache, each piece is kept and looked up apart, and the GET is sent only when one is missing
     // (or found damaged: `intact(k)` checks piece k).
@@ -107,7 +110,7 @@ private:
     };
     // One ranged GET with its tries; `opening` accepts a shorter range (a small object's head)
     // and pins nothing.
-    Answer fetch(uint64_t offset, size_t n, void* dst, bool opening) const;
+    Answer fetch(uint64_t offset, size_t n, void* dst, bool opening, const std::atomic<bool>* cancel = nullptr) const;
 
     struct Impl;
     std::unique_ptr<Impl> mImpl;

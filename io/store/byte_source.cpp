@@ -11,7 +11,8 @@
 
 namespace vdiso {
 
-void ByteSource::readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck&) const {
+void ByteSource::readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck&,
+                          const std::atomic<bool>*) const {
     for (const ByteRange& r : ranges) read(r.offset, r.bytes, r.dst, what);
 }
 
@@ -90,8 +91,9 @@ public:
     void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck& intact) const override {
         mFile.read(offset, n, dst, intact);
     }
-    void readMany(std::span<const ByteRange> ranges, const char*, const RangeCheck& intact) const override {
-        mFile.readMany(ranges, intact);
+    void readMany(std::span<const ByteRange> ranges, const char*, const RangeCheck& intact,
+                  const std::atomic<bool>* cancel) const override {
+        mFile.readMany(ranges, intact, cancel);
     }
     void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces, const char*,
                       const RangeCheck& intact) const override {

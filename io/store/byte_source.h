@@ -3,6 +3,7 @@
 // bricks through this and nothing else.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -36,7 +37,10 @@ public:
     // The ranges at once where the source can (remote: concurrently), else in turn. `intact(k)`
     // says whether range k arrived whole and right (its checksum): a remote source's disk cache
     // keeps only such ranges (io/remote/remote_file.h, RangeCheck); the caller still checks.
-    virtual void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact = {}) const;
+    // Once `cancel` (if given) is set, a remote source ends the transfers in flight and throws
+    // (an owner that stops reading in the background need not wait for them).
+    virtual void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact = {},
+                          const std::atomic<bool>* cancel = nullptr) const;
     // n bytes at `offset` into dst, as read() does, in one request; only `pieces` of them (within
     // dst, in order) are wanted, and a remote source's disk cache keeps and finds each apart,
     // so a piece read in one run is found in the next however it is read there; `intact` as above.

@@ -98,7 +98,8 @@ bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const 
             };
             try {
                 // A remote disk cache keeps a part once it unpacks (its checksum passes).
-                mSource.readMany(ranges, "index", unpack);
+                // In the background, a transfer in flight ends when the index is closed.
+                mSource.readMany(ranges, "index", unpack, background ? &mStop : nullptr);
                 tbb::parallel_for(size_t(0), mine.size(), [&](size_t k) {
                     if (!unpacked[k]) unpack(k);
                 });

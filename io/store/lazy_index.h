@@ -30,7 +30,7 @@ public:
     // Reads and validates the directory of the packed index of `storedBytes` at `offset` of
     // `source` (one read), which unpacks to rawBytes. No part is read yet. Throws IoError.
     LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes);
-    // Stops the background reading (waiting for the parts in flight).
+    // Stops the background reading: the parts in flight are abandoned (their transfers end).
     ~LazyIndex();
     LazyIndex(const LazyIndex&) = delete;
     LazyIndex& operator=(const LazyIndex&) = delete;

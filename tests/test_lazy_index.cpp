@@ -1,0 +1,73 @@
+// A remote store's index read by parts (io/store/lazy_index.h): parts asked for are read and
+// unpacked; closing the index abandons the parts still in flight in the background instead of
+// waiting for their transfers (a one-shot view would otherwise wait at exit for parts it never
+// needed).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "io/error.h"
+#include "io/store/byte_source.h"
+#include "io/store/index_parts.h"
+#include "io/store/lazy_index.h"
+
+namespace vdiso {
+namespace {
+
+// A packed index in memory. Reads asked for with a cancel flag (the background's) wait until it
+// is set, as a transfer from a server that has not answered yet would, and then fail.
+class HeldSource final : public ByteSource {
+public:
+    explicit HeldSource(std::vector<unsigned char> bytes) : mBytes(std::move(bytes)) {}
+    const std::string& name() const override { return mName; }
+    uint64_t size() const override { return mBytes.size(); }
+    const char* method() const override { return "memory"; }
+    void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck&) const override {
+        std::memcpy(dst, mBytes.data() + offset, n);
+    }
+    void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact,
+                  const std::atomic<bool>* cancel) const override {
+        if (!cancel) return ByteSource::readMany(ranges, what, intact);
+        ++mHeld;
+        while (!cancel->load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        ++mCancelled;
+        throw IoError(mName + ": read cancelled");
+    }
+    mutable std::atomic<int> mHeld{0}, mCancelled{0};
+
+private:
+    std::vector<unsigned char> mBytes;
+    std::string mName = "memory://index";
+};
+
+std::vector<unsigned char> rawIndex(size_t bytes) {
+    std::vector<unsigned char> raw(bytes);
+    for (size_t i = 0; i < bytes; ++i) raw[i] = static_cast<unsigned char>(i * 7 / 13);
+    return raw;
+}
+
+TEST(LazyIndex, PartsAskedForAreReadAndClosingAbandonsTheBackground) {
+    const std::vector<unsigned char> raw = rawIndex(3 * store_format::kIndexPartBytes + 100);  // 4 parts
+    const std::vector<unsigned char> packed = store_format::packIndex(raw);
+    HeldSource source(packed);
+    {
+        LazyIndex index(source, 0, packed.size(), raw.size());
+        index.need(0, raw.size());  // in the foreground: read at once
+        EXPECT_EQ(std::memcmp(index.raw(), raw.data(), raw.size()), 0);
+    }
+    {
+        LazyIndex index(source, 0, packed.size(), raw.size());
+        index.readInBackground(0, 2);
+        for (int k = 0; k < 5000 && source.mHeld.load() < 2; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        ASSERT_EQ(source.mHeld.load(), 2);
+    }  // returns only because the held reads are cancelled
+    EXPECT_EQ(source.mCancelled.load(), 2);
+}
+
+}  // namespace
+}  // namespace vdiso
