@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # vdiso serve on a store in a bucket: the first frames a fresh server gives a fresh client,
-# cold (no warm-up orbit), the store read through tests/remote/s3_server.py holding each
-# request's first byte for DELAY_MS (public bucket). The server opens the store (header and
+# cold (no warm-up orbit), the store read through bench/bucket_server.sh's endpoint (by default
+# nginx behind tests/remote/link_proxy.cpp) holding each request DELAY_MS (public bucket). The server opens the store (header and
 # index) before the client connects; the times are from the client's VIEW.
 #
 #   bench/remote_serve.sh NAME.vdiso [DELAY_MS] [ISO] [FRAMES] [RATE_MBIT]
@@ -31,4 +31,4 @@ for line in open(sys.argv[1]):
     print("| %d | %.0f | %.0f | %.0f | %d | %d |" % (j["frame"], j["client_coarse_complete_ms"],
           j["client_first_geometry_ms"], j["client_complete_ms"], j["bricks_read"], j["triangles"]))
 PY
-echo "($name, ${delay} ms before each answer's first byte, 1024x1024, the normal view's orbit, $(nproc) cores)"
+echo "($name, against $endpoint, 1024x1024, the normal view's orbit, $(nproc) cores)"

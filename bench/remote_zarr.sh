@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Converting an OME-Zarr from object storage: a generated head written as OME-Zarr 0.4 (zlib
 # chunks of CHUNK^3, bench/make_ome_zarr.py) in data/bench/bucket/, converted from the local
-# folder and from s3:// through tests/remote/s3_server.py holding each request's first byte for
+# folder and from s3:// through bench/bucket_server.sh's endpoint (nginx behind the link by default) holding each request's first byte for
 # DELAY_MS (a public bucket: the server's signature check does not count), against downloading
 # the chunks first at 1 Gbit/s. Medians of RUNS.
 #

@@ -6,7 +6,7 @@
 #   local, page cache warm: a plain read of every chunk (zarr-python, a layer of chunks at a time,
 #     so that memory stays a layer), the index pass, the index's size, the first SAGE normal view
 #     from the index, and vdiso convert then the same view;
-#   through tests/remote/s3_server.py at DELAY_MS before each first byte and 1 Gbit/s
+#   through bench/bucket_server.sh's endpoint at DELAY_MS before each first byte and 1 Gbit/s
 #     (bench/bucket_server.sh; the same folder, in the bucket): the index pass, the
 #     first SAGE normal and distant views from the local index with the chunks at s3://, and
 #     vdiso serve's first frames (vdiso_serve_bench, a fresh server and client, no warm-up).

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Views of an OME-Zarr in a bucket through a local index (vdiso index s3://...), against the
-# store converted from it in the same bucket: tests/remote/s3_server.py holding each answer's
+# store converted from it in the same bucket: bench/bucket_server.sh's endpoint (nginx behind the link by default) holding each answer's
 # first byte DELAY_MS and capping bodies at 1 Gbit/s (bench/bucket_server.sh). The Zarr folders
 # are bench/zarr_index.sh's (run it first), copied into data/bench/bucket/. Whole processes,
 # medians of 5, 1024x1024 (vdiso extract's default camera).
