@@ -46,6 +46,7 @@ size_t BrickPrefetcher::push(int64_t id) {
 void BrickPrefetcher::publish() {
     {
         std::lock_guard lock(mMutex);
+        if (mPublished == mItems.size()) return;  // nothing new: no reader woken (called every brick)
         mPublished = mItems.size();
     }
     mChanged.notify_all();

@@ -43,8 +43,8 @@ struct Link {
     // When `bytes` given now have crossed the link.
     Clock::time_point send(size_t bytes) {
         if (bytesPerSecond <= 0) return Clock::now();
-        freeAt = std::max(freeAt, Clock::now()) +
-                 std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(double(bytes) / bytesPerSecond));
+        const std::chrono::duration<double> carrying(double(bytes) / bytesPerSecond);
+        freeAt = std::max(freeAt, Clock::now()) + std::chrono::duration_cast<Clock::duration>(carrying);
         return freeAt;
     }
 };
@@ -61,40 +61,31 @@ public:
             if (e) return self->close();
             self->mUpstream.set_option(tcp::no_delay(true));
             self->mClient.set_option(tcp::no_delay(true));
-            self->readClient();
-            self->readUpstream();
+            self->pump(true);
+            self->pump(false);
         });
     }
 
 private:
-    // Client to server: each request held the round trip's delay.
-    void readClient() {
+    // Passes what one side sends to the other once it is due: client to server (`upward`) after
+    // the round trip's delay, server to client once the shared link has carried it.
+    void pump(bool upward) {
         auto self = shared_from_this();
-        mClient.async_read_some(asio::buffer(mUpBytes), [self](boost::system::error_code e, size_t n) {
+        char* bytes = upward ? mUpBytes : mDownBytes;
+        const size_t capacity = upward ? sizeof mUpBytes : sizeof mDownBytes;
+        tcp::socket& from = upward ? mClient : mUpstream;
+        using Error = boost::system::error_code;
+        from.async_read_some(asio::buffer(bytes, capacity), [self, upward, bytes](Error e, size_t n) {
             if (e) return self->close();
-            self->mUp.expires_after(self->mLink.delay);
-            self->mUp.async_wait([self, n](boost::system::error_code waited) {
+            asio::steady_timer& due = upward ? self->mUp : self->mDown;
+            if (upward) due.expires_after(self->mLink.delay);
+            else due.expires_at(self->mLink.send(n));
+            due.async_wait([self, upward, bytes, n](Error waited) {
                 if (waited) return self->close();
-                asio::async_write(self->mUpstream, asio::buffer(self->mUpBytes, n),
-                                  [self](boost::system::error_code written, size_t) {
+                asio::async_write(upward ? self->mUpstream : self->mClient, asio::buffer(bytes, n),
+                                  [self, upward](Error written, size_t) {
                                       if (written) return self->close();
-                                      self->readClient();
-                                  });
-            });
-        });
-    }
-    // Server to client: the bytes pass once the shared link has carried them.
-    void readUpstream() {
-        auto self = shared_from_this();
-        mUpstream.async_read_some(asio::buffer(mDownBytes), [self](boost::system::error_code e, size_t n) {
-            if (e) return self->close();
-            self->mDown.expires_at(self->mLink.send(n));
-            self->mDown.async_wait([self, n](boost::system::error_code waited) {
-                if (waited) return self->close();
-                asio::async_write(self->mClient, asio::buffer(self->mDownBytes, n),
-                                  [self](boost::system::error_code written, size_t) {
-                                      if (written) return self->close();
-                                      self->readUpstream();
+                                      self->pump(upward);
                                   });
             });
         });
@@ -123,7 +114,10 @@ void accept(asio::io_context& io, tcp::acceptor& acceptor, const tcp::endpoint& 
 }
 
 [[noreturn]] void usage(const char* why) {
-    std::fprintf(stderr, "vdiso_link_proxy: %s\nusage: vdiso_link_proxy --upstream PORT [--delay-ms N] [--rate-mbit M] [--lifetime S]\n", why);
+    std::fprintf(stderr,
+                 "vdiso_link_proxy: %s\nusage: vdiso_link_proxy --upstream PORT [--delay-ms N] "
+                 "[--rate-mbit M] [--lifetime S]\n",
+                 why);
     std::exit(2);
 }
 
