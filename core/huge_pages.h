@@ -1,9 +1,10 @@
-// Large buffers mapped straight from the kernel and marked for transparent huge pages
-// (madvise MADV_HUGEPAGE, a hint: without THP they are ordinary pages). A buffer written once
-// from start to end, as a brick cache chunk or an extraction's mesh arrays are, then takes one
-// page fault per 2 MB instead of one per 4 KB: on a CT's full extraction the faults of the
-// fresh mesh arrays were about a tenth of the time, and on two threads they serialise in the
-// kernel.
+// Large buffers mapped straight from the kernel and marked for transparent huge pages past
+// their first 2-4 MB (madvise MADV_HUGEPAGE, a hint: without THP they are ordinary pages). A
+// buffer written once from start to end, as a brick cache chunk or an extraction's mesh arrays
+// are, then takes one page fault per 2 MB instead of one per 4 KB: on a CT's full extraction the
+// faults of the fresh mesh arrays were about a tenth of the time, and on two threads they
+// serialise in the kernel. The head in ordinary pages keeps a buffer reserved large and filled
+// little from zeroing a whole huge page for its first bytes.
 #pragma once
 
 #include <cstddef>
