@@ -1,7 +1,9 @@
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -28,3 +30,15 @@ def python_child(code, *, env_extra=None, **kw):
     env.update(env_extra or {})
     return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, env=env, **kw)
+
+
+def interrupt(child):
+    """Ctrl-C to a child mid-call: it must end by KeyboardInterrupt before printing "done".
+    Returns the seconds it took."""
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    stdout, stderr = child.communicate(timeout=60)
+    waited = time.monotonic() - sent
+    assert child.returncode != 0 and "KeyboardInterrupt" in stderr, stderr
+    assert "done" not in stdout
+    return waited

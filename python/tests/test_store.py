@@ -10,7 +10,7 @@ import pytest
 import zarr
 
 import vdiso
-from conftest import python_child, run
+from conftest import interrupt, python_child, run
 
 
 def head(shape=(40, 50, 60), dtype=np.uint16):
@@ -217,18 +217,6 @@ def test_a_dask_array_larger_than_the_memory_limit_converts(tmp_path):
     assert "done" in stdout
     store = vdiso.open(out)
     assert store.shape == (n, n, n) and store.value_range == (0.0, 254.0)
-
-
-def interrupt(child):
-    """Ctrl-C to a child mid-call: it must end by KeyboardInterrupt before printing "done".
-    Returns the seconds it took."""
-    sent = time.monotonic()
-    child.send_signal(signal.SIGINT)
-    stdout, stderr = child.communicate(timeout=60)
-    waited = time.monotonic() - sent
-    assert child.returncode != 0 and "KeyboardInterrupt" in stderr, stderr
-    assert "done" not in stdout
-    return waited
 
 
 def test_ctrl_c_stops_within_a_second_and_writes_nothing(tmp_path):

@@ -22,7 +22,7 @@ import errno as _errno
 import threading as _threading
 
 from . import _vdiso
-from ._args import _float, _int
+from ._args import _float, _int, _z_chunk_bounds
 from ._marching_cubes import marching_cubes
 from ._vdiso import Error, Mesh, __version__
 
@@ -337,29 +337,6 @@ def convert(source, path, *, spacing=None, origin=None, brick=32, levels="auto",
     return _vdiso._convert_array(source, name, shape, np.dtype(source.dtype), path, spacing, origin,
                                  _int(brick, "brick"), levels, compress, bool(overwrite), _z_chunk_bounds(source, shape),
                                  progress)
-
-
-def _z_chunk_bounds(source, shape):
-    """Where a chunked array's chunks begin along axis 0, and its end (Dask: a size per chunk;
-    Zarr: one size): convert reads whole chunks, so none is computed or decoded twice. [] for an
-    array without chunks."""
-    chunks = getattr(source, "chunks", None)
-    if not isinstance(chunks, tuple) or not chunks:
-        return []
-    first = chunks[0]
-    try:
-        sizes = [int(c) for c in first] if isinstance(first, tuple) else None
-        depth = None if sizes is not None else int(first)
-    except (TypeError, ValueError):
-        return []
-    if sizes is None:
-        if depth <= 0:
-            return []
-        sizes = [min(depth, shape[0] - z) for z in range(0, shape[0], depth)]
-    bounds = [0]
-    for size in sizes:
-        bounds.append(bounds[-1] + size)
-    return bounds
 
 
 class Server:

@@ -22,3 +22,26 @@ def _float(value, name):
         return float(value)
     except (TypeError, ValueError):
         raise TypeError(f"{name}: expects a number, not {type(value).__name__}") from None
+
+
+def _z_chunk_bounds(source, shape):
+    """Where a chunked array's chunks begin along axis 0, and its end (Dask: a size per chunk;
+    Zarr: one size): convert reads whole chunks, so none is computed or decoded twice. [] for an
+    array without chunks."""
+    chunks = getattr(source, "chunks", None)
+    if not isinstance(chunks, tuple) or not chunks:
+        return []
+    first = chunks[0]
+    try:
+        sizes = [int(c) for c in first] if isinstance(first, tuple) else None
+        depth = None if sizes is not None else int(first)
+    except (TypeError, ValueError):
+        return []
+    if sizes is None:
+        if depth <= 0:
+            return []
+        sizes = [min(depth, shape[0] - z) for z in range(0, shape[0], depth)]
+    bounds = [0]
+    for size in sizes:
+        bounds.append(bounds[-1] + size)
+    return bounds
