@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -17,7 +18,7 @@ namespace {
 
 // Min and max of the samples at the corners of brick `c`'s cells, as the store type holds them.
 template <class S>
-BrickRange measure(const StridedSamples& s, const BrickLayout& layout, const Dims3& c) {
+BrickRange measure(const StridedSamples& s, int64_t firstRow, const BrickLayout& layout, const Dims3& c) {
     const auto* base = static_cast<const unsigned char*>(s.data);
     S lo = std::numeric_limits<S>::max(), hi = std::numeric_limits<S>::lowest();
     bool nan = false;
@@ -30,7 +31,7 @@ BrickRange measure(const StridedSamples& s, const BrickLayout& layout, const Dim
     auto scan = [&](auto at) {
         for (int64_t z = first[2]; z < first[2] + count[2]; ++z)
             for (int64_t y = first[1]; y < first[1] + count[1]; ++y) {
-                const unsigned char* row = base + z * s.strides[2] + y * s.strides[1] + first[0] * s.strides[0];
+                const unsigned char* row = base + (z - firstRow) * s.strides[2] + y * s.strides[1] + first[0] * s.strides[0];
                 S rowLo = lo, rowHi = hi;
                 for (int64_t x = 0; x < count[0]; ++x) {
                     const S v = at(row, x);
@@ -67,29 +68,45 @@ BrickRange measure(const StridedSamples& s, const BrickLayout& layout, const Dim
 
 ArrayBrickSource::ArrayBrickSource(const StridedSamples& samples, int brickSize, const glm::dvec3& spacing,
                                    int threads)
-    : mSamples(samples) {
-    if (const std::string problem = volumeDimsProblem(samples.dims); !problem.empty())
+    : ArrayBrickSource(samples, 0, samples.dims[2], brickSize, spacing, threads) {}
+
+ArrayBrickSource::ArrayBrickSource(const StridedSamples& rows, int64_t firstRow, int64_t volumeDepth, int brickSize,
+                                   const glm::dvec3& spacing, int threads)
+    : mSamples(rows), mFirstRow(firstRow) {
+    const Dims3 dims{rows.dims[0], rows.dims[1], volumeDepth};
+    if (const std::string problem = volumeDimsProblem(dims); !problem.empty())
         throw std::invalid_argument(problem);
-    mInfo.dims = samples.dims;
-    mInfo.type = storeTypeFor(samples.type, false);
+    if (firstRow < 0 || firstRow + rows.dims[2] > volumeDepth)
+        throw std::logic_error("ArrayBrickSource: rows beyond the volume's");
+    mInfo.dims = dims;
+    mInfo.type = storeTypeFor(rows.type, false);
     mInfo.spacing = spacing;
-    mLayout = BrickLayout(samples.dims, brickSize);
+    mLayout = BrickLayout(dims, brickSize);
     if (const std::string problem = brickLayoutProblem(mLayout); !problem.empty())
         throw std::invalid_argument(problem);
-    mRanges.resize(size_t(mLayout.brickCount()));
+    mRanges.assign(size_t(mLayout.brickCount()), BrickRange{INFINITY, -INFINITY});
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     arena.execute([&] {
         tbb::parallel_for(int64_t(0), mLayout.brickCount(), [&](int64_t id) {
+            const Dims3 c = mLayout.brickCoord(id);
+            if (!holdsLayer(c[2])) return;
             throwIfInterrupted("the array");  // a pass over all of it: stopped within a brick
-            mRanges[size_t(id)] = visitFileScalar(samples.type, [&](auto zero) {
-                return measure<decltype(zero)>(mSamples, mLayout, mLayout.brickCoord(id));
+            mRanges[size_t(id)] = visitFileScalar(rows.type, [&](auto zero) {
+                return measure<decltype(zero)>(mSamples, mFirstRow, mLayout, c);
             });
         });
     });
 }
 
+bool ArrayBrickSource::holdsLayer(int64_t brickZ) const {
+    const int64_t first = mLayout.clampSample(2, mLayout.firstSample(brickZ));
+    const int64_t last = mLayout.clampSample(2, mLayout.firstSample(brickZ) + mLayout.side() - 1);
+    return first >= mFirstRow && last < mFirstRow + mSamples.dims[2];
+}
+
 void ArrayBrickSource::gather(int64_t id, unsigned char* brick) const {
     const Dims3 c = mLayout.brickCoord(id);
+    if (!holdsLayer(c[2])) throw std::logic_error("ArrayBrickSource: brick " + std::to_string(id) + " lies beyond the rows held");
     const int side = mLayout.side();
     const size_t inBytes = fileScalarSize(mSamples.type), outBytes = scalarSize(mInfo.type);
     const auto* base = static_cast<const unsigned char*>(mSamples.data);
@@ -99,7 +116,7 @@ void ArrayBrickSource::gather(int64_t id, unsigned char* brick) const {
     const bool contiguous = mSamples.strides[0] == int64_t(inBytes);
     const bool sameType = fileScalarOf(mInfo.type) == mSamples.type;
     for (int lz = 0; lz < side; ++lz) {
-        const int64_t z = mLayout.clampSample(2, mLayout.firstSample(c[2]) + lz);
+        const int64_t z = mLayout.clampSample(2, mLayout.firstSample(c[2]) + lz) - mFirstRow;
         for (int ly = 0; ly < side; ++ly) {
             const int64_t y = mLayout.clampSample(1, mLayout.firstSample(c[1]) + ly);
             const unsigned char* line = base + z * mSamples.strides[2] + y * mSamples.strides[1];

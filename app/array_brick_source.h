@@ -3,7 +3,8 @@
 // of the volume. The samples are converted to the store type that holds them
 // (io/readers/sample_decode.h storeTypeFor: i8 -> i16, i32/u32/f64 -> f32) brick by brick as bricks are
 // acquired; the brick ranges come from one pass over the samples at construction. The memory
-// must stay valid and unchanged while the source lives.
+// must stay valid and unchanged while the source lives. A source may hold a window of rows of a
+// larger volume instead (what app/slab_extraction.h extracts a volume read in order with).
 #pragma once
 
 #include <array>
@@ -29,6 +30,15 @@ public:
     // Throws std::invalid_argument for dimensions outside core/volume.h's limits. `threads`
     // measure the brick ranges (0: TBB's default).
     ArrayBrickSource(const StridedSamples& samples, int brickSize, const glm::dvec3& spacing, int threads);
+    // Over the rows (z) [firstRow, firstRow + rows.dims[2]) of a volume `volumeDepth` samples deep,
+    // its x and y those of `rows`: the bricks whose samples, ghost rows included, lie in those
+    // rows are measured and may be acquired (holds()); the others have the empty range
+    // {+inf, -inf}, which holds no isovalue, and acquiring one throws std::logic_error.
+    ArrayBrickSource(const StridedSamples& rows, int64_t firstRow, int64_t volumeDepth, int brickSize,
+                     const glm::dvec3& spacing, int threads);
+
+    // Whether the bricks of layer `brickZ` (brick coordinate z) lie in the rows held.
+    bool holdsLayer(int64_t brickZ) const;
 
     const VolumeInfo& volume() const override { return mInfo; }
     const BrickLayout& layout() const override { return mLayout; }
@@ -43,6 +53,7 @@ private:
     void gather(int64_t id, unsigned char* brick) const;
 
     StridedSamples mSamples;
+    int64_t mFirstRow = 0;  // the volume's row that mSamples' row 0 is
     VolumeInfo mInfo;
     BrickLayout mLayout;
     std::vector<BrickRange> mRanges;

@@ -6,12 +6,19 @@
 #   bench/python.sh lazy [N]   instead: an N^3 (default 2048) Dask array generated lazily, converted
 #                              and its SAGE normal view extracted from Python: seconds, peak RSS
 #                              (bench/python_lazy.py; the store goes to data/bench/lazyN.vdiso)
+#   bench/python.sh dask [N] [C]  instead: marching_cubes on an N^3 (default 1024) u16 Dask array
+#                              of C^3 (default 64) chunks generated lazily, read a layer at a
+#                              time, against computing it whole first (bench/python_dask_mc.py)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh bench
 build=${BUILD_DIR:-build}
 py="env PYTHONPATH=$build/python /usr/bin/python3"
 mkdir -p data/bench
+if [ "${1:-}" = dask ]; then
+  for mode in slabs memory slabs memory; do $py bench/python_dask_mc.py "${2:-1024}" "${3:-64}" $mode; done
+  exit 0
+fi
 if [ "${1:-}" = lazy ]; then
   n=${2:-2048}
   $py bench/python_lazy.py "$n" "data/bench/lazy$n.vdiso"

@@ -4,9 +4,13 @@
 
 #include <cmath>
 #include <optional>
+#include <span>
+#include <vector>
 #include <stdexcept>
 
 #include "app/array_brick_source.h"
+#include "app/slab_extraction.h"
+#include "array_slices.h"
 #include "app/extract_settings.h"
 #include "arrays.h"
 #include "bindings.h"
@@ -21,14 +25,18 @@ namespace {
 
 // scikit-image's `values`: a measure of the data near each vertex, for colour maps. Here the
 // largest sample at the corners of the cell the vertex lies in (its lower corner at the floor
-// of its sample coordinates).
+// of its sample coordinates, clamped to the volume's `depth` along z). `s` holds the volume's
+// rows (z) from `firstRow`, those of the cells of `positions`.
 template <class S>
-void cellMaxima(const StridedSamples& s, const TriangleMesh& mesh, const glm::dvec3& spacing, float* values) {
+void cellMaxima(const StridedSamples& s, int64_t firstRow, int64_t depth, std::span<const glm::vec3> positions,
+                const glm::dvec3& spacing, float* values) {
     const auto* base = static_cast<const unsigned char*>(s.data);
-    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    const int64_t last[3] = {s.dims[0] - 2, s.dims[1] - 2, depth - 2};
+    for (size_t v = 0; v < positions.size(); ++v) {
         int64_t corner[3];
         for (int a = 0; a < 3; ++a)
-            corner[a] = std::clamp<int64_t>(int64_t(std::floor(mesh.positions[v][a] / spacing[a])), 0, s.dims[size_t(a)] - 2);
+            corner[a] = std::clamp<int64_t>(int64_t(std::floor(positions[v][a] / spacing[a])), 0, last[a]);
+        corner[2] -= firstRow;
         double best = -INFINITY;
         for (int c = 0; c < 8; ++c) {
             S sample;
@@ -42,52 +50,38 @@ void cellMaxima(const StridedSamples& s, const TriangleMesh& mesh, const glm::dv
     }
 }
 
-pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLevel, std::array<double, 3> spacing,
-                         std::optional<int64_t> threads, pyb::object progress) {
-    // Every check on the arguments and the array's size comes before any pass over its samples.
-    const StridedSamples samples = stridedSamplesOf(volume, "volume");
-    if (givenLevel && !std::isfinite(*givenLevel))
-        throw std::invalid_argument("level: expects a finite isovalue, not " + std::to_string(*givenLevel));
+// The level asked for, or the middle of the values [lo, hi] (NaN left out) for none, checked
+// as scikit-image checks it.
+double levelIn(std::optional<double> given, float lo, float hi) {
+    // No level: the middle of the values (NaN left out), as scikit-image takes it.
+    if (!given && !(std::isfinite(lo) && std::isfinite(hi)))
+        throw std::invalid_argument("volume: has no finite sample, so no level lies in its values");
+    const double level = given ? *given : 0.5 * (double(lo) + double(hi));
+    // As scikit-image: a level outside the values is a mistake, not an empty surface.
+    if (!(level >= lo && level <= hi))
+        throw std::invalid_argument("level: " + std::to_string(level) + " is outside the volume's values (" +
+                                    std::to_string(lo) + " to " + std::to_string(hi) + ")");
+    return level;
+}
+
+void checkLevelAndSpacing(std::optional<double> level, const std::array<double, 3>& spacing) {
+    if (level && !std::isfinite(*level))
+        throw std::invalid_argument("level: expects a finite isovalue, not " + std::to_string(*level));
     for (double s : spacing)
         if (!(s > 0 && std::isfinite(s)))
             throw std::invalid_argument("spacing: expects three positive finite numbers, not " + std::to_string(s));
-    const int threadCount = threads ? int(checkedInt("threads", *threads, 1, 256)) : machineThreads();
-    double level = givenLevel.value_or(0.0);
-    // The kernel's x, y, z are NumPy's axes 2, 1, 0.
-    const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
-    TriangleMesh mesh;
-    runReleased([&](const ProgressFn& fraction) {
-        ArrayBrickSource source(samples, 32, xyzSpacing, threadCount);
-        // As scikit-image: a level outside the values is a mistake, not an empty surface.
-        float lo = INFINITY, hi = -INFINITY;
-        for (const BrickRange& r : source.brickRanges()) {
-            lo = std::min(lo, r.minValue);
-            hi = std::max(hi, r.maxValue);
-        }
-        // No level: the middle of the values (NaN left out), as scikit-image takes it.
-        if (!givenLevel) {
-            if (!(std::isfinite(lo) && std::isfinite(hi)))
-                throw std::invalid_argument("volume: has no finite sample, so no level lies in its values");
-            level = 0.5 * (double(lo) + double(hi));
-        }
-        if (!(level >= lo && level <= hi))
-            throw std::invalid_argument("level: " + std::to_string(level) + " is outside the volume's values (" +
-                                        std::to_string(lo) + " to " + std::to_string(hi) + ")");
-        FullExtractOptions options{level, kDefaultMetaCellSize, threadCount};
-        extractOctree(source, options, mesh, fraction);
-    }, progress, double(samples.dims[0]) * double(samples.dims[1]) * double(samples.dims[2]));
-    // The mesh's own buffers become the arrays (owned by a capsule): peak memory is the output
-    // once, not twice. NumPy's axis order is z, y, x: each row is reversed in place.
+}
+
+// marching_cubes' four arrays over `mesh` (x, y, z in index units times spacing) and `values`:
+// the mesh's own buffers become the arrays (owned by a capsule), so peak memory is the output
+// once, not twice. NumPy's axis order is z, y, x: each row is reversed in place.
+pyb::tuple meshArrays(TriangleMesh&& mesh, pyb::array_t<float> values, const std::array<double, 3>& spacing) {
     auto* owned = new TriangleMesh(std::move(mesh));
     const pyb::capsule owner(owned, [](void* p) { delete static_cast<TriangleMesh*>(p); });
     const size_t n = owned->positions.size(), m = owned->triangleCount();
     if (n > size_t(INT32_MAX))
         throw std::runtime_error("the surface has " + std::to_string(n) + " vertices, more than scikit-image's int32 "
                                  "faces can number: use vdiso.convert and Store.extract (uint32 faces)");
-    pyb::array_t<float> values(n);
-    visitFileScalar(samples.type, [&](auto zero) {
-        cellMaxima<decltype(zero)>(samples, *owned, xyzSpacing, values.mutable_data());
-    });
     for (size_t v = 0; v < n; ++v) {
         std::swap(owned->positions[v].x, owned->positions[v].z);
         std::swap(owned->normals[v].x, owned->normals[v].z);
@@ -110,6 +104,77 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     return pyb::make_tuple(verts, faces, normals, values);
 }
 
+pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLevel, std::array<double, 3> spacing,
+                         std::optional<int64_t> threads, pyb::object progress) {
+    // Every check on the arguments and the array's size comes before any pass over its samples.
+    const StridedSamples samples = stridedSamplesOf(volume, "volume");
+    checkLevelAndSpacing(givenLevel, spacing);
+    const int threadCount = threads ? int(checkedInt("threads", *threads, 1, 256)) : machineThreads();
+    // The kernel's x, y, z are NumPy's axes 2, 1, 0.
+    const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
+    TriangleMesh mesh;
+    runReleased([&](const ProgressFn& fraction) {
+        ArrayBrickSource source(samples, 32, xyzSpacing, threadCount);
+        float lo = INFINITY, hi = -INFINITY;
+        for (const BrickRange& r : source.brickRanges()) {
+            lo = std::min(lo, r.minValue);
+            hi = std::max(hi, r.maxValue);
+        }
+        FullExtractOptions options{levelIn(givenLevel, lo, hi), kDefaultMetaCellSize, threadCount};
+        extractOctree(source, options, mesh, fraction);
+    }, progress, double(samples.dims[0]) * double(samples.dims[1]) * double(samples.dims[2]));
+    pyb::array_t<float> values(mesh.positions.size());
+    visitFileScalar(samples.type, [&](auto zero) {
+        cellMaxima<decltype(zero)>(samples, 0, samples.dims[2], mesh.positions, xyzSpacing, values.mutable_data());
+    });
+    return meshArrays(std::move(mesh), values, spacing);
+}
+
+// marching_cubes of an array-like too large to load (Dask, Zarr, anything sliced along axis 0):
+// read once in order a layer of bricks at a time (app/slab_extraction.h), each chunk of
+// `bounds` computed or decoded once; with no level, read once more before, for its range.
+pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, const std::vector<int64_t>& shape,
+                                const pyb::dtype& dtype, std::optional<double> givenLevel,
+                                std::array<double, 3> spacing, std::optional<int64_t> threads,
+                                const std::vector<int64_t>& bounds, pyb::object progress) {
+    checkLevelAndSpacing(givenLevel, spacing);
+    const FileScalar type = fileScalarOfDtype(dtype, name.c_str());
+    const VolumeInfo info = arrayVolumeInfo(name, shape, type, spacing, {0.0, 0.0, 0.0});
+    checkChunkBounds(name, shape, bounds);
+    const int threadCount = threads ? int(checkedInt("threads", *threads, 1, 256)) : machineThreads();
+    constexpr int kBrick = 32;  // as in memory: the same bricks, the same mesh
+    TriangleMesh mesh;
+    std::vector<float> values;
+    const double samplesTotal = double(info.sampleCount());
+    runReleased([&](const ProgressFn& fraction) {
+        std::optional<double> level = givenLevel;
+        double start = 0;
+        if (!level) {  // its range first: a pass of its own
+            ArraySlices slices(source, info, type, name, bounds);
+            const BrickRange r = sliceRange(slices, kBrick, threadCount, [&](double f) { fraction(0.5 * f); });
+            level = levelIn(std::nullopt, r.minValue, r.maxValue);
+            start = 0.5;
+        }
+        ArraySlices slices(source, info, type, name, bounds);
+        SlabExtractOptions options;
+        options.extract = FullExtractOptions{*level, kDefaultMetaCellSize, threadCount};
+        options.brickSize = kBrick;
+        options.layerDone = [&](const StridedSamples& rows, int64_t firstRow, std::span<const glm::vec3> added) {
+            const size_t first = values.size();
+            values.resize(first + added.size());
+            visitFileScalar(rows.type, [&](auto zero) {
+                cellMaxima<decltype(zero)>(rows, firstRow, info.dims[2], added, info.spacing, values.data() + first);
+            });
+        };
+        const SlabExtractResult result =
+            extractSlabs(slices, options, mesh, [&](double f) { fraction(start + (1 - start) * f); });
+        levelIn(level, result.range.minValue, result.range.maxValue);  // a level given outside the values
+    }, progress, samplesTotal);
+    pyb::array_t<float> out(values.size());
+    std::copy(values.begin(), values.end(), out.mutable_data());
+    return meshArrays(std::move(mesh), out, spacing);
+}
+
 }  // namespace
 
 void bindMarchingCubes(pyb::module_& m) {
@@ -117,6 +182,9 @@ void bindMarchingCubes(pyb::module_& m) {
           pyb::arg("spacing") = std::array<double, 3>{1.0, 1.0, 1.0}, pyb::kw_only(),
           pyb::arg("threads") = pyb::none(), pyb::arg("progress") = pyb::none(),
           "The isosurface of a 3-D array (see vdiso.marching_cubes).");
+    m.def("_marching_cubes_in_slabs", &marchingCubesInSlabs, pyb::arg("source"), pyb::arg("name"), pyb::arg("shape"),
+          pyb::arg("dtype"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"), pyb::arg("bounds"),
+          pyb::arg("progress"), "marching_cubes of an array-like read a layer of bricks at a time.");
 }
 
 }  // namespace vdiso::py

@@ -2,7 +2,7 @@
 array in place (python/src/marching_cubes.cpp), with scikit-image's keywords."""
 
 from . import _vdiso
-from ._args import _float, _int
+from ._args import _float, _int, _z_chunk_bounds
 
 
 def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent", step_size=1,
@@ -29,6 +29,13 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     default "lewiner" (which resolves them and makes a few more triangles). progress:
     callable(done, total) in samples; Ctrl-C stops the call within a fraction of a second.
 
+    A Dask or Zarr array, or any array-like with shape, dtype and slicing along axis 0 that is
+    not a NumPy array, is never loaded whole: it is read once, in order, a layer of 35 slices at
+    a time (a Dask or Zarr array a whole chunk's slab at a time, so no chunk is computed or
+    decoded twice), and meshed layer by layer into the same arrays as the array held in memory
+    gives, bit for bit. Memory: the output, a chunk's slab and a layer. With level=None it is
+    read twice (once for its range): pass a level to read it once.
+
     scikit-image's keywords: gradient_direction "descent" (its default and this winding) or
     "ascent" (the faces' winding reversed); step_size, the cells' side in samples (the array read
     as a strided view, no copy); allow_degenerate=False merges vertices that coincide and drops
@@ -39,10 +46,11 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     answered with another surface.
     """
     import numpy as np
-    if not isinstance(volume, np.ndarray):
-        volume = np.asarray(volume)
-    volume = _readable_samples(volume)
-    if level is None and volume.size == 0:
+    chunked = not isinstance(volume, np.ndarray) and _sliceable(volume)
+    if not chunked:
+        volume = _readable_samples(np.asarray(volume))
+    shape = tuple(int(n) for n in volume.shape)
+    if level is None and 0 in shape:
         raise ValueError("volume: an empty array has no isosurface")
     # level None: the library takes the middle of the values, after its checks of the array.
     try:
@@ -62,24 +70,30 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     if step < 1:
         raise ValueError(f"step_size: expects 1 or more, not {step}")
     if mask is not None:
-        mask = np.asarray(mask)
-        if mask.shape != volume.shape:
-            raise ValueError(f"mask: expects the volume's shape {volume.shape}, not {mask.shape}")
-        mask = mask.astype(bool, copy=False)
-    if step > 1:
-        volume = volume[::step, ::step, ::step]
-        mask = None if mask is None else mask[::step, ::step, ::step]
-        spacing = tuple(s * step for s in spacing)
-    verts, faces, normals, values = _vdiso.marching_cubes(
-        volume, None if level is None else _float(level, "level"), spacing,
-        threads=None if threads is None else _int(threads, "threads"), progress=progress)
+        if not hasattr(mask, "shape"):
+            mask = np.asarray(mask)
+        if tuple(mask.shape) != shape:
+            raise ValueError(f"mask: expects the volume's shape {shape}, not {tuple(mask.shape)}")
+    level = None if level is None else _float(level, "level")
+    threads = None if threads is None else _int(threads, "threads")
+    if chunked:
+        rows = _SlabView(volume, step)
+        name = f"{type(volume).__module__}.{type(volume).__name__}"
+        verts, faces, normals, values = _vdiso._marching_cubes_in_slabs(
+            rows if rows.wrapped else volume, name, list(rows.shape), rows.dtype, level,
+            tuple(s * step for s in spacing), threads, _z_chunk_bounds(rows, list(rows.shape)), progress)
+    else:
+        verts, faces, normals, values = _vdiso.marching_cubes(
+            volume[::step, ::step, ::step] if step > 1 else volume, level, tuple(s * step for s in spacing),
+            threads=threads, progress=progress)
     if mask is not None:
         # A triangle lies in one cell, its centroid inside it (or on its faces): the cell's
         # first corner is the centroid's floor, in samples. scikit-image tests a cell's far
         # corner (the one of highest indices).
-        cells = np.floor(verts[faces].mean(axis=1) / np.asarray(spacing)).astype(np.int64)
-        np.clip(cells, 0, np.array(volume.shape) - 2, out=cells)
-        faces = faces[mask[cells[:, 0] + 1, cells[:, 1] + 1, cells[:, 2] + 1]]
+        cells = np.floor(verts[faces].mean(axis=1) / (np.asarray(spacing) * step)).astype(np.int64)
+        np.clip(cells, 0, np.array([(n - 1) // step for n in shape]) - 1, out=cells)
+        far = (cells + 1) * step
+        faces = faces[_mask_at(mask, far[:, 0], far[:, 1], far[:, 2])]
         verts, faces, normals, values = _used_vertices(verts, faces, normals, values)
     if not allow_degenerate:
         _, first, inverse = np.unique(verts, axis=0, return_index=True, return_inverse=True)
@@ -91,6 +105,60 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     if gradient_direction == "ascent":
         faces = np.ascontiguousarray(faces[:, ::-1])
     return verts, faces, normals, values
+
+
+def _sliceable(volume):
+    """Whether `volume` is an array-like to read a layer at a time: shape, a NumPy dtype and
+    slicing (a Dask, Zarr, h5py or xarray array); others (lists, tensors) are loaded whole."""
+    import numpy as np
+    if not all(hasattr(volume, a) for a in ("shape", "dtype", "__getitem__")):
+        return False
+    try:
+        np.dtype(volume.dtype)
+    except TypeError:
+        return False
+    return True
+
+
+class _SlabView:
+    """An array-like read along axis 0 as marching_cubes reads one too large to load, every
+    `step`-th sample on each axis and in a dtype the library reads (bool as uint8, float16 as
+    float32, 64-bit integers as float64, which the library holds as float32 alike): slices of it
+    are slices of the source, converted. `wrapped` is False when it is the source itself."""
+
+    def __init__(self, source, step):
+        import numpy as np
+        self._source, self._step = source, step
+        kind, size = np.dtype(source.dtype).kind, np.dtype(source.dtype).itemsize
+        self.dtype = np.dtype(np.uint8 if kind == "b" else np.float32 if kind == "f" and size == 2
+                              else np.float64 if kind in "iu" and size == 8 else np.dtype(source.dtype))
+        self.shape = tuple((int(n) + step - 1) // step for n in source.shape)
+        self.wrapped = step > 1 or self.dtype != np.dtype(source.dtype)
+        bounds = _z_chunk_bounds(source, [int(n) for n in source.shape])
+        # The chunks' first slices in this view's numbering (a chunk holds the samples from its
+        # first multiple of `step`).
+        firsts = sorted({(b + step - 1) // step for b in bounds[:-1]} | {0}) if bounds else []
+        self.chunks = (tuple(b - a for a, b in zip(firsts, firsts[1:] + [self.shape[0]])),) if firsts else None
+
+    def __getitem__(self, key):
+        import numpy as np
+        z = key if isinstance(key, slice) else key[0]
+        first, end, _ = z.indices(self.shape[0])
+        s = self._step
+        got = np.asarray(self._source[first * s:max(end - 1, first) * s + 1:s, ::s, ::s])
+        return got.view(np.uint8) if got.dtype.kind == "b" else got.astype(self.dtype, copy=False)
+
+
+def _mask_at(mask, z, y, x):
+    """mask[z, y, x] at the points given, as bools: a NumPy mask indexed, a Dask or Zarr one
+    read at those points only (vindex)."""
+    import numpy as np
+    if isinstance(mask, np.ndarray):
+        return mask[z, y, x].astype(bool, copy=False)
+    got = mask.vindex[z, y, x] if hasattr(mask, "vindex") else np.asarray(mask)[z, y, x]
+    if hasattr(got, "compute"):
+        got = got.compute()
+    return np.asarray(got).astype(bool, copy=False)
 
 
 def _used_vertices(verts, faces, normals, values):

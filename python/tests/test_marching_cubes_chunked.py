@@ -1,0 +1,168 @@
+"""vdiso.marching_cubes on arrays too large to load (Dask, Zarr, any array-like sliced along axis
+0): read once, in order, a layer of bricks at a time, and meshed into the same arrays, bit for bit,
+as the array held in memory gives."""
+import dask
+import dask.array as da
+import numpy as np
+import pytest
+import zarr
+
+import vdiso
+from conftest import interrupt, python_child
+
+
+def wavy(shape=(70, 50, 40), seed=1):
+    """A field with much surface, crossing every layer of bricks and the chunks' seams."""
+    z, y, x = np.mgrid[: shape[0], : shape[1], : shape[2]]
+    noise = np.random.default_rng(seed).normal(0, 0.05, shape)
+    return np.sin(z / 7.0) * np.cos(y / 9.0) + np.sin(x / 5.0) + noise
+
+
+def assert_identical(ours, expected):
+    assert len(ours) == len(expected) == 4
+    for got, want in zip(ours, expected):
+        assert got.dtype == want.dtype and got.shape == want.shape
+        assert np.array_equal(got, want)
+    assert len(expected[1]) > 1000
+
+
+class Rows:
+    """An array-like that answers slices along axis 0 only, and records them."""
+
+    def __init__(self, a):
+        self.a, self.shape, self.dtype, self.asked = a, a.shape, a.dtype, []
+
+    def __getitem__(self, key):
+        assert isinstance(key, slice), key
+        self.asked.append((key.start, key.stop))
+        return self.a[key]
+
+
+@pytest.mark.parametrize("chunks", [(9, 25, 40), (64, 50, 40), (1, 50, 40), (70, 50, 40)])
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_dask_array_gives_the_in_memory_mesh_and_each_chunk_is_computed_once(chunks, threads):
+    v = (wavy() * 1000 + 3000).astype(np.uint16)
+    computed = []
+
+    def block(x, block_info=None):
+        computed.append(tuple(block_info[0]["chunk-location"]))
+        return x
+
+    source = da.from_array(v, chunks=chunks).map_blocks(block, dtype=v.dtype)
+    with dask.config.set(scheduler="synchronous"):
+        assert_identical(vdiso.marching_cubes(source, 3300.0, threads=threads),
+                         vdiso.marching_cubes(v, 3300.0, threads=threads))
+        assert len(computed) == len(set(computed)) == source.npartitions
+        # No level: read once for the range, once to mesh, with the middle of the values.
+        computed.clear()
+        assert_identical(vdiso.marching_cubes(source, threads=threads), vdiso.marching_cubes(v, threads=threads))
+        assert len(computed) == 2 * source.npartitions
+
+
+def test_a_zarr_array_and_any_array_like_are_read_a_layer_at_a_time():
+    v = wavy().astype(np.float32)
+    expected = vdiso.marching_cubes(v, 0.3)
+    assert_identical(vdiso.marching_cubes(zarr.array(v, chunks=(16, 25, 40)), 0.3), expected)
+    rows = Rows(v)
+    assert_identical(vdiso.marching_cubes(rows, 0.3), expected)
+    # In order, each slice once, at most a layer of bricks and its ghosts (35 slices) at a time.
+    assert rows.asked[0][0] == 0 and rows.asked[-1][1] == v.shape[0]
+    assert all(a[1] == b[0] for a, b in zip(rows.asked, rows.asked[1:]))
+    assert max(stop - start for start, stop in rows.asked) <= 35
+
+
+@pytest.mark.parametrize("dtype", [np.bool_, np.int8, np.int64, np.uint64, np.float16, np.float64])
+def test_every_dtype_gives_the_in_memory_mesh(dtype):
+    v = wavy()
+    if dtype == np.bool_:
+        v, level = v > 0.2, None
+    elif np.issubdtype(dtype, np.integer):
+        v, level = (v * 40 + 100).astype(dtype), 110.0
+    else:
+        v, level = v.astype(dtype), 0.3
+    assert_identical(vdiso.marching_cubes(da.from_array(v, chunks=(16, 50, 40)), level),
+                     vdiso.marching_cubes(v, level))
+
+
+@pytest.mark.parametrize("keywords", [dict(spacing=(1.5, 0.5, 2.0)), dict(step_size=2),
+                                      dict(step_size=3, spacing=(1, 2, 1)), dict(mask=True),
+                                      dict(mask=True, step_size=2), dict(gradient_direction="ascent"),
+                                      dict(allow_degenerate=False)], ids=str)
+def test_scikit_images_keywords_give_the_in_memory_mesh(keywords):
+    v = wavy()
+    mask = np.random.default_rng(2).random(v.shape) > 0.3
+    here = dict(keywords, mask=mask) if "mask" in keywords else keywords
+    expected = vdiso.marching_cubes(v, 0.3, **here)
+    # The mask a Dask array too: read at the cells' corners only.
+    lazy = dict(keywords, mask=da.from_array(mask, chunks=(10, 50, 40))) if "mask" in keywords else keywords
+    assert_identical(vdiso.marching_cubes(da.from_array(v, chunks=(16, 50, 40)), 0.3, **lazy), expected)
+    assert_identical(vdiso.marching_cubes(zarr.array(v, chunks=(16, 25, 40)), 0.3, **here), expected)
+
+
+def test_bad_chunked_input_is_refused_by_name():
+    v = da.from_array(wavy(), chunks=(16, 50, 40))
+    with pytest.raises(ValueError, match=r"level: 50.0+ is outside the volume's values"):
+        vdiso.marching_cubes(v, 50.0)
+    with pytest.raises(ValueError, match="dask.array.core.Array: expects a 3-D array, not one of 2 dimensions"):
+        vdiso.marching_cubes(da.zeros((4, 5)), 0.5)
+    with pytest.raises(ValueError, match="level: expects a finite isovalue"):
+        vdiso.marching_cubes(v, float("nan"))
+    with pytest.raises(ValueError, match="mask: expects the volume's shape"):
+        vdiso.marching_cubes(v, 0.3, mask=da.zeros((3, 3, 3), dtype=bool))
+
+    class Liar(Rows):
+        def __getitem__(self, key):
+            return super().__getitem__(key)[:, :-1]
+
+    with pytest.raises(OSError, match=r"Liar: slices 0 to 34 came back with shape \(34, 49, 40\), not \(34, 50, 40\)"):
+        vdiso.marching_cubes(Liar(wavy()), 0.3)
+
+
+LARGE = """
+import resource, sys
+import dask.array as da, numpy as np
+import vdiso
+limit = {limit}
+if limit > 0:
+    resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
+n = {n}
+def block(block_info=None):  # a ball, u8, chunk by chunk
+    (z0, z1), (y0, y1), (x0, x1) = block_info[None]["array-location"]
+    c = np.float32(n // 2)
+    z, y, x = (np.arange(a, b, dtype=np.float32) - c for a, b in ((z0, z1), (y0, y1), (x0, x1)))
+    plane = y[:, None] ** 2 + x[None, :] ** 2
+    out = np.empty((z1 - z0, y1 - y0, x1 - x0), np.uint8)
+    for i in range(z1 - z0):
+        out[i] = np.clip(np.float32(200) - (plane + z[i] ** 2) * np.float32(200 / (0.4 * n) ** 2), 0, 255)
+    return out
+volume = da.map_blocks(block, dtype=np.uint8, chunks=((16,) * (n // 16), (n,), (n,)))
+said = []
+def progress(done, total):
+    if done > 0 and not said:
+        said.append(1)
+        print("working", done <= total, flush=True)
+verts, faces, normals, values = vdiso.marching_cubes(volume, 100.5, progress=progress)
+radius = np.linalg.norm(verts - np.float32(n // 2), axis=1)
+print("done", len(faces), radius.min(), radius.max(), flush=True)
+"""
+
+
+def test_a_dask_array_larger_than_the_memory_limit_is_meshed():
+    n = 1024  # 1 GiB of samples, generated chunk by chunk, under a 600 MB data limit
+    child = python_child(LARGE.format(limit=600 << 20, n=n))
+    stdout, stderr = child.communicate(timeout=900)
+    assert child.returncode == 0, stderr
+    triangles, low, high = (float(w) for w in stdout.split("done")[-1].split())
+    # The ball where the samples, 200 - r^2 200 / (0.4 n)^2 truncated, pass 100.5 (where the
+    # field is 101): its vertices within a sample of that sphere, about three triangles a unit
+    # of its area.
+    r = 0.4 * n * np.sqrt(99 / 200)
+    assert r - 1 < low and high < r + 1, (low, high, r)
+    assert 2 < triangles / (4 * np.pi * r * r) < 4, triangles
+
+
+def test_ctrl_c_stops_a_chunked_marching_cubes_within_a_second():
+    child = python_child(LARGE.format(limit=-1, n=1536))
+    assert child.stdout.readline().strip() == "working True"
+    waited = interrupt(child)
+    assert waited < 1, f"stopped {waited:.2f} s after Ctrl-C"
