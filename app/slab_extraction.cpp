@@ -11,40 +11,38 @@ namespace vdiso {
 
 namespace {
 
-// A layer's part, its vertices on the face with the layer before replaced by that layer's
-// numbers: what is appended to the output, kept apart until the end so that the output is
-// allocated once at its size.
-struct WeldedPart {
-    MeshArray<glm::vec3> positions, normals;  // the vertices the layer owns, numbered on
-    MeshArray<uint32_t> indices;              // output numbers
-};
-
-// Renumbers `part` (vertices from 0, its border vertices in `border`) into the output's
-// numbers: a border vertex the layer before made (in `before`: edge key -> output number)
-// takes that number, the others are numbered from `next` on in their order. `after` gets the
-// output number of each of the part's border vertices.
-WeldedPart weld(const TriangleMesh& part, const EdgeVertexMap& border, const EdgeVertexMap& before, uint32_t next,
-                EdgeVertexMap& after) {
+// Renumbers a layer's part (vertices from 0, its border vertices in `border`) in place into the
+// output's numbers: a border vertex the layer before made (in `before`: edge key -> output
+// number) takes that number and is dropped from the part, the others keep their order and are
+// numbered from `next` on. `after` gets the output number of each of the part's border vertices.
+// The parts are kept apart until the end, so that the output is allocated once at its size.
+void weld(TriangleMesh& part, const EdgeVertexMap& border, const EdgeVertexMap& before, uint32_t next,
+          EdgeVertexMap& after) {
     constexpr uint32_t kOwned = UINT32_MAX;
     std::vector<uint32_t> number(part.positions.size(), kOwned);
     border.forEach([&](uint64_t key, uint32_t v) {
         if (const uint32_t n = before.find(key); n != UINT32_MAX) number[v] = n;
     });
-    WeldedPart out;
     size_t owned = 0;
-    for (const uint32_t n : number) owned += n == kOwned;
-    out.positions.reserve(owned);
-    out.normals.reserve(owned);
     for (size_t v = 0; v < number.size(); ++v)
         if (number[v] == kOwned) {
-            number[v] = next++;
-            out.positions.push_back(part.positions[v]);
-            out.normals.push_back(part.normals[v]);
+            number[v] = next + uint32_t(owned);
+            part.positions[owned] = part.positions[v];
+            part.normals[owned] = part.normals[v];
+            ++owned;
         }
-    out.indices.resize(part.indices.size());
-    for (size_t k = 0; k < part.indices.size(); ++k) out.indices[k] = number[part.indices[k]];
+    part.positions.resize(owned);
+    part.normals.resize(owned);
+    for (uint32_t& index : part.indices) index = number[index];
+    // A part extracted on one thread was reserved for a layer full of surface: held until the
+    // end, its room would count against the address space (an RLIMIT_DATA counts it).
+    auto fit = [](auto& array) {
+        if (array.capacity() > array.size() + array.size() / 4) array.shrink_to_fit();
+    };
+    fit(part.positions);
+    fit(part.normals);
+    fit(part.indices);
     border.forEach([&](uint64_t key, uint32_t v) { after.insert(key, number[v]); });
-    return out;
 }
 
 // Calls layer(rows, firstRow, L) for each layer L of bricks in order, with the slices it needs
@@ -117,7 +115,7 @@ SlabExtractResult extractSlabs(SliceReader& slices, const SlabExtractOptions& op
     const VolumeInfo& info = slices.info();
     const BrickLayout layout = layoutOf(info, options.brickSize);
     SlabExtractResult result;
-    std::vector<WeldedPart> parts;
+    std::vector<TriangleMesh> parts;
     EdgeVertexMap before, after;  // the layer before's border vertices, and this one's
     uint32_t next = 0;
     uint64_t triangles = 0;
@@ -136,9 +134,9 @@ SlabExtractResult extractSlabs(SliceReader& slices, const SlabExtractOptions& op
         TriangleMesh part;
         const ExtractStats s = extractOctree(source, o, part);
         after.clear();
-        parts.push_back(weld(part, border, before, next, after));
+        weld(part, border, before, next, after);
         std::swap(before, after);
-        const WeldedPart& p = parts.back();
+        const TriangleMesh& p = parts.emplace_back(std::move(part));
         next += uint32_t(p.positions.size());
         triangles += p.indices.size() / 3;
         result.stats.nodesVisited += s.nodesVisited;
@@ -153,13 +151,13 @@ SlabExtractResult extractSlabs(SliceReader& slices, const SlabExtractOptions& op
     mesh.normals.resize(next);
     mesh.indices.resize(size_t(triangles) * 3);
     size_t v = 0, k = 0;
-    for (WeldedPart& p : parts) {
+    for (TriangleMesh& p : parts) {
         std::copy(p.positions.begin(), p.positions.end(), mesh.positions.begin() + ptrdiff_t(v));
         std::copy(p.normals.begin(), p.normals.end(), mesh.normals.begin() + ptrdiff_t(v));
         std::copy(p.indices.begin(), p.indices.end(), mesh.indices.begin() + ptrdiff_t(k));
         v += p.positions.size();
         k += p.indices.size();
-        p = WeldedPart();
+        p = TriangleMesh();
     }
     result.stats.triangles = triangles;
     result.stats.vertices = next;
