@@ -12,12 +12,15 @@
 #pragma once
 
 #include <cstdint>
+#include <cmath>
 #include <functional>
 #include <span>
+#include <vector>
 
 #include "app/array_brick_source.h"
 #include "core/extract/extract_full.h"
 #include "core/extract/extract_stats.h"
+#include "core/kernel/edge_vertex_map.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "io/readers/slice_reader.h"
@@ -33,6 +36,17 @@ struct SlabExtractOptions {
     std::function<void(const StridedSamples& rows, int64_t firstRow, std::span<const glm::vec3> added)> layerDone;
 };
 
+// A run of layers extracted alone (what one worker of a cluster meshes): its mesh, vertices
+// numbered from 0 in the order a process extracting everything numbers them (those it shares
+// with the runs before and after included), and its border vertices on the faces it shares
+// with them (edge key -> its number), which joinSlabParts welds by.
+struct SlabPart {
+    TriangleMesh mesh;
+    EdgeVertexMap border;
+    ExtractStats stats;
+    BrickRange range{INFINITY, -INFINITY};  // of the run's samples (NaN left out)
+};
+
 struct SlabExtractResult {
     ExtractStats stats;
     BrickRange range{INFINITY, -INFINITY};  // of the volume's samples (NaN left out)
@@ -41,6 +55,19 @@ struct SlabExtractResult {
 // The range of the samples of `slices` (NaN left out; {+inf, -inf} for none), read once in
 // order as extractSlabs reads them, measured on `threads` threads. Progress from 0 to 1.
 BrickRange sliceRange(SliceReader& slices, int brickSize, int threads, const ProgressFn& progress = {});
+
+// Layers [firstLayer, endLayer) of the volume of `slices`, whose reader starts at the first
+// layer's first slice (its ghost below included: firstLayer * B - 1, or 0) and is read up to the
+// last layer's ghosts above. Progress from 0 to 1 over the run.
+SlabPart extractSlabPart(SliceReader& slices, const SlabExtractOptions& options, int64_t firstLayer,
+                         int64_t endLayer, const ProgressFn& progress = {});
+
+// Joins parts of consecutive runs of layers that cover the volume, in order, into `mesh` (the
+// mesh extractSlabs makes, vertex numbers included), moving from them; `values`, when not empty,
+// one array per part with a value per vertex, are joined alike into `joinedValues`. Throws
+// std::invalid_argument for values that do not match their parts.
+void joinSlabParts(std::span<SlabPart> parts, std::span<std::vector<float>> values, TriangleMesh& mesh,
+                   std::vector<float>* joinedValues);
 
 // Reads every slice of `slices` once, in order, and appends the surface to `mesh` (which must
 // be empty). Progress runs from 0 to 1 over the layers; throws what the reader throws.

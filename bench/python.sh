@@ -8,7 +8,8 @@
 #                              (bench/python_lazy.py; the store goes to data/bench/lazyN.vdiso)
 #   bench/python.sh dask [N] [C]  instead: marching_cubes on an N^3 (default 1024) u16 Dask array
 #                              of C^3 (default 64) chunks generated lazily, read a layer at a
-#                              time, against computing it whole first (bench/python_dask_mc.py)
+#                              time, against computing it whole first, and on a local cluster of
+#                              1 and 2 worker processes (bench/python_dask_mc.py)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh bench
@@ -16,7 +17,9 @@ build=${BUILD_DIR:-build}
 py="env PYTHONPATH=$build/python /usr/bin/python3"
 mkdir -p data/bench
 if [ "${1:-}" = dask ]; then
-  for mode in slabs memory slabs memory; do $py bench/python_dask_mc.py "${2:-1024}" "${3:-64}" $mode; done
+  for mode in slabs memory cluster1 cluster2 slabs memory cluster1 cluster2; do
+    $py bench/python_dask_mc.py "${2:-1024}" "${3:-64}" $mode
+  done
   exit 0
 fi
 if [ "${1:-}" = lazy ]; then

@@ -86,6 +86,42 @@ INSTANTIATE_TEST_SUITE_P(BricksAndThreads, SlabExtraction,
                                     std::to_string(p.param.threads);
                          });
 
+// Runs of layers meshed apart (as a cluster's workers do), each from its first slice on, then
+// joined: the mesh of the volume held whole, vertex numbers included, and the values carried.
+TEST(SlabExtraction, RunsMeshedApartJoinIntoTheMeshOfTheVolumeHeldWhole) {
+    test::MemoryVolume volume({37, 29, 75}, ScalarType::U16);
+    makeWavy(volume);
+    const double iso = 3300.5;
+    TriangleMesh whole;
+    ArrayBrickSource held(samplesOf(volume), 8, volume.info().spacing, 2);
+    extractOctree(held, {iso, 4, 2}, whole);
+    const int64_t runs[][2] = {{0, 3}, {3, 4}, {4, 10}};  // 10 layers of bricks of 8
+    std::vector<SlabPart> parts;
+    std::vector<std::vector<float>> values;
+    for (const auto& run : runs) {
+        test::MemoryVolume reader({37, 29, 75}, ScalarType::U16);
+        reader.bytes() = volume.bytes();
+        reader.skip(std::max<int64_t>(run[0] * 8 - 1, 0));
+        SlabExtractOptions options;
+        options.extract = {iso, 4, 2};
+        options.brickSize = 8;
+        std::vector<float>& z = values.emplace_back();
+        options.layerDone = [&](const StridedSamples&, int64_t, std::span<const glm::vec3> added) {
+            for (const glm::vec3& p : added) z.push_back(p.z);
+        };
+        parts.push_back(extractSlabPart(reader, options, run[0], run[1]));
+        EXPECT_GT(parts.back().border.size(), 0u);
+    }
+    TriangleMesh joined;
+    std::vector<float> z;
+    joinSlabParts(parts, values, joined, &z);
+    EXPECT_TRUE(joined.positions == whole.positions);
+    EXPECT_TRUE(joined.normals == whole.normals);
+    EXPECT_TRUE(joined.indices == whole.indices);
+    ASSERT_EQ(z.size(), joined.positions.size());
+    for (size_t v = 0; v < z.size(); ++v) ASSERT_EQ(z[v], joined.positions[v].z) << v;
+}
+
 TEST(SlabExtraction, RangePassAgreesWithTheVolumeHeldWhole) {
     test::MemoryVolume volume({20, 18, 41}, ScalarType::F32);
     ArrayBrickSource held(samplesOf(volume), 8, volume.info().spacing, 1);

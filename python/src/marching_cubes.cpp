@@ -175,6 +175,102 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
     return meshArrays(std::move(mesh), out, spacing);
 }
 
+// One run of layers [firstLayer, endLayer) of an array of `shape` meshed alone, from `rows`, its
+// slices from the run's first (its ghost below included) to its last layer's ghosts above: what
+// a worker of a Dask cluster runs. Returns its arrays (positions and normals x, y, z; indices;
+// values) and border (edge keys and their vertices) and its samples' range, for
+// _join_slab_parts.
+pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, const pyb::dtype& dtype,
+                       int64_t firstLayer, int64_t endLayer, double level, std::array<double, 3> spacing,
+                       int64_t threads) {
+    checkLevelAndSpacing(level, spacing);
+    const std::string name = "rows of the array";
+    const FileScalar type = fileScalarOfDtype(dtype, name.c_str());
+    const VolumeInfo info = arrayVolumeInfo(name, shape, type, spacing, {0.0, 0.0, 0.0});
+    SlabPart part;
+    std::vector<float> values;
+    runReleased([&](const ProgressFn&) {
+        ArraySlices slices(rows, info, type, name, {});
+        SlabExtractOptions options;
+        options.extract = FullExtractOptions{level, kDefaultMetaCellSize, int(checkedInt("threads", threads, 1, 256))};
+        options.layerDone = [&](const StridedSamples& window, int64_t firstRow, std::span<const glm::vec3> added) {
+            const size_t first = values.size();
+            values.resize(first + added.size());
+            visitFileScalar(window.type, [&](auto zero) {
+                cellMaxima<decltype(zero)>(window, firstRow, info.dims[2], added, info.spacing, values.data() + first);
+            });
+        };
+        part = extractSlabPart(slices, options, firstLayer, endLayer);
+    });
+    const size_t n = part.mesh.positions.size();
+    pyb::array_t<uint64_t> keys(part.border.size());
+    pyb::array_t<uint32_t> vertices(part.border.size());
+    size_t k = 0;
+    part.border.forEach([&](uint64_t key, uint32_t v) {
+        keys.mutable_data()[k] = key;
+        vertices.mutable_data()[k++] = v;
+    });
+    auto copy = [](const auto* data, size_t count) {
+        pyb::array_t<std::remove_const_t<std::remove_pointer_t<decltype(data)>>> out(count);
+        std::copy_n(data, count, out.mutable_data());
+        return out;
+    };
+    return pyb::dict(pyb::arg("positions") = copy(&rowsOrEmpty(part.mesh.positions.data())->x, 3 * n),
+                     pyb::arg("normals") = copy(&rowsOrEmpty(part.mesh.normals.data())->x, 3 * n),
+                     pyb::arg("indices") = copy(rowsOrEmpty(part.mesh.indices.data()), part.mesh.indices.size()),
+                     pyb::arg("values") = copy(rowsOrEmpty(values.data()), values.size()),
+                     pyb::arg("border_keys") = keys, pyb::arg("border_vertices") = vertices,
+                     pyb::arg("range") = pyb::make_tuple(part.range.minValue, part.range.maxValue));
+}
+
+// marching_cubes' arrays from the parts of meshSlabPart, in the order of their runs, which cover
+// the array: welded into the mesh of the array meshed whole. `level` is checked against their
+// samples' range.
+pyb::tuple joinSlabPartArrays(const pyb::list& given, double level, std::array<double, 3> spacing) {
+    std::vector<SlabPart> parts(given.size());
+    std::vector<std::vector<float>> values(given.size());
+    float lo = INFINITY, hi = -INFINITY;
+    for (size_t p = 0; p < parts.size(); ++p) {
+        const pyb::dict d = given[p].cast<pyb::dict>();
+        auto array = [&](const char* key, auto zero) {
+            return d[key].cast<pyb::array_t<decltype(zero), pyb::array::c_style | pyb::array::forcecast>>();
+        };
+        const auto positions = array("positions", 0.0f), normals = array("normals", 0.0f), vals = array("values", 0.0f);
+        const auto indices = array("indices", uint32_t(0));
+        const auto keys = array("border_keys", uint64_t(0));
+        const auto numbers = array("border_vertices", uint32_t(0));
+        const size_t n = size_t(vals.size());
+        if (size_t(positions.size()) != 3 * n || size_t(normals.size()) != 3 * n || keys.size() != numbers.size())
+            throw std::invalid_argument("a mesh part: arrays of unequal lengths");
+        TriangleMesh& mesh = parts[p].mesh;
+        mesh.positions.resize(n);
+        mesh.normals.resize(n);
+        std::copy_n(positions.data(), 3 * n, reinterpret_cast<float*>(mesh.positions.data()));
+        std::copy_n(normals.data(), 3 * n, reinterpret_cast<float*>(mesh.normals.data()));
+        mesh.indices.assign(indices.data(), indices.data() + indices.size());
+        for (const uint32_t i : mesh.indices)
+            if (i >= n) throw std::invalid_argument("a mesh part: a face names vertex " + std::to_string(i) + " of " + std::to_string(n));
+        for (pyb::ssize_t k = 0; k < keys.size(); ++k) {
+            if (numbers.data()[k] >= n) throw std::invalid_argument("a mesh part: a border vertex beyond its vertices");
+            parts[p].border.insert(keys.data()[k], numbers.data()[k]);
+        }
+        values[p].assign(vals.data(), vals.data() + n);
+        const auto range = d["range"].cast<std::pair<float, float>>();
+        lo = std::min(lo, range.first);
+        hi = std::max(hi, range.second);
+    }
+    levelIn(level, lo, hi);
+    TriangleMesh mesh;
+    std::vector<float> joined;
+    {
+        pyb::gil_scoped_release release;
+        joinSlabParts(parts, values, mesh, &joined);
+    }
+    pyb::array_t<float> out(joined.size());
+    std::copy(joined.begin(), joined.end(), out.mutable_data());
+    return meshArrays(std::move(mesh), out, spacing);
+}
+
 }  // namespace
 
 void bindMarchingCubes(pyb::module_& m) {
@@ -185,6 +281,13 @@ void bindMarchingCubes(pyb::module_& m) {
     m.def("_marching_cubes_in_slabs", &marchingCubesInSlabs, pyb::arg("source"), pyb::arg("name"), pyb::arg("shape"),
           pyb::arg("dtype"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"), pyb::arg("bounds"),
           pyb::arg("progress"), "marching_cubes of an array-like read a layer of bricks at a time.");
+    m.def("_mesh_slab_part", &meshSlabPart, pyb::arg("rows"), pyb::arg("shape"), pyb::arg("dtype"),
+          pyb::arg("first_layer"), pyb::arg("end_layer"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"),
+          "One run of layers of an array meshed alone (a Dask worker's part of marching_cubes).");
+    m.def("_join_slab_parts", &joinSlabPartArrays, pyb::arg("parts"), pyb::arg("level"), pyb::arg("spacing"),
+          "marching_cubes' arrays from the parts of _mesh_slab_part, welded.");
+    m.def("_level_in", [](std::optional<double> level, float lo, float hi) { return levelIn(level, lo, hi); },
+          pyb::arg("level"), pyb::arg("lo"), pyb::arg("hi"), "The level marching_cubes takes for the values [lo, hi].");
 }
 
 }  // namespace vdiso::py

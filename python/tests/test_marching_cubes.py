@@ -120,8 +120,8 @@ def test_bad_spacing_and_threads_are_value_errors():
 
 def test_help_reads_well():
     assert ("marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction=\"descent\",\n"
-            "    step_size=1, allow_degenerate=True, method=\"lorensen\", mask=None, threads=None, progress=None)"
-            in vdiso.marching_cubes.__doc__)
+            "    step_size=1, allow_degenerate=True, method=\"lorensen\", mask=None, threads=None, progress=None,\n"
+            "    client=None)" in vdiso.marching_cubes.__doc__)
     assert "extract(iso, *, method=" in vdiso.Store.extract.__doc__
 
 

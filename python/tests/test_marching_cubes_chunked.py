@@ -166,3 +166,45 @@ def test_ctrl_c_stops_a_chunked_marching_cubes_within_a_second():
     assert child.stdout.readline().strip() == "working True"
     waited = interrupt(child)
     assert waited < 1, f"stopped {waited:.2f} s after Ctrl-C"
+
+
+@pytest.fixture(scope="module")
+def cluster_client():
+    """A dask.distributed cluster of two worker processes on this machine."""
+    from distributed import Client, LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with Client(cluster) as client:
+            yield client
+
+
+@pytest.mark.parametrize("level, keywords", [(0.3, {}), (None, {}), (0.3, dict(step_size=2, spacing=(1, 2, 3))),
+                                             (0.3, dict(mask=True)), (0.3, dict(allow_degenerate=False))], ids=str)
+def test_a_dask_array_meshed_on_a_cluster_gives_the_in_memory_mesh(cluster_client, level, keywords):
+    from distributed import get_task_stream
+    v = wavy((150, 50, 40))
+    mask = np.random.default_rng(2).random(v.shape) > 0.3
+    here = dict(keywords, mask=mask) if "mask" in keywords else keywords
+    lazy = dict(keywords, mask=da.from_array(mask, chunks=(40, 50, 40))) if "mask" in keywords else keywords
+    with get_task_stream(cluster_client) as stream:
+        ours = vdiso.marching_cubes(da.from_array(v, chunks=(16, 50, 40)), level, client=cluster_client, **lazy)
+    assert_identical(ours, vdiso.marching_cubes(v, level, **here))
+    # The runs were meshed on the workers, both of them.
+    runs = [t for t in stream.data if t["key"].startswith("_mesh_run")]
+    assert len(runs) >= 2 and len({t["worker"] for t in runs}) == 2
+
+
+def test_a_closed_surface_meshed_on_a_cluster_has_no_crack(cluster_client):
+    z, y, x = np.ogrid[:200, :60, :70]
+    ball = (np.sqrt((z - 100.3) ** 2 + (y - 30.1) ** 2 + (x - 34.7) ** 2) * 3).astype(np.int64)  # int64, as label() gives
+    verts, faces, _, _ = vdiso.marching_cubes(da.from_array(ball, chunks=(25, 60, 70)), 80.5, client=cluster_client)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    _, uses = np.unique(edges, axis=0, return_counts=True)
+    assert len(faces) > 10000 and (uses == 2).all()  # no boundary edge: no crack, no duplicate vertex at a seam
+    assert len(np.unique(verts, axis=0)) == len(verts)
+
+
+def test_a_cluster_is_given_a_dask_array(cluster_client):
+    with pytest.raises(ValueError, match="client: meshes a Dask array on the cluster, not a ndarray"):
+        vdiso.marching_cubes(wavy(), 0.3, client=cluster_client)
+    with pytest.raises(ValueError, match=r"level: 50.0+ is outside the volume's values"):
+        vdiso.marching_cubes(da.from_array(wavy(), chunks=(16, 50, 40)), 50.0, client=cluster_client)

@@ -6,10 +6,10 @@ from ._args import _float, _int, _z_chunk_bounds
 
 
 def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent", step_size=1,
-                   allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None):
+                   allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None, client=None):
     """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent",
-    step_size=1, allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None)
-    -> (verts, faces, normals, values)
+    step_size=1, allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None,
+    client=None) -> (verts, faces, normals, values)
 
     The isosurface `level` of a 3-D array, as skimage.measure.marching_cubes returns it: verts
     (V, 3) in the array's axis order scaled by `spacing` (float32; float64 when a spacing is not
@@ -35,6 +35,11 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     decoded twice), and meshed layer by layer into the same arrays as the array held in memory
     gives, bit for bit. Memory: the output, a chunk's slab and a layer. With level=None it is
     read twice (once for its range): pass a level to read it once.
+
+    client: a dask.distributed Client, to mesh a Dask array on the cluster's workers: the layers
+    of bricks are cut into runs, each run's slices (with one more on each side) computed and
+    meshed on a worker (`threads` each, or the worker's threads), and the runs welded by the
+    edges they share into the same arrays again. The client holds the parts and the output.
 
     scikit-image's keywords: gradient_direction "descent" (its default and this winding) or
     "ascent" (the faces' winding reversed); step_size, the cells' side in samples (the array read
@@ -76,7 +81,12 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
             raise ValueError(f"mask: expects the volume's shape {shape}, not {tuple(mask.shape)}")
     level = None if level is None else _float(level, "level")
     threads = None if threads is None else _int(threads, "threads")
-    if chunked:
+    if client is not None:
+        if not hasattr(volume, "__dask_graph__"):
+            raise ValueError(f"client: meshes a Dask array on the cluster, not a {type(volume).__name__}")
+        verts, faces, normals, values = _on_cluster(volume, level, tuple(s * step for s in spacing), step, threads,
+                                                    client, progress)
+    elif chunked:
         rows = _SlabView(volume, step)
         name = f"{type(volume).__module__}.{type(volume).__name__}"
         verts, faces, normals, values = _vdiso._marching_cubes_in_slabs(
@@ -105,6 +115,61 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     if gradient_direction == "ascent":
         faces = np.ascontiguousarray(faces[:, ::-1])
     return verts, faces, normals, values
+
+
+def _on_cluster(volume, level, spacing, step, threads, client, progress):
+    """marching_cubes' arrays of the Dask array `volume` meshed on `client`'s workers, a run of
+    layers of bricks a task (_vdiso._mesh_slab_part), welded here (_vdiso._join_slab_parts)."""
+    import dask
+    import dask.array as da
+    import numpy as np
+    from distributed import as_completed
+    if step > 1:
+        volume = volume[::step, ::step, ::step]
+    kind, size = volume.dtype.kind, volume.dtype.itemsize
+    readable = np.uint8 if kind == "b" else np.float32 if kind == "f" and size == 2 \
+        else np.float64 if kind in "iu" and size == 8 else volume.dtype
+    volume = volume.astype(readable)
+    shape = [int(n) for n in volume.shape]
+    if len(shape) != 3:
+        raise ValueError(f"volume: expects a 3-D array, not one of {len(shape)} dimensions")
+    if level is None:  # the middle of the values, as the library holds them (32-bit floats at most)
+        lo, hi = client.gather(client.compute([da.nanmin(volume), da.nanmax(volume)]))
+        level = _vdiso._level_in(None, float(np.float32(lo)), float(np.float32(hi)))
+    brick = 32  # app/slab_extraction.h's layers, as marching_cubes' bricks in memory
+    layers = max(1, -(-(shape[0] - 1) // brick))
+    workers = client.nthreads()
+    if not workers:
+        raise ValueError("client: the cluster has no workers")
+    each = threads if threads is not None else min(workers.values())
+    # At least two runs a worker, and runs of at most about 256 MB of samples.
+    layer_bytes = brick * shape[1] * shape[2] * np.dtype(readable).itemsize
+    count = min(layers, max(2 * len(workers), -(-layers * layer_bytes // (256 << 20))))
+    cuts = [round(k * layers / count) for k in range(count + 1)]
+    tasks, samples = [], []
+    for first, end in zip(cuts, cuts[1:]):
+        r0, r1 = max(first * brick - 1, 0), min(end * brick + 2, shape[0])
+        tasks.append(dask.delayed(_mesh_run, pure=True)(volume[r0:r1], shape, np.dtype(readable), first, end, level,
+                                                         spacing, each))
+        samples.append((r1 - r0) * shape[1] * shape[2])
+    futures = client.compute(tasks)
+    done, total = 0, sum(samples)
+    try:
+        for future in as_completed(futures):
+            done += samples[futures.index(future)]
+            if progress is not None:
+                progress(done, total)
+        parts = client.gather(futures)
+    except BaseException:
+        client.cancel(futures)
+        raise
+    return _vdiso._join_slab_parts(parts, level, spacing)
+
+
+def _mesh_run(rows, shape, dtype, first, end, level, spacing, threads):
+    """A worker's task: layers [first, end) meshed from their slices `rows`."""
+    import numpy as np
+    return _vdiso._mesh_slab_part(np.ascontiguousarray(rows), shape, dtype, first, end, level, spacing, threads)
 
 
 def _sliceable(volume):
