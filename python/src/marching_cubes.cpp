@@ -2,6 +2,7 @@
 // array in place (app/array_brick_source.h).
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <span>
@@ -22,6 +23,10 @@ namespace vdiso::py {
 namespace pyb = pybind11;
 
 namespace {
+
+// The bricks marching_cubes meshes an array in (cells a side): in memory, a layer at a time and
+// on a cluster alike, so the mesh is the same (Python cuts masks and runs by it).
+constexpr int kBrick = 32;
 
 // scikit-image's `values`: a measure of the data near each vertex, for colour maps. Here the
 // largest sample at the corners of the cell the vertex lies in (its lower corner at the floor
@@ -104,8 +109,11 @@ pyb::tuple meshArrays(TriangleMesh&& mesh, pyb::array_t<float> values, const std
     return pyb::make_tuple(verts, faces, normals, values);
 }
 
+// `bricks`: when given, only these bricks (kBrick cells a side, numbered x fastest) are meshed,
+// as a part of the array (FullExtractOptions::bricks): the triangles of their cells, vertices
+// numbered as the whole array's would be.
 pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLevel, std::array<double, 3> spacing,
-                         std::optional<int64_t> threads, pyb::object progress) {
+                         std::optional<int64_t> threads, pyb::object progress, std::optional<std::vector<int64_t>> bricks) {
     // Every check on the arguments and the array's size comes before any pass over its samples.
     const StridedSamples samples = stridedSamplesOf(volume, "volume");
     checkLevelAndSpacing(givenLevel, spacing);
@@ -114,13 +122,19 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
     TriangleMesh mesh;
     runReleased([&](const ProgressFn& fraction) {
-        ArrayBrickSource source(samples, 32, xyzSpacing, threadCount);
+        ArrayBrickSource source(samples, kBrick, xyzSpacing, threadCount);
         float lo = INFINITY, hi = -INFINITY;
         for (const BrickRange& r : source.brickRanges()) {
             lo = std::min(lo, r.minValue);
             hi = std::max(hi, r.maxValue);
         }
         FullExtractOptions options{levelIn(givenLevel, lo, hi), kDefaultMetaCellSize, threadCount};
+        if (bricks) {
+            std::sort(bricks->begin(), bricks->end());
+            bricks->erase(std::unique(bricks->begin(), bricks->end()), bricks->end());
+            if (bricks->empty()) return;  // nothing to mesh
+            options.bricks = *bricks;
+        }
         extractOctree(source, options, mesh, fraction);
     }, progress, double(samples.dims[0]) * double(samples.dims[1]) * double(samples.dims[2]));
     pyb::array_t<float> values(mesh.positions.size());
@@ -142,7 +156,6 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
     const VolumeInfo info = arrayVolumeInfo(name, shape, type, spacing, {0.0, 0.0, 0.0});
     checkChunkBounds(name, shape, bounds);
     const int threadCount = threads ? int(checkedInt("threads", *threads, 1, 256)) : machineThreads();
-    constexpr int kBrick = 32;  // as in memory: the same bricks, the same mesh
     TriangleMesh mesh;
     std::vector<float> values;
     const double samplesTotal = double(info.sampleCount());
@@ -276,8 +289,9 @@ pyb::tuple joinSlabPartArrays(const pyb::list& given, double level, std::array<d
 void bindMarchingCubes(pyb::module_& m) {
     m.def("marching_cubes", &marchingCubes, pyb::arg("volume"), pyb::arg("level") = pyb::none(),
           pyb::arg("spacing") = std::array<double, 3>{1.0, 1.0, 1.0}, pyb::kw_only(),
-          pyb::arg("threads") = pyb::none(), pyb::arg("progress") = pyb::none(),
+          pyb::arg("threads") = pyb::none(), pyb::arg("progress") = pyb::none(), pyb::arg("bricks") = pyb::none(),
           "The isosurface of a 3-D array (see vdiso.marching_cubes).");
+    m.attr("_marching_cubes_brick") = kBrick;
     m.def("_marching_cubes_in_slabs", &marchingCubesInSlabs, pyb::arg("source"), pyb::arg("name"), pyb::arg("shape"),
           pyb::arg("dtype"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"), pyb::arg("bounds"),
           pyb::arg("progress"), "marching_cubes of an array-like read a layer of bricks at a time.");

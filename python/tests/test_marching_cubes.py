@@ -271,3 +271,25 @@ def test_scikit_images_keywords():
                               (dict(mask=np.ones((2, 2, 2), bool)), "mask: expects the volume's shape")):
         with pytest.raises(ValueError, match=message):
             vdiso.marching_cubes(volume, 30.5, **keywords)
+
+
+@pytest.mark.parametrize("step", [1, 2, 3])
+def test_a_mask_meshes_only_the_bricks_it_marks_and_keeps_the_same_surface(monkeypatch, step):
+    # Only the bricks holding a marked cell are meshed: the arrays are those of the whole volume
+    # meshed and then filtered, as before bricks were left out.
+    import vdiso._marching_cubes as mc
+    v = blob((90, 100, 110))
+    corner = np.zeros(v.shape, bool)
+    corner[:30, :30, :30] = True  # about the blob
+    scattered = np.random.default_rng(4).random(v.shape) > 0.97
+    for mask in (corner, scattered, np.zeros(v.shape, bool)):
+        marked = mc._bricks_marked(mask, step)
+        ours = vdiso.marching_cubes(v, 80.0, mask=mask, step_size=step)
+        monkeypatch.setattr(mc, "_bricks_marked", lambda mask, step: None)
+        whole = vdiso.marching_cubes(v, 80.0, mask=mask, step_size=step)
+        monkeypatch.undo()
+        for got, want in zip(ours, whole):
+            assert got.dtype == want.dtype and np.array_equal(got, want)
+        if mask is corner:
+            assert 0 < len(marked) <= 8  # of the 3x4x4 bricks at step 1
+    assert len(vdiso.marching_cubes(v, 80.0, mask=corner)[1]) > 1000

@@ -46,7 +46,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     as a strided view, no copy); allow_degenerate=False merges vertices that coincide and drops
     the triangles that then have no area; mask, a boolean array of the volume's shape: only the
     triangles of the cells whose far corner (of highest indices) it marks are kept, as
-    scikit-image's (the whole volume is meshed first: a mask saves no time here). method:
+    scikit-image's; of an array in memory only the bricks of 32^3 cells holding such a cell are
+    meshed, so a small mask saves work (an array read a layer at a time is meshed whole). method:
     "lorensen" only; "lewiner" is refused (its ambiguity resolution is not implemented), never
     answered with another surface.
     """
@@ -95,7 +96,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     else:
         verts, faces, normals, values = _vdiso.marching_cubes(
             volume[::step, ::step, ::step] if step > 1 else volume, level, tuple(s * step for s in spacing),
-            threads=threads, progress=progress)
+            threads=threads, progress=progress,
+            bricks=None if mask is None or 0 in shape else _bricks_marked(np.asarray(mask), step))
     if mask is not None:
         # A triangle lies in one cell, its centroid inside it (or on its faces): the cell's
         # first corner is the centroid's floor, in samples. scikit-image tests a cell's far
@@ -136,7 +138,7 @@ def _on_cluster(volume, level, spacing, step, threads, client, progress):
     if level is None:  # the middle of the values, as the library holds them (32-bit floats at most)
         lo, hi = client.gather(client.compute([da.nanmin(volume), da.nanmax(volume)]))
         level = _vdiso._level_in(None, float(np.float32(lo)), float(np.float32(hi)))
-    brick = 32  # app/slab_extraction.h's layers, as marching_cubes' bricks in memory
+    brick = _vdiso._marching_cubes_brick  # app/slab_extraction.h's layers, as the bricks in memory
     layers = max(1, -(-(shape[0] - 1) // brick))
     workers = client.nthreads()
     if not workers:
@@ -212,6 +214,19 @@ class _SlabView:
         s = self._step
         got = np.asarray(self._source[first * s:max(end - 1, first) * s + 1:s, ::s, ::s])
         return got.view(np.uint8) if got.dtype.kind == "b" else got.astype(self.dtype, copy=False)
+
+
+def _bricks_marked(mask, step):
+    """The bricks (the library's numbers, x fastest) of the array read every `step`-th sample that
+    hold a cell whose far corner the mask marks: only they are meshed, so a mask saves the work
+    of the bricks it leaves out (their triangles would all be dropped)."""
+    import numpy as np
+    far = mask[step::step, step::step, step::step].astype(bool, copy=False)  # cell c's far corner
+    b = _vdiso._marching_cubes_brick
+    padded = np.zeros(tuple(-(-n // b) * b for n in far.shape), bool)
+    padded[:far.shape[0], :far.shape[1], :far.shape[2]] = far
+    z, y, x = (n // b for n in padded.shape)
+    return np.flatnonzero(padded.reshape(z, b, y, b, x, b).any(axis=(1, 3, 5))).tolist()
 
 
 def _mask_at(mask, z, y, x):
