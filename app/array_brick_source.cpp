@@ -84,7 +84,7 @@ ArrayBrickSource::ArrayBrickSource(const StridedSamples& rows, int64_t firstRow,
     mLayout = BrickLayout(dims, brickSize);
     if (const std::string problem = brickLayoutProblem(mLayout); !problem.empty())
         throw std::invalid_argument(problem);
-    mRanges.assign(size_t(mLayout.brickCount()), BrickRange{INFINITY, -INFINITY});
+    mRanges.assign(size_t(mLayout.brickCount()), kNoRange);
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     arena.execute([&] {
         tbb::parallel_for(int64_t(0), mLayout.brickCount(), [&](int64_t id) {

@@ -90,11 +90,9 @@ BrickLayout layoutOf(const VolumeInfo& info, int brickSize) {
 // The union of the ranges of layer L's bricks.
 BrickRange layerRange(const ArrayBrickSource& source, int64_t L) {
     const BrickLayout& layout = source.layout();
-    BrickRange range{INFINITY, -INFINITY};
-    for (int64_t id = layout.brickId(0, 0, L); id < layout.brickId(0, 0, L + 1); ++id) {
-        const BrickRange& r = source.brickRanges()[size_t(id)];
-        range = {std::min(range.minValue, r.minValue), std::max(range.maxValue, r.maxValue)};
-    }
+    BrickRange range = kNoRange;
+    for (int64_t id = layout.brickId(0, 0, L); id < layout.brickId(0, 0, L + 1); ++id)
+        range = unite(range, source.brickRanges()[size_t(id)]);
     return range;
 }
 
@@ -148,12 +146,11 @@ private:
 BrickRange sliceRange(SliceReader& slices, int brickSize, int threads, const ProgressFn& progress) {
     const VolumeInfo& info = slices.info();
     const BrickLayout layout = layoutOf(info, brickSize);
-    BrickRange range{INFINITY, -INFINITY};
+    BrickRange range = kNoRange;
     forEachLayer(slices, layout, 0, layout.brickCounts[2], [&](const StridedSamples& rows, int64_t firstRow,
                                                                int64_t L) {
         const ArrayBrickSource source(rows, firstRow, info.dims[2], brickSize, info.spacing, threads);
-        const BrickRange r = layerRange(source, L);
-        range = {std::min(range.minValue, r.minValue), std::max(range.maxValue, r.maxValue)};
+        range = unite(range, layerRange(source, L));
         if (progress) progress(double(L + 1) / double(layout.brickCounts[2]));
     });
     return range;
@@ -171,8 +168,7 @@ SlabPart extractSlabPart(SliceReader& slices, const SlabExtractOptions& options,
     PartWelder welder;
     forEachLayer(slices, layout, firstLayer, endLayer, [&](const StridedSamples& rows, int64_t firstRow, int64_t L) {
         ArrayBrickSource source(rows, firstRow, info.dims[2], options.brickSize, info.spacing, options.extract.threads);
-        const BrickRange r = layerRange(source, L);
-        part.range = {std::min(part.range.minValue, r.minValue), std::max(part.range.maxValue, r.maxValue)};
+        part.range = unite(part.range, layerRange(source, L));
         std::vector<int64_t> layer(size_t(layout.brickId(0, 0, L + 1) - layout.brickId(0, 0, L)));
         for (size_t k = 0; k < layer.size(); ++k) layer[k] = layout.brickId(0, 0, L) + int64_t(k);
         FullExtractOptions o = options.extract;

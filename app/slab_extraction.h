@@ -44,12 +44,12 @@ struct SlabPart {
     TriangleMesh mesh;
     EdgeVertexMap border;
     ExtractStats stats;
-    BrickRange range{INFINITY, -INFINITY};  // of the run's samples (NaN left out)
+    BrickRange range = kNoRange;  // of the run's samples (NaN left out)
 };
 
 struct SlabExtractResult {
     ExtractStats stats;
-    BrickRange range{INFINITY, -INFINITY};  // of the volume's samples (NaN left out)
+    BrickRange range = kNoRange;  // of the volume's samples (NaN left out)
 };
 
 // The range of the samples of `slices` (NaN left out; {+inf, -inf} for none), read once in

@@ -6,6 +6,8 @@
 // (cache/brick_cache.h) implements it over the store reader; tests implement it in memory.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -19,6 +21,11 @@ namespace vdiso {
 struct BrickRange {
     float minValue, maxValue;
 };
+// The range of no sample, which holds no isovalue; the union of two ranges (a NaN end is left out).
+constexpr BrickRange kNoRange{INFINITY, -INFINITY};
+inline BrickRange unite(const BrickRange& a, const BrickRange& b) {
+    return {std::min(a.minValue, b.minValue), std::max(a.maxValue, b.maxValue)};
+}
 
 // The range of one sub-block of a brick, coded in two bytes (core/trees/sub_blocks.h).
 struct SubBlockCode {

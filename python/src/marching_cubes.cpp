@@ -55,9 +55,10 @@ void cellMaxima(const StridedSamples& s, int64_t firstRow, int64_t depth, std::s
     }
 }
 
-// The level asked for, or the middle of the values [lo, hi] (NaN left out) for none, checked
-// as scikit-image checks it.
-double levelIn(std::optional<double> given, float lo, float hi) {
+// The level asked for, or the middle of the values `range` (NaN left out) for none, checked as
+// scikit-image checks it.
+double levelIn(std::optional<double> given, const BrickRange& range) {
+    const float lo = range.minValue, hi = range.maxValue;
     // No level: the middle of the values (NaN left out), as scikit-image takes it.
     if (!given && !(std::isfinite(lo) && std::isfinite(hi)))
         throw std::invalid_argument("volume: has no finite sample, so no level lies in its values");
@@ -67,6 +68,18 @@ double levelIn(std::optional<double> given, float lo, float hi) {
         throw std::invalid_argument("level: " + std::to_string(level) + " is outside the volume's values (" +
                                     std::to_string(lo) + " to " + std::to_string(hi) + ")");
     return level;
+}
+
+// What a layer of an array read a layer at a time adds to marching_cubes' `values`: those of the
+// vertices it made, from its slices while they are held (SlabExtractOptions::layerDone).
+auto appendValues(const VolumeInfo& info, std::vector<float>& values) {
+    return [&info, &values](const StridedSamples& rows, int64_t firstRow, std::span<const glm::vec3> added) {
+        const size_t first = values.size();
+        values.resize(first + added.size());
+        visitFileScalar(rows.type, [&](auto zero) {
+            cellMaxima<decltype(zero)>(rows, firstRow, info.dims[2], added, info.spacing, values.data() + first);
+        });
+    };
 }
 
 void checkLevelAndSpacing(std::optional<double> level, const std::array<double, 3>& spacing) {
@@ -123,12 +136,9 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     TriangleMesh mesh;
     runReleased([&](const ProgressFn& fraction) {
         ArrayBrickSource source(samples, kBrick, xyzSpacing, threadCount);
-        float lo = INFINITY, hi = -INFINITY;
-        for (const BrickRange& r : source.brickRanges()) {
-            lo = std::min(lo, r.minValue);
-            hi = std::max(hi, r.maxValue);
-        }
-        FullExtractOptions options{levelIn(givenLevel, lo, hi), kDefaultMetaCellSize, threadCount};
+        BrickRange range = kNoRange;
+        for (const BrickRange& r : source.brickRanges()) range = unite(range, r);
+        FullExtractOptions options{levelIn(givenLevel, range), kDefaultMetaCellSize, threadCount};
         if (bricks) {
             std::sort(bricks->begin(), bricks->end());
             bricks->erase(std::unique(bricks->begin(), bricks->end()), bricks->end());
@@ -164,24 +174,17 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
         double start = 0;
         if (!level) {  // its range first: a pass of its own
             ArraySlices slices(source, info, type, name, bounds);
-            const BrickRange r = sliceRange(slices, kBrick, threadCount, [&](double f) { fraction(0.5 * f); });
-            level = levelIn(std::nullopt, r.minValue, r.maxValue);
+            level = levelIn(std::nullopt, sliceRange(slices, kBrick, threadCount, [&](double f) { fraction(0.5 * f); }));
             start = 0.5;
         }
         ArraySlices slices(source, info, type, name, bounds);
         SlabExtractOptions options;
         options.extract = FullExtractOptions{*level, kDefaultMetaCellSize, threadCount};
         options.brickSize = kBrick;
-        options.layerDone = [&](const StridedSamples& rows, int64_t firstRow, std::span<const glm::vec3> added) {
-            const size_t first = values.size();
-            values.resize(first + added.size());
-            visitFileScalar(rows.type, [&](auto zero) {
-                cellMaxima<decltype(zero)>(rows, firstRow, info.dims[2], added, info.spacing, values.data() + first);
-            });
-        };
+        options.layerDone = appendValues(info, values);
         const SlabExtractResult result =
             extractSlabs(slices, options, mesh, [&](double f) { fraction(start + (1 - start) * f); });
-        levelIn(level, result.range.minValue, result.range.maxValue);  // a level given outside the values
+        levelIn(level, result.range);  // a level given outside the values
     }, progress, samplesTotal);
     pyb::array_t<float> out(values.size());
     std::copy(values.begin(), values.end(), out.mutable_data());
@@ -206,13 +209,7 @@ pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, cons
         ArraySlices slices(rows, info, type, name, {});
         SlabExtractOptions options;
         options.extract = FullExtractOptions{level, kDefaultMetaCellSize, int(checkedInt("threads", threads, 1, 256))};
-        options.layerDone = [&](const StridedSamples& window, int64_t firstRow, std::span<const glm::vec3> added) {
-            const size_t first = values.size();
-            values.resize(first + added.size());
-            visitFileScalar(window.type, [&](auto zero) {
-                cellMaxima<decltype(zero)>(window, firstRow, info.dims[2], added, info.spacing, values.data() + first);
-            });
-        };
+        options.layerDone = appendValues(info, values);
         part = extractSlabPart(slices, options, firstLayer, endLayer);
     });
     const size_t n = part.mesh.positions.size();
@@ -242,7 +239,7 @@ pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, cons
 pyb::tuple joinSlabPartArrays(const pyb::list& given, double level, std::array<double, 3> spacing) {
     std::vector<SlabPart> parts(given.size());
     std::vector<std::vector<float>> values(given.size());
-    float lo = INFINITY, hi = -INFINITY;
+    BrickRange range = kNoRange;
     for (size_t p = 0; p < parts.size(); ++p) {
         const pyb::dict d = given[p].cast<pyb::dict>();
         auto array = [&](const char* key, auto zero) {
@@ -268,11 +265,10 @@ pyb::tuple joinSlabPartArrays(const pyb::list& given, double level, std::array<d
             parts[p].border.insert(keys.data()[k], numbers.data()[k]);
         }
         values[p].assign(vals.data(), vals.data() + n);
-        const auto range = d["range"].cast<std::pair<float, float>>();
-        lo = std::min(lo, range.first);
-        hi = std::max(hi, range.second);
+        const auto [lo, hi] = d["range"].cast<std::pair<float, float>>();
+        range = unite(range, {lo, hi});
     }
-    levelIn(level, lo, hi);
+    levelIn(level, range);
     TriangleMesh mesh;
     std::vector<float> joined;
     {
@@ -300,7 +296,7 @@ void bindMarchingCubes(pyb::module_& m) {
           "One run of layers of an array meshed alone (a Dask worker's part of marching_cubes).");
     m.def("_join_slab_parts", &joinSlabPartArrays, pyb::arg("parts"), pyb::arg("level"), pyb::arg("spacing"),
           "marching_cubes' arrays from the parts of _mesh_slab_part, welded.");
-    m.def("_level_in", [](std::optional<double> level, float lo, float hi) { return levelIn(level, lo, hi); },
+    m.def("_level_in", [](std::optional<double> level, float lo, float hi) { return levelIn(level, {lo, hi}); },
           pyb::arg("level"), pyb::arg("lo"), pyb::arg("hi"), "The level marching_cubes takes for the values [lo, hi].");
 }
 

@@ -128,9 +128,7 @@ def _on_cluster(volume, level, spacing, step, threads, client, progress):
     from distributed import as_completed
     if step > 1:
         volume = volume[::step, ::step, ::step]
-    kind, size = volume.dtype.kind, volume.dtype.itemsize
-    readable = np.uint8 if kind == "b" else np.float32 if kind == "f" and size == 2 \
-        else np.float64 if kind in "iu" and size == 8 else volume.dtype
+    readable = _read_as(volume.dtype)
     volume = volume.astype(readable)
     shape = [int(n) for n in volume.shape]
     if len(shape) != 3:
@@ -145,13 +143,13 @@ def _on_cluster(volume, level, spacing, step, threads, client, progress):
         raise ValueError("client: the cluster has no workers")
     each = threads if threads is not None else min(workers.values())
     # At least two runs a worker, and runs of at most about 256 MB of samples.
-    layer_bytes = brick * shape[1] * shape[2] * np.dtype(readable).itemsize
+    layer_bytes = brick * shape[1] * shape[2] * readable.itemsize
     count = min(layers, max(2 * len(workers), -(-layers * layer_bytes // (256 << 20))))
     cuts = [round(k * layers / count) for k in range(count + 1)]
     tasks, samples = [], []
     for first, end in zip(cuts, cuts[1:]):
         r0, r1 = max(first * brick - 1, 0), min(end * brick + 2, shape[0])
-        tasks.append(dask.delayed(_mesh_run, pure=True)(volume[r0:r1], shape, np.dtype(readable), first, end, level,
+        tasks.append(dask.delayed(_mesh_run, pure=True)(volume[r0:r1], shape, readable, first, end, level,
                                                          spacing, each))
         samples.append((r1 - r0) * shape[1] * shape[2])
     futures = client.compute(tasks)
@@ -189,16 +187,13 @@ def _sliceable(volume):
 
 class _SlabView:
     """An array-like read along axis 0 as marching_cubes reads one too large to load, every
-    `step`-th sample on each axis and in a dtype the library reads (bool as uint8, float16 as
-    float32, 64-bit integers as float64, which the library holds as float32 alike): slices of it
-    are slices of the source, converted. `wrapped` is False when it is the source itself."""
+    `step`-th sample on each axis and in a dtype the library reads (_read_as): slices of it are
+    slices of the source, converted. `wrapped` is False when it is the source itself."""
 
     def __init__(self, source, step):
         import numpy as np
         self._source, self._step = source, step
-        kind, size = np.dtype(source.dtype).kind, np.dtype(source.dtype).itemsize
-        self.dtype = np.dtype(np.uint8 if kind == "b" else np.float32 if kind == "f" and size == 2
-                              else np.float64 if kind in "iu" and size == 8 else np.dtype(source.dtype))
+        self.dtype = _read_as(source.dtype)
         self.shape = tuple((int(n) + step - 1) // step for n in source.shape)
         self.wrapped = step > 1 or self.dtype != np.dtype(source.dtype)
         bounds = _z_chunk_bounds(source, [int(n) for n in source.shape])
@@ -227,6 +222,17 @@ def _bricks_marked(mask, step):
     padded[:far.shape[0], :far.shape[1], :far.shape[2]] = far
     z, y, x = (n // b for n in padded.shape)
     return np.flatnonzero(padded.reshape(z, b, y, b, x, b).any(axis=(1, 3, 5))).tolist()
+
+
+def _read_as(dtype):
+    """The dtype an array of `dtype` read a part at a time is given to the library in: its own,
+    or bool as uint8, float16 as float32 and the 64-bit integers as float64 (which the library
+    holds as float32, as it holds them narrowed to 32 bits in memory: the same surface)."""
+    import numpy as np
+    dtype = np.dtype(dtype)
+    kind, size = dtype.kind, dtype.itemsize
+    return np.dtype(np.uint8 if kind == "b" else np.float32 if kind == "f" and size == 2
+                    else np.float64 if kind in "iu" and size == 8 else dtype)
 
 
 def _mask_at(mask, z, y, x):
