@@ -178,7 +178,12 @@ SlabPart extractSlabPart(SliceReader& slices, const SlabExtractOptions& options,
         EdgeVertexMap border;
         o.borderVertices = &border;
         TriangleMesh layerMesh;
-        const ExtractStats s = extractOctree(source, o, layerMesh);
+        // Reported within the layer too: a layer of a large array is a second of work, and a
+        // caller stops on an interrupt from its progress (Python's Ctrl-C).
+        const double layers = double(endLayer - firstLayer);
+        const ExtractStats s = extractOctree(source, o, layerMesh, [&](double f) {
+            if (progress) progress((double(L - firstLayer) + f) / layers);
+        });
         welder.add(std::move(layerMesh), nullptr, border);
         if (L == firstLayer) part.border = welder.lastBorder();  // its face with the run before
         part.stats.nodesVisited += s.nodesVisited;
@@ -186,7 +191,6 @@ SlabPart extractSlabPart(SliceReader& slices, const SlabExtractOptions& options,
         part.stats.metaCellsActive += s.metaCellsActive;
         part.stats.cellsActive += s.cellsActive;
         if (options.layerDone) options.layerDone(rows, firstRow, welder.lastPart().positions);
-        if (progress) progress(double(L + 1 - firstLayer) / double(endLayer - firstLayer));
     });
     welder.lastBorder().forEach([&](uint64_t key, uint32_t v) {  // its face with the run after
         if (part.border.find(key) == UINT32_MAX) part.border.insert(key, v);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "arrays.h"
+#include "core/interrupt.h"
 #include "io/error.h"
 
 namespace vdiso::py {
@@ -60,6 +61,9 @@ void ArraySlices::loadSlab(int64_t z) {
 
 // Slices [z, z + count) of the source into dst, in the store's type.
 void ArraySlices::readSource(void* dst, int64_t z, int64_t count) {
+    // A slab of a Dask array may be seconds of computing that nothing can interrupt: an
+    // interrupt asked for meanwhile stops the reader before the next one.
+    throwIfInterrupted(mName);
     pyb::gil_scoped_acquire acquire;
     const pyb::module_ np = pyb::module_::import("numpy");
     pyb::object got = mSource[pyb::slice(pyb::int_(z), pyb::int_(z + count), pyb::none())];
