@@ -198,7 +198,10 @@ def test_a_dask_array_meshed_on_a_cluster_gives_the_in_memory_mesh(cluster_clien
     here = dict(keywords, mask=mask) if "mask" in keywords else keywords
     lazy = dict(keywords, mask=da.from_array(mask, chunks=(40, 50, 40))) if "mask" in keywords else keywords
     with get_task_stream(cluster_client) as stream:
-        ours = vdiso.marching_cubes(da.from_array(v, chunks=(16, 50, 40)), level, client=cluster_client, **lazy)
+        # Each chunk a task of its own (inline_array): no one task holds the array, so no worker
+        # holds every run's input.
+        ours = vdiso.marching_cubes(da.from_array(v, chunks=(16, 50, 40), inline_array=True), level,
+                                    client=cluster_client, **lazy)
     assert_identical(ours, vdiso.marching_cubes(v, level, **here))
     # The runs were meshed on the workers, both of them.
     runs = [t for t in stream.data if t["key"].startswith("_mesh_run")]
