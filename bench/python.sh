@@ -16,6 +16,13 @@ scripts/setup.sh bench
 build=${BUILD_DIR:-build}
 py="env PYTHONPATH=$build/python /usr/bin/python3"
 mkdir -p data/bench
+#   bench/python.sh scans [R]  instead: the real scans in memory, as a Zarr array loaded first, and
+#                              read a layer at a time as Zarr and Dask (bench/python_scans_mc.py)
+if [ "${1:-}" = scans ]; then
+  [ -f data/ch2better.nii.gz ] || scripts/fetch_data.sh
+  PYTHONPATH=$build/python:bench /usr/bin/python3 bench/python_scans_mc.py "${2:-5}"
+  exit 0
+fi
 if [ "${1:-}" = dask ]; then
   for mode in slabs memory cluster1 cluster2 slabs memory cluster1 cluster2; do
     $py bench/python_dask_mc.py "${2:-1024}" "${3:-64}" $mode
