@@ -19,27 +19,6 @@ double surfaceArea(const TriangleMesh& mesh) {
     return area;
 }
 
-void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex) {
-    const size_t first = size_t(fromVertex - mesh.firstVertex);
-    if (first >= mesh.positions.size()) return;
-    constexpr uint32_t kUnused = UINT32_MAX;
-    std::vector<uint32_t> renumbered(mesh.positions.size() - first, kUnused);
-    for (const uint32_t v : mesh.indices)
-        if (v >= fromVertex) renumbered[v - fromVertex] = 0;
-    uint32_t next = fromVertex;
-    for (size_t k = 0; k < renumbered.size(); ++k) {
-        if (renumbered[k] == kUnused) continue;
-        const size_t to = next - mesh.firstVertex;
-        mesh.positions[to] = mesh.positions[first + k];
-        mesh.normals[to] = mesh.normals[first + k];
-        renumbered[k] = next++;
-    }
-    mesh.positions.resize(next - mesh.firstVertex);
-    mesh.normals.resize(next - mesh.firstVertex);
-    for (uint32_t& v : mesh.indices)
-        if (v >= fromVertex) v = renumbered[v - fromVertex];
-}
-
 void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle) {
     const size_t end = mesh.indices.size();
     if (3 * firstTriangle >= end) return;

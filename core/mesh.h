@@ -109,10 +109,6 @@ private:
 // vertices the mesh holds (firstVertex == 0).
 double surfaceArea(const TriangleMesh& mesh);
 
-// Removes the vertices numbered `fromVertex` onwards that no triangle refers to, renumbering
-// the later ones in the indices (which must all be held: none handed to a sink yet).
-void dropUnreferencedVertices(TriangleMesh& mesh, uint32_t fromVertex);
-
 // Turns the normal of each vertex of triangles [firstTriangle, triangleCount()) that points
 // against those triangles (against the sum of their area-weighted face normals, which the
 // winding orients) to that sum's direction. A gradient normal points the wrong way where a part

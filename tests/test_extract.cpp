@@ -2,6 +2,7 @@
 // triangles from both methods and from memory or the store, analytic areas and volumes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -514,6 +515,30 @@ TEST(ExtractView, VertexNormalsAreTheFullExtractionsNormals) {
     }
 }
 
+// A vertex is made only for a cell that keeps its triangles (polygons are tested on points
+// placed from the meta-cell's projected corners before any vertex exists): every vertex of a
+// view, whole or on two strips, belongs to a triangle, with no pass to drop the rest.
+TEST(ExtractView, EveryVertexBelongsToATriangle) {
+    test::ScratchDir dir;
+    const BrickStoreReader store(headStore(dir, {96, 96, 96}));
+    BrickCache cache(store, 64 * store.brickBytes());
+    const VolumeInfo& v = store.volume();
+    for (ViewPreset preset : {ViewPreset::Distant, ViewPreset::Normal, ViewPreset::Closeup})
+        for (int threads : {1, 2}) {
+            const Camera camera = presetCamera(preset, v.origin, v.worldMax(), 400, 400);
+            ViewExtractOptions options = ViewExtractOptions::sage(kHeadSkinIso);
+            options.threads = threads;
+            TriangleMesh view;
+            PointSet points;
+            const ExtractStats stats = extractViewDependent(cache, camera, options, view, points);
+            ASSERT_GT(view.triangleCount(), 0u);
+            EXPECT_GT(stats.view.polygonsHidden, 0);  // hidden polygons were tested, and left no vertex
+            std::vector<bool> used(view.positions.size(), false);
+            for (const uint32_t k : view.indices) used[k - view.firstVertex] = true;
+            EXPECT_EQ(std::count(used.begin(), used.end(), false), 0) << viewPresetName(preset) << ", " << threads;
+        }
+}
+
 // A brick whose surface the consumer holds (ViewStream::Use::Held) marks the coverage its kept
 // cells would, and makes no triangle: the bricks after it keep exactly what they keep when
 // every brick's visible part is made.
@@ -524,7 +549,7 @@ TEST(ExtractView, HeldBricksMarkTheCoverageWithoutTriangles) {
     struct ByBrick final : ViewStream {
         bool holdEven = false;
         std::map<int64_t, std::vector<std::array<float, 9>>> made;  // Part bricks' triangles
-        size_t heldBricks = 0, heldTriangles = 0;
+        size_t heldBricks = 0, heldTriangles = 0, heldVertices = 0;
         bool beginBrick(int64_t brick, int, double, Use& use) override {
             use = holdEven && brick % 2 == 0 ? Use::Held : Use::Part;
             return true;
@@ -533,6 +558,7 @@ TEST(ExtractView, HeldBricksMarkTheCoverageWithoutTriangles) {
             if (use == Use::Held) {
                 ++heldBricks;
                 heldTriangles += mesh.triangleCount();
+                heldVertices += mesh.vertexCount();
                 return;
             }
             std::vector<std::array<float, 9>>& out = made[brick];
@@ -563,6 +589,7 @@ TEST(ExtractView, HeldBricksMarkTheCoverageWithoutTriangles) {
         const char* label = viewPresetName(preset);
         EXPECT_GT(someHeld.heldBricks, 0u) << label;
         EXPECT_EQ(someHeld.heldTriangles, 0u) << label;
+        EXPECT_EQ(someHeld.heldVertices, 0u) << label;
         size_t compared = 0;
         for (const auto& [brick, triangles] : someHeld.made) {
             ASSERT_TRUE(all.made.contains(brick)) << label << " brick " << brick;

@@ -1,16 +1,18 @@
 // Screen boxes of world boxes: the SAGE estimate (§3.4, Fig. 6) always contains the exact
 // 8-corner box, which agrees with Camera::project; near-plane handling; and the Fig. 4
-// sub-pixel point rule.
+// sub-pixel point rule; the per-cell boxes and vertex positions of a meta-cell's projected corners.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 
 #include <glm/geometric.hpp>
 
 #include "core/camera.h"
+#include "core/view/corner_projection.h"
 #include "core/view/screen_box.h"
 #include "core/volume.h"
 
@@ -112,35 +114,78 @@ TEST(ScreenBox, EstimateContainsExactAndExactMatchesCameraProject) {
     EXPECT_EQ(boxes, 6000);
 }
 
-// A cell's box from cell coordinates (the grid's map folded into the matrix, as the per-cell
-// test does) is the box of the cell's world box.
-TEST(ScreenBox, UnitBoxInGridCoordinatesIsTheCellsWorldBox) {
+// A meta-cell's corners projected once (core/view/corner_projection.h): each cell's box holds
+// the exact box of the cell's world box (and is it, but for the slack), a point placed on an edge
+// is Camera::project's pixel of that point, and a corner shared by two meta-cells places the
+// points of its edges with the same bits from either.
+TEST(CornerProjection, CellBoxesAreExactAndSharedEdgesPlaceTheSameBits) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
+    constexpr int M = 4;
+    uint64_t rows[(M + 1) * (M + 1)];
+    std::fill_n(rows, (M + 1) * (M + 1), (uint64_t(1) << (M + 1)) - 1);
+    int boxes = 0, points = 0;
     for (int cam = 0; cam < 100; ++cam) {
         const Camera c = randomCamera(rng);
         VolumeInfo grid;
         grid.spacing = glm::dvec3(0.002 + 0.02 * unit(rng), 0.002 + 0.02 * unit(rng), 0.002 + 0.02 * unit(rng));
         grid.origin = glm::dvec3(unit(rng), unit(rng), unit(rng)) - 0.5;
-        const BoxProjector world(c), cells(c.viewProjection() * grid.gridToWorld(), c.width, c.height);
-        for (int b = 0; b < 30; ++b) {
-            const glm::dvec3 cell = glm::floor(glm::dvec3(unit(rng), unit(rng), unit(rng)) * 60.0);
-            const glm::dvec3 lo = grid.origin + cell * grid.spacing, hi = lo + grid.spacing;
-            const ScreenBox a = world.estimateBox(lo, hi), e = cells.estimateUnitBox(cell);
-            const ScreenBox x = world.exactBox(lo, hi), y = cells.exactBox(cell, cell + 1.0);
-            ASSERT_EQ(a.crossesNearPlane, e.crossesNearPlane);
-            ASSERT_EQ(x.crossesNearPlane, y.crossesNearPlane);
-            if (a.crossesNearPlane || x.crossesNearPlane) continue;
-            const double tol = 1e-9 * (1.0 + std::abs(a.left) + std::abs(a.top) + std::abs(a.right) +
-                                       std::abs(a.bottom));
-            EXPECT_NEAR(e.left, a.left, tol);
-            EXPECT_NEAR(e.right, a.right, tol);
-            EXPECT_NEAR(e.top, a.top, tol);
-            EXPECT_NEAR(e.bottom, a.bottom, tol);
-            EXPECT_NEAR(y.left, x.left, tol);
-            EXPECT_NEAR(y.bottom, x.bottom, tol);
+        const glm::dmat4 gridToClip = c.viewProjection() * grid.gridToWorld();
+        const BoxProjector world(c);
+        CornerProjection a(gridToClip, c.width, c.height, M), b(gridToClip, c.width, c.height, M);
+        for (int m = 0; m < 10; ++m) {
+            const int64_t first[3] = {int64_t(unit(rng) * 56), int64_t(unit(rng) * 56), int64_t(unit(rng) * 56)};
+            const int64_t next[3] = {first[0] + M, first[1], first[2]};  // the meta-cell beside it in x
+            a.project(first, rows);
+            b.project(next, rows);
+            for (int z = 0; z < M; ++z)
+                for (int y = 0; y < M; ++y)
+                    for (int x = 0; x < M; ++x) {
+                        const glm::dvec3 cell{double(first[0] + x), double(first[1] + y), double(first[2] + z)};
+                        const glm::dvec3 lo = grid.origin + cell * grid.spacing, hi = lo + grid.spacing;
+                        const ScreenBox e = world.exactBox(lo, hi), box = a.cellBox(x, y, z);
+                        ASSERT_EQ(box.crossesNearPlane, e.crossesNearPlane);
+                        if (e.crossesNearPlane) continue;
+                        ++boxes;
+                        const double tol = 1e-9 * (1.0 + std::abs(e.left) + std::abs(e.top) + std::abs(e.right) +
+                                                   std::abs(e.bottom));
+                        EXPECT_LE(box.left, e.left);
+                        EXPECT_GE(box.right, e.right);
+                        EXPECT_LE(box.top, e.top);
+                        EXPECT_GE(box.bottom, e.bottom);
+                        EXPECT_NEAR(box.left, e.left, tol + CornerProjection::kBoxSlack);
+                        EXPECT_NEAR(box.bottom, e.bottom, tol + CornerProjection::kBoxSlack);
+                    }
+            // Points on every edge of the corners the two meta-cells share (x = M in a, 0 in b),
+            // along y and z, and on a's edges along x.
+            for (int z = 0; z < M; ++z)
+                for (int y = 0; y < M; ++y)
+                    for (int axis = 0; axis < 3; ++axis) {
+                        const double t = unit(rng);
+                        const int corner = a.cornerIndex(axis == 0 ? M - 1 : M, y, z);
+                        glm::dvec2 pa, pb;
+                        const bool placed = a.place(corner, axis, t, pa);
+                        glm::dvec3 local{double(first[0] + (axis == 0 ? M - 1 : M)), double(first[1] + y),
+                                         double(first[2] + z)};
+                        local[axis] += t;
+                        const glm::dvec3 expected = c.project(grid.origin + local * grid.spacing);
+                        const bool projects = expected.z >= 0.0 && expected.z <= 1.0;
+                        if (placed != projects) {  // only a hair from the near or far plane
+                            EXPECT_LT(std::min(std::abs(expected.z), std::abs(expected.z - 1.0)), 1e-9);
+                            continue;
+                        }
+                        if (!placed) continue;
+                        ++points;
+                        EXPECT_NEAR(pa.x, expected.x, 1e-7 * (1.0 + std::abs(expected.x)));
+                        EXPECT_NEAR(pa.y, expected.y, 1e-7 * (1.0 + std::abs(expected.y)));
+                        if (axis == 0) continue;
+                        ASSERT_TRUE(b.place(b.cornerIndex(0, y, z), axis, t, pb));
+                        EXPECT_EQ(std::memcmp(&pa, &pb, sizeof pa), 0) << pa.x << " " << pb.x;
+                    }
         }
     }
+    EXPECT_GT(boxes, 40000);
+    EXPECT_GT(points, 30000);
 }
 
 TEST(ScreenBox, BoxesAtOrBehindTheNearPlaneCrossIt) {

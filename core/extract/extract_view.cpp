@@ -20,7 +20,9 @@
 #include "core/kernel/iso.h"
 #include "core/kernel/mc_tables.h"
 #include "core/kernel/meta_cell_walk.h"
+#include "core/kernel/shown_meta_cell.h"
 #include "core/trees/minmax_tree.h"
+#include "core/view/corner_projection.h"
 #include "core/view/occlusion_pyramid.h"
 #include "core/view/polygon_coverage.h"
 #include "core/scalar_type.h"
@@ -68,22 +70,6 @@ private:
     friend struct BrickVisit;
 
     void count(Cull cull);
-    // The pixel position of vertex v (a mesh vertex number), projected the first time it is
-    // asked for: a vertex is shared by up to four cells' polygons. False when it cannot be
-    // placed on the image plane (behind the eye, clipped, or beyond what a double holds).
-    // Inline for the vertices projected already (two in three); the rest go to placeVertex.
-    bool screenPosition(uint32_t v, glm::dvec2& out) {
-        const size_t i = v - mMesh.firstVertex;
-        if (i < mScreen.size()) {
-            const glm::dvec2 s = mScreen[i];
-            if (!std::isnan(s.x)) {
-                out = s;
-                return !std::isinf(s.x);
-            }
-        }
-        return placeVertex(i, out);
-    }
-    bool placeVertex(size_t i, glm::dvec2& out);
     // The pixel a point falls on; false when it is off the image or not on the image plane.
     bool pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const;
     // Adds to mThinParts the points of coarse brick `at`'s lost thin parts that fall on pixels
@@ -104,11 +90,13 @@ private:
     ViewLevels mLevels;
     const ViewCuller& mCuller;  // level 0's: the tree's
     PolygonCoverage mCoverage;
-    // What extracting a level's bricks needs: its kernel's scratch, and its own seam map (edge
-    // keys are the level's grid's; vertices are welded within a level only).
+    // What extracting a level's bricks needs: its kernel's scratch, its own seam map (edge
+    // keys are the level's grid's; vertices are welded within a level only) and its meta-cells'
+    // corner projection.
     struct LevelParts {
         BrickExtractor extractor;
         EdgeVertexMap seams;
+        CornerProjection corners;
     };
     std::vector<std::unique_ptr<LevelParts>> mParts;  // made at the level's first brick
     // Level `level`'s parts, made the first time: a view takes bricks of one or two levels, and
@@ -117,16 +105,15 @@ private:
         std::unique_ptr<LevelParts>& p = mParts[size_t(level)];
         if (!p) {
             const LevelSource& source = mLevels.source(level);
-            p = std::make_unique<LevelParts>(
-                LevelParts{BrickExtractor(source.volume(), source.layout(), mOptions.metaCellSize), {}});
+            BrickExtractor extractor(source.volume(), source.layout(), mOptions.metaCellSize);
+            CornerProjection corners(mLevels.culler(level).gridToClip(), mCamera.width, mCamera.height,
+                                     extractor.metaCellSize());
+            p = std::make_unique<LevelParts>(LevelParts{std::move(extractor), {}, std::move(corners)});
         }
         return *p;
     }
     TriangleMesh mCaps;  // streaming: the current brick's seam caps
     BrickLookAhead mLookAhead;
-    // Screen positions by vertex number - mMesh.firstVertex; x NaN: not projected yet, x inf:
-    // not on the image plane. Grows with the mesh; cleared with it in streaming.
-    std::vector<glm::dvec2> mScreen;
     PointSet mThinParts;
     // The visibility work's share of the time (ViewCounters).
     SampledTimer mCellTimer, mProjectionTimer, mCoverageTimer, mBoxTimer;
@@ -134,15 +121,14 @@ private:
 
 // One brick of sample type T in the traversal: the visitor of its meta-cell walk
 // (core/kernel/meta_cell_walk.h: each box tested, and extracted when visible), and the cell policy of
-// core/kernel/brick_kernel.h that tests its cells and scan-converts its polygons
+// core/kernel/shown_meta_cell.h that tests its cells and scan-converts its polygons
 // (core/view/polygon_coverage.h), with the point rule for sub-pixel boxes (core/view/sub_pixel_point.h).
 template <class T>
 struct BrickVisit {
-    static constexpr bool kTestsCells = true, kTestsPolygons = true;
-
     ViewTraversal& t;
     const ViewCuller& culler;     // the brick's level's
     BrickExtractor& extractor;    //   "
+    CornerProjection& corners;    //   "
     const BrickLayout& layout;    //   "
     int64_t brick;                // in the level's numbering
     BrickKernel<T> kernel;
@@ -159,7 +145,7 @@ struct BrickVisit {
 
     BrickVisit(ViewTraversal& traversal, const ViewLevels::Brick& at, const void* samples, ViewStream::Use use)
         : t(traversal), culler(traversal.mLevels.culler(at.level)),
-          extractor(traversal.parts(at.level).extractor),
+          extractor(traversal.parts(at.level).extractor), corners(traversal.parts(at.level).corners),
           layout(traversal.mLevels.source(at.level).layout()), brick(at.local),
           kernel(extractor, at.local, samples, traversal.mOptions.iso, traversal.mMesh,
                  traversal.parts(at.level).seams),
@@ -170,24 +156,34 @@ struct BrickVisit {
                                              : nullptr),
           ranges(kept ? *kept : extractor.currentRanges()) {}
 
+    // The corners of a visible meta-cell's crossed cells, projected for its cells' boxes and its
+    // polygons' vertices (nothing is projected without occlusion culling: nothing is tested).
+    void projectCorners(const int64_t first[3], const uint64_t* rows) {
+        if (!t.mOptions.occlusion) return;
+        t.mProjectionTimer(t.mStats.view.projectionSeconds, [&] {
+            corners.project(first, rows);
+            return 0;
+        });
+    }
+
     // The per-cell test: a cell shows only if its box covers a pixel centre not yet covered.
-    bool keepCell(int64_t x, int64_t y, int64_t z) {
+    bool keepCell(int x, int y, int z) {
         if (!cellTests) return true;
         const bool keep = t.mCellTimer(t.mStats.view.cellTestSeconds, [&] {
-            return culler.cullScreenBox(culler.cellBox(x, y, z)) == Cull::None;
+            return culler.cullScreenBox(corners.cellBox(x, y, z)) == Cull::None;
         });
         t.mStats.view.cellsCulled += !keep;
         return keep;
     }
 
-    // Scan-converts a polygon (SAGE §3.2) before its triangles are appended; with cell tests,
-    // keeps it only when it draws something (core/view/polygon_coverage.h).
-    bool keepPolygon(const uint32_t* vertices, int count) {
+    // Scan-converts a polygon (SAGE §3.2) before its vertices are made; with cell tests, keeps
+    // it only when it draws something (core/view/polygon_coverage.h).
+    bool keepPolygon(const EdgePoint* outline, int count) {
         if (!t.mOptions.occlusion) return true;
         glm::dvec2 v[kMcMaxPolygonVertices];
         const bool placed = t.mProjectionTimer(t.mStats.view.projectionSeconds, [&] {
             for (int k = 0; k < count; ++k)
-                if (!t.screenPosition(vertices[k], v[k])) return false;
+                if (!corners.place(outline[k].corner, outline[k].axis, outline[k].t, v[k])) return false;
             return true;
         });
         if (!placed) return true;  // marks nothing
@@ -257,7 +253,7 @@ struct BrickVisit {
     void extract(const int lo[3]) {
         const int n = extractor.metaCellsPerAxis();
         const auto start = Clock::now();
-        kernel.extractMetaCell((lo[2] * n + lo[1]) * n + lo[0], *this, &eyeCell);
+        extractShownMetaCell(kernel, (lo[2] * n + lo[1]) * n + lo[0], *this, eyeCell);
         ++t.mStats.metaCellsActive;
         if (t.mOptions.bottomUp) t.mPyramid.propagate();
         t.mStats.view.scanSeconds += std::chrono::duration<double>(Clock::now() - start).count();
@@ -282,14 +278,13 @@ struct BrickVisit {
     // brick's chunk, not scan-converted.
     void extractUnseen(const int lo[3], const int hi[3]) {
         const int n = extractor.metaCellsPerAxis();
-        AllCells all;
         for (int z = lo[2]; z < hi[2]; ++z)
             for (int y = lo[1]; y < hi[1]; ++y)
                 for (int x = lo[0]; x < hi[0]; ++x) {
                     const int metaCell = (z * n + y) * n + x;
                     const BrickRange& r = ranges[size_t(metaCell)];
                     if (!rangeHoldsIso(r.minValue, r.maxValue, t.mOptions.iso)) continue;
-                    kernel.extractMetaCell(metaCell, all);
+                    kernel.extractMetaCell(metaCell);
                 }
     }
 
@@ -312,19 +307,6 @@ void ViewTraversal::count(Cull cull) {
         case Cull::Occlusion: ++mStats.view.culledByOcclusion; break;
         case Cull::None: break;
     }
-}
-
-// Vertex i (counted from mMesh.firstVertex) not projected yet: projected and kept.
-bool ViewTraversal::placeVertex(size_t i, glm::dvec2& out) {
-    if (i >= mScreen.size())  // grown geometrically: vertices arrive one by one
-        mScreen.resize(std::max(mMesh.positions.size(), 2 * mScreen.size()),
-                       glm::dvec2(std::numeric_limits<double>::quiet_NaN()));
-    glm::dvec2& s = mScreen[i];
-    const glm::dvec3 p = mPixels.project(glm::dvec3(mMesh.positions[i]));
-    const bool placed = p.z >= 0.0 && p.z <= 1.0 && std::isfinite(p.x) && std::isfinite(p.y);
-    s = placed ? glm::dvec2(p.x, p.y) : glm::dvec2(std::numeric_limits<double>::infinity());
-    out = s;
-    return placed;
 }
 
 bool ViewTraversal::pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const {
@@ -438,7 +420,6 @@ std::vector<int64_t> ViewTraversal::run() {
             mMesh.clear();
             mCaps.clear();
             mPoints.clear();
-            mScreen.clear();
         }
     }
     drawThinParts();
@@ -484,10 +465,7 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
             mesh.positions.reserve(mesh.positions.size() + pixels);
             mesh.normals.reserve(mesh.positions.capacity());
         }
-        const uint32_t firstNewVertex = mesh.nextVertex();
         ViewTraversal(source, tree, camera, options, mesh, points, stats, column0, column1).run();
-        // Vertices made for polygons that were then hidden belong to no triangle.
-        if (options.cellTests && !options.stream) dropUnreferencedVertices(mesh, firstNewVertex);
     } else {
         const std::vector<int> columns = stripColumns(source, camera, options.iso, strips, column0, column1);
         std::vector<StripOutput> outputs(static_cast<size_t>(strips));
@@ -503,7 +481,6 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
             out.acquired = ViewTraversal(source, tree, camera, each, out.triangles, out.points, out.stats,
                                          columns[size_t(k)], columns[size_t(k) + 1])
                                .run();
-            if (options.cellTests && !options.stream) dropUnreferencedVertices(out.triangles, 0);
         });
         stats = mergeStrips(outputs, mesh, points, source.layout().brickCount());
     }

@@ -13,12 +13,14 @@
 //   4. points (SAGE §3.3): a box under two pixels each way becomes one point with a normal
 //      if the Fig. 4 rule finds the pixel centre it covers (and that pixel is marked), or is
 //      dropped;
-//   5. otherwise a node descends, and a meta-cell is extracted: its triangles are appended,
-//      and its polygons are projected (each vertex once) and scan-converted into the bottom
-//      of the pyramid, changed tiles propagated upward after the meta-cell (SAGE §3.1-3.2).
-//      Its cells are visited front to back too; with cellTests, each is first tested like a
-//      node (no pixel centre, or all covered: skipped), so cells hide cells, and a polygon
-//      whose scan conversion covers no new pixel centre keeps no triangles.
+//   5. otherwise a node descends, and a meta-cell is extracted: the corners of its crossed
+//      cells are projected once (core/view/corner_projection.h), its polygons placed from them
+//      and scan-converted into the bottom of the pyramid, changed tiles propagated upward
+//      after the meta-cell (SAGE §3.1-3.2), and the triangles of the cells that draw something
+//      appended. Its cells are visited front to back too; with cellTests, each is first tested
+//      like a node by its corners' exact box (no pixel centre, or all covered: skipped), so cells
+//      hide cells, and a polygon whose scan conversion covers no new pixel centre keeps no
+//      triangles (nor makes a vertex).
 // WISE = exact boxes, no points, one triangle at a time inserted top-down (Greene's masks).
 // Every SAGE feature is a switch, for the ablations of the paper's Tables 3-4.
 #pragma once

@@ -162,8 +162,7 @@ void BrickExtractor::extractInto(int64_t id, const void* samples, double iso,
             k.emitBrick(mEdgeSeen.data(), mLayerVertex.data());
             return;
         }
-        AllCells all;
-        forEachActiveMetaCell(id, samples, iso, metaCells, [&](int m) { k.extractMetaCell(m, all); });
+        forEachActiveMetaCell(id, samples, iso, metaCells, [&](int m) { k.extractMetaCell(m); });
     });
 }
 

@@ -1,22 +1,9 @@
 // The marching-cubes cell loop over one brick of sample type T (core/kernel/brick_extractor.h tells
 // what it computes). A kernel is made once per brick, after BrickExtractor::beginBrick or by
 // the extractor's own loops; it borrows the extractor's scratch, so one kernel per extractor
-// at a time.
-//
-// What a traversal decides per cell is a policy type, so that its tests inline into the loop
-// (a call through a pointer per cell and per polygon cost 10% of a view):
-//   static constexpr bool kTestsCells, kTestsPolygons;
-//   bool keepCell(int64_t x, int64_t y, int64_t z);   // global cell coordinates; false skips it
-//   bool keepPolygon(const uint32_t* vertices, int count);
-//   bool keepsTriangles();  // with kTestsPolygons: false when only keepPolygon's effects count
-// keepPolygon gets each polygon's outline (global vertex numbers into the mesh, in order) before
-// its fan triangles are appended; a cell's triangles are appended when any of its polygons is
-// wanted (the polygons of one cell come in no front-to-back order, so one may hide another),
-// and the policy keeps triangles (a traversal marking its coverage with a brick whose surface
-// the consumer holds wants the scan conversion, not the triangles or their normals).
-// With kTestsPolygons, vertex normals are computed only for cells that are kept: the
-// view-dependent traversal drops about half the vertices it makes, and the normal is most of a
-// vertex's cost.
+// at a time. extractMetaCell makes every crossed cell of a meta-cell (the full extractions);
+// the view takes a meta-cell through core/kernel/shown_meta_cell.h, which tests its cells and
+// polygons before it makes their vertices.
 #pragma once
 
 #include <algorithm>
@@ -37,12 +24,6 @@
 namespace vdiso {
 
 // Every active cell and polygon: the full extractions.
-struct AllCells {
-    static constexpr bool kTestsCells = false, kTestsPolygons = false;
-    bool keepCell(int64_t, int64_t, int64_t) { return true; }
-    bool keepPolygon(const uint32_t*, int) { return true; }
-};
-
 // A row of cells between four corner rows of above bits (rows (y, z), (y + 1, z), (y, z + 1),
 // (y + 1, z + 1); bit i: corner x = i): the cells with corners on both sides (bit i: cell x = i,
 // of `cellBits`), and cell rx's marching-cubes case (corner k is (k & 1, k >> 1 & 1, k >> 2)).
@@ -92,6 +73,7 @@ struct BrickKernel {
     }
 
     const VolumeInfo& volume() const { return x.mVolume; }
+    KernelCounters& counters() { return x.mCounters; }
 
     // The eye (world) in this brick's cell coordinates, for extractMetaCell's cell order.
     glm::dvec3 eyeInCells(const glm::dvec3& eyeWorld) const {
@@ -123,16 +105,14 @@ struct BrickKernel {
                 (double(s[i + sz]) - double(s[i - sz])) / (2 * h.z)};
     }
 
-    // The vertex on edge `e` of cell (cx, cy, cz), computed the first time it is asked for.
-    // Without `withNormal` its normal is left zero, for ensureNormal() to fill once the cell
-    // is known to be kept: the view-dependent traversal drops about half the vertices it
-    // makes, and the normal is most of a vertex's cost.
-    // `local`: the edge's slot in x.mEdgeVertex, cornerSlot(cx, cy, cz) + the edgeSlots() offset of e.
-    uint32_t edgeVertex(size_t local, int cx, int cy, int cz, int e, bool withNormal) {
+    // The vertex on edge `e` of cell (cx, cy, cz), with its normal, made the first time it is
+    // asked for. `local`: the edge's slot in x.mEdgeVertex, cornerSlot(cx, cy, cz) + the
+    // edgeSlots() offset of e.
+    uint32_t edgeVertex(size_t local, int cx, int cy, int cz, int e) {
         uint32_t& slot = x.mEdgeVertex[local];
         if (slot > x.mBrickFirstVertex) return slot - 1;
         const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
-        return makeEdgeVertex(cx + o[0], cy + o[1], cz + o[2], mcEdgeAxis(e), withNormal, &slot);
+        return makeEdgeVertex(cx + o[0], cy + o[1], cz + o[2], mcEdgeAxis(e), &slot);
     }
     // The first of the three vertex slots (x, y and z edges) of local corner (cx, cy, cz).
     size_t cornerSlot(int cx, int cy, int cz) const {
@@ -153,7 +133,7 @@ struct BrickKernel {
     // edge on a face the brick shares with a neighbour is welded through the seam map (and, in
     // a PlacedMesh, gets a placeholder when a brick in another chunk owns it); else it is made
     // now, and its number + 1 kept in `slot` when one is given.
-    uint32_t makeEdgeVertex(int px, int py, int pz, int axis, bool withNormal, uint32_t* slot) {
+    uint32_t makeEdgeVertex(int px, int py, int pz, int axis, uint32_t* slot) {
         const int p[3] = {px, py, pz};
         bool onFace = false;
         for (int a = 0; a < 3; ++a)
@@ -177,7 +157,7 @@ struct BrickKernel {
         const glm::dvec3 position =
             x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
                                    x.mVolume.spacing;
-        const glm::vec3 normal = withNormal ? edgeNormal(i0, step, axis) : glm::vec3(0.0f);
+        const glm::vec3 normal = edgeNormal(i0, step, axis);
         if constexpr (kPlaced)
             if (!owned) {  // its owner, in another chunk, makes it: a placeholder until then
                 const uint32_t placeholder = mesh.addPlaceholder(key, glm::vec3(position), normal);
@@ -194,8 +174,8 @@ struct BrickKernel {
 
     // Minus the gradient at the crossing of the edge from sample i0 to i0 + step (along
     // `axis`), interpolated between central differences at its ends, normalized. Never zero:
-    // a flat gradient (clamped border, plateau) takes the edge's own direction, so a zero
-    // normal means "not computed yet". Any brick holding the edge gives the same normal (the
+    // a flat gradient (clamped border, plateau) takes the edge's own direction. Any brick
+    // holding the edge gives the same normal (the
     // ghost samples cover the differences), so a welded vertex may get it from either.
     glm::vec3 edgeNormal(size_t i0, size_t step, int axis) const {
         const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
@@ -209,15 +189,6 @@ struct BrickKernel {
         else
             normal[axis] = s1 > s0 ? -1.0 : 1.0;
         return glm::vec3(normal);
-    }
-
-    void ensureNormal(uint32_t v, int cx, int cy, int cz, int e) {
-        glm::vec3& normal = mesh.normals[v - mesh.firstVertex];
-        if (normal != glm::vec3(0.0f)) return;
-        const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
-        const int axis = mcEdgeAxis(e);
-        const size_t step = axis == 0 ? 1 : axis == 1 ? size_t(side) : size_t(side) * side;
-        normal = edgeNormal(sampleIndex(cx + o[0], cy + o[1], cz + o[2]), step, axis);
     }
 
     // Above bits of the corner samples of the cells lo..hi, one word per corner row (bit i:
@@ -239,7 +210,7 @@ struct BrickKernel {
                 rows[size_t(z) * size_t(cells[1] + 1) + size_t(y)] = aboveBits(s + sampleIndex(0, y, z), cells[0] + 1, threshold);
     }
 
-    // Every crossed cell of the brick, for a full extraction: what extractMetaCell(m, AllCells)
+    // Every crossed cell of the brick, for a full extraction: what extractMetaCell(m)
     // makes over every meta-cell whose range holds iso, in another order, Flying Edges' way. The
     // brick is classified a word per corner row (classifyBrick, into `rows`); then layer by layer
     // of cells, the vertices of the crossed edges of its corner rows are made in row order (x
@@ -263,7 +234,7 @@ struct BrickKernel {
         auto makeRow = [&](uint64_t mask, int y, int z, int axis, uint32_t* slots) {
             for (; mask; mask &= mask - 1) {
                 const int px = __builtin_ctzll(mask);
-                slots[px] = makeEdgeVertex(px, y, z, axis, true, nullptr);
+                slots[px] = makeEdgeVertex(px, y, z, axis, nullptr);
             }
         };
         // The seam map's slots of a row's edges on the brick's faces, asked for a layer ahead of
@@ -379,7 +350,7 @@ struct BrickKernel {
         return count;
     }
 
-    // What extractMetaCell(m, AllCells) writes into a PlacedMesh, by classification alone: adds
+    // What extractMetaCell(m) writes into a PlacedMesh, by classification alone: adds
     // the triangles to count.triangles and, once per edge (`seen`: a bit per local edge of the
     // brick, cleared for each brick), the vertices this brick owns to count.vertices.
     void countMetaCell(int m, uint64_t* seen, const EdgeOwnership& ownership, BrickCount& count) const {
@@ -413,38 +384,42 @@ struct BrickKernel {
             }
     }
 
-    // Appends the surface of meta-cell m, asking `cells` about each active cell and polygon;
-    // cells go front to back from `eyeCell` (this brick's cell coordinates: eyeInCells) when
-    // given, else in memory order.
-    template <class Cells>
-    void extractMetaCell(int m, Cells& cellPolicy, const glm::dvec3* eyeCell = nullptr) {
-        int lo[3], hi[3];
-        metaCellBox(m, lo, hi);
-        // Cell order per axis: ascending, or with an eye (in this brick's cell coordinates)
-        // nearest the eye first. Nested z, y, x, each ordered so, is a front-to-back order
-        // for a grid: a cell hiding another is no farther from the eye on any axis.
-        int order[3][kMaxMetaCellSize];
+    // Cell coordinates lo..hi per axis in front-to-back order from `eyeCell` (this brick's cell
+    // coordinates: eyeInCells), nearest the eye first. Nested z, y, x, each ordered so, is a
+    // front-to-back order for a grid: a cell hiding another is no farther from the eye on any axis.
+    static void frontToBack(const int lo[3], const int hi[3], const glm::dvec3& eyeCell, int (&order)[3][kMaxMetaCellSize]) {
         for (int a = 0; a < 3; ++a) {
             const int n = hi[a] - lo[a];
-            for (int k = 0; k < n; ++k) order[a][k] = lo[a] + k;
-            if (eyeCell)
-                std::sort(order[a], order[a] + n, [&](int i, int j) {
-                    return std::abs(i + 0.5 - (*eyeCell)[a]) < std::abs(j + 0.5 - (*eyeCell)[a]);
-                });
+            // The eye beside the cells on this axis (most meta-cells): ascending or descending.
+            const bool descending = eyeCell[a] >= double(hi[a]);
+            for (int k = 0; k < n; ++k) order[a][k] = descending ? hi[a] - 1 - k : lo[a] + k;
+            if (descending || eyeCell[a] <= double(lo[a])) continue;
+            std::sort(order[a], order[a] + n, [&](int i, int j) {
+                return std::abs(i + 0.5 - eyeCell[a]) < std::abs(j + 0.5 - eyeCell[a]);
+            });
         }
-        const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
-        uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
-        const int edgeRow = x.mLayout.brickSize + 1;
-        for (int z = 0; z <= nz; ++z)
-            for (int y = 0; y <= ny; ++y) {
-                // The vertex slots of this corner row's edges, asked for below: requested now,
-                // all rows at once, their misses overlap instead of stalling one by one (a
-                // view visits a brick's meta-cells scattered, so the slots are rarely cached).
-                const uint32_t* slots =
-                    x.mEdgeVertex.data() + ((size_t(lo[2] + z) * edgeRow + size_t(lo[1] + y)) * edgeRow + size_t(lo[0])) * 3;
+    }
+
+    // The vertex slots of the meta-cell's corner rows, asked for below: requested now, all rows
+    // at once, their misses overlap instead of stalling one by one (a view visits a brick's
+    // meta-cells scattered, so the slots are rarely cached).
+    void prefetchSlots(const int lo[3], const int hi[3]) const {
+        const int edgeRow = x.mLayout.brickSize + 1, nx = hi[0] - lo[0];
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y) {
+                const uint32_t* slots = x.mEdgeVertex.data() + ((size_t(z) * edgeRow + size_t(y)) * edgeRow + size_t(lo[0])) * 3;
                 __builtin_prefetch(slots);
                 __builtin_prefetch(slots + 3 * nx + 2);
             }
+    }
+
+    // Appends the surface of every crossed cell of meta-cell m, in memory order.
+    void extractMetaCell(int m) {
+        int lo[3], hi[3];
+        metaCellBox(m, lo, hi);
+        const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = hi[2] - lo[2];
+        uint64_t above[kMaxMetaCellSize + 1][kMaxMetaCellSize + 1];
+        prefetchSlots(lo, hi);
         classifyCorners(lo, hi, above);
         const uint64_t cellBits = (uint64_t(1) << nx) - 1;
         uint32_t slotOffset[kMcEdgeCount];
@@ -452,42 +427,24 @@ struct BrickKernel {
         KernelCounters& counters = x.mCounters;
         ++counters.metaCellsActive;
         counters.cellsVisited += int64_t(nx) * ny * nz;
-        for (int iz = 0; iz < nz; ++iz)
-            for (int iy = 0; iy < ny; ++iy) {
-                const int cz = order[2][iz], cy = order[1][iy];
-                const int rz = cz - lo[2], ry = cy - lo[1];
+        for (int rz = 0; rz < nz; ++rz)
+            for (int ry = 0; ry < ny; ++ry) {
                 const CellRow cellRow{above[rz][ry], above[rz][ry + 1], above[rz + 1][ry], above[rz + 1][ry + 1]};
-                const uint64_t mixed = cellRow.crossed(cellBits);
-                if (mixed == 0) continue;
-                for (int ix = 0; ix < nx; ++ix) {
-                    const int cx = order[0][ix], rx = cx - lo[0];
-                    if (!(mixed >> rx & 1)) continue;
-                    const int caseIndex = cellRow.caseOf(rx);
-                    if constexpr (Cells::kTestsCells)
-                        if (!cellPolicy.keepCell(corner0[0] + cx, corner0[1] + cy, corner0[2] + cz)) continue;
+                for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1) {
+                    const int rx = __builtin_ctzll(mixed);
+                    const int cx = lo[0] + rx, cy = lo[1] + ry, cz = lo[2] + rz;
                     ++counters.cellsActive;
-                    const McPolygonCase& pc = mcPolygonCase(caseIndex);
+                    const McPolygonCase& pc = mcPolygonCase(cellRow.caseOf(rx));
                     const size_t cellSlot = cornerSlot(cx, cy, cz);
-                    uint32_t outline[kMcEdgeCount];  // every polygon's, one after another
-                    bool wanted = !Cells::kTestsPolygons;
-                    int outlineLength = 0;
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
-                        for (int k = 0; k < pc.vertexCount[p]; ++k) {
-                            const int e = pc.edges[at + k];
-                            outline[at + k] = edgeVertex(cellSlot + slotOffset[e], cx, cy, cz, e, !Cells::kTestsPolygons);
+                        const uint32_t first = edgeVertex(cellSlot + slotOffset[pc.edges[at]], cx, cy, cz, pc.edges[at]);
+                        uint32_t last = edgeVertex(cellSlot + slotOffset[pc.edges[at + 1]], cx, cy, cz, pc.edges[at + 1]);
+                        for (int k = 2; k < pc.vertexCount[p]; ++k) {
+                            const uint32_t next = edgeVertex(cellSlot + slotOffset[pc.edges[at + k]], cx, cy, cz, pc.edges[at + k]);
+                            mesh.addTriangle(first, last, next);
+                            last = next;
                         }
-                        if constexpr (Cells::kTestsPolygons)
-                            wanted |= cellPolicy.keepPolygon(outline + at, pc.vertexCount[p]);
-                        outlineLength = at + pc.vertexCount[p];
                     }
-                    if (!wanted) continue;
-                    if constexpr (Cells::kTestsPolygons) {
-                        if (!cellPolicy.keepsTriangles()) continue;
-                        for (int k = 0; k < outlineLength; ++k) ensureNormal(outline[k], cx, cy, cz, pc.edges[k]);
-                    }
-                    for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++])
-                        for (int k = 2; k < pc.vertexCount[p]; ++k)
-                            mesh.addTriangle(outline[at], outline[at + k - 1], outline[at + k]);
                 }
             }
     }

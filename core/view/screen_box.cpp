@@ -30,10 +30,6 @@ BoxProjector::BoxProjector(const glm::dmat4& viewProjection, int width, int heig
       mAbsY(glm::abs(glm::dvec3(mRowY))),
       mAbsW(glm::abs(glm::dvec3(mRowW))),
       mAbsNear(glm::abs(glm::dvec3(mRowNear))),
-      mUnitX(glm::dot(mAbsX, glm::dvec3(0.5))),
-      mUnitY(glm::dot(mAbsY, glm::dvec3(0.5))),
-      mUnitW(glm::dot(mAbsW, glm::dvec3(0.5))),
-      mUnitNear(glm::dot(mAbsNear, glm::dvec3(0.5))),
       mWidth(width),
       mHeight(height) {}
 

@@ -51,11 +51,6 @@ public:
     // nearest corner's w, so the near-plane test is exact. Two matrix-vector products, two
     // divisions.
     ScreenBox estimateBox(const glm::dvec3& lo, const glm::dvec3& hi) const;
-    // estimateBox(lo, lo + 1): a unit cube (a grid cell, with the grid's map in the matrix),
-    // its half-extent terms computed once.
-    ScreenBox estimateUnitBox(const glm::dvec3& lo) const {
-        return estimate(lo + 0.5, mUnitX, mUnitY, mUnitW, mUnitNear);
-    }
 
     int width() const { return mWidth; }
     int height() const { return mHeight; }
@@ -77,8 +72,6 @@ private:
     // plane) and their elementwise absolute values for the half extents.
     glm::dvec4 mRowX, mRowY, mRowW, mRowNear;
     glm::dvec3 mAbsX, mAbsY, mAbsW, mAbsNear;
-    double mUnitX, mUnitY, mUnitW, mUnitNear;  // |row| . (0.5, 0.5, 0.5)
-    // Inline: the per-cell test of every visible meta-cell's cells asks for it.
     ScreenBox estimate(const glm::dvec3& p, double dmx, double dmy, double dmw, double dmNear) const {
         const double pmw = apply(mRowW, p);
         // The smallest w and z + w over the corners, exactly: each is linear in the corner.

@@ -52,12 +52,8 @@ public:
     ScreenBox screenBox(const glm::dvec3& a, const glm::dvec3& b) const {
         return mEstimateBox ? mProjector.estimateBox(a, b) : mProjector.exactBox(a, b);
     }
-    // The box of grid cell (x, y, z), from a projection with the grid's map folded in: the
-    // per-cell test runs a million times and costs no world arithmetic this way.
-    ScreenBox cellBox(int64_t x, int64_t y, int64_t z) const {
-        const glm::dvec3 a{double(x), double(y), double(z)};
-        return mEstimateBox ? mCellProjector.estimateUnitBox(a) : mCellProjector.exactBox(a, a + 1.0);
-    }
+    // The camera's view-projection times the grid-to-world map: grid coordinates to clip space.
+    const glm::dmat4& gridToClip() const { return mGridToClip; }
     // The pixel centres a screen box covers; all of the image for a box crossing the near plane.
     PixelRect pixelRect(const ScreenBox& box) const;
 
@@ -85,7 +81,7 @@ private:
     double mIso;
     bool mEstimateBox;
     BoxProjector mProjector;
-    BoxProjector mCellProjector;  // from grid coordinates
+    glm::dmat4 mGridToClip;
     glm::dvec3 mEyeInBricks;
 };
 

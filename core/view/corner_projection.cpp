@@ -1,0 +1,58 @@
+#include "core/view/corner_projection.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace vdiso {
+
+CornerProjection::CornerProjection(const glm::dmat4& gridToClip, int width, int height, int metaCellSize)
+    : mWidth(width), mHeight(height), mSide(metaCellSize + 1) {
+    for (int r = 0; r < 4; ++r) mRow[r] = {gridToClip[0][r], gridToClip[1][r], gridToClip[2][r], gridToClip[3][r]};
+    const size_t corners = size_t(mSide) * size_t(mSide) * size_t(mSide);
+    mClip.resize(corners);
+    mPixel.resize(corners);
+    mFront.assign(size_t(mSide) * size_t(mSide), 0);
+    mEdgePixel.resize(3 * corners);
+    mEdgeStamp.assign(3 * corners, 0);
+}
+
+void CornerProjection::project(const int64_t first[3], const uint64_t* rows) {
+    if (++mStamp == 0) {  // wrapped: no stamp may match an old one
+        std::fill(mEdgeStamp.begin(), mEdgeStamp.end(), 0u);
+        mStamp = 1;
+    }
+    const __m128d stepXY = _mm_set_pd(mRow[1].x, mRow[0].x), stepZW = _mm_set_pd(mRow[3].x, mRow[2].x);
+    const __m128d half = _mm_set_pd(-0.5, 0.5), size = _mm_set_pd(mHeight, mWidth);
+    for (int z = 0; z < mSide; ++z)
+        for (int y = 0; y < mSide; ++y) {
+            uint64_t bits = rows[z * mSide + y];
+            if (bits == 0) continue;
+            // One formula for every corner: ((w + z gz) + y gy) + x gx per row of the matrix.
+            const double gy = double(first[1] + y), gz = double(first[2] + z);
+            double base[4];
+            for (int r = 0; r < 4; ++r) base[r] = (mRow[r].w + mRow[r].z * gz) + mRow[r].y * gy;
+            const __m128d baseXY = _mm_loadu_pd(base), baseZW = _mm_loadu_pd(base + 2);
+            uint64_t front = mFront[size_t(z * mSide + y)];
+            double* clip = &mClip[size_t(cornerIndex(0, y, z))].x;
+            double* pixel = &mPixel[size_t(cornerIndex(0, y, z))].x;
+            for (; bits; bits &= bits - 1) {
+                const int x = __builtin_ctzll(bits);
+                const __m128d gx = _mm_set1_pd(double(first[0] + x));
+                const __m128d xy = _mm_add_pd(baseXY, _mm_mul_pd(stepXY, gx));
+                const __m128d zw = _mm_add_pd(baseZW, _mm_mul_pd(stepZW, gx));
+                _mm_storeu_pd(clip + 4 * x, xy);
+                _mm_storeu_pd(clip + 4 * x + 2, zw);
+                // In front: w > 0 and z + w > 0 (lanes: z + w, w).
+                const __m128d w = _mm_unpackhi_pd(zw, zw);
+                const int positive = _mm_movemask_pd(_mm_cmpgt_pd(_mm_add_pd(zw, _mm_unpackhi_pd(zw, _mm_setzero_pd())), _mm_setzero_pd()));
+                const uint64_t bit = uint64_t(1) << x;
+                front = positive == 3 ? front | bit : front & ~bit;
+                // pixelOf: ((x, y) / w * (0.5, -0.5) + 0.5) * (width, height).
+                const __m128d ndc = _mm_mul_pd(xy, _mm_div_pd(_mm_set1_pd(1.0), w));
+                _mm_storeu_pd(pixel + 2 * x, _mm_mul_pd(_mm_add_pd(_mm_mul_pd(ndc, half), _mm_set1_pd(0.5)), size));
+            }
+            mFront[size_t(z * mSide + y)] = front;
+        }
+}
+
+}  // namespace vdiso
