@@ -5,9 +5,10 @@
 namespace vdiso {
 
 BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
-                               size_t depth, int readers, size_t near)
+                               size_t depth, int readers, size_t near, bool coverageFromElsewhere)
     : mSource(source), mCursor(tree, levels, levels.culler(0)), mDepth(depth), mNear(near),
-      mPrefetcher(source, depth, readers) {}
+      mPrefetcher(source, depth, readers), mCoverageFromElsewhere(coverageFromElsewhere),
+      mDrawn{0, 0, levels.culler(0).camera().width - 1, levels.culler(0).camera().height - 1} {}
 
 bool BrickLookAhead::findNext() {
     TraversalCursor::Step step;
@@ -37,12 +38,16 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         if (pushed(mAhead.front().item)) mPrefetcher.consumed(mAhead.front().item);
         mAhead.pop_front();
     }
+    // Coverage grew only within the brick acquired last: a brick ahead whose rectangle misses
+    // that one's shows as it did at its last test.
     std::erase_if(mAhead, [&](const AheadBrick& ahead) {
         if (ahead.item == kResident) return false;  // nothing to cancel: not tested again
+        if (!mCoverageFromElsewhere && !ahead.rect.overlaps(mDrawn)) return false;
         if (mCursor.stillShows(ahead.node, ahead.at)) return false;
         if (pushed(ahead.item)) mPrefetcher.cancel(ahead.item);
         return true;
     });
+    mDrawn = current;  // what the brick acquired now can draw
     while (mAhead.size() < mDepth && findNext()) {
     }
     // Most of a brick's box lies in the current brick's: it is likely behind, and hidden once

@@ -8,8 +8,9 @@
 // counted by readUnused).
 //
 // Each time the traversal is about to acquire a brick (beforeAcquire), bricks found ahead that
-// it skipped are hidden by now and their pins go; those still ahead are tested again and
-// dropped once hidden (cancelled if not read yet); the cursor moves on to keep `depth` bricks
+// it skipped are hidden by now and their pins go; those still ahead whose screen rectangle meets
+// the brick acquired last (the only place coverage grew since their last test, unless coverage
+// also comes from elsewhere) are tested again and dropped once hidden (cancelled if not read yet); the cursor moves on to keep `depth` bricks
 // found; and bricks are handed to the reader threads, in order, while each is settled: where
 // its screen box meets this brick's or any earlier one's, every pixel is covered already, so
 // nothing drawn before its turn can hide it and reading it now cannot be wasted. The next
@@ -52,9 +53,11 @@ public:
 
     // depth 0: nothing is read ahead (every call does nothing). `near`: the bricks next in
     // turn handed over unsettled (kNearBricks for a disk; more where a read waits a round trip).
+    // coverageFromElsewhere: the pyramid also gains coverage the traversal's bricks did not draw
+    // (CoverageExchange), so every brick ahead is tested again at every step.
     BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
                    size_t depth, int readers = BrickPrefetcher::kDefaultReaders,
-                   size_t near = kNearBricks);
+                   size_t near = kNearBricks, bool coverageFromElsewhere = false);
 
     // The traversal is about to acquire `brick` (it acquires it itself).
     void beforeAcquire(int64_t brick);
@@ -84,6 +87,9 @@ private:
     size_t mNear;
     BrickPrefetcher mPrefetcher;
     std::deque<AheadBrick> mAhead;  // found, in the traversal's order
+    bool mCoverageFromElsewhere;
+    // The pixel centres the brick acquired last can have covered (its box's); at first, all.
+    PixelRect mDrawn;
 };
 
 }  // namespace vdiso

@@ -56,7 +56,7 @@ public:
           mCuller(mLevels.culler(0)),
           mCoverage(mPyramid, options.bottomUp, options.scanPolygons),
           mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders,
-                     size_t(std::max(options.prefetchNear, 0))) {
+                     size_t(std::max(options.prefetchNear, 0)), options.coverage != nullptr) {
         mLevels.confineTo(options.region);
         coverOutsideStrip(mPyramid, column0, column1);
         mParts.resize(size_t(mLevels.count()));
