@@ -23,7 +23,6 @@
 
 namespace vdiso {
 
-// Every active cell and polygon: the full extractions.
 // A row of cells between four corner rows of above bits (rows (y, z), (y + 1, z), (y, z + 1),
 // (y + 1, z + 1); bit i: corner x = i): the cells with corners on both sides (bit i: cell x = i,
 // of `cellBits`), and cell rx's marching-cubes case (corner k is (k & 1, k >> 1 & 1, k >> 2)).
