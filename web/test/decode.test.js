@@ -125,13 +125,16 @@ function refsMessage(frame, bricks, count = bricks.length) {
 }
 
 // The index codec keeps each triangle's winding but may rotate its corners: triangles compare
-// with their smallest index first.
+// as their least rotation.
 function canonicalTriangles(indices) {
   const out = [];
   for (let i = 0; i < indices.length; i += 3) {
     const [a, b, c] = indices.slice(i, i + 3);
-    const r = a <= b && a <= c ? [a, b, c] : b <= c ? [b, c, a] : [c, a, b];
-    out.push(r.join(','));
+    // The least of the three rotations, compared whole: a random triangle may repeat its least
+    // index ([23, 267, 23]), and the index codec may hand it back turned ([23, 23, 267]).
+    const rotations = [[a, b, c], [b, c, a], [c, a, b]];
+    const least = rotations.reduce((l, r) => (r[0] < l[0] || (r[0] === l[0] && (r[1] < l[1] || (r[1] === l[1] && r[2] < l[2]))) ? r : l));
+    out.push(least.join(','));
   }
   return out;
 }
