@@ -4,6 +4,7 @@
 // bad moment (a status, a truncated body, a wrong Content-Range, a server that never answers or
 // dies, a redirect loop, a TLS failure, an object replaced while read) is an error naming the URL.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <chrono>
@@ -180,6 +181,26 @@ TEST_F(RemoteStore, S3SignedWithEnvironmentOrProfilePathOrVirtualHost) {
                 "s3://bkt/head.vdiso", "profile", "--s3-endpoint http://127.0.0.1:" + std::to_string(port));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     expectSameAsLocal("profile");
+}
+
+// A view's requests reuse the pool's connections (kept alive, up to --connections of them):
+// with libcurl's default cache of 5, a pool of 8 readers closed most connections after one
+// request each, and every request paid a connect.
+TEST_F(RemoteStore, RequestsReuseThePoolsConnections) {
+    // Bricks of 8: a view of about a hundred requests, many in flight at once behind the delay.
+    test::CommandResult r = test::runVdiso("synth " + file("bkt/fine.vdiso") + " --kind head --size 96 --brick 8 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    LoopbackServer server = s3({"--delay-ms", "20"});
+    const int port = server.port();
+    r = extract(s3Env(port), "s3://bkt/fine.vdiso", "pool", "--connections 8");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const test::CommandResult stats =
+        test::runCommand("curl -sf 'http://127.0.0.1:" + std::to_string(port) + "/__stats?log=0'");
+    ASSERT_EQ(stats.exitCode, 0) << stats.output;
+    const nlohmann::json total = nlohmann::json::parse(stats.output)["total"];
+    const int64_t requests = total["requests"].get<int64_t>(), connections = total["connections"].get<int64_t>();
+    EXPECT_GE(requests, 40) << stats.output;
+    EXPECT_LE(connections - 1, 8) << requests << " requests";  // less this request's own
 }
 
 // libcurl is loaded when remote data is first read (io/remote/curl_library.h): a local store

@@ -110,6 +110,10 @@ CURL* RemoteSession::take() {
         throw std::bad_alloc();
     }
     curlLibrary().easy_setopt(c, CURLOPT_SHARE, d.share);
+    // The shared connection cache keeps at most this many connections, in use or idle, and
+    // closes the oldest idle one beyond it as a transfer ends: libcurl's default (5) closed most
+    // connections of a pool of 32 after one request each (a connect per request).
+    curlLibrary().easy_setopt(c, CURLOPT_MAXCONNECTS, long(d.options.connections));
     return c;
 }
 

@@ -212,7 +212,7 @@ class Stats:
 
     def reset(self):
         with getattr(self, "lock", threading.Lock()):
-            self.total = {"requests": 0, "bytes": 0, "other_bytes": 0,
+            self.total = {"requests": 0, "bytes": 0, "other_bytes": 0, "connections": 0,
                           "by_method": {}, "by_status": {}}
             self.paths = {}
             self.log = []
@@ -236,6 +236,10 @@ class Stats:
             p["by_status"][status] = p["by_status"].get(status, 0) + 1
             if len(self.log) < self.keep_log:
                 self.log.append(entry)
+
+    def connected(self):
+        with self.lock:
+            self.total["connections"] += 1
 
     def snapshot(self):
         with self.lock:
@@ -342,6 +346,10 @@ class Handler(BaseHTTPRequestHandler):
 
     def version_string(self):
         return "AmazonS3"
+
+    def setup(self):  # once a connection, before its first request
+        super().setup()
+        self.server.stats.connected()
 
     # ---------------------------------------------------------------- plumbing
     def log_message(self, fmt, *args):
