@@ -29,6 +29,7 @@ BrickCache::BrickCache(const BrickStoreReader& store, uint64_t budgetBytes)
     // Never more slots than bricks: a budget larger than the volume allocates only what it uses.
     mSlotCount = std::min<size_t>(mSlotCount, store.index().size());
     mSlots.resize(mSlotCount);
+    mLoadedOf = std::make_unique<std::condition_variable[]>(mSlotCount);
     mSlotsPerChunk = std::max<size_t>(1, (32u << 20) / mBrickBytes);
     mRanges.reserve(store.index().size());
     for (const BrickEntry& e : store.index()) mRanges.push_back({e.minValue, e.maxValue});
@@ -78,7 +79,7 @@ BrickHandle BrickCache::acquire(int64_t id) {
         Slot& s = mSlots[slot];
         if (s.pins++ == 0) mLru.erase(s.lruPosition);
         ++mCounters.hits;
-        mLoaded.wait(lock, [&] { return !mSlots[slot].loading; });
+        mLoadedOf[slot].wait(lock, [&] { return !mSlots[slot].loading; });
         if (mSlots[slot].id != id) {
             // Another thread's load of this brick failed: give the slot back and try the read
             // ourselves, so this caller gets the error (or the brick) first-hand.
@@ -109,7 +110,6 @@ BrickHandle BrickCache::acquire(int64_t id) {
     } catch (...) {
         lock.lock();
         abandonLocked(slot);
-        mLoaded.notify_all();
         throw;
     }
     lock.lock();
@@ -117,7 +117,7 @@ BrickHandle BrickCache::acquire(int64_t id) {
     mCounters.readSeconds += readSeconds;
     mCounters.decodeSeconds += decodeSeconds;
     mCounters.bytesRead += storedBytes;
-    mLoaded.notify_all();
+    mLoadedOf[slot].notify_all();
     return BrickHandle(this, id, s.samples);
 }
 
@@ -141,6 +141,7 @@ void BrickCache::abandonLocked(size_t slot) {
         mLru.push_back(slot);
         s.lruPosition = std::prev(mLru.end());
     }
+    mLoadedOf[slot].notify_all();
 }
 
 std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> ids) {
@@ -155,7 +156,6 @@ std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> id
                 for (const int64_t id : ids) slots.push_back(claimLocked(id));
             } catch (...) {
                 for (const size_t slot : slots) abandonLocked(slot);
-                mLoaded.notify_all();
                 throw;
             }
             mCounters.requests += uint64_t(count);
@@ -179,19 +179,18 @@ std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> id
     } catch (...) {
         std::lock_guard lock(mMutex);
         for (const size_t slot : slots) abandonLocked(slot);
-        mLoaded.notify_all();
         throw;
     }
     std::vector<BrickHandle> handles;
     std::lock_guard lock(mMutex);
     for (int k = 0; k < count; ++k) {
         mSlots[slots[size_t(k)]].loading = false;
+        mLoadedOf[slots[size_t(k)]].notify_all();
         handles.emplace_back(this, ids[size_t(k)], mSlots[slots[size_t(k)]].samples);
     }
     mCounters.readSeconds += readSeconds;
     mCounters.decodeSeconds += decodeSeconds;
     mCounters.bytesRead += storedBytes;
-    mLoaded.notify_all();
     return handles;
 }
 

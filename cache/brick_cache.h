@@ -87,7 +87,7 @@ private:
 
     size_t takeFreeSlot();
     // Under the lock: a slot for brick `id`, pinned and loading; and giving one back whose load
-    // failed (the brick forgotten, waiters woken by the caller).
+    // failed (the brick forgotten, its waiters woken).
     size_t claimLocked(int64_t id);
     void abandonLocked(size_t slot);
 
@@ -103,7 +103,9 @@ private:
     std::list<size_t> mLru;  // unpinned slots holding a brick, most recently used first
     CacheCounters mCounters;
     mutable std::mutex mMutex;
-    std::condition_variable mLoaded;
+    // Per slot: the threads waiting for its load. One for all woke every waiter at every brick
+    // loaded (16 readers of a remote store: most of a view's wake-ups).
+    std::unique_ptr<std::condition_variable[]> mLoadedOf;
 };
 
 }  // namespace vdiso

@@ -43,13 +43,21 @@ size_t BrickPrefetcher::push(int64_t id) {
     return index;
 }
 
+size_t BrickPrefetcher::availableLocked() const {
+    const size_t target = std::max(mNext, mConsumed + 1);
+    const size_t limit = std::min(mPublished, mConsumed + 1 + mLookahead);
+    return limit > target ? limit - target : 0;
+}
+
 void BrickPrefetcher::publish() {
+    bool work;
     {
         std::lock_guard lock(mMutex);
         if (mPublished == mItems.size()) return;  // nothing new: no reader woken (called every brick)
         mPublished = mItems.size();
+        work = availableLocked() > 0;
     }
-    mChanged.notify_all();
+    if (work) mChanged.notify_one();
 }
 
 void BrickPrefetcher::close() {
@@ -63,6 +71,7 @@ void BrickPrefetcher::close() {
 
 void BrickPrefetcher::consumed(size_t i) {
     std::deque<std::pair<size_t, BrickHandle>> done;
+    bool work, finished;
     {
         std::lock_guard lock(mMutex);
         mConsumed = std::max(mConsumed, i);
@@ -72,8 +81,11 @@ void BrickPrefetcher::consumed(size_t i) {
             done.push_back(std::move(mPinned.front()));
             mPinned.pop_front();
         }
+        work = availableLocked() > 0;
+        finished = mClosed && std::max(mNext, mConsumed + 1) >= mItems.size();
     }
-    mChanged.notify_all();
+    if (finished) mChanged.notify_all();  // nothing left to read: every reader ends
+    else if (work) mChanged.notify_one();
 }  // `done` releases its pins here, outside the lock
 
 void BrickPrefetcher::cancel(size_t i) {
@@ -109,6 +121,9 @@ void BrickPrefetcher::run() {
         if (mStop || target() >= mItems.size()) return;
         const size_t i = target();
         mNext = i + 1;
+        // One reader woken at a time (a wake-up of every reader at each brick cost more CPU than
+        // the requests over a network): this one hands what is left to the next.
+        if (availableLocked() > 0) mChanged.notify_one();
         if (mItems[i] == kCancelled || mTaken[i]) continue;
         // With it, the bricks it is read with (next to it in a store's file) found among the next
         // items: one read for them all, where the source can. A brick joins when it reads

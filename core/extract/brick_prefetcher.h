@@ -69,6 +69,9 @@ public:
 
 private:
     void run();
+    // Under the lock: items a reader could take now (within the published list and the
+    // look-ahead). Work that appears wakes one reader, which wakes the next while more is left.
+    size_t availableLocked() const;
 
     BrickSource& mSource;
     size_t mLookahead;
