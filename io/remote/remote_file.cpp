@@ -358,7 +358,7 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
         }
         char curlError[CURL_ERROR_SIZE] = {};
         curlLibrary().easy_setopt(curl, CURLOPT_ERRORBUFFER, curlError);
-        const CURLcode rc = curlLibrary().easy_perform(curl);
+        const CURLcode rc = d.session->perform(curl);
         curlLibrary().easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
         curl_off_t firstByteUs = 0;
         curlLibrary().easy_getinfo(curl, CURLINFO_STARTTRANSFER_TIME_T, &firstByteUs);

@@ -9,9 +9,10 @@
 // s3:// locations are signed with SigV4 by libcurl (io/remote/s3_location.h says where the
 // endpoint, region and credentials come from); a request without credentials is anonymous.
 //
-// Reads are thread-safe and run concurrently, each on an easy handle from a pool that shares one
-// connection cache (HTTP/2 streams multiplex over one connection where the server offers it;
-// otherwise up to RemoteOptions::connections HTTP/1.1 connections are kept alive). A 5xx, a 429,
+// Reads are thread-safe and run concurrently, each on an easy handle of its own that shares the
+// session's connection cache, all of them run by the session's one transfer thread (HTTP/2
+// streams multiplex over one connection where the server offers it; otherwise up to
+// RemoteOptions::connections HTTP/1.1 connections are kept alive and reused). A 5xx, a 429,
 // a broken or truncated transfer and a request without a byte for the stall timeout are tried
 // again, up to RemoteOptions::attempts times with doubling pauses from 100 ms; other 4xx, TLS
 // failures and redirect loops are errors at once. With RemoteOptions::diskCacheDir, ranges are

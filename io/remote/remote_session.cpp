@@ -13,6 +13,7 @@
 
 #include "io/error.h"
 #include "io/remote/curl_library.h"
+#include "io/remote/transfer_loop.h"
 
 namespace vdiso {
 
@@ -29,6 +30,7 @@ struct RemoteSession::Impl {
     std::vector<double> firstBytesMs;  // the last kFirstBytesKept, as a ring
     size_t firstBytesNext = 0;
     static constexpr size_t kFirstBytesKept = 64;
+    std::unique_ptr<TransferLoop> loop;  // last: it ends before the share goes
 };
 
 RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_unique<Impl>()) {
@@ -51,11 +53,18 @@ RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_uni
     curlLibrary().share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_CONNECT);
     curlLibrary().share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_DNS);
     curlLibrary().share_setopt(d.share, CURLSHOPT_SHARE, CURL_LOCK_DATA_SSL_SESSION);
+    // The connection cache keeps the pool's connections, in use or idle: libcurl's default (5)
+    // closed the oldest idle one whenever more were open, and with 16-32 requests in flight
+    // nearly every request connected anew.
+    d.loop = std::make_unique<TransferLoop>(long(d.options.connections));
 }
 
 RemoteSession::~RemoteSession() {
+    mImpl->loop.reset();
     if (mImpl->share) curlLibrary().share_cleanup(mImpl->share);
 }
+
+CURLcode RemoteSession::perform(CURL* curl) { return mImpl->loop->perform(curl); }
 
 const RemoteOptions& RemoteSession::options() const { return mImpl->options; }
 
@@ -110,10 +119,6 @@ CURL* RemoteSession::take() {
         throw std::bad_alloc();
     }
     curlLibrary().easy_setopt(c, CURLOPT_SHARE, d.share);
-    // The shared connection cache keeps at most this many connections, in use or idle, and
-    // closes the oldest idle one beyond it as a transfer ends: libcurl's default (5) closed most
-    // connections of a pool of 32 after one request each (a connect per request).
-    curlLibrary().easy_setopt(c, CURLOPT_MAXCONNECTS, long(d.options.connections));
     return c;
 }
 

@@ -1,6 +1,7 @@
 // What the objects read from one place share: libcurl's connection cache, DNS and TLS sessions
-// (so a second object reuses the first one's connection), the bound of RemoteOptions::connections
-// requests in flight, and the counts of requests and bytes.
+// (so a second object reuses the first one's connection), the thread that runs their transfers
+// (io/remote/transfer_loop.h), the bound of RemoteOptions::connections requests in flight, and
+// the counts of requests and bytes.
 // A store's one object (io/remote/remote_file.h) has a session of its own; the chunks of a Zarr
 // array over HTTP or S3 (io/readers/zarr_keys.h) share one.
 #pragma once
@@ -11,10 +12,10 @@
 #include <functional>
 #include <memory>
 
+#include <curl/curl.h>
+
 #include "io/remote/remote_options.h"
 #include "io/remote/s3_location.h"
-
-typedef void CURL;
 
 namespace vdiso {
 
@@ -33,6 +34,10 @@ public:
     // use; give it back (it is cleaned up) when its one transfer ends.
     CURL* take();
     void give(CURL* curl);
+    // Runs the handle's transfer as curl_easy_perform does, on the session's one thread of
+    // transfers (io/remote/transfer_loop.h), where the sockets of every request in flight are
+    // waited on together; its callbacks run on that thread.
+    CURLcode perform(CURL* curl);
 
     // Calls work(i) for i in [0, n), on up to `connections` threads at once (this one among
     // them): each call waits on the network, not a core. The first exception ends the rest
