@@ -104,7 +104,7 @@ private:
     CacheCounters mCounters;
     mutable std::mutex mMutex;
     // Per slot: the threads waiting for its load. One for all woke every waiter at every brick
-    // loaded (16 readers of a remote store: most of a view's wake-ups).
+    // loaded (the 16-32 readers of a remote store: most of a view's wake-ups).
     std::unique_ptr<std::condition_variable[]> mLoadedOf;
 };
 

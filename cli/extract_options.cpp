@@ -106,7 +106,7 @@ const char* const kExtractHelp =
     "                            (with more threads no reader thread runs: stats say prefetch 0)\n"
     "  --readers N               threads reading those bricks, so N reads wait on the disk at\n"
     "                            once (default 2, at most the cores beside the extraction;\n"
-    "                            16 for a store at a URL, with --prefetch 128)\n"
+    "                            32 for a store at a URL, with --prefetch 128)\n"
     "  --cache-mb N              brick cache budget in MB (default 1024)\n"
     "  --cold                    drop the store's pages from the page cache first and read\n"
     "                            every brick from disk (O_DIRECT), so io_s is disk time\n"

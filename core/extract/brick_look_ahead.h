@@ -44,7 +44,7 @@ namespace vdiso {
 // reader threads, `bricks` bricks found ahead, of which `near` are read before they are known
 // to show. vdiso extract and vdiso serve both read a remote store so.
 struct RemoteReadAhead {
-    static constexpr int kReaders = 16, kBricks = 128, kNear = 32;
+    static constexpr int kReaders = 32, kBricks = 128, kNear = 32;
 };
 
 class BrickLookAhead {
