@@ -30,8 +30,8 @@ url=s3://bucket/$name
 number() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 
 bytes=$(stat -c %s "$store")
-echo "| view | local cold s | local MB read | remote s | remote MB fetched | requests | again from --disk-cache s | its requests | whole store at 1 Gbit/s, s |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| view | local cold s | local MB read | remote s | remote MB fetched | requests | filling a --disk-cache s | again from it s | its requests | whole store at 1 Gbit/s, s |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 # Downloading first: the store's bytes at 1 Gbit/s plus one round trip (loopback is faster).
 download=$(python3 -c "print(round($bytes / 125e6 + $delay / 1000, 2))")
 # The Python test server hashes the whole object once for its ETag (S3 has it stored): done here
@@ -40,18 +40,20 @@ $vdiso info "$url" "${remote[@]}" --remote-timeout 900 > /dev/null
 for view in distant normal closeup; do
   # Remote first, the server's file in its page cache (an object store's own caching and disks
   # are outside what is measured); then the local run, cold.
-  # The first remote run fills a disk cache (its writes count in its time); the second reads it.
-  rm -rf "$work/cache"
+  # Then a remote run that fills a disk cache (its writes count in its time), and one reading it.
   read -r remote_s _ < <(measure $vdiso extract "$url" "${remote[@]}" --iso "$iso" --method sage --view $view \
-                           --size 1024x1024 --stats "$work/remote.json" --disk-cache "$work/cache" --quiet --force)
+                           --size 1024x1024 --stats "$work/remote.json" --quiet --force)
+  rm -rf "$work/cache"
+  read -r filling_s _ < <(measure $vdiso extract "$url" "${remote[@]}" --iso "$iso" --method sage --view $view \
+                           --size 1024x1024 --disk-cache "$work/cache" --quiet --force)
   read -r cached_s _ < <(measure $vdiso extract "$url" "${remote[@]}" --iso "$iso" --method sage --view $view \
                            --size 1024x1024 --stats "$work/cached.json" --disk-cache "$work/cache" --quiet --force)
   drop
   read -r local_s _ < <(measure $vdiso extract "$store" --iso "$iso" --method sage --view $view --size 1024x1024 \
                           --cold --stats "$work/local.json" --quiet --force)
-  printf "| %s | %s | %.1f | %s | %.1f | %s | %s | %s | %s |\n" $view "$local_s" \
+  printf "| %s | %s | %.1f | %s | %.1f | %s | %s | %s | %s | %s |\n" $view "$local_s" \
     "$(python3 -c "print($(number "$work/local.json" bytes_read)/1e6)")" "$remote_s" \
     "$(python3 -c "print($(number "$work/remote.json" remote_bytes)/1e6)")" "$(number "$work/remote.json" remote_requests)" \
-    "$cached_s" "$(number "$work/cached.json" remote_requests)" "$download"
+    "$filling_s" "$cached_s" "$(number "$work/cached.json" remote_requests)" "$download"
 done
 echo "($name with levels, sage, 1 frame, against $endpoint, $(nproc) cores; $cold local runs; remote runs with the file in the page cache)"
