@@ -11,6 +11,8 @@
 #include <mutex>
 #include <new>
 
+#include <unistd.h>
+
 #include "io/error.h"
 #include "io/remote/curl_library.h"
 #include "io/remote/transfer_loop.h"
@@ -30,6 +32,7 @@ struct RemoteSession::Impl {
     std::vector<double> firstBytesMs;  // the last kFirstBytesKept, as a ring
     size_t firstBytesNext = 0;
     static constexpr size_t kFirstBytesKept = 64;
+    pid_t pid = ::getpid();              // the process whose thread runs the transfers
     std::unique_ptr<TransferLoop> loop;  // last: it ends before the share goes
 };
 
@@ -108,6 +111,11 @@ S3Location RemoteSession::s3Location(const std::string& s3Url) const {
 // through the share all the same; a handle costs microseconds beside a request.
 CURL* RemoteSession::take() {
     Impl& d = *mImpl;
+    // A forked child has no transfer thread (and shares the parent's connections): its
+    // transfers would wait for ever.
+    if (::getpid() != d.pid)
+        throw IoError("a remote store or array opened before fork() cannot be read in the child process: "
+                      "open it again there (a pickled vdiso.Store opens itself again)");
     {
         std::unique_lock lock(d.poolLock);
         d.poolFree.wait(lock, [&] { return d.inUse < d.options.connections; });

@@ -31,7 +31,8 @@ public:
     const RemoteOptions& options() const;
 
     // A new easy handle set to share the session's caches, waiting while `connections` are in
-    // use; give it back (it is cleaned up) when its one transfer ends.
+    // use; give it back (it is cleaned up) when its one transfer ends. Throws IoError in a
+    // process forked from the one that made the session.
     CURL* take();
     void give(CURL* curl);
     // Runs the handle's transfer as curl_easy_perform does, on the session's one thread of

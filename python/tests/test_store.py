@@ -323,6 +323,45 @@ def test_a_store_in_a_bucket_extracts_as_on_disk(s3_bucket, volume_and_cli_store
         vdiso.open("s3://bucket/missing.vdiso")
 
 
+def test_a_store_from_a_bucket_used_after_fork_is_an_error_not_a_hang(s3_bucket, volume_and_cli_store):
+    """Its transfers are run by a thread of the process that opened it, which a forked child
+    lacks: reading there is an OSError saying to open it again (a pickled Store does)."""
+    import pickle
+    _, cli = volume_and_cli_store
+    (s3_bucket / "head.vdiso").write_bytes(cli.read_bytes())
+    remote = vdiso.open("s3://bucket/head.vdiso")
+    remote.extract(500.5, size=(160, 120))
+    read_end, write_end = os.pipe()
+    child = os.fork()
+    if child == 0:  # the child: report and leave without running the parent's cleanup
+        try:
+            remote.extract(700.5, method="octree", cache_mb=64)  # another cache: its bricks read anew
+            said = "read"
+        except OSError as e:
+            said = str(e)
+        except BaseException as e:  # noqa: BLE001 - anything else is the test's finding
+            said = f"{type(e).__name__}: {e}"
+        try:
+            again = pickle.loads(pickle.dumps(remote)).extract(700.5, method="octree")
+            said += f"|again {len(again.faces)}"
+        except BaseException as e:  # noqa: BLE001
+            said += f"|again {type(e).__name__}: {e}"
+        os.write(write_end, said.encode())
+        os._exit(0)
+    os.close(write_end)
+    deadline = time.monotonic() + 60
+    while os.waitpid(child, os.WNOHANG) == (0, 0):
+        if time.monotonic() > deadline:
+            os.kill(child, 9)
+            pytest.fail("the forked child hung reading the parent's remote store")
+        time.sleep(0.05)
+    said = os.read(read_end, 4096).decode()
+    os.close(read_end)
+    first, again = said.split("|again ")
+    assert "opened before fork() cannot be read in the child process" in first, said
+    assert int(again) == len(remote.extract(700.5, method="octree").faces) > 0, said
+
+
 def test_post_processing_and_progress_match_the_command_line(vdiso_bin, volume_and_cli_store):
     _, cli = volume_and_cli_store
     flags = ["--largest", "--smooth", "3", "--decimate", "0.5"]
