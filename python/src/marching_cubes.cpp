@@ -28,28 +28,54 @@ namespace {
 // on a cluster alike, so the mesh is the same (Python cuts masks and runs by it).
 constexpr int kBrick = 32;
 
-// scikit-image's `values`: a measure of the data near each vertex, for colour maps. Here the
-// largest sample at the corners of the cell the vertex lies in (its lower corner at the floor
-// of its sample coordinates, clamped to the volume's `depth` along z). `s` holds the volume's
-// rows (z) from `firstRow`, those of the cells of `positions`.
+// scikit-image's `values` (its "measure of the data near each vertex", for colour maps): the
+// largest spread, max(0, largest corner - level) - min(0, smallest corner - level), of the cells
+// whose triangles use the vertex, which are the cells around the edge it lies on (up to four,
+// those in the volume). The edge is found from the position: the vertex lies strictly inside it
+// along one axis, at whole sample coordinates along the others. `s` holds the volume's rows (z)
+// from `firstRow` (a layer's, its ghost rows included), those of the cells around `positions`.
 template <class S>
-void cellMaxima(const StridedSamples& s, int64_t firstRow, int64_t depth, std::span<const glm::vec3> positions,
-                const glm::dvec3& spacing, float* values) {
+void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, double level,
+                 std::span<const glm::vec3> positions, const glm::dvec3& spacing, float* values) {
     const auto* base = static_cast<const unsigned char*>(s.data);
-    const int64_t last[3] = {s.dims[0] - 2, s.dims[1] - 2, depth - 2};
+    const int64_t dims[3] = {s.dims[0], s.dims[1], depth};
+    const int64_t rowEnd = firstRow + s.dims[2];
+    auto sample = [&](int64_t x, int64_t y, int64_t z) {
+        S v;
+        std::memcpy(&v, base + x * s.strides[0] + y * s.strides[1] + (z - firstRow) * s.strides[2], sizeof v);
+        return double(float(v)) - level;  // scikit-image reads every array as float32
+    };
     for (size_t v = 0; v < positions.size(); ++v) {
-        int64_t corner[3];
+        double g[3];
+        int axis = 0;
+        double farthest = -1;
+        for (int a = 0; a < 3; ++a) {
+            g[a] = positions[v][a] / spacing[a];
+            const double off = std::abs(g[a] - std::round(g[a]));
+            if (off > farthest) {
+                farthest = off;
+                axis = a;
+            }
+        }
+        int64_t edge[3];
         for (int a = 0; a < 3; ++a)
-            corner[a] = std::clamp<int64_t>(int64_t(std::floor(positions[v][a] / spacing[a])), 0, last[a]);
-        corner[2] -= firstRow;
-        double best = -INFINITY;
-        for (int c = 0; c < 8; ++c) {
-            S sample;
-            std::memcpy(&sample,
-                        base + (corner[0] + (c & 1)) * s.strides[0] + (corner[1] + ((c >> 1) & 1)) * s.strides[1] +
-                            (corner[2] + (c >> 2)) * s.strides[2],
-                        sizeof sample);
-            best = std::max(best, double(sample));
+            edge[a] = a == axis ? std::clamp<int64_t>(int64_t(std::floor(g[a])), 0, dims[a] - 2) : std::llround(g[a]);
+        const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+        double best = 0;
+        for (int k = 0; k < 4; ++k) {
+            int64_t cell[3] = {edge[0], edge[1], edge[2]};
+            cell[b] -= k & 1;
+            cell[c] -= k >> 1;
+            bool inside = true;
+            for (int a = 0; a < 3; ++a) inside &= cell[a] >= 0 && cell[a] <= dims[a] - 2;
+            if (!inside || cell[2] < firstRow || cell[2] + 1 >= rowEnd) continue;
+            double hi = 0, lo = 0;
+            for (int corner = 0; corner < 8; ++corner) {
+                const double d = sample(cell[0] + (corner & 1), cell[1] + ((corner >> 1) & 1), cell[2] + (corner >> 2));
+                hi = std::max(hi, d);
+                lo = std::min(lo, d);
+            }
+            best = std::max(best, hi - lo);
         }
         values[v] = float(best);
     }
@@ -72,12 +98,12 @@ double levelIn(std::optional<double> given, const BrickRange& range) {
 
 // What a layer of an array read a layer at a time adds to marching_cubes' `values`: those of the
 // vertices it made, from its slices while they are held (SlabExtractOptions::layerDone).
-auto appendValues(const VolumeInfo& info, std::vector<float>& values) {
-    return [&info, &values](const StridedSamples& rows, int64_t firstRow, std::span<const glm::vec3> added) {
+auto appendValues(const VolumeInfo& info, double level, std::vector<float>& values) {
+    return [&info, level, &values](const StridedSamples& rows, int64_t firstRow, std::span<const glm::vec3> added) {
         const size_t first = values.size();
         values.resize(first + added.size());
         visitFileScalar(rows.type, [&](auto zero) {
-            cellMaxima<decltype(zero)>(rows, firstRow, info.dims[2], added, info.spacing, values.data() + first);
+            cellSpreads<decltype(zero)>(rows, firstRow, info.dims[2], level, added, info.spacing, values.data() + first);
         });
     };
 }
@@ -134,11 +160,13 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     // The kernel's x, y, z are NumPy's axes 2, 1, 0.
     const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
     TriangleMesh mesh;
+    double level = 0;
     runReleased([&](const ProgressFn& fraction) {
         ArrayBrickSource source(samples, kBrick, xyzSpacing, threadCount);
         BrickRange range = kNoRange;
         for (const BrickRange& r : source.brickRanges()) range = unite(range, r);
-        FullExtractOptions options{levelIn(givenLevel, range), kDefaultMetaCellSize, threadCount};
+        level = levelIn(givenLevel, range);
+        FullExtractOptions options{level, kDefaultMetaCellSize, threadCount};
         if (bricks) {
             std::sort(bricks->begin(), bricks->end());
             bricks->erase(std::unique(bricks->begin(), bricks->end()), bricks->end());
@@ -149,7 +177,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     }, progress, double(samples.dims[0]) * double(samples.dims[1]) * double(samples.dims[2]));
     pyb::array_t<float> values(mesh.positions.size());
     visitFileScalar(samples.type, [&](auto zero) {
-        cellMaxima<decltype(zero)>(samples, 0, samples.dims[2], mesh.positions, xyzSpacing, values.mutable_data());
+        cellSpreads<decltype(zero)>(samples, 0, samples.dims[2], level, mesh.positions, xyzSpacing, values.mutable_data());
     });
     return meshArrays(std::move(mesh), values, spacing);
 }
@@ -181,7 +209,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
         SlabExtractOptions options;
         options.extract = FullExtractOptions{*level, kDefaultMetaCellSize, threadCount};
         options.brickSize = kBrick;
-        options.layerDone = appendValues(info, values);
+        options.layerDone = appendValues(info, *level, values);
         const SlabExtractResult result =
             extractSlabs(slices, options, mesh, [&](double f) { fraction(start + (1 - start) * f); });
         levelIn(level, result.range);  // a level given outside the values
@@ -209,7 +237,7 @@ pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, cons
         ArraySlices slices(rows, info, type, name, {});
         SlabExtractOptions options;
         options.extract = FullExtractOptions{level, kDefaultMetaCellSize, int(checkedInt("threads", threads, 1, 256))};
-        options.layerDone = appendValues(info, values);
+        options.layerDone = appendValues(info, level, values);
         part = extractSlabPart(slices, options, firstLayer, endLayer);
     });
     const size_t n = part.mesh.positions.size();

@@ -45,6 +45,8 @@ def assert_same_surface(ours, theirs):
     assert abs(area(v, f) / area(sv, sf) - 1) < 0.005
     index, dist = nearest(v, sv)
     assert dist.max() < 1e-4
+    # Values as scikit-image's: the largest spread about the level of the cells using the vertex.
+    np.testing.assert_array_equal(values, svalues[index])
     # Normals point the same way (outward from the values above the level).
     assert (np.sum(n * sn[index], axis=1) > 0).mean() > 0.99
     # Winding as scikit-image's, relative to the normals.

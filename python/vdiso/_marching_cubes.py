@@ -15,7 +15,9 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     (V, 3) in the array's axis order scaled by `spacing` (float32; float64 when a spacing is not
     1, as scikit-image's), faces (F, 3) int32, normals
     (V, 3) float32 pointing away from the values above `level` (outward for a bright object),
-    values (V,) float32 (the largest sample of the cell each vertex lies in). `volume`: any 3-D
+    values (V,) float32 as scikit-image's (the largest spread of the samples about `level`, as
+    float32, in the cells around each vertex's edge; with a mask, those cells masked out count
+    too, where scikit-image leaves them out). `volume`: any 3-D
     array of uint8, int8, uint16, int16, uint32, int32, float32 or float64, C- or F-ordered or
     strided, read in place (never copied to float); bool is read as uint8 in place; float16 is
     copied to float32, and int64 and uint64 (what skimage.measure.label returns) to the 32-bit
