@@ -203,9 +203,11 @@ def test_a_dask_array_meshed_on_a_cluster_gives_the_in_memory_mesh(cluster_clien
         ours = vdiso.marching_cubes(da.from_array(v, chunks=(16, 50, 40), inline_array=True), level,
                                     client=cluster_client, **lazy)
     assert_identical(ours, vdiso.marching_cubes(v, level, **here))
-    # The runs were meshed on the workers, both of them.
+    # The runs were meshed on the cluster's workers (which ones is the scheduler's choice: a
+    # fast worker may take all three runs of a small array).
     runs = [t for t in stream.data if t["key"].startswith("_mesh_run")]
-    assert len(runs) >= 2 and len({t["worker"] for t in runs}) == 2
+    workers = set(cluster_client.scheduler_info()["workers"])
+    assert len(runs) >= 2 and {t["worker"] for t in runs} <= workers
 
 
 def test_a_closed_surface_meshed_on_a_cluster_has_no_crack(cluster_client):
