@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 #include <stdexcept>
+#include <thread>
 
 #include "app/array_brick_source.h"
 #include "app/slab_extraction.h"
@@ -31,52 +32,121 @@ constexpr int kBrick = 32;
 // scikit-image's `values` (its "measure of the data near each vertex", for colour maps): the
 // largest spread, max(0, largest corner - level) - min(0, smallest corner - level), of the cells
 // whose triangles use the vertex, which are the cells around the edge it lies on (up to four,
-// those in the volume). The edge is found from the position: the vertex lies strictly inside it
-// along one axis, at whole sample coordinates along the others. `s` holds the volume's rows (z)
-// from `firstRow` (a layer's, its ghost rows included), those of the cells around `positions`.
+// those in the volume), its samples read as float32 as scikit-image reads them. The edge is
+// found from the position: the vertex lies inside it along one axis, at whole sample
+// coordinates along the others. `s` holds the volume's rows (z) from `firstRow` (a layer's, its
+// ghost rows included), those of the cells around `positions`.
 template <class S>
 void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, double level,
                  std::span<const glm::vec3> positions, const glm::dvec3& spacing, float* values) {
     const auto* base = static_cast<const unsigned char*>(s.data);
     const int64_t dims[3] = {s.dims[0], s.dims[1], depth};
     const int64_t rowEnd = firstRow + s.dims[2];
-    auto sample = [&](int64_t x, int64_t y, int64_t z) {
+    auto at = [&](const int64_t p[3]) {
         S v;
-        std::memcpy(&v, base + x * s.strides[0] + y * s.strides[1] + (z - firstRow) * s.strides[2], sizeof v);
-        return double(float(v)) - level;  // scikit-image reads every array as float32
+        std::memcpy(&v, base + p[0] * s.strides[0] + p[1] * s.strides[1] + (p[2] - firstRow) * s.strides[2], sizeof v);
+        return v;
     };
-    for (size_t v = 0; v < positions.size(); ++v) {
+    // A vertex's edge: its first sample and axis; interior when every column around it is held.
+    struct Edge {
+        int64_t at[3];
+        int axis;
+        bool interior;
+        const unsigned char* first;  // interior: the column at (-1, -1) across the edge
+    };
+    auto edgeOf = [&](size_t v, Edge& e) {
         double g[3];
-        int axis = 0;
         double farthest = -1;
         for (int a = 0; a < 3; ++a) {
             g[a] = positions[v][a] / spacing[a];
             const double off = std::abs(g[a] - std::round(g[a]));
             if (off > farthest) {
                 farthest = off;
-                axis = a;
+                e.axis = a;
             }
         }
-        int64_t edge[3];
         for (int a = 0; a < 3; ++a)
-            edge[a] = a == axis ? std::clamp<int64_t>(int64_t(std::floor(g[a])), 0, dims[a] - 2) : std::llround(g[a]);
-        const int b = (axis + 1) % 3, c = (axis + 2) % 3;
-        double best = 0;
-        for (int k = 0; k < 4; ++k) {
-            int64_t cell[3] = {edge[0], edge[1], edge[2]};
-            cell[b] -= k & 1;
-            cell[c] -= k >> 1;
-            bool inside = true;
-            for (int a = 0; a < 3; ++a) inside &= cell[a] >= 0 && cell[a] <= dims[a] - 2;
-            if (!inside || cell[2] < firstRow || cell[2] + 1 >= rowEnd) continue;
-            double hi = 0, lo = 0;
-            for (int corner = 0; corner < 8; ++corner) {
-                const double d = sample(cell[0] + (corner & 1), cell[1] + ((corner >> 1) & 1), cell[2] + (corner >> 2));
-                hi = std::max(hi, d);
-                lo = std::min(lo, d);
+            e.at[a] = a == e.axis ? std::clamp<int64_t>(int64_t(std::floor(g[a])), 0, dims[a] - 2) : std::llround(g[a]);
+        const int b = (e.axis + 1) % 3, c = (e.axis + 2) % 3;
+        e.interior = e.at[b] >= 1 && e.at[b] <= dims[b] - 2 && e.at[c] >= 1 && e.at[c] <= dims[c] - 2 &&
+                     e.at[2] - 1 >= firstRow && e.at[2] + 1 < rowEnd;
+        e.first = !e.interior ? nullptr
+                              : base + e.at[0] * s.strides[0] + e.at[1] * s.strides[1] +
+                                    (e.at[2] - firstRow) * s.strides[2] - s.strides[b] - s.strides[c];
+    };
+    // The volume is cold by the time its vertices are known (a whole mesh, a layer's): the
+    // columns of the vertices kAhead ahead are fetched while this one is worked out (without,
+    // the misses cost more than the rest of the pass).
+    constexpr size_t kAhead = 16;
+    Edge ring[kAhead];
+    auto fetchAhead = [&](size_t v) {
+        Edge& e = ring[v % kAhead];
+        edgeOf(v, e);
+        if (!e.interior) return;
+        const int64_t sa = s.strides[e.axis], sb = s.strides[(e.axis + 1) % 3], sc = s.strides[(e.axis + 2) % 3];
+        for (int j = 0; j < 3; ++j)
+            for (int i = 0; i < 3; ++i) {
+                __builtin_prefetch(e.first + j * sc + i * sb);
+                if (e.axis != 0) __builtin_prefetch(e.first + j * sc + i * sb + sa);
             }
-            best = std::max(best, hi - lo);
+    };
+    const size_t n = positions.size();
+    for (size_t v = 0; v < std::min(n, kAhead); ++v) fetchAhead(v);
+    for (size_t v = 0; v < n; ++v) {
+        const Edge e = ring[v % kAhead];
+        if (v + kAhead < n) fetchAhead(v + kAhead);
+        const int axis = e.axis;
+        const int64_t* edge = e.at;
+        const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+        if (e.interior) {  // most vertices: no column to leave out, the samples at fixed steps
+            const int64_t sa = s.strides[axis], sb = s.strides[b], sc = s.strides[c];
+            const unsigned char* q = e.first;
+            S hi[9], lo[9];
+            for (int j = 0; j < 3; ++j)
+                for (int i = 0; i < 3; ++i) {
+                    S s0, s1;
+                    std::memcpy(&s0, q + j * sc + i * sb, sizeof s0);
+                    std::memcpy(&s1, q + j * sc + i * sb + sa, sizeof s1);
+                    hi[3 * j + i] = s0 > s1 ? s0 : s1;
+                    lo[3 * j + i] = s0 < s1 ? s0 : s1;
+                }
+            double best = 0;
+            for (int k = 0; k < 4; ++k) {
+                const int o = 3 * (k >> 1) + (k & 1);
+                const S top = std::max(std::max(hi[o], hi[o + 1]), std::max(hi[o + 3], hi[o + 4]));
+                const S bottom = std::min(std::min(lo[o], lo[o + 1]), std::min(lo[o + 3], lo[o + 4]));
+                best = std::max(best, std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level));
+            }
+            values[v] = float(best);
+            continue;
         }
+        // The 3 x 3 columns of two samples along the edge around it, as their largest and
+        // smallest (compared as S: float32 rounding keeps the order); each cell around the edge is
+        // 2 x 2 of them. A column outside the volume or the rows held has none.
+        S hi[3][3], lo[3][3];
+        bool held[3][3];
+        for (int j = 0; j < 3; ++j)
+            for (int i = 0; i < 3; ++i) {
+                int64_t p[3] = {edge[0], edge[1], edge[2]};
+                p[b] += i - 1;
+                p[c] += j - 1;
+                held[j][i] = p[b] >= 0 && p[b] < dims[b] && p[c] >= 0 && p[c] < dims[c] && p[2] >= firstRow &&
+                             p[2] + (axis == 2) < rowEnd;
+                if (!held[j][i]) continue;
+                const S s0 = at(p);
+                ++p[axis];
+                const S s1 = at(p);
+                hi[j][i] = s0 > s1 ? s0 : s1;
+                lo[j][i] = s0 < s1 ? s0 : s1;
+            }
+        double best = 0;
+        for (int j = 0; j < 2; ++j)
+            for (int i = 0; i < 2; ++i) {
+                if (!(held[j][i] && held[j][i + 1] && held[j + 1][i] && held[j + 1][i + 1])) continue;
+                const S top = std::max({hi[j][i], hi[j][i + 1], hi[j + 1][i], hi[j + 1][i + 1]});
+                const S bottom = std::min({lo[j][i], lo[j][i + 1], lo[j + 1][i], lo[j + 1][i + 1]});
+                best = std::max(best, std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level));
+            }
         values[v] = float(best);
     }
 }
@@ -161,6 +231,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
     TriangleMesh mesh;
     double level = 0;
+    std::vector<float> spreads;  // the values
     runReleased([&](const ProgressFn& fraction) {
         ArrayBrickSource source(samples, kBrick, xyzSpacing, threadCount);
         BrickRange range = kNoRange;
@@ -174,11 +245,26 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
             options.bricks = *bricks;
         }
         extractOctree(source, options, mesh, fraction);
+        // The values on the extraction's threads, a run of vertices each.
+        spreads.resize(mesh.positions.size());
+        const size_t n = spreads.size(), runs = size_t(std::max(threadCount, 1));
+        std::vector<std::thread> workers;
+        for (size_t r = 0; r < runs; ++r) {
+            const size_t first = n * r / runs, end = n * (r + 1) / runs;
+            auto work = [&, first, end] {
+                visitFileScalar(samples.type, [&](auto zero) {
+                    cellSpreads<decltype(zero)>(samples, 0, samples.dims[2], level,
+                                                std::span(mesh.positions).subspan(first, end - first), xyzSpacing,
+                                                spreads.data() + first);
+                });
+            };
+            if (r + 1 == runs) work();
+            else workers.emplace_back(work);
+        }
+        for (std::thread& w : workers) w.join();
     }, progress, double(samples.dims[0]) * double(samples.dims[1]) * double(samples.dims[2]));
-    pyb::array_t<float> values(mesh.positions.size());
-    visitFileScalar(samples.type, [&](auto zero) {
-        cellSpreads<decltype(zero)>(samples, 0, samples.dims[2], level, mesh.positions, xyzSpacing, values.mutable_data());
-    });
+    pyb::array_t<float> values(spreads.size());
+    std::copy(spreads.begin(), spreads.end(), values.mutable_data());
     return meshArrays(std::move(mesh), values, spacing);
 }
 
