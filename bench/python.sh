@@ -23,6 +23,13 @@ if [ "${1:-}" = scans ]; then
   PYTHONPATH=$build/python:bench /usr/bin/python3 bench/python_scans_mc.py "${2:-5}"
   exit 0
 fi
+#   bench/python.sh skimage [R]  instead: vdiso.marching_cubes against scikit-image's on the real
+#                              scans, surface, normals, winding, time (bench/python_vs_skimage.py)
+if [ "${1:-}" = skimage ]; then
+  [ -f data/ch2better.nii.gz ] || scripts/fetch_data.sh
+  PYTHONPATH=$build/python:bench /usr/bin/python3 bench/python_vs_skimage.py "${2:-3}"
+  exit 0
+fi
 if [ "${1:-}" = dask ]; then
   for mode in slabs memory cluster1 cluster2 slabs memory cluster1 cluster2; do
     $py bench/python_dask_mc.py "${2:-1024}" "${3:-64}" $mode
