@@ -54,7 +54,7 @@ bool ViewLevels::holdsIso(const MinMaxNode& node, int l) const {
 }
 
 int ViewLevels::levelAt(const int64_t c[3]) const {
-    const std::vector<MinMaxNode>& nodes = mTree.nodes();
+    const std::span<const MinMaxNode> nodes = mTree.nodes();
     uint32_t index = 0;
     while (true) {
         const MinMaxNode& node = nodes[index];

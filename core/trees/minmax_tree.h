@@ -26,6 +26,7 @@
 #include "core/brick_levels.h"
 #include "core/brick_source.h"
 #include "core/kernel/iso.h"
+#include "core/mesh.h"
 
 namespace vdiso {
 
@@ -55,7 +56,7 @@ public:
     // Over `levels` (level 0 first), `ranges` indexed by brick ids through all of them.
     MinMaxTree(std::span<const BrickLevel> levels, std::span<const BrickRange> ranges);
 
-    const std::vector<MinMaxNode>& nodes() const { return mNodes; }
+    std::span<const MinMaxNode> nodes() const { return mNodes; }
     const BrickLayout& layout() const { return mLayout; }
     int64_t brickOf(const MinMaxNode& leaf) const {
         return mLayout.brickId(leaf.lo[0], leaf.lo[1], leaf.lo[2]);
@@ -114,7 +115,9 @@ private:
 
     BrickLayout mLayout;
     std::vector<BrickLevel> mLevels;
-    std::vector<MinMaxNode> mNodes;
+    // In huge pages past 2 MB (core/mesh.h): a 2560^3 store's tree reserves 32 MB, which in 4 KB
+    // pages took a fault each as the build first wrote them (a third of the build).
+    MeshArray<MinMaxNode> mNodes;
 };
 
 }  // namespace vdiso
