@@ -171,6 +171,18 @@ SlabPart extractSlabPart(SliceReader& slices, const SlabExtractOptions& options,
         part.range = unite(part.range, layerRange(source, L));
         std::vector<int64_t> layer(size_t(layout.brickId(0, 0, L + 1) - layout.brickId(0, 0, L)));
         for (size_t k = 0; k < layer.size(); ++k) layer[k] = layout.brickId(0, 0, L) + int64_t(k);
+        if (options.onlyBricks) {
+            const std::vector<int64_t>& only = *options.onlyBricks;
+            layer.assign(std::lower_bound(only.begin(), only.end(), layer.front()),
+                         std::lower_bound(only.begin(), only.end(), layer.back() + 1));
+        }
+        if (layer.empty()) {  // read (the next layer's ghosts), not meshed
+            welder.add(TriangleMesh(), nullptr, EdgeVertexMap());
+            if (L == firstLayer) part.border = welder.lastBorder();
+            if (options.layerDone) options.layerDone(rows, firstRow, welder.lastPart().positions);
+            if (progress) progress(double(L + 1 - firstLayer) / double(endLayer - firstLayer));
+            return;
+        }
         FullExtractOptions o = options.extract;
         o.sink = nullptr;
         o.brickSink = nullptr;

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -30,6 +31,10 @@ namespace vdiso {
 struct SlabExtractOptions {
     FullExtractOptions extract;  // iso, metaCellSize, threads (sink, brickSink, bricks: not taken)
     int brickSize = 32;
+    // When set, only these bricks (increasing ids; none at all when empty) are meshed, the
+    // others' samples read all the same: the triangles of their cells, as FullExtractOptions::
+    // bricks gives them of an array held whole (the same arrays).
+    std::optional<std::vector<int64_t>> onlyBricks;
     // Called after each layer, with its slices (rows [firstRow, firstRow + rows.dims[2]) of the
     // volume, in the store type) and the positions of the vertices it added to the output, in
     // their order: for what needs the samples at the vertices while they are held.

@@ -271,11 +271,17 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
 // marching_cubes of an array-like too large to load (Dask, Zarr, anything sliced along axis 0):
 // read once in order a layer of bricks at a time (app/slab_extraction.h), each chunk of
 // `bounds` computed or decoded once; with no level, read once more before, for its range.
+// `bricks`: when given, only these are meshed (SlabExtractOptions::onlyBricks).
 pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, const std::vector<int64_t>& shape,
                                 const pyb::dtype& dtype, std::optional<double> givenLevel,
                                 std::array<double, 3> spacing, std::optional<int64_t> threads,
-                                const std::vector<int64_t>& bounds, pyb::object progress) {
+                                const std::vector<int64_t>& bounds, pyb::object progress,
+                                std::optional<std::vector<int64_t>> bricks) {
     checkLevelAndSpacing(givenLevel, spacing);
+    if (bricks) {
+        std::sort(bricks->begin(), bricks->end());
+        bricks->erase(std::unique(bricks->begin(), bricks->end()), bricks->end());
+    }
     const FileScalar type = fileScalarOfDtype(dtype, name.c_str());
     const VolumeInfo info = arrayVolumeInfo(name, shape, type, spacing, {0.0, 0.0, 0.0});
     checkChunkBounds(name, shape, bounds);
@@ -295,6 +301,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
         SlabExtractOptions options;
         options.extract = FullExtractOptions{*level, kDefaultMetaCellSize, threadCount};
         options.brickSize = kBrick;
+        options.onlyBricks = bricks;
         options.layerDone = appendValues(info, *level, values);
         const SlabExtractResult result =
             extractSlabs(slices, options, mesh, [&](double f) { fraction(start + (1 - start) * f); });
@@ -404,7 +411,8 @@ void bindMarchingCubes(pyb::module_& m) {
     m.attr("_marching_cubes_brick") = kBrick;
     m.def("_marching_cubes_in_slabs", &marchingCubesInSlabs, pyb::arg("source"), pyb::arg("name"), pyb::arg("shape"),
           pyb::arg("dtype"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"), pyb::arg("bounds"),
-          pyb::arg("progress"), "marching_cubes of an array-like read a layer of bricks at a time.");
+          pyb::arg("progress"), pyb::arg("bricks") = pyb::none(),
+          "marching_cubes of an array-like read a layer of bricks at a time (only `bricks` meshed, when given).");
     m.def("_mesh_slab_part", &meshSlabPart, pyb::arg("rows"), pyb::arg("shape"), pyb::arg("dtype"),
           pyb::arg("first_layer"), pyb::arg("end_layer"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"),
           "One run of layers of an array meshed alone (a Dask worker's part of marching_cubes).");

@@ -99,6 +99,28 @@ def test_scikit_images_keywords_give_the_in_memory_mesh(keywords):
     assert_identical(vdiso.marching_cubes(zarr.array(v, chunks=(16, 25, 40)), 0.3, **here), expected)
 
 
+@pytest.mark.parametrize("step", [1, 2])
+@pytest.mark.parametrize("first, end", [(33, 80), (25, 50)])
+def test_a_small_mask_meshes_few_bricks_of_an_array_read_a_layer_at_a_time(monkeypatch, step, first, end):
+    """Only the marked bricks are meshed, and the arrays are the in-memory ones: a mask from a
+    layer's first cells on (far corners from 33: their face with the layer before is that layer's,
+    which is not meshed), and one across two layers."""
+    import vdiso._marching_cubes as mc
+    v = wavy((150, 100, 90))
+    mask = np.zeros(v.shape, bool)
+    mask[first * step:end * step, 20 * step:60 * step, 20 * step:60 * step] = True
+    expected = vdiso.marching_cubes(v, 0.3, mask=mask, step_size=step)
+    meshed = []
+    marked = mc._bricks_marked_by_layers
+    monkeypatch.setattr(mc, "_bricks_marked_by_layers", lambda mask, step: meshed.append(marked(mask, step)) or meshed[-1])
+    for lazy in (da.from_array(v, chunks=(16, 50, 40)), zarr.array(v, chunks=(16, 25, 40))):
+        assert_identical(vdiso.marching_cubes(lazy, 0.3, mask=da.from_array(mask, chunks=(20, 50, 45)), step_size=step),
+                         expected)
+    cells = [(n - 1) // step for n in v.shape]
+    total = np.prod([-(-n // 32) for n in cells])
+    assert 0 < len(meshed[-1]) < total, (len(meshed[-1]), total)
+
+
 def test_bad_chunked_input_is_refused_by_name():
     v = da.from_array(wavy(), chunks=(16, 50, 40))
     with pytest.raises(ValueError, match=r"level: 50.0+ is outside the volume's values"):

@@ -48,8 +48,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     as a strided view, no copy); allow_degenerate=False merges vertices that coincide and drops
     the triangles that then have no area; mask, a boolean array of the volume's shape: only the
     triangles of the cells whose far corner (of highest indices) it marks are kept, as
-    scikit-image's; of an array in memory only the bricks of 32^3 cells holding such a cell are
-    meshed, so a small mask saves work (an array read a layer at a time is meshed whole). method:
+    scikit-image's; only the bricks of 32^3 cells holding such a cell are meshed (the mask of an
+    array read a layer at a time read a layer at a time too), so a small mask saves work. method:
     "lorensen" only; "lewiner" is refused (its ambiguity resolution is not implemented), never
     answered with another surface.
     """
@@ -94,7 +94,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         name = f"{type(volume).__module__}.{type(volume).__name__}"
         verts, faces, normals, values = _vdiso._marching_cubes_in_slabs(
             rows if rows.wrapped else volume, name, list(rows.shape), rows.dtype, level,
-            tuple(s * step for s in spacing), threads, _z_chunk_bounds(rows, list(rows.shape)), progress)
+            tuple(s * step for s in spacing), threads, _z_chunk_bounds(rows, list(rows.shape)), progress,
+            bricks=None if mask is None or 0 in shape else _bricks_marked_by_layers(mask, step))
     else:
         verts, faces, normals, values = _vdiso.marching_cubes(
             volume[::step, ::step, ::step] if step > 1 else volume, level, tuple(s * step for s in spacing),
@@ -224,6 +225,25 @@ def _bricks_marked(mask, step):
     padded[:far.shape[0], :far.shape[1], :far.shape[2]] = far
     z, y, x = (n // b for n in padded.shape)
     return np.flatnonzero(padded.reshape(z, b, y, b, x, b).any(axis=(1, 3, 5))).tolist()
+
+
+def _bricks_marked_by_layers(mask, step):
+    """_bricks_marked for a mask too large to load (a Dask or Zarr array, any array-like sliced
+    along axis 0): read a layer of bricks' far corners at a time."""
+    import numpy as np
+    b = _vdiso._marching_cubes_brick
+    cells = [(n - 1) // step for n in mask.shape]  # of the array read every step-th sample
+    grid = [-(-n // b) for n in cells]
+    marked = []
+    for z in range(grid[0]):
+        first, end = z * b, min((z + 1) * b, cells[0])  # the layer's cells along axis 0
+        far = np.asarray(mask[(first + 1) * step:end * step + 1:step, step::step, step::step])
+        far = far[:, :cells[1], :cells[2]].astype(bool, copy=False)
+        padded = np.zeros((b, grid[1] * b, grid[2] * b), bool)
+        padded[:far.shape[0], :far.shape[1], :far.shape[2]] = far
+        hit = padded.reshape(b, grid[1], b, grid[2], b).any(axis=(0, 2, 4))
+        marked.extend((z * grid[1] * grid[2] + np.flatnonzero(hit)).tolist())
+    return marked
 
 
 def _read_as(dtype):
