@@ -42,11 +42,6 @@ void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, doubl
     const auto* base = static_cast<const unsigned char*>(s.data);
     const int64_t dims[3] = {s.dims[0], s.dims[1], depth};
     const int64_t rowEnd = firstRow + s.dims[2];
-    auto at = [&](const int64_t p[3]) {
-        S v;
-        std::memcpy(&v, base + p[0] * s.strides[0] + p[1] * s.strides[1] + (p[2] - firstRow) * s.strides[2], sizeof v);
-        return v;
-    };
     // A vertex's edge: its first sample and axis; interior when every column around it is held.
     struct Edge {
         int64_t at[3];
@@ -100,58 +95,44 @@ void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, doubl
     for (size_t v = 0; v < n; ++v) {
         const Edge e = ring[v % kAhead];
         if (v + kAhead < n) fetchAhead(v + kAhead);
-        const int axis = e.axis;
-        const int64_t* edge = e.at;
-        const int b = (axis + 1) % 3, c = (axis + 2) % 3;
-        if (e.interior) {  // most vertices: no column to leave out, the samples at fixed steps
-            const int64_t sa = s.strides[axis], sb = s.strides[b], sc = s.strides[c];
-            const unsigned char* q = e.first;
-            S hi[9], lo[9];
-            for (int j = 0; j < 3; ++j)
-                for (int i = 0; i < 3; ++i) {
-                    S s0, s1;
-                    std::memcpy(&s0, q + j * sc + i * sb, sizeof s0);
-                    std::memcpy(&s1, q + j * sc + i * sb + sa, sizeof s1);
-                    hi[3 * j + i] = s0 > s1 ? s0 : s1;
-                    lo[3 * j + i] = s0 < s1 ? s0 : s1;
-                }
-            double best = 0;
-            for (int k = 0; k < 4; ++k) {
-                const int o = 3 * (k >> 1) + (k & 1);
-                const S top = std::max(std::max(hi[o], hi[o + 1]), std::max(hi[o + 3], hi[o + 4]));
-                const S bottom = std::min(std::min(lo[o], lo[o + 1]), std::min(lo[o + 3], lo[o + 4]));
-                best = std::max(best, std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level));
-            }
-            values[v] = float(best);
-            continue;
-        }
+        const int b = (e.axis + 1) % 3, c = (e.axis + 2) % 3;
+        const int64_t sa = s.strides[e.axis], sb = s.strides[b], sc = s.strides[c];
         // The 3 x 3 columns of two samples along the edge around it, as their largest and
         // smallest (compared as S: float32 rounding keeps the order); each cell around the edge is
-        // 2 x 2 of them. A column outside the volume or the rows held has none.
-        S hi[3][3], lo[3][3];
-        bool held[3][3];
+        // 2 x 2 of them. A column outside the volume or the rows held has none; an interior
+        // edge's (most) are all held, at fixed steps from its first.
+        S hi[9], lo[9];
+        bool held[9];
         for (int j = 0; j < 3; ++j)
             for (int i = 0; i < 3; ++i) {
-                int64_t p[3] = {edge[0], edge[1], edge[2]};
-                p[b] += i - 1;
-                p[c] += j - 1;
-                held[j][i] = p[b] >= 0 && p[b] < dims[b] && p[c] >= 0 && p[c] < dims[c] && p[2] >= firstRow &&
-                             p[2] + (axis == 2) < rowEnd;
-                if (!held[j][i]) continue;
-                const S s0 = at(p);
-                ++p[axis];
-                const S s1 = at(p);
-                hi[j][i] = s0 > s1 ? s0 : s1;
-                lo[j][i] = s0 < s1 ? s0 : s1;
+                const int k = 3 * j + i;
+                const unsigned char* q = nullptr;
+                if (e.interior) {
+                    q = e.first + j * sc + i * sb;
+                } else {
+                    int64_t p[3] = {e.at[0], e.at[1], e.at[2]};
+                    p[b] += i - 1;
+                    p[c] += j - 1;
+                    held[k] = p[b] >= 0 && p[b] < dims[b] && p[c] >= 0 && p[c] < dims[c] && p[2] >= firstRow &&
+                              p[2] + (e.axis == 2) < rowEnd;
+                    if (!held[k]) continue;
+                    q = base + p[0] * s.strides[0] + p[1] * s.strides[1] + (p[2] - firstRow) * s.strides[2];
+                }
+                held[k] = true;
+                S s0, s1;
+                std::memcpy(&s0, q, sizeof s0);
+                std::memcpy(&s1, q + sa, sizeof s1);
+                hi[k] = s0 > s1 ? s0 : s1;
+                lo[k] = s0 < s1 ? s0 : s1;
             }
         double best = 0;
-        for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 2; ++i) {
-                if (!(held[j][i] && held[j][i + 1] && held[j + 1][i] && held[j + 1][i + 1])) continue;
-                const S top = std::max({hi[j][i], hi[j][i + 1], hi[j + 1][i], hi[j + 1][i + 1]});
-                const S bottom = std::min({lo[j][i], lo[j][i + 1], lo[j + 1][i], lo[j + 1][i + 1]});
-                best = std::max(best, std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level));
-            }
+        for (int k = 0; k < 4; ++k) {
+            const int o = 3 * (k >> 1) + (k & 1);
+            if (!(held[o] && held[o + 1] && held[o + 3] && held[o + 4])) continue;
+            const S top = std::max(std::max(hi[o], hi[o + 1]), std::max(hi[o + 3], hi[o + 4]));
+            const S bottom = std::min(std::min(lo[o], lo[o + 1]), std::min(lo[o + 3], lo[o + 4]));
+            best = std::max(best, std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level));
+        }
         values[v] = float(best);
     }
 }

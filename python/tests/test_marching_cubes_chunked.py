@@ -111,8 +111,8 @@ def test_a_small_mask_meshes_few_bricks_of_an_array_read_a_layer_at_a_time(monke
     mask[first * step:end * step, 20 * step:60 * step, 20 * step:60 * step] = True
     expected = vdiso.marching_cubes(v, 0.3, mask=mask, step_size=step)
     meshed = []
-    marked = mc._bricks_marked_by_layers
-    monkeypatch.setattr(mc, "_bricks_marked_by_layers", lambda mask, step: meshed.append(marked(mask, step)) or meshed[-1])
+    marked = mc._bricks_marked
+    monkeypatch.setattr(mc, "_bricks_marked", lambda mask, step: meshed.append(marked(mask, step)) or meshed[-1])
     for lazy in (da.from_array(v, chunks=(16, 50, 40)), zarr.array(v, chunks=(16, 25, 40))):
         assert_identical(vdiso.marching_cubes(lazy, 0.3, mask=da.from_array(mask, chunks=(20, 50, 45)), step_size=step),
                          expected)

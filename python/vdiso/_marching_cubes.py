@@ -95,12 +95,12 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         verts, faces, normals, values = _vdiso._marching_cubes_in_slabs(
             rows if rows.wrapped else volume, name, list(rows.shape), rows.dtype, level,
             tuple(s * step for s in spacing), threads, _z_chunk_bounds(rows, list(rows.shape)), progress,
-            bricks=None if mask is None or 0 in shape else _bricks_marked_by_layers(mask, step))
+            bricks=None if mask is None or 0 in shape else _bricks_marked(mask, step))
     else:
         verts, faces, normals, values = _vdiso.marching_cubes(
             volume[::step, ::step, ::step] if step > 1 else volume, level, tuple(s * step for s in spacing),
             threads=threads, progress=progress,
-            bricks=None if mask is None or 0 in shape else _bricks_marked(np.asarray(mask), step))
+            bricks=None if mask is None or 0 in shape else _bricks_marked(mask, step))
     if mask is not None:
         # A triangle lies in one cell, its centroid inside it (or on its faces): the cell's
         # first corner is the centroid's floor, in samples. scikit-image tests a cell's far
@@ -217,19 +217,8 @@ class _SlabView:
 def _bricks_marked(mask, step):
     """The bricks (the library's numbers, x fastest) of the array read every `step`-th sample that
     hold a cell whose far corner the mask marks: only they are meshed, so a mask saves the work
-    of the bricks it leaves out (their triangles would all be dropped)."""
-    import numpy as np
-    far = mask[step::step, step::step, step::step].astype(bool, copy=False)  # cell c's far corner
-    b = _vdiso._marching_cubes_brick
-    padded = np.zeros(tuple(-(-n // b) * b for n in far.shape), bool)
-    padded[:far.shape[0], :far.shape[1], :far.shape[2]] = far
-    z, y, x = (n // b for n in padded.shape)
-    return np.flatnonzero(padded.reshape(z, b, y, b, x, b).any(axis=(1, 3, 5))).tolist()
-
-
-def _bricks_marked_by_layers(mask, step):
-    """_bricks_marked for a mask too large to load (a Dask or Zarr array, any array-like sliced
-    along axis 0): read a layer of bricks' far corners at a time."""
+    of the bricks it leaves out (their triangles would all be dropped). The mask is read a layer
+    of bricks' far corners at a time (a Dask or Zarr mask is never loaded whole)."""
     import numpy as np
     b = _vdiso._marching_cubes_brick
     cells = [(n - 1) // step for n in mask.shape]  # of the array read every step-th sample
