@@ -176,26 +176,24 @@ SlabPart extractSlabPart(SliceReader& slices, const SlabExtractOptions& options,
             layer.assign(std::lower_bound(only.begin(), only.end(), layer.front()),
                          std::lower_bound(only.begin(), only.end(), layer.back() + 1));
         }
-        if (layer.empty()) {  // read (the next layer's ghosts), not meshed
-            welder.add(TriangleMesh(), nullptr, EdgeVertexMap());
-            if (L == firstLayer) part.border = welder.lastBorder();
-            if (options.layerDone) options.layerDone(rows, firstRow, welder.lastPart().positions);
-            if (progress) progress(double(L + 1 - firstLayer) / double(endLayer - firstLayer));
-            return;
-        }
-        FullExtractOptions o = options.extract;
-        o.sink = nullptr;
-        o.brickSink = nullptr;
-        o.bricks = layer;
         EdgeVertexMap border;
-        o.borderVertices = &border;
         TriangleMesh layerMesh;
-        // Reported within the layer too: a layer of a large array is a second of work, and a
-        // caller stops on an interrupt from its progress (Python's Ctrl-C).
-        const double layers = double(endLayer - firstLayer);
-        const ExtractStats s = extractOctree(source, o, layerMesh, [&](double f) {
-            if (progress) progress((double(L - firstLayer) + f) / layers);
-        });
+        ExtractStats s;
+        if (!layer.empty()) {  // (a layer with none of onlyBricks is read for its ghosts, not meshed)
+            FullExtractOptions o = options.extract;
+            o.sink = nullptr;
+            o.brickSink = nullptr;
+            o.bricks = layer;
+            o.borderVertices = &border;
+            // Reported within the layer too: a layer of a large array is a second of work, and a
+            // caller stops on an interrupt from its progress (Python's Ctrl-C).
+            const double layers = double(endLayer - firstLayer);
+            s = extractOctree(source, o, layerMesh, [&](double f) {
+                if (progress) progress((double(L - firstLayer) + f) / layers);
+            });
+        } else if (progress) {
+            progress(double(L + 1 - firstLayer) / double(endLayer - firstLayer));
+        }
         welder.add(std::move(layerMesh), nullptr, border);
         if (L == firstLayer) part.border = welder.lastBorder();  // its face with the run before
         part.stats.nodesVisited += s.nodesVisited;
