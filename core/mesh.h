@@ -21,39 +21,6 @@
 
 namespace vdiso {
 
-// A std::allocator whose value-less construct leaves the element uninitialized, so that
-// resize() does not zero what is written next anyway. The parallel merge of a full
-// extraction resizes the whole mesh and fills it from several threads: a zeroing resize was a
-// serial pass over it (page faults included) that took a third of the time on two threads.
-// Arrays of 2 MB and more live in huge pages (core/huge_pages.h).
-template <class T>
-struct UninitializedAllocator : std::allocator<T> {
-    template <class U>
-    struct rebind {
-        using other = UninitializedAllocator<U>;
-    };
-    UninitializedAllocator() = default;
-    template <class U>
-    UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
-    T* allocate(size_t n) {
-        if (n > SIZE_MAX / sizeof(T)) throw std::bad_array_new_length();
-        if (n * sizeof(T) < kHugePageBytes) return std::allocator<T>::allocate(n);
-        return static_cast<T*>(mapHugePages(n * sizeof(T)));
-    }
-    void deallocate(T* p, size_t n) noexcept {
-        if (n * sizeof(T) < kHugePageBytes) return std::allocator<T>::deallocate(p, n);
-        unmapHugePages(p, n * sizeof(T));
-    }
-    template <class U>
-    void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
-        ::new (static_cast<void*>(p)) U;
-    }
-    template <class U, class... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-};
-
 template <class T>
 using MeshArray = std::vector<T, UninitializedAllocator<T>>;
 

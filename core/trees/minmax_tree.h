@@ -25,8 +25,8 @@
 #include "core/brick_layout.h"
 #include "core/brick_levels.h"
 #include "core/brick_source.h"
+#include "core/huge_pages.h"
 #include "core/kernel/iso.h"
-#include "core/mesh.h"
 
 namespace vdiso {
 
@@ -115,9 +115,9 @@ private:
 
     BrickLayout mLayout;
     std::vector<BrickLevel> mLevels;
-    // In huge pages past 2 MB (core/mesh.h): a 2560^3 store's tree reserves 32 MB, which in 4 KB
-    // pages took a fault each as the build first wrote them (a third of the build).
-    MeshArray<MinMaxNode> mNodes;
+    // In huge pages past 2 MB (core/huge_pages.h): a 2560^3 store's tree reserves 32 MB, which
+    // in 4 KB pages took a fault each as the build first wrote them (a third of the build).
+    std::vector<MinMaxNode, UninitializedAllocator<MinMaxNode>> mNodes;
 };
 
 }  // namespace vdiso
