@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "io/error.h"
+#include "io/forked_child.h"
 #include "io/remote/curl_library.h"
 #include "io/remote/transfer_loop.h"
 
@@ -113,7 +114,7 @@ CURL* RemoteSession::take() {
     Impl& d = *mImpl;
     // A forked child has no transfer thread (and shares the parent's connections): its
     // transfers would wait for ever.
-    if (::getpid() != d.pid)
+    if (inForkedChild(d.pid))
         throw IoError("a remote store or array opened before fork() cannot be read in the child process: "
                       "open it again there (a pickled vdiso.Store opens itself again)");
     {

@@ -1,11 +1,14 @@
 #include "io/remote/transfer_loop.h"
 
+#include <unistd.h>
+
 #include "io/error.h"
+#include "io/forked_child.h"
 #include "io/remote/curl_library.h"
 
 namespace vdiso {
 
-TransferLoop::TransferLoop(long maxConnections) {
+TransferLoop::TransferLoop(long maxConnections) : mPid(::getpid()) {
     const CurlLibrary& curl = curlLibrary();
     mMulti = curl.multi_init();
     if (!mMulti) throw IoError("libcurl cannot make a multi handle: remote data cannot be read");
@@ -14,6 +17,10 @@ TransferLoop::TransferLoop(long maxConnections) {
 }
 
 TransferLoop::~TransferLoop() {
+    if (inForkedChild(mPid)) {  // (io/forked_child.h); the multi handle is the parent's too
+        abandonThread(mThread);
+        return;
+    }
     {
         std::lock_guard lock(mLock);
         mQuit = true;

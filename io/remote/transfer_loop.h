@@ -8,7 +8,8 @@
 // waits meanwhile), and the result is returned once the handle has left the loop. The handle is
 // the caller's before and after. Progress callbacks are called at least every kTickMs while a
 // transfer waits, for cancellation and straggler checks. The loop's thread lives as long as the
-// object; no transfer may be running when it goes.
+// object; no transfer may be running when it goes. In a process forked from the one that made
+// it there is no such thread: going there leaves the parent's handles alone.
 #pragma once
 
 #include <condition_variable>
@@ -16,6 +17,8 @@
 #include <mutex>
 #include <thread>
 #include <vector>
+
+#include <sys/types.h>
 
 #include <curl/curl.h>
 
@@ -44,6 +47,7 @@ private:
     void run();
 
     CURLM* mMulti = nullptr;
+    pid_t mPid;  // the process whose thread runs the loop
     std::mutex mLock;
     std::vector<Pending*> mSubmitted;  // not yet added to the multi handle
     bool mQuit = false;

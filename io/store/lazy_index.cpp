@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include "io/error.h"
+#include "io/forked_child.h"
 
 namespace vdiso {
 
@@ -35,6 +36,10 @@ LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedB
 }
 
 LazyIndex::~LazyIndex() {
+    if (inForkedChild(mPid)) {  // (io/forked_child.h)
+        for (std::thread& t : mBackground) abandonThread(t);
+        return;
+    }
     {
         std::lock_guard lock(mLock);
         mStop = true;

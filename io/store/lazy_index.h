@@ -20,6 +20,9 @@
 #include <thread>
 #include <vector>
 
+#include <sys/types.h>
+#include <unistd.h>
+
 #include "io/store/byte_source.h"
 #include "io/store/index_parts.h"
 
@@ -68,6 +71,7 @@ private:
     mutable std::condition_variable mChanged;
     std::atomic<bool> mStop{false};
     std::vector<std::thread> mBackground;
+    pid_t mPid = ::getpid();  // the process whose threads mBackground are
 };
 
 }  // namespace vdiso

@@ -325,7 +325,8 @@ def test_a_store_in_a_bucket_extracts_as_on_disk(s3_bucket, volume_and_cli_store
 
 def test_a_store_from_a_bucket_used_after_fork_is_an_error_not_a_hang(s3_bucket, volume_and_cli_store):
     """Its transfers are run by a thread of the process that opened it, which a forked child
-    lacks: reading there is an OSError saying to open it again (a pickled Store does)."""
+    lacks: reading there is an OSError saying to open it again (a pickled Store does), and
+    closing it there leaves the parent's threads alone (joining them crashed the child)."""
     import pickle
     _, cli = volume_and_cli_store
     (s3_bucket / "head.vdiso").write_bytes(cli.read_bytes())
@@ -346,15 +347,17 @@ def test_a_store_from_a_bucket_used_after_fork_is_an_error_not_a_hang(s3_bucket,
             said += f"|again {len(again.faces)}"
         except BaseException as e:  # noqa: BLE001
             said += f"|again {type(e).__name__}: {e}"
+        remote.close()
         os.write(write_end, said.encode())
         os._exit(0)
     os.close(write_end)
     deadline = time.monotonic() + 60
-    while os.waitpid(child, os.WNOHANG) == (0, 0):
+    while (status := os.waitpid(child, os.WNOHANG)) == (0, 0):
         if time.monotonic() > deadline:
             os.kill(child, 9)
             pytest.fail("the forked child hung reading the parent's remote store")
         time.sleep(0.05)
+    assert os.waitstatus_to_exitcode(status[1]) == 0, "the forked child died"
     said = os.read(read_end, 4096).decode()
     os.close(read_end)
     first, again = said.split("|again ")
