@@ -17,7 +17,7 @@
 namespace vdiso {
 
 #define VDISO_CURL_FUNCTIONS(X)                                                                    \
-    X(global_init) X(easy_init) X(easy_setopt) X(easy_perform) X(easy_getinfo) X(easy_cleanup)     \
+    X(global_init) X(easy_init) X(easy_setopt) X(easy_getinfo) X(easy_cleanup)                     \
     X(easy_strerror) X(share_init) X(share_setopt) X(share_cleanup) X(slist_append)               \
     X(slist_free_all) X(url) X(url_set) X(url_get) X(url_cleanup) X(free) X(getdate)               \
     X(multi_init) X(multi_cleanup) X(multi_setopt) X(multi_add_handle) X(multi_remove_handle)      \
