@@ -153,6 +153,7 @@ void ViewerSession::runPass() {
     ViewMessage view;
     Clock::time_point arrival;
     bool first = false;
+    bool quickFinal = false;  // the last final pass of this store and isovalue was quick
     std::vector<std::shared_ptr<ViewerOutput>> catchUps;
     {
         std::lock_guard lock(mMutex);
@@ -164,6 +165,8 @@ void ViewerSession::runPass() {
         arrival = mPendingArrival;
         if (mPending) {
             first = true;
+            quickFinal = mLastFinal && mLastFinal->store == mPending->store && mLastFinal->iso == mPending->iso &&
+                         mLastFinal->took <= SessionSettings::kQuickFinalPass;
             mLastStart = Clock::now();
             view = *mPending;
             mPending.reset();
@@ -185,12 +188,19 @@ void ViewerSession::runPass() {
         catchUps.empty() ? mDirectory.outputsOf(mId) : catchUps;
     if (outputs.empty()) return;  // no longer leading
     const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.view.lodError : 0.0;
-    const bool coarse = first && lodError > 0;
+    const bool coarse = first && lodError > 0 && !quickFinal;
     try {
         // The final pass after a coarse one lets first passes run inside it.
         const bool later = !first && catchUps.empty();
+        const Clock::time_point begun = Clock::now();
         const std::string status = extractPass(
             view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs, later);
+        const Clock::duration took = Clock::now() - begun;
+        if (!coarse && catchUps.empty() &&
+            (status == "complete" || (status == "superseded" && took > SessionSettings::kQuickFinalPass))) {
+            std::lock_guard lock(mMutex);
+            mLastFinal = FinalPass{view.store, view.iso, took};
+        }
         if (status == "busy") {  // nested, an output taken by another pass: again, on its turn
             std::lock_guard lock(mMutex);
             if (!mClosing && !mPending) {

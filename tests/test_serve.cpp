@@ -187,6 +187,11 @@ TEST(ServeSession, NearbyCameraSendsOnlyMissingChunks) {
     const Camera second = presetFor(fixture.storePath, ViewPreset::Normal, 192, 10);
     const ClientFrame b = client->requestFrame(viewOf(second, 2));
     ASSERT_EQ(b.status, "complete") << b.frameEnd;
+    // The first VIEW had a coarse frame before its final one; this one, of the same isovalue
+    // after a final pass well within SessionSettings::kQuickFinalPass, has its final one only.
+    EXPECT_EQ(a.coarseFrames, 1);
+    EXPECT_EQ(b.coarseFrames, 0);
+    EXPECT_EQ(nlohmann::json::parse(b.frameEnd)["final"], true);
     EXPECT_EQ(b.missingRefs, 0u);
     EXPECT_FALSE(b.refs.empty());
     for (const uint32_t brick : b.chunks)  // nothing held is sent again
@@ -211,6 +216,7 @@ TEST(ServeSession, NearbyCameraSendsOnlyMissingChunks) {
     const ClientFrame d = client->requestFrame(viewOf(second, 4, kHeadBoneIso));
     ASSERT_EQ(d.status, "complete");
     EXPECT_TRUE(d.refs.empty());
+    EXPECT_EQ(d.coarseFrames, 1);  // the viewer holds no surface of it: a coarse one first
 }
 
 TEST(ServeSession, TwoStripsSendEachBrickOnce) {
