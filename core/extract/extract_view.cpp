@@ -187,6 +187,13 @@ struct BrickVisit {
             return true;
         });
         if (!placed) return true;  // marks nothing
+        if (held && cellTests) {  // only its coverage counts
+            t.mCoverageTimer(t.mStats.view.coverageSeconds, [&] {
+                t.mCoverage.mark(v, count);
+                return 0;
+            });
+            return false;
+        }
         const bool draws =
             t.mCoverageTimer(t.mStats.view.coverageSeconds, [&] { return t.mCoverage.cover(v, count, cellTests); });
         t.mStats.view.polygonsHidden += !draws;

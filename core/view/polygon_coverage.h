@@ -38,6 +38,10 @@ public:
     // covers. With keepOnlyNew, returns whether it covered a centre not covered before, or one
     // lies within a rasterizer's rounding of it (then it is drawn); otherwise true.
     bool cover(const glm::dvec2* v, int count, bool keepOnlyNew);
+    // Marks what cover(v, count, true) marks, without asking whether the polygon is kept (a
+    // polygon of a brick the consumer holds: only its coverage counts). Skips the slack query
+    // and the rounding check of a polygon that covers nothing new.
+    void mark(const glm::dvec2* v, int count);
 
     // Whether the projected polygon folds over itself: its fan triangles wind both ways.
     static bool folds(const glm::dvec2* v, int count);
@@ -97,6 +101,16 @@ inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnly
     // coverage this side of the rounding is ever marked).
     for (int k = 2; k < count && !coversNew; ++k) coversNew = nearUncoveredCentre(v[0], v[k - 1], v[k]);
     return coversNew;
+}
+
+// The same marks as cover(v, count, true): where it marks anything, the box's centres hold an
+// uncovered one and it covers them as here; the fans it asks of a folded polygon are asked here.
+inline void PolygonCoverage::mark(const glm::dvec2* v, int count) {
+    if (!mBottomUp) {
+        cover(v, count, false);
+        return;
+    }
+    if (PixelRect r; uncoveredCentresInBox(boxOfPoints(v, count), r)) coverCentres(v, count, r, true);
 }
 
 // Covers the centres of r (the polygon's box's, with one uncovered) that the polygon covers;
