@@ -201,22 +201,34 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
                             const int64_t last =
                                 std::min<int64_t>(first + size, fc[k] * fl.brickSize + fl.cellsOnAxis(k, fc[k]));
                             const int64_t origin = cc[k] * cl.brickSize;
-                            lo[k] = int(std::clamp<int64_t>(first / ratio - origin, 0, cells[k]));
-                            hi[k] = int(std::clamp<int64_t>((last + ratio - 1) / ratio - origin, 0, cells[k]));
+                            // first and last are not negative: shifts are the divisions by ratio.
+                            lo[k] = int(std::clamp<int64_t>((first >> levelsBetween) - origin, 0, cells[k]));
+                            hi[k] = int(std::clamp<int64_t>(((last + ratio - 1) >> levelsBetween) - origin, 0, cells[k]));
                             inside = inside && first < last && lo[k] < hi[k];
                         }
                         if (!inside) continue;
-                        double least = INFINITY, most = -INFINITY;
-                        for (int z = lo[2]; z <= hi[2]; ++z)
-                            for (int y = lo[1]; y <= hi[1]; ++y)
-                                for (int x = lo[0]; x <= hi[0]; ++x) {
-                                    least = std::min(least, c.at(x, y, z));
-                                    most = std::max(most, c.at(x, y, z));
-                                }
                         // A peak (the fine samples' reach above the isovalue) or a trough the
                         // coarse level lost, or kept less than kKeptReach of: the part is gone
-                        // here, or in strips.
+                        // here, or in strips. The coarse corners are ranged in the samples' own
+                        // type a row at a time, and the box is left as soon as they reach far
+                        // enough both ways (most boxes, where the coarse surface kept the part:
+                        // ranging every corner was most of a distant CT frame's thin-part work).
                         const double fineUp = double(r.maxValue) - iso, fineDown = iso - double(r.minValue);
+                        T lowest = rangeValue(c.s[BrickLayout::cornerIndex(c.side, lo[0], lo[1], lo[2])]);
+                        T highest = lowest;
+                        bool kept = false;
+                        for (int z = lo[2]; z <= hi[2] && !kept; ++z)
+                            for (int y = lo[1]; y <= hi[1] && !kept; ++y) {
+                                const T* row = c.s + BrickLayout::cornerIndex(c.side, 0, y, z);
+                                for (int x = lo[0]; x <= hi[0]; ++x) {
+                                    lowest = std::min(lowest, rangeValue(row[x]));
+                                    highest = std::max(highest, rangeValue(row[x]));
+                                }
+                                kept = !(double(highest) - iso < kKeptReach * fineUp) &&
+                                       !(iso - double(lowest) < kKeptReach * fineDown);
+                            }
+                        if (kept) continue;  // the sign below would be 0
+                        const double least = double(lowest), most = double(highest);
                         const double sign = most - iso < kKeptReach * fineUp ? -1.0
                                             : iso - least < kKeptReach * fineDown ? 1.0
                                                                                  : 0.0;
