@@ -15,12 +15,16 @@ void* mapHugePages(size_t bytes) {
     // writes, where its first huge page zeroed 2 MB of each array every frame (a tenth of a
     // distant CT frame). What lies past the first huge page boundary beyond kHugePageBytes is
     // marked.
-    const uintptr_t begin = reinterpret_cast<uintptr_t>(p), end = begin + bytes;
-    const uintptr_t huge = (begin + 2 * kHugePageBytes - 1) & ~uintptr_t(kHugePageBytes - 1);
-    if (huge < end) ::madvise(reinterpret_cast<void*>(huge), end - huge, MADV_HUGEPAGE);
+    if (bytes > kHugePageBytes) adviseHugePages(static_cast<unsigned char*>(p) + kHugePageBytes, bytes - kHugePageBytes);
     return p;
 }
 
 void unmapHugePages(void* p, size_t bytes) noexcept { ::munmap(p, bytes); }
+
+void adviseHugePages(void* p, size_t bytes) noexcept {
+    const uintptr_t begin = reinterpret_cast<uintptr_t>(p), end = begin + bytes;
+    const uintptr_t huge = (begin + kHugePageBytes - 1) & ~uintptr_t(kHugePageBytes - 1);
+    if (huge < end) ::madvise(reinterpret_cast<void*>(huge), end - huge, MADV_HUGEPAGE);
+}
 
 }  // namespace vdiso

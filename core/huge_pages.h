@@ -24,6 +24,10 @@ constexpr size_t kHugePageBytes = size_t(2) << 20;
 void* mapHugePages(size_t bytes);
 // Returns what mapHugePages(bytes) gave.
 void unmapHugePages(void* p, size_t bytes) noexcept;
+// Marks the whole huge pages within [p, p + bytes) of an anonymous mapping for transparent huge
+// pages (a hint). For memory that is written whole and read in scattered rows, as a
+// conversion's slices are: a row of a 2048-wide u16 slice is a 4 KB page of its own.
+void adviseHugePages(void* p, size_t bytes) noexcept;
 
 // A std::allocator whose value-less construct leaves the element uninitialized, so that
 // resize() does not zero what is written next anyway. The parallel merge of a full

@@ -16,6 +16,7 @@
 
 #include "core/brick_levels.h"
 #include "core/checked_math.h"
+#include "core/huge_pages.h"
 #include "core/lod/downsample.h"
 #include "core/kernel/iso.h"
 #include "core/orientation.h"
@@ -182,6 +183,10 @@ MappedSlices::MappedSlices(const Dims3& dims, size_t sampleBytes, int64_t slots,
                                      " samples, more memory than the process may allocate");
     mBytes = static_cast<unsigned char*>(p);
     mMappedBytes = size_t(bytes);
+    // Rows of a slice lie a slice's width apart: measuring a brick walks 33 x 33 of them, each a
+    // page of its own on a 2048-wide u16 volume (a TLB miss a row). In huge pages, `vdiso index`
+    // of a 2048^3 OME-Zarr took 0.94x the wall time (5 pairs).
+    adviseHugePages(p, size_t(bytes));
 }
 
 MappedSlices::~MappedSlices() {
