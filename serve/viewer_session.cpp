@@ -164,9 +164,19 @@ void ViewerSession::runPass() {
         }
         arrival = mPendingArrival;
         if (mPending) {
-            first = true;
             quickFinal = mLastFinal && mLastFinal->store == mPending->store && mLastFinal->iso == mPending->iso &&
                          mLastFinal->took <= SessionSettings::kQuickFinalPass;
+            if (quickFinal && FramePool::nested()) {
+                // Only coarse passes run inside another viewer's pass (on one thread, holding
+                // it up): a final one goes to the queue, as after a coarse pass.
+                mFinalDue = *mPending;
+                mPending.reset();
+                mSuperseded = false;
+                mLastStart = Clock::now();
+                mPool.post(*this, false);
+                return;
+            }
+            first = true;
             mLastStart = Clock::now();
             view = *mPending;
             mPending.reset();
