@@ -200,8 +200,8 @@ void ViewerSession::runPass() {
     const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.view.lodError : 0.0;
     const bool coarse = first && lodError > 0 && !quickFinal;
     try {
-        // The final pass after a coarse one lets first passes run inside it.
-        const bool later = !first && catchUps.empty();
+        // A final pass (after a coarse one or in its stead) lets first passes run inside it.
+        const bool later = !coarse && catchUps.empty();
         const Clock::time_point begun = Clock::now();
         const std::string status = extractPass(
             view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs, later);
