@@ -187,10 +187,15 @@ TEST(ServeSession, NearbyCameraSendsOnlyMissingChunks) {
     const Camera second = presetFor(fixture.storePath, ViewPreset::Normal, 192, 10);
     const ClientFrame b = client->requestFrame(viewOf(second, 2));
     ASSERT_EQ(b.status, "complete") << b.frameEnd;
-    // The first VIEW had a coarse frame before its final one; this one, of the same isovalue
-    // after a final pass well within SessionSettings::kQuickFinalPass, has its final one only.
+    // The first VIEW had a coarse frame before its final one; this one, of the same isovalue,
+    // has its final one only when that final pass took at most SessionSettings::kQuickFinalPass
+    // (known when the whole of the first frame did: its serverMs counts from the VIEW's arrival;
+    // about 10 ms here, so only a stalled machine leaves it unknown).
     EXPECT_EQ(a.coarseFrames, 1);
-    EXPECT_EQ(b.coarseFrames, 0);
+    const double firstMs = nlohmann::json::parse(a.frameEnd)["serverMs"].get<double>();
+    if (firstMs <= double(serve::SessionSettings::kQuickFinalPass.count())) {
+        EXPECT_EQ(b.coarseFrames, 0) << "the first frame took " << firstMs << " ms";
+    }
     EXPECT_EQ(nlohmann::json::parse(b.frameEnd)["final"], true);
     EXPECT_EQ(b.missingRefs, 0u);
     EXPECT_FALSE(b.refs.empty());
