@@ -37,17 +37,21 @@ OcclusionPyramid::OcclusionPyramid(int width, int height) : mWidth(width), mHeig
         gy = wy;
     } while (gx > 1 || gy > 1);
 
+    // Bits beyond the image's edge count as covered: only the last column and row of words of
+    // each level hold any (a whole tile's word starts at 0). A pyramid is made every frame.
     mClearWords.assign(offset, 0);
     for (int level = 0; level < levels(); ++level) {
         const int bitsX = level == 0 ? width : mWordsX[size_t(level) - 1];
         const int bitsY = level == 0 ? height : mWordsY[size_t(level) - 1];
-        for (int wy = 0; wy < mWordsY[size_t(level)]; ++wy)
-            for (int wx = 0; wx < mWordsX[size_t(level)]; ++wx) {
-                const int cols = std::min(kTileSize, bitsX - wx * kTileSize);
-                const int rows = std::min(kTileSize, bitsY - wy * kTileSize);
-                mClearWords[mLevelOffset[size_t(level)] + size_t(wy) * mWordsX[size_t(level)] +
-                            size_t(wx)] = ~rectMask(0, cols - 1, 0, rows - 1);
-            }
+        const int wordsX = mWordsX[size_t(level)], wordsY = mWordsY[size_t(level)];
+        auto clear = [&](int wx, int wy) {
+            const int cols = std::min(kTileSize, bitsX - wx * kTileSize);
+            const int rows = std::min(kTileSize, bitsY - wy * kTileSize);
+            mClearWords[mLevelOffset[size_t(level)] + size_t(wy) * size_t(wordsX) + size_t(wx)] =
+                ~rectMask(0, cols - 1, 0, rows - 1);
+        };
+        for (int wy = 0; wy < wordsY; ++wy) clear(wordsX - 1, wy);
+        for (int wx = 0; wx < wordsX; ++wx) clear(wx, wordsY - 1);
     }
     mWords = mClearWords;
 }
