@@ -8,7 +8,7 @@
 // (then only its visible part is made, to mark the pyramid), else extracted, encoded and shared;
 // a smaller one, or one of a coarser level, goes to the frame's transient chunks the SAGE way
 // (points, visible triangles).
-// Refs and transient geometry are batched; each cacheable chunk is encoded on the strip's
+// Refs and transient geometry are batched (a frame's first batch small); each cacheable chunk is encoded on the strip's
 // thread and queued as soon as its brick is done, refs queued before it, so the stream stays
 // front to back.
 #pragma once
@@ -89,7 +89,9 @@ struct ViewerOutput {
 // Thread-safe: the strips add to it at once; a batch is encoded outside the lock.
 class TransientBatch {
 public:
-    static constexpr size_t kVertices = 32768;
+    // A batch is sent at this many vertices (and points); a frame's first at kFirstVertices, so
+    // that the nearest surface shows soon (as REFs: kRefsInFirstBatch).
+    static constexpr size_t kVertices = 32768, kFirstVertices = 2048;
     // A transient CHUNK, encoded, and what it holds.
     struct Encoded {
         std::shared_ptr<const std::vector<uint8_t>> bytes;
@@ -109,6 +111,7 @@ private:
     std::mutex mMutex;
     TriangleMesh mMesh;
     PointSet mPoints;
+    bool mSentOne = false;  // a batch of this frame was taken
 };
 
 struct FrameCounters {
