@@ -8,9 +8,9 @@
 // (then only its visible part is made, to mark the pyramid), else extracted, encoded and shared;
 // a smaller one, or one of a coarser level, goes to the frame's transient chunks the SAGE way
 // (points, visible triangles).
-// Refs and transient geometry are batched (a frame's first batch small); each cacheable chunk is encoded on the strip's
-// thread and queued as soon as its brick is done, refs queued before it, so the stream stays
-// front to back.
+// Refs and transient geometry are batched (a frame's first batch small); each cacheable chunk
+// is encoded on the strip's thread and queued as soon as its brick is done, refs queued before
+// it, so the stream stays front to back.
 #pragma once
 
 #include <atomic>
