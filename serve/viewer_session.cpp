@@ -164,7 +164,9 @@ void ViewerSession::runPass() {
         }
         arrival = mPendingArrival;
         if (mPending) {
-            quickFinal = mLastFinal && mLastFinal->store == mPending->store && mLastFinal->iso == mPending->iso &&
+            // (A store without levels of detail has no coarse pass to skip.)
+            quickFinal = mStores[mPending->store].reader->header().levelCount > 1 && mSettings.view.lodError > 0 &&
+                         mLastFinal && mLastFinal->store == mPending->store && mLastFinal->iso == mPending->iso &&
                          mLastFinal->took <= SessionSettings::kQuickFinalPass;
             if (quickFinal && FramePool::nested()) {
                 // Only coarse passes run inside another viewer's pass (on one thread, holding
@@ -200,8 +202,8 @@ void ViewerSession::runPass() {
     const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.view.lodError : 0.0;
     const bool coarse = first && lodError > 0 && !quickFinal;
     try {
-        // A final pass (after a coarse one or in its stead) lets first passes run inside it.
-        const bool later = !coarse && catchUps.empty();
+        // A final pass after a coarse one, or in its stead, lets first passes run inside it.
+        const bool later = (!first || quickFinal) && catchUps.empty();
         const Clock::time_point begun = Clock::now();
         const std::string status = extractPass(
             view, arrival, coarse ? lodError * SessionSettings::kCoarsePassFactor : lodError, !coarse, outputs, later);
