@@ -86,8 +86,8 @@ private:
     // FramePool::Task: the pending VIEW's first pass (its coarse frame on a store with levels of
     // detail, unless the last final pass of its surface was quick; else its only one: never
     // run nested in another viewer's pass, it goes to the queue instead), or the final pass due
-    // after a complete coarse one, or a new follower's first frame. Every final pass of a VIEW
-    // lets waiting first passes run inside it.
+    // after a complete coarse one, or a new follower's first frame. On a store with levels,
+    // every final pass of a VIEW lets waiting first passes run inside it.
     void runPass() override;
     // FollowedSession
     void catchUp(std::shared_ptr<ViewerOutput> output, const ViewMessage& view) override;
