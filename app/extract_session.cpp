@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <utility>
 
 #include "cache/cache_plan.h"
 #include "core/clock.h"
@@ -66,6 +67,8 @@ ExtractFrame ExtractSession::extract(const std::optional<Camera>& camera, const 
     const ExtractSettings& s = mSettings;
     const CacheCounters before = mCache->counters();
     ExtractFrame f;
+    f.mesh = std::exchange(mSpareMesh, TriangleMesh{});
+    f.points = std::exchange(mSparePoints, PointSet{});
     f.plan = planCache(s, *mCache, machineThreads());
     if (isViewDependent(s.method)) {
         if (!camera) throw SettingsError("camera", "is needed by the view-dependent methods, sage and wise");
@@ -105,6 +108,14 @@ ExtractFrame ExtractSession::extract(const std::optional<Camera>& camera, const 
     }
     f.io = mCache->counters() - before;
     return f;
+}
+
+void ExtractSession::recycle(ExtractFrame&& frame) {
+    mSpareMesh = std::move(frame.mesh);
+    mSpareMesh.clear();
+    mSpareMesh.firstVertex = 0;
+    mSparePoints = std::move(frame.points);
+    mSparePoints.clear();
 }
 
 JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) const {

@@ -60,6 +60,11 @@ public:
     ExtractFrame extract(const std::optional<Camera>& camera, const FrameOutput& output = {},
                          const ProgressFn& progress = {});
 
+    // Hands a frame's mesh and points back, for the next frame to fill emptied: the frames of a
+    // path (vdiso extract --path) then write into pages the process holds already instead of
+    // faulting fresh ones in every frame.
+    void recycle(ExtractFrame&& frame);
+
     // The frame's statistics as vdiso extract --stats writes them (without the oracle's).
     // `meshWritten`: a mesh or points file was written (mesh_space is then stated).
     JsonObject frameStats(const ExtractFrame& frame, bool meshWritten) const;
@@ -80,6 +85,8 @@ private:
     std::unique_ptr<MetaCellRangeCache> mRanges;
     std::optional<MinMaxTree> mTree;
     double mTreeSeconds = 0;
+    TriangleMesh mSpareMesh;  // recycle()'s, for the next frame
+    PointSet mSparePoints;
 };
 
 }  // namespace vdiso

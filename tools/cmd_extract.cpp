@@ -43,7 +43,7 @@ JsonObject extractFrame(const ExtractOptions& o, ExtractSession& session, const 
     if (streamed) output.sink = &*streamed;
     output.postBeside = meshPath.empty() ? pngPath : meshPath;
     output.postProgress = progressBar("post-process", 0, o.quiet);
-    const ExtractFrame frame = session.extract(camera, output, progress);
+    ExtractFrame frame = session.extract(camera, output, progress);
     const ExtractStats& stats = frame.stats;
     if (frame.post && frame.post->pieces > 0 && frame.post->piecesKept == 0)
         std::fprintf(stderr,
@@ -83,6 +83,7 @@ JsonObject extractFrame(const ExtractOptions& o, ExtractSession& session, const 
                   (unsigned long long)frame.io.misses, frame.io.bytesRead / 1e6,
                   drawSeconds ? (", drawn in " + std::to_string(*drawSeconds) + " s").c_str() : "");
     summary = line;
+    session.recycle(std::move(frame));  // the next frame of a path fills the same arrays
     return s;
 }
 
