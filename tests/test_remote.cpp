@@ -365,8 +365,10 @@ TEST_F(RemoteStore, DiskCacheKeepsRangesAcrossRuns) {
     // look-ahead's speculation reads differently from run to run (it depends on timing).
     EXPECT_LE(number(second, "remote_bytes"),
               double(kStoreHeaderBytes) + 0.1 * number(first, "remote_bytes")) << first << second;
-    EXPECT_GE(number(second, "disk_cache_bytes"), 0.9 * (number(first, "remote_bytes") - kStoreHeaderBytes))
-        << first << second;
+    // What the second run read came from the cache. (Against the first run's remote bytes, which
+    // hold its speculation too, this failed by 0.1 % once: 2 bricks prefetched and not used.)
+    EXPECT_GT(number(second, "bytes_read"), 0.0) << second;
+    EXPECT_GE(number(second, "disk_cache_bytes"), 0.9 * number(second, "bytes_read")) << first << second;
 
     // Two processes at once, and damaged entries: each still gets the very picture.
     std::vector<std::filesystem::path> entries;
