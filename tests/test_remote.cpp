@@ -358,17 +358,17 @@ TEST_F(RemoteStore, DiskCacheKeepsRangesAcrossRuns) {
         expectSameAsLocal(name);
         return test::readText(file(name + ".json"));
     };
-    const std::string first = run("first");
+    // Without read-ahead, so that both runs read the same bricks: the look-ahead's speculation
+    // depends on timing, and 2 bricks more or fewer in one run broke either bound below (twice
+    // in about 20 runs, 2026-11-30).
+    const std::string first = run("first", "--prefetch 0");
     EXPECT_EQ(number(first, "disk_cache_hits"), 0.0) << first;
-    const std::string second = run("second");
-    // The header, which pins the version, crosses again; of the rest, at most what the
-    // look-ahead's speculation reads differently from run to run (it depends on timing).
+    const std::string second = run("second", "--prefetch 0");
+    // The header, which pins the version, crosses again; the rest comes from the cache.
     EXPECT_LE(number(second, "remote_bytes"),
               double(kStoreHeaderBytes) + 0.1 * number(first, "remote_bytes")) << first << second;
-    // What the second run read came from the cache. (Against the first run's remote bytes, which
-    // hold its speculation too, this failed by 0.1 % once: 2 bricks prefetched and not used.)
-    EXPECT_GT(number(second, "bytes_read"), 0.0) << second;
-    EXPECT_GE(number(second, "disk_cache_bytes"), 0.9 * number(second, "bytes_read")) << first << second;
+    EXPECT_GE(number(second, "disk_cache_bytes"), 0.9 * (number(first, "remote_bytes") - kStoreHeaderBytes))
+        << first << second;
 
     // Two processes at once, and damaged entries: each still gets the very picture.
     std::vector<std::filesystem::path> entries;
