@@ -206,7 +206,7 @@ bool TransientBatch::add(const TriangleMesh& mesh, const PointSet& points) {
     for (const uint32_t v : mesh.indices) mMesh.indices.push_back(v - mesh.firstVertex + offset);
     mPoints.positions.insert(mPoints.positions.end(), points.positions.begin(), points.positions.end());
     mPoints.normals.insert(mPoints.normals.end(), points.normals.begin(), points.normals.end());
-    return mMesh.positions.size() + mPoints.size() >= (mSentOne ? kVertices : kFirstVertices);
+    return mMesh.positions.size() + mPoints.size() >= fullAt();
 }
 
 std::optional<TransientBatch::Encoded> TransientBatch::take(bool force) {
@@ -215,7 +215,7 @@ std::optional<TransientBatch::Encoded> TransientBatch::take(bool force) {
     {
         std::lock_guard lock(mMutex);
         const size_t held = mMesh.positions.size() + mPoints.size();
-        if (held == 0 || (!force && held < (mSentOne ? kVertices : kFirstVertices))) return std::nullopt;
+        if (held == 0 || (!force && held < fullAt())) return std::nullopt;
         mSentOne = true;
         std::swap(mesh, mMesh);
         std::swap(points, mPoints);

@@ -112,6 +112,8 @@ private:
     TriangleMesh mMesh;
     PointSet mPoints;
     bool mSentOne = false;  // a batch of this frame was taken
+    // The vertices at which the batch is full (caller holds mMutex).
+    size_t fullAt() const { return mSentOne ? kVertices : kFirstVertices; }
 };
 
 struct FrameCounters {

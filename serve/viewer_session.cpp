@@ -149,6 +149,10 @@ std::optional<OutMessage> ViewerSession::nextToWrite() {
     return m;
 }
 
+double ViewerSession::finalLodError(uint32_t store) const {
+    return mStores[store].reader->header().levelCount > 1 ? mSettings.view.lodError : 0.0;
+}
+
 void ViewerSession::runPass() {
     ViewMessage view;
     Clock::time_point arrival;
@@ -165,8 +169,7 @@ void ViewerSession::runPass() {
         arrival = mPendingArrival;
         if (mPending) {
             // (A store without levels of detail has no coarse pass to skip.)
-            quickFinal = mStores[mPending->store].reader->header().levelCount > 1 && mSettings.view.lodError > 0 &&
-                         mLastFinal && mLastFinal->store == mPending->store && mLastFinal->iso == mPending->iso &&
+            quickFinal = finalLodError(mPending->store) > 0 && mLastFinal && mLastFinal->store == mPending->store && mLastFinal->iso == mPending->iso &&
                          mLastFinal->took <= SessionSettings::kQuickFinalPass;
             if (quickFinal && FramePool::nested()) {
                 // Only coarse passes run inside another viewer's pass (on one thread, holding
@@ -199,7 +202,7 @@ void ViewerSession::runPass() {
     const std::vector<std::shared_ptr<ViewerOutput>> outputs =
         catchUps.empty() ? mDirectory.outputsOf(mId) : catchUps;
     if (outputs.empty()) return;  // no longer leading
-    const double lodError = mStores[view.store].reader->header().levelCount > 1 ? mSettings.view.lodError : 0.0;
+    const double lodError = finalLodError(view.store);
     const bool coarse = first && lodError > 0 && !quickFinal;
     try {
         // A final pass after a coarse one, or in its stead, lets first passes run inside it.

@@ -100,6 +100,9 @@ private:
                             double lodError, bool final, const std::vector<std::shared_ptr<ViewerOutput>>& outputs,
                             bool yields);
     void reply(const std::string& error, std::optional<uint32_t> seq = std::nullopt);
+    // The error of a VIEW's final pass on `store` in pixels: 0 (level 0 only) on a store without
+    // levels of detail, which then has no coarse pass either.
+    double finalLodError(uint32_t store) const;
 
     StoreCatalog& mStores;
     const SessionSettings mSettings;
