@@ -2,7 +2,7 @@
 // head, one format after another, streaming (bench/inputs/writers.h says what each holds).
 //
 //   vdiso_bench_inputs OUT_DIR [--raw data/head1024.raw | --synth N] [--only NAME,...]
-//                      [--dicom-slices 1000] [--chunk 64]
+//                      [--dicom-slices 1000] [--chunk 64] [--scales 1]
 //
 // An input already in OUT_DIR is kept; each is written as NAME.partial and renamed when
 // complete, so an interrupted run leaves nothing that looks finished.
@@ -34,17 +34,19 @@ struct Input {
 
 const char* const kUsage =
     "usage: vdiso_bench_inputs OUT_DIR [--raw FILE | --synth N] [--only NAME,...]\n"
-    "                          [--dicom-slices S] [--chunk C]\n"
+    "                          [--dicom-slices S] [--chunk C] [--scales L]\n"
     "  --raw FILE        the head as raw u16, N^3 samples, x fastest (data/head1024.raw)\n"
     "  --synth N         generate the head at N^3 instead (core/synth/synth.h; default 1024)\n"
     "  --only NAMES      dicom, dicom-jpeg, tiff, tiff-deflate, zarr, hdf5, hdf5-contig\n"
     "                    (default: all but hdf5-contig)\n"
     "  --dicom-slices S  slices of the DICOM series (default 1000)\n"
-    "  --chunk C         Zarr and HDF5 chunk side (default 64)\n";
+    "  --chunk C         Zarr and HDF5 chunk side (default 64)\n"
+    "  --scales L        OME-Zarr levels: 0 and every 2^l-th sample for l < L (default 1)\n";
 
 int run(int argc, char** argv) {
     std::string out, raw;
     int64_t synthSize = 1024, dicomSlices = 1000, chunk = 64;
+    int scales = 1;
     std::set<std::string> only;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -66,6 +68,8 @@ int run(int argc, char** argv) {
             dicomSlices = std::stoll(value());
         } else if (a == "--chunk") {
             chunk = std::stoll(value());
+        } else if (a == "--scales") {
+            scales = std::stoi(value());
         } else if (!a.empty() && a[0] == '-') {
             throw std::invalid_argument("unknown option " + a);
         } else if (out.empty()) {
@@ -76,6 +80,7 @@ int run(int argc, char** argv) {
     }
     if (out.empty()) throw std::invalid_argument("expects OUT_DIR");
     if (chunk < 1 || synthSize < 2) throw std::invalid_argument("--chunk and --synth need a positive size");
+    if (scales < 1 || scales > 16) throw std::invalid_argument("--scales needs 1 to 16 levels");
 
     using namespace vdiso::bench;
     const std::vector<Input> inputs = {
@@ -88,7 +93,7 @@ int run(int argc, char** argv) {
         {"tiff-deflate", "head_deflate.tif", true,
          [](const HeadSlices& h, const std::string& p) { writeTiffStack(h, p, true); }},
         {"zarr", "head.ome.zarr", true,
-         [&](const HeadSlices& h, const std::string& p) { writeOmeZarr(h, p, chunk); }},
+         [&](const HeadSlices& h, const std::string& p) { writeOmeZarr(h, p, chunk, scales); }},
         {"hdf5", "head.h5", true,
          [&](const HeadSlices& h, const std::string& p) { writeHdf5Volume(h, p, chunk); }},
         {"hdf5-contig", "head_contig.h5", false,

@@ -25,9 +25,11 @@ void writeDicomSeries(const HeadSlices& head, const std::string& folder, int64_t
 // (zlib's default level 6) after the horizontal-differencing predictor when `deflate`.
 void writeTiffStack(const HeadSlices& head, const std::string& path, bool deflate);
 
-// An OME-Zarr 0.4 image (Zarr v2 folder store, "/" chunk keys): one level "0" of N^3 u16,
-// chunks of `chunk`^3, blosc lz4 level 5 with byte shuffle (what ome-zarr-py writes by default).
-void writeOmeZarr(const HeadSlices& head, const std::string& folder, int64_t chunk);
+// An OME-Zarr 0.4 image (Zarr v2 folder store, "/" chunk keys): `scales` levels, "0" of N^3
+// u16 and level l every 2^l-th sample of it on each axis (ceil(N / 2^l) samples, scale 2^l, no
+// translation: a nearest-neighbour pyramid), chunks of `chunk`^3, blosc lz4 level 5 with byte
+// shuffle (what ome-zarr-py writes by default).
+void writeOmeZarr(const HeadSlices& head, const std::string& folder, int64_t chunk, int scales = 1);
 
 // An HDF5 file with the u16 dataset /volume (z, y, x); chunks of `chunk`^3 with shuffle and
 // deflate level 1, or contiguous and uncompressed when `chunk` is 0.
