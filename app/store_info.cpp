@@ -83,7 +83,8 @@ JsonObject storeInfoJson(const BrickStoreReader& store, std::optional<double> is
     o.add("brick_size", h.brickSize).addRaw("brick_counts", triple(l.brickCounts));
     o.add("bricks", l.brickCount()).add("compression", compressionName(h.compression));
     o.add("volume_bytes", v.byteSize()).add("file_bytes", store.fileBytes());
-    if (store.external()) o.add("indexes", store.external()->name());  // level 0 lies there
+    if (store.external())  // level 0 lies there, and the levels after it that come from the data's own scales
+        o.add("indexes", store.external()->name()).add("indexed_levels", store.external()->levelCount());
     std::string levels = "[";
     for (size_t k = 0; k < bytesOfLevel.size(); ++k) {
         const BrickLevel& level = store.levels()[k];

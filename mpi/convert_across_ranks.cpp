@@ -189,7 +189,7 @@ private:
             if (bk >= 0) {
                 firstId = lay.brickId(0, bj, bk);
                 count = std::min(groupRows, lay.brickCounts[1] - bj) * rowBricks;
-                mEncoder.encode(window, lay, firstId, count, level.firstBrick == 0, mWriter.group());
+                mEncoder.encode(window, lay, firstId, count, level.firstBrick == 0, false, mWriter.group());
                 mine = placedBytes(mWriter.group(), count);
             }
             const std::vector<uint64_t> sizes = mRounds.exchange(mine);

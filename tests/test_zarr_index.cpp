@@ -64,25 +64,6 @@ StoreWriteOptions storeOptions() {
     return o;
 }
 
-void expectSameStore(const BrickStoreReader& index, const BrickStoreReader& store, const std::string& what) {
-    ASSERT_EQ(index.levels().size(), store.levels().size()) << what;
-    ASSERT_EQ(index.index().size(), store.index().size()) << what;
-    EXPECT_EQ(index.volume().dims, store.volume().dims) << what;
-    EXPECT_EQ(index.histogram().counts, store.histogram().counts) << what;
-    const auto a = index.subBlockCodes(), b = store.subBlockCodes();
-    ASSERT_EQ(a.size(), b.size());
-    for (size_t i = 0; i < a.size(); ++i)
-        ASSERT_TRUE(a[i].lo == b[i].lo && a[i].hi == b[i].hi) << what << ": sub-block " << i;
-    std::vector<unsigned char> x(index.brickBytes()), y(store.brickBytes());
-    for (int64_t id = 0; id < int64_t(store.index().size()); ++id) {
-        EXPECT_EQ(index.index()[size_t(id)].minValue, store.index()[size_t(id)].minValue) << what << ": brick " << id;
-        EXPECT_EQ(index.index()[size_t(id)].maxValue, store.index()[size_t(id)].maxValue) << what << ": brick " << id;
-        index.readBrick(id, x.data());
-        store.readBrick(id, y.data());
-        ASSERT_EQ(x, y) << what << ": brick " << id;
-    }
-}
-
 class ZarrIndex : public test::ReaderFileTest {
 protected:
     // The array written at `name`, converted into a store and indexed beside it.
@@ -116,7 +97,7 @@ TEST_F(ZarrIndex, OpensAsTheConvertedStoreBrickForBrick) {
             ASSERT_NE(index.external(), nullptr);
             EXPECT_EQ(store.external(), nullptr);
             EXPECT_GT(index.levels().size(), 2u);
-            expectSameStore(index, store, what);
+            test::expectSameStore(index, store, what);
             // No chunk read twice while it stays in the cache.
             EXPECT_EQ(index.external()->chunksRead(), uint64_t(std::ceil(45.0 / double(chunk[2])) *
                                                                std::ceil(41.0 / double(chunk[1])) *
@@ -145,7 +126,7 @@ TEST_F(ZarrIndex, MissingChunksAreTheFillValueAndStayMissing) {
     a.fill = 5;
     a.skip = [](int64_t x, int64_t y, int64_t z) { return x == 2 && y == 0 && z == 1; };
     writeAndIndex("holes", a);
-    expectSameStore(BrickStoreReader(path("holes")), BrickStoreReader(path("holes.store")), "holes");
+    test::expectSameStore(BrickStoreReader(path("holes")), BrickStoreReader(path("holes.store")), "holes");
     // A chunk that appears where none was is a change.
     test::ArraySpec full = a;
     full.skip = {};
@@ -279,7 +260,7 @@ TEST_F(ZarrIndex, AnInterruptedIndexGoesOnWhereItStopped) {
     EXPECT_EQ(test::readText(index), whole);  // the pins of the chunks read before, the ranges, the levels
     EXPECT_FALSE(std::filesystem::exists(indexPartialPath(index)));
     EXPECT_FALSE(std::filesystem::exists(indexCheckpointPath(index)));
-    expectSameStore(BrickStoreReader(index), BrickStoreReader(path("whole.vdiso")), "resumed");
+    test::expectSameStore(BrickStoreReader(index), BrickStoreReader(path("whole.vdiso")), "resumed");
 
     // The array changed between the runs: a chunk read again is refused, naming it.
     std::filesystem::remove(index);
@@ -334,23 +315,44 @@ TEST(ZarrIndexRecord, InconsistentRecordsAreRefused) {
     e.chunkShape = {4, 4, 4};
     e.chunkCounts = {2, 2, 2};
     e.pins.resize(8);
-    std::vector<unsigned char> good = encodeExternalLevel(e);
-    EXPECT_EQ(decodeExternalLevel(good.data(), good.size(), "i.vdiso").pins.size(), 8u);
+    auto decode = [](const std::vector<unsigned char>& b, size_t n = 0) {
+        return decodeExternalLevels(b.data(), n ? n : b.size(), "i.vdiso");
+    };
+    std::vector<unsigned char> good = encodeExternalLevels({e});
+    ASSERT_EQ(decode(good).size(), 1u);
+    EXPECT_EQ(decode(good)[0].pins.size(), 8u);
+    // Two levels (an OME-Zarr's own scale as level 1): version 2, both back as written.
+    ExternalLevel scale = e;
+    scale.level = 1;
+    scale.chunkCounts = {1, 1, 1};
+    scale.pins.assign(1, ZarrChunkPin{77, 5});
+    const std::vector<ExternalLevel> two = decode(encodeExternalLevels({e, scale}));
+    ASSERT_EQ(two.size(), 2u);
+    EXPECT_EQ(two[1].level, 1);
+    EXPECT_EQ(two[1].pins[0], (ZarrChunkPin{77, 5}));
     e.pins.resize(7);  // fewer pins than chunks
-    std::vector<unsigned char> bytes = encodeExternalLevel(e);
-    expectIoError([&] { decodeExternalLevel(bytes.data(), bytes.size(), "i.vdiso"); }, {"i.vdiso", "damaged", "chunk count"});
+    std::vector<unsigned char> bytes = encodeExternalLevels({e});
+    expectIoError([&] { decode(bytes); }, {"i.vdiso", "damaged", "chunk count"});
+    bytes = encodeExternalLevels({scale, e});  // the second level short of pins
+    expectIoError([&] { decode(bytes); }, {"i.vdiso", "damaged", "chunk count"});
     e.pins.resize(8);
     e.chunkCounts = {int64_t(1) << 31, int64_t(1) << 31, int64_t(1) << 31};  // a product beyond 64 bits
-    bytes = encodeExternalLevel(e);
-    expectIoError([&] { decodeExternalLevel(bytes.data(), bytes.size(), "i.vdiso"); }, {"i.vdiso", "damaged"});
+    bytes = encodeExternalLevels({e});
+    expectIoError([&] { decode(bytes); }, {"i.vdiso", "damaged"});
     e.chunkCounts = {2, 2, 2};
     e.level = -1;
-    bytes = encodeExternalLevel(e);
-    expectIoError([&] { decodeExternalLevel(bytes.data(), bytes.size(), "i.vdiso"); }, {"i.vdiso", "out of range"});
-    expectIoError([&] { decodeExternalLevel(good.data(), 20, "i.vdiso"); }, {"i.vdiso", "damaged"});
+    bytes = encodeExternalLevels({e});
+    expectIoError([&] { decode(bytes); }, {"i.vdiso", "out of range"});
+    expectIoError([&] { decode(good, 20); }, {"i.vdiso", "damaged"});
+    // A level count beyond any store's, its checksum made to hold.
+    e.level = 0;
+    bytes = encodeExternalLevels({e, scale});
+    bytes[12] = 200;
+    const uint32_t crc = crc32Of(bytes.data(), bytes.size() - 4);
+    std::memcpy(bytes.data() + bytes.size() - 4, &crc, 4);
+    expectIoError([&] { decode(bytes); }, {"i.vdiso", "damaged", "200 levels"});
 }
 
-// vdiso serve opens the indexed folder like a store: a view's frame is the converted store's.
 TEST_F(ZarrIndex, ServedLikeTheConvertedStore) {
     test::writeArray(path("img.zarr"), ballArray(3, {16, 16, 16}, test::Codec::Zstd));
     ASSERT_EQ(test::runVdiso("index " + path("img.zarr") + " --brick 8 --quiet").exitCode, 0);

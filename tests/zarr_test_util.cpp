@@ -6,7 +6,10 @@
 #include <cstring>
 #include <optional>
 
+#include <gtest/gtest.h>
+
 #include "io/crc32.h"
+#include "io/store/brick_store.h"
 #include "io/readers/sample_decode.h"
 #include "tests/reader_test_util.h"
 #include "tests/test_util.h"
@@ -147,6 +150,25 @@ void writeArray(const std::filesystem::path& dir, const ArraySpec& a) {
                 tail.append(reinterpret_cast<const char*>(&crc), 4);
                 writeFile(fileOf(sx, sy, sz), shard + tail);
             }
+}
+
+void expectSameStore(const BrickStoreReader& index, const BrickStoreReader& store, const std::string& what) {
+    ASSERT_EQ(index.levels().size(), store.levels().size()) << what;
+    ASSERT_EQ(index.index().size(), store.index().size()) << what;
+    EXPECT_EQ(index.volume().dims, store.volume().dims) << what;
+    EXPECT_EQ(index.histogram().counts, store.histogram().counts) << what;
+    const auto a = index.subBlockCodes(), b = store.subBlockCodes();
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i)
+        ASSERT_TRUE(a[i].lo == b[i].lo && a[i].hi == b[i].hi) << what << ": sub-block " << i;
+    std::vector<unsigned char> x(index.brickBytes()), y(store.brickBytes());
+    for (int64_t id = 0; id < int64_t(store.index().size()); ++id) {
+        EXPECT_EQ(index.index()[size_t(id)].minValue, store.index()[size_t(id)].minValue) << what << ": brick " << id;
+        EXPECT_EQ(index.index()[size_t(id)].maxValue, store.index()[size_t(id)].maxValue) << what << ": brick " << id;
+        index.readBrick(id, x.data());
+        store.readBrick(id, y.data());
+        ASSERT_EQ(x, y) << what << ": brick " << id;
+    }
 }
 
 }  // namespace vdiso::test

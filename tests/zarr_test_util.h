@@ -11,6 +11,10 @@
 
 #include "core/volume.h"
 
+namespace vdiso {
+class BrickStoreReader;
+}
+
 namespace vdiso::test {
 
 enum class Codec { None, Blosc, Zstd, Gzip };
@@ -43,5 +47,9 @@ struct ArraySpec {
 
 // Writes the array's metadata and chunks into `dir` (created).
 void writeArray(const std::filesystem::path& dir, const ArraySpec& a);
+
+// Expects an index (vdiso index) to open as `store` does, level for level: the same levels,
+// entries' ranges, sub-block codes, histogram and every brick's samples.
+void expectSameStore(const BrickStoreReader& index, const BrickStoreReader& store, const std::string& what);
 
 }  // namespace vdiso::test

@@ -21,6 +21,11 @@ constexpr const char* kHelp =
     "a chunk that changes afterwards is refused when read. Then 'vdiso extract DATA ...' (a\n"
     "folder finds its index beside it) or 'vdiso extract OUT ...'.\n"
     "\n"
+    "An OME-Zarr's own coarser scales are the coarser levels where they fit them (each 2x the\n"
+    "one before on x, y and z, at level 0's origin): read once too and left where they lie, so\n"
+    "the index stays a small fraction of the data. Levels past them are filtered from the last\n"
+    "one and kept in the index; the summary says which scale was not taken, and why.\n"
+    "\n"
     "The index is written as OUT.partial, and where the pass stands is saved as OUT.resume\n"
     "every half minute or so: a run that stops (Ctrl-C, a failed read, a kill) is gone on\n"
     "with by running the same command again. Both files go once OUT is written.\n"
@@ -28,6 +33,8 @@ constexpr const char* kHelp =
     "  --index OUT             where the index goes (default: DATA.vdiso beside a local DATA;\n"
     "                          needed for a URL)\n"
     "  --scale-level N         the OME-Zarr multiscales level to index (default 0, the finest)\n"
+    "  --own-levels            make every coarser level with vdiso's filter and keep it in the\n"
+    "                          index, rather than take the image's own scales\n"
     "  --restart               start over, not from an interrupted run's OUT.resume\n"
     "  --checkpoint-seconds S  save where the pass stands at least S seconds apart (default 30;\n"
     "                          never more often than ten times the time a save takes)\n"
@@ -56,6 +63,8 @@ int runIndex(int argc, char** argv) {
         } else if (a == "--checkpoint-seconds") {
             options.checkpointSeconds = parseDouble(a, args.value(a));
             if (!(options.checkpointSeconds >= 0)) throw UsageError(a + " expects seconds, 0 or more");
+        } else if (a == "--own-levels") {
+            options.ownScales = false;
         } else if (a == "--restart") {
             options.restart = true;
         } else if (a == "--quiet") {
@@ -85,6 +94,10 @@ int runIndex(int argc, char** argv) {
         if (s.store.resumedLayers > 0)
             std::printf("went on from an interrupted run: %lld of %lld layers of bricks were done\n",
                         (long long)s.store.resumedLayers, (long long)s.store.layers);
+        if (s.ownScaleLevels > 0)
+            std::printf("levels 1-%d from its own scales, read where they lie%s\n", s.ownScaleLevels,
+                        s.store.levels > s.ownScaleLevels + 1 ? "; the coarser ones filtered from the last" : "");
+        if (!s.scalesNotUsed.empty()) std::printf("%s; the levels from there on are filtered\n", s.scalesNotUsed.c_str());
         const double ratio = double(s.store.fileBytes) / double(std::max<uint64_t>(s.dataBytes, 1));
         std::printf("wrote %s: %lld bricks of %d^3 cells in %d level%s over %lld chunks (%lld missing), "
                     "%.1f MB indexed into %.2f MB (%.2f%% of the data; coarse levels %.2f MB), %.2f s, %.0f MB/s\n",

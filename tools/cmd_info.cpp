@@ -107,17 +107,24 @@ int runInfo(int argc, char** argv) {
                 (long long)l.brickCounts[2], h.brickSize, l.side());
     for (size_t k = 0; k < bytesOfLevel.size() && bytesOfLevel.size() > 1; ++k) {
         const BrickLevel& level = store.levels()[k];
-        std::printf("  level %-2zu     cells %3lldx  %lld x %lld x %lld samples  %6lld bricks  %8.1f MB", k,
+        std::printf("  level %-2zu     cells %3lldx  %lld x %lld x %lld samples  %6lld bricks", k,
                     (long long)(int64_t(1) << k), (long long)level.volume.dims[0],
                     (long long)level.volume.dims[1], (long long)level.volume.dims[2],
-                    (long long)level.layout.brickCount(), bytesOfLevel[k] / 1e6);
-        if (k > 0) std::printf("  (%.2f%% of level 0)", 100.0 * double(bytesOfLevel[k]) / double(std::max<uint64_t>(bytesOfLevel[0], 1)));
-        std::printf("\n");
+                    (long long)level.layout.brickCount());
+        // An index's levels that lie in the indexed data have no bytes here.
+        if (store.external() && int(k) < store.external()->levelCount()) std::printf("  in the data\n");
+        else if (k > 0 && bytesOfLevel[0] > 0)
+            std::printf("  %8.1f MB  (%.2f%% of level 0)\n", bytesOfLevel[k] / 1e6,
+                        100.0 * double(bytesOfLevel[k]) / double(bytesOfLevel[0]));
+        else std::printf("  %8.1f MB\n", bytesOfLevel[k] / 1e6);
     }
     if (bytesOfLevel.size() == 1) std::printf("  levels       1 (no coarser levels of detail)\n");
-    if (store.external())  // level 0 lies in the indexed array
-        std::printf("  indexes      %s: level 0's samples read from its chunks; this index %.2f MB\n",
-                    store.external()->name().c_str(), store.fileBytes() / 1e6);
+    if (const ExternalBricks* external = store.external()) {  // level 0 lies in the indexed array
+        const int n = external->levelCount();
+        const std::string which = n == 1 ? "level 0's" : "levels 0-" + std::to_string(n - 1) + "'s (its own scales)";
+        std::printf("  indexes      %s: %s samples read from its chunks; this index %.2f MB\n",
+                    external->name().c_str(), which.c_str(), store.fileBytes() / 1e6);
+    }
     else
         std::printf("  stored       %.1f MB on disk for %.1f MB of samples (%s, ratio %.2f)\n",
                     store.fileBytes() / 1e6, v.byteSize() / 1e6, compressionName(h.compression), ratio);

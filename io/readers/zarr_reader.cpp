@@ -105,6 +105,7 @@ struct ZarrImage {
     ZarrArrayMeta meta;
     uint32_t metadataCrc = 0;  // of the array's metadata document
     glm::dvec3 spacing{1.0}, origin{0.0};
+    int levels = 1;  // the multiscale's datasets (1 for a plain array)
 };
 
 // "0 (512 x 512 x 300), 1 (256 x 256 x 150)": the levels, for a level out of range.
@@ -140,6 +141,7 @@ ZarrImage openMultiscale(const ZarrKeys& keys, const json& multiscales, int form
         std::any_of(relative.begin(), relative.end(), [](const fs::path& p) { return p == ".."; }))
         throwIoError(where, "dataset path \"" + path + "\" does not name a folder inside the image");
     ZarrImage image;
+    image.levels = int(datasets.size());
     image.arrayDir = relative.lexically_normal().generic_string();
     while (!image.arrayDir.empty() && image.arrayDir.back() == '/') image.arrayDir.pop_back();
     if (image.arrayDir == ".") image.arrayDir.clear();
@@ -341,6 +343,7 @@ ZarrVolume::ZarrVolume(const std::string& path, int level, const RemoteOptions& 
 ZarrVolume::~ZarrVolume() = default;
 
 bool ZarrVolume::isRemote() const { return mKeys->isRemote(); }
+int ZarrVolume::levelCount() const { return mImage->levels; }
 uint64_t ZarrVolume::requests() const { return mKeys->requests(); }
 uint64_t ZarrVolume::bytesFetched() const { return mKeys->bytesFetched(); }
 size_t ZarrVolume::decodedBytes() const {

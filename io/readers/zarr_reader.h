@@ -59,6 +59,8 @@ public:
     int64_t chunkCount() const { return mChunkCounts[0] * mChunkCounts[1] * mChunkCounts[2]; }
     // Chunk c's number, x fastest (the order of an index's pins).
     int64_t chunkNumber(const Dims3& c) const { return (c[2] * mChunkCounts[1] + c[1]) * mChunkCounts[0] + c[0]; }
+    // Levels of the OME-Zarr image's multiscales (its datasets, finest first); 1 for a plain array.
+    int levelCount() const;
     // CRC-32 of the array's metadata document (.zarray or zarr.json).
     uint32_t metadataCrc() const { return mMetadataCrc; }
     bool isRemote() const;

@@ -95,16 +95,17 @@ struct BrickScratch {
 };
 
 // Brick `id` of the level whose slices `window` holds, in `layout`; its owned samples count in
-// the histogram when `countSamples` (level 0).
+// the histogram when `countSamples` (level 0); with `external` (an index's level lying in the
+// indexed data) it is measured only.
 void encodeBrick(const SliceWindow& window, const BrickLayout& layout, ScalarType type,
-                 const StoreWriteOptions& options, int64_t id, bool countSamples, BrickScratch& scratch,
+                 const StoreWriteOptions& options, int64_t id, bool countSamples, bool external, BrickScratch& scratch,
                  EncodedBrick& out) {
     const Dims3 coord = layout.brickCoord(id);
     measureBrickInSlices(type, window, layout, coord, out.entry, out.subBlocks,
                          countSamples ? scratch.histogramEven.data() : nullptr,
                          countSamples ? scratch.histogramOdd.data() : nullptr);
-    out.entry.external = countSamples && options.externalRecord;
-    if (out.entry.external) {  // an index's level 0: measured, its samples left where they are
+    out.entry.external = external;
+    if (external) {  // measured, its samples left where they are
         out.bytes.clear();
         out.entry.compressed = false;
         out.entry.storedBytes = 0;
@@ -231,13 +232,13 @@ BrickEncoder::BrickEncoder(ScalarType type, const StoreWriteOptions& options)
 BrickEncoder::~BrickEncoder() = default;
 
 void BrickEncoder::encode(const SliceWindow& window, const BrickLayout& layout, int64_t firstId,
-                          int64_t count, bool countSamples, std::vector<EncodedBrick>& out) {
+                          int64_t count, bool countSamples, bool external, std::vector<EncodedBrick>& out) {
     if (out.size() < size_t(count)) out.resize(size_t(count));
     Impl& m = *mImpl;
     tbb::parallel_for(tbb::blocked_range<int64_t>(0, count, 2), [&](const auto& r) {
         BrickScratch& s = m.scratch.local();
         for (int64_t b = r.begin(); b != r.end(); ++b)
-            encodeBrick(window, layout, m.type, m.options, firstId + b, countSamples, s, out[size_t(b)]);
+            encodeBrick(window, layout, m.type, m.options, firstId + b, countSamples, external, s, out[size_t(b)]);
     });
 }
 

@@ -117,10 +117,11 @@ public:
 
     // Bricks [firstId, firstId + count) of `layout` (ids within that level), whose slices
     // `window` holds, into out[0, count) (grown as needed; later elements untouched). With
-    // `countSamples` (level 0) the samples each brick owns count in the histogram. Throws on a
-    // compressor failure.
+    // `countSamples` (level 0) the samples each brick owns count in the histogram; with
+    // `external` (a level of an index that lies in the indexed data, io/store/zarr_index.h) the
+    // bricks are measured and get no bytes. Throws on a compressor failure.
     void encode(const SliceWindow& window, const BrickLayout& layout, int64_t firstId, int64_t count,
-                bool countSamples, std::vector<EncodedBrick>& out);
+                bool countSamples, bool external, std::vector<EncodedBrick>& out);
 
     // kFineHistogramBins counts: every sample counted so far, by all threads.
     std::vector<uint64_t> fineHistogram() const;

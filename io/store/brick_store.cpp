@@ -101,7 +101,7 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     if (mHeader.externalBytes) {
         std::vector<unsigned char> record(size_t(mHeader.externalBytes));
         mSource->read(mHeader.externalOffset, record.size(), record.data(), "record of indexed data");
-        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevel(record.data(), record.size(), mPath),
+        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevels(record.data(), record.size(), mPath),
                                                      options.remote, options.chunkCacheBytes);
     }
 }

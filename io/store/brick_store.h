@@ -14,7 +14,8 @@
 // An index (vdiso index: a store whose level 0 stays in the Zarr array it indexes) opens the
 // same way, by its path or by the indexed folder's (whose index is beside it,
 // io/store/external_level.h defaultIndexPath); level 0's bricks are then assembled from the
-// array's chunks (io/store/external_bricks.h), coarser levels read from the index file.
+// array's chunks (io/store/external_bricks.h), and so are an OME-Zarr's own scales' where the
+// index takes its coarser levels from them; other coarser levels are read from the index file.
 #pragma once
 
 #include <array>

@@ -6,9 +6,11 @@
 #include <future>
 #include <list>
 #include <mutex>
+#include <stdexcept>
 #include <unordered_map>
 #include <vector>
 
+#include "core/brick_levels.h"
 #include "io/crc32.h"
 #include "io/error.h"
 
@@ -22,17 +24,25 @@ std::string dimsText(const Dims3& d) {
     return std::to_string(d[0]) + " x " + std::to_string(d[1]) + " x " + std::to_string(d[2]);
 }
 
+// One level's array, its record and its bricks' place among the store's levels.
+struct ArrayLevel {
+    ZarrVolume array;
+    ExternalLevel record;
+    BrickLevel level;
+    Dims3 arrayDims;  // the array's own (its level's, or one or two samples fewer)
+    ArrayLevel(const std::string& location, int omeLevel, const RemoteOptions& remote)
+        : array(location, omeLevel, remote), arrayDims(array.info().dims) {}
+};
+
 }  // namespace
 
 struct ExternalBricks::Impl {
-    ZarrVolume array;
-    ExternalLevel record;
-    BrickLayout layout;
+    std::vector<std::unique_ptr<ArrayLevel>> levels;
     size_t cacheBytes;
     std::string again;  // what to do about a change
 
-    // Decoded chunks by number: being read (a future others wait on) or held, least recently
-    // used last; `bytes` is 0 until the chunk is read.
+    // Decoded chunks by key (chunk number x kMaxLevels + level): being read (a future others
+    // wait on) or held, least recently used last; `bytes` is 0 until the chunk is read.
     struct Slot {
         std::shared_future<ChunkSamples> samples;
         std::list<int64_t>::iterator used;
@@ -44,26 +54,24 @@ struct ExternalBricks::Impl {
     size_t heldBytes = 0;
     std::atomic<uint64_t> chunksRead{0}, chunkBytesRead{0};
 
-    Impl(const std::string& location, int level, const RemoteOptions& remote)
-        : array(location, level, remote) {}
-
-    [[noreturn]] void changed(const Dims3& c, const std::string& what) const {
+    [[noreturn]] void changed(const ZarrVolume& array, const Dims3& c, const std::string& what) const {
         throwIoError(array.where(c), "changed since it was indexed (" + what + "): " + again);
     }
 
-    ChunkSamples load(const Dims3& c) {
+    ChunkSamples load(const ArrayLevel& level, const Dims3& c) {
+        const ZarrVolume& array = level.array;
         const auto stored = array.stored({c})[0];
-        const ZarrChunkPin& pin = record.pins[size_t(array.chunkNumber(c))];
+        const ZarrChunkPin& pin = level.record.pins[size_t(array.chunkNumber(c))];
         if (!stored) {
             if (pin.bytes != ZarrChunkPin::kMissing)
-                changed(c, "it is missing, where it held " + std::to_string(pin.bytes) + " bytes");
+                changed(array, c, "it is missing, where it held " + std::to_string(pin.bytes) + " bytes");
         } else if (pin.bytes == ZarrChunkPin::kMissing) {
-            changed(c, "it was missing (the fill value) and now holds " + std::to_string(stored->size()) + " bytes");
+            changed(array, c, "it was missing (the fill value) and now holds " + std::to_string(stored->size()) + " bytes");
         } else if (stored->size() != pin.bytes) {
-            changed(c, "it holds " + std::to_string(stored->size()) + " bytes, where it held " +
-                           std::to_string(pin.bytes));
+            changed(array, c, "it holds " + std::to_string(stored->size()) + " bytes, where it held " +
+                                  std::to_string(pin.bytes));
         } else if (crc32Of(stored->data(), stored->size()) != pin.crc) {
-            changed(c, "its bytes differ from those indexed");
+            changed(array, c, "its bytes differ from those indexed");
         }
         auto samples = std::make_shared<std::vector<unsigned char>>(array.decodedBytes());
         array.decode(c, stored, samples->data());
@@ -72,33 +80,34 @@ struct ExternalBricks::Impl {
         return samples;
     }
 
-    // Chunk c's decoded samples, read once however many bricks ask for it at once.
-    ChunkSamples chunk(const Dims3& c) {
-        const int64_t number = array.chunkNumber(c);
+    // Chunk c of level `l`'s decoded samples, read once however many bricks ask for it at once.
+    ChunkSamples chunk(int l, const Dims3& c) {
+        const ArrayLevel& level = *levels[size_t(l)];
+        const int64_t key = level.array.chunkNumber(c) * kMaxLevels + l;
         std::unique_lock lock(mutex);
-        if (auto it = slots.find(number); it != slots.end()) {
+        if (auto it = slots.find(key); it != slots.end()) {
             used.splice(used.begin(), used, it->second.used);
             const std::shared_future<ChunkSamples> samples = it->second.samples;
             lock.unlock();
             return samples.get();
         }
         std::promise<ChunkSamples> promise;
-        used.push_front(number);
-        slots.emplace(number, Slot{promise.get_future().share(), used.begin(), 0});
+        used.push_front(key);
+        slots.emplace(key, Slot{promise.get_future().share(), used.begin(), 0});
         lock.unlock();
         ChunkSamples samples;
         try {
-            samples = load(c);
+            samples = load(level, c);
         } catch (...) {
             promise.set_exception(std::current_exception());
             lock.lock();
-            used.erase(slots.at(number).used);
-            slots.erase(number);
+            used.erase(slots.at(key).used);
+            slots.erase(key);
             throw;
         }
         promise.set_value(samples);
         lock.lock();
-        slots.at(number).bytes = samples->size();
+        slots.at(key).bytes = samples->size();
         heldBytes += samples->size();
         // The least recently used read chunks go while over budget (the one just read stays).
         for (auto it = std::prev(used.end()); heldBytes > cacheBytes && it != used.begin();) {
@@ -115,58 +124,88 @@ struct ExternalBricks::Impl {
     }
 };
 
-ExternalBricks::ExternalBricks(const std::string& indexPath, const StoreHeader& header, ExternalLevel record,
-                               const RemoteOptions& remote, size_t cacheBytes) {
-    const std::string location = resolveExternalLocation(record.location, indexPath);
-    try {
-        mImpl = std::make_unique<Impl>(location, record.level, remote);
-    } catch (const IoError& e) {
-        throwIoError(indexPath, std::string("indexes data that cannot be opened: ") + e.what());
-    }
+ExternalBricks::ExternalBricks(const std::string& indexPath, const StoreHeader& header, std::vector<ExternalLevel> records,
+                               const RemoteOptions& remote, size_t cacheBytes)
+    : mImpl(std::make_unique<Impl>()) {
     Impl& m = *mImpl;
-    m.record = std::move(record);
-    m.layout = BrickLayout(header.volume.dims, header.brickSize);
     m.cacheBytes = cacheBytes;
-    m.again = "run 'vdiso index' on " + m.array.name() + " again (" + indexPath + " is out of date)";
-    const VolumeInfo& v = m.array.info();
-    std::string problem;
-    if (v.dims != header.volume.dims)
-        problem = "it is " + dimsText(v.dims) + " samples, the index " + dimsText(header.volume.dims);
-    else if (v.type != header.volume.type)
-        problem = std::string("its samples are ") + scalarTypeName(v.type) + ", the index's " +
-                  scalarTypeName(header.volume.type);
-    else if (m.array.chunkShape() != m.record.chunkShape || m.array.chunkCounts() != m.record.chunkCounts)
-        problem = "its chunks are " + dimsText(m.array.chunkShape()) + " samples, the index's " +
-                  dimsText(m.record.chunkShape);
-    else if (v.spacing != header.volume.spacing || v.origin != header.volume.origin)
-        problem = "its spacing or origin differ from the index's";
-    else if (m.array.metadataCrc() != m.record.metadataCrc)
-        problem = "its metadata changed since it was indexed";
-    if (!problem.empty())
-        throwIoError(indexPath, "is not an index of " + m.array.name() + " as it is now (" + problem + "): " + m.again);
+    if (int(records.size()) != header.externalLevels)
+        throwIoError(indexPath, "its record of the indexed data lists " + std::to_string(records.size()) +
+                                    " levels where its header says " + std::to_string(header.externalLevels));
+    const std::vector<BrickLevel> storeLevels = brickLevels(header.volume, header.brickSize, header.levelCount);
+    for (size_t l = 0; l < records.size(); ++l) {
+        const std::string location = resolveExternalLocation(records[l].location, indexPath);
+        try {
+            m.levels.push_back(std::make_unique<ArrayLevel>(location, records[l].level, remote));
+        } catch (const IoError& e) {
+            throwIoError(indexPath, std::string("indexes data that cannot be opened: ") + e.what());
+        }
+        ArrayLevel& a = *m.levels.back();
+        a.record = std::move(records[l]);
+        a.level = storeLevels[l];
+        if (l == 0)
+            m.again = "run 'vdiso index' on " + a.array.name() + " again (" + indexPath + " is out of date)";
+        const VolumeInfo& v = a.array.info();
+        const Dims3& want = a.level.volume.dims;
+        std::string problem;
+        // Level 0 is the volume; a coarser level may be up to two samples short of its dims.
+        bool fits = true;
+        for (int k = 0; k < 3; ++k) fits = fits && v.dims[k] <= want[k] && v.dims[k] >= want[k] - (l ? 2 : 0);
+        if (!fits)
+            problem = "it is " + dimsText(v.dims) + " samples, the index's level " + std::to_string(l) + " " + dimsText(want);
+        else if (v.type != header.volume.type)
+            problem = std::string("its samples are ") + scalarTypeName(v.type) + ", the index's " +
+                      scalarTypeName(header.volume.type);
+        else if (a.array.chunkShape() != a.record.chunkShape || a.array.chunkCounts() != a.record.chunkCounts)
+            problem = "its chunks are " + dimsText(a.array.chunkShape()) + " samples, the index's " +
+                      dimsText(a.record.chunkShape);
+        else if (l == 0 && (v.spacing != header.volume.spacing || v.origin != header.volume.origin))
+            problem = "its spacing or origin differ from the index's";
+        else if (a.array.metadataCrc() != a.record.metadataCrc)
+            problem = "its metadata changed since it was indexed";
+        if (!problem.empty())
+            throwIoError(indexPath, "is not an index of " + a.array.name() + " as it is now (" + problem + "): " + m.again);
+    }
 }
 
 ExternalBricks::~ExternalBricks() = default;
 
-const std::string& ExternalBricks::name() const { return mImpl->array.name(); }
+const std::string& ExternalBricks::name() const { return mImpl->levels[0]->array.name(); }
+int ExternalBricks::levelCount() const { return int(mImpl->levels.size()); }
 uint64_t ExternalBricks::chunksRead() const { return mImpl->chunksRead.load(); }
 uint64_t ExternalBricks::chunkBytesRead() const { return mImpl->chunkBytesRead.load(); }
-bool ExternalBricks::isRemote() const { return mImpl->array.isRemote(); }
-uint64_t ExternalBricks::requests() const { return mImpl->array.requests(); }
-uint64_t ExternalBricks::bytesFetched() const { return mImpl->array.bytesFetched(); }
+bool ExternalBricks::isRemote() const { return mImpl->levels[0]->array.isRemote(); }
+uint64_t ExternalBricks::requests() const {
+    uint64_t n = 0;
+    for (const auto& a : mImpl->levels) n += a->array.requests();
+    return n;
+}
+uint64_t ExternalBricks::bytesFetched() const {
+    uint64_t n = 0;
+    for (const auto& a : mImpl->levels) n += a->array.bytesFetched();
+    return n;
+}
 
 void ExternalBricks::assemble(int64_t id, unsigned char* dst) const {
     Impl& m = *mImpl;
-    const BrickLayout& layout = m.layout;
-    const Dims3 coord = layout.brickCoord(id);
-    const Dims3& chunk = m.array.chunkShape();
+    int l = int(m.levels.size()) - 1;
+    while (l > 0 && id < m.levels[size_t(l)]->level.firstBrick) --l;
+    const ArrayLevel& level = *m.levels[size_t(l)];
+    const BrickLayout& layout = level.level.layout;
+    if (id - level.level.firstBrick >= layout.brickCount())
+        throw std::logic_error("ExternalBricks::assemble: a brick of a level kept in the index file");
+    const Dims3 coord = layout.brickCoord(id - level.level.firstBrick);
+    const Dims3& chunk = level.array.chunkShape();
+    const Dims3& dims = level.arrayDims;
     const int side = layout.side();
-    const size_t sampleBytes = scalarSize(m.array.info().type);
-    // The chunks holding the brick's samples (clamped to the volume), fetched first.
+    const size_t sampleBytes = scalarSize(level.array.info().type);
+    // A sample of the level, clamped to its faces and then to the array's own last sample.
+    auto clamp = [&](int a, int64_t s) { return std::min(layout.clampSample(a, s), dims[a] - 1); };
+    // The chunks holding the brick's samples, fetched first.
     Dims3 first{}, count{};
     for (int a = 0; a < 3; ++a) {
-        const int64_t lo = layout.clampSample(a, layout.firstSample(coord[a]));
-        const int64_t hi = layout.clampSample(a, layout.firstSample(coord[a]) + side - 1);
+        const int64_t lo = clamp(a, layout.firstSample(coord[a]));
+        const int64_t hi = clamp(a, layout.firstSample(coord[a]) + side - 1);
         first[a] = lo / chunk[a];
         count[a] = hi / chunk[a] - first[a] + 1;
     }
@@ -175,18 +214,18 @@ void ExternalBricks::assemble(int64_t id, unsigned char* dst) const {
     for (int64_t kz = 0; kz < count[2]; ++kz)
         for (int64_t ky = 0; ky < count[1]; ++ky)
             for (int64_t kx = 0; kx < count[0]; ++kx)
-                chunks.push_back(m.chunk({first[0] + kx, first[1] + ky, first[2] + kz}));
-    // Rows as gatherBrick makes them (io/store/brick_encoder.cpp): the part inside the volume
+                chunks.push_back(m.chunk(l, {first[0] + kx, first[1] + ky, first[2] + kz}));
+    // Rows as gatherBrick makes them (io/store/brick_encoder.cpp): the part inside the array
     // copied a chunk's run at a time, the ends clamped.
-    const int64_t nx = layout.dims[0];
+    const int64_t nx = dims[0];
     const int64_t x0 = layout.firstSample(coord[0]);
     const int begin = int(std::max<int64_t>(0, -x0));
     const int end = int(std::min<int64_t>(side, nx - x0));
     for (int lz = 0; lz < side; ++lz) {
-        const int64_t z = layout.clampSample(2, layout.firstSample(coord[2]) + lz);
+        const int64_t z = clamp(2, layout.firstSample(coord[2]) + lz);
         const int64_t kz = z / chunk[2] - first[2], iz = z % chunk[2];
         for (int ly = 0; ly < side; ++ly) {
-            const int64_t y = layout.clampSample(1, layout.firstSample(coord[1]) + ly);
+            const int64_t y = clamp(1, layout.firstSample(coord[1]) + ly);
             const int64_t ky = y / chunk[1] - first[1], iy = y % chunk[1];
             unsigned char* row = dst + (size_t(lz) * side + size_t(ly)) * side * sampleBytes;
             for (int lx = begin; lx < end;) {

@@ -2,8 +2,11 @@
 
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <stdexcept>
 #include <nlohmann/json.hpp>
 
+#include "core/brick_levels.h"
 #include "io/crc32.h"
 #include "io/error.h"
 #include "io/remote/remote_file.h"
@@ -12,7 +15,6 @@ namespace vdiso {
 namespace {
 
 constexpr char kMagic[8] = {'V', 'D', 'I', 'S', 'O', 'E', 'X', 'T'};
-constexpr uint32_t kVersion = 1;
 constexpr size_t kPinBytes = 12;
 constexpr size_t kMaxJsonBytes = 1 << 20;
 
@@ -29,9 +31,7 @@ T get(const unsigned char* bytes, size_t& at) {
     return v;
 }
 
-}  // namespace
-
-std::vector<unsigned char> encodeExternalLevel(const ExternalLevel& e) {
+void encodeLevel(const ExternalLevel& e, std::vector<unsigned char>& out) {
     nlohmann::json j;
     j["kind"] = "zarr";
     j["location"] = e.location;
@@ -40,9 +40,6 @@ std::vector<unsigned char> encodeExternalLevel(const ExternalLevel& e) {
     j["chunk_shape"] = {e.chunkShape[0], e.chunkShape[1], e.chunkShape[2]};
     j["chunk_counts"] = {e.chunkCounts[0], e.chunkCounts[1], e.chunkCounts[2]};
     const std::string text = j.dump();
-    std::vector<unsigned char> out;
-    put(out, kMagic, 8);
-    put(out, &kVersion, 4);
     const uint32_t jsonBytes = uint32_t(text.size());
     put(out, &jsonBytes, 4);
     put(out, text.data(), text.size());
@@ -52,23 +49,13 @@ std::vector<unsigned char> encodeExternalLevel(const ExternalLevel& e) {
         put(out, &pin.bytes, 8);
         put(out, &pin.crc, 4);
     }
-    const uint32_t crc = crc32Of(out.data(), out.size());
-    put(out, &crc, 4);
-    return out;
 }
 
-ExternalLevel decodeExternalLevel(const unsigned char* bytes, size_t n, const std::string& path) {
-    auto damaged = [&](const std::string& what) -> void {
-        throwIoError(path, "its record of the indexed data is damaged (" + what + ")");
-    };
-    if (n < 28 || std::memcmp(bytes, kMagic, 8) != 0) damaged("wrong magic");
-    uint32_t storedCrc;
-    std::memcpy(&storedCrc, bytes + n - 4, 4);
-    if (storedCrc != crc32Of(bytes, n - 4)) damaged("checksum mismatch");
-    size_t at = 8;
-    if (get<uint32_t>(bytes, at) != kVersion) damaged("unknown version");
+// One level's description and pins from bytes [at, end); `at` moves past them.
+ExternalLevel decodeLevel(const unsigned char* bytes, size_t& at, size_t end, const std::function<void(const std::string&)>& damaged) {
+    if (end - at < 12) damaged("a level's description overruns it");
     const uint32_t jsonBytes = get<uint32_t>(bytes, at);
-    if (jsonBytes > kMaxJsonBytes || jsonBytes > n - at - 12) damaged("its description overruns it");
+    if (jsonBytes > kMaxJsonBytes || jsonBytes > end - at - 8) damaged("its description overruns it");
     ExternalLevel e;
     try {
         const nlohmann::json j = nlohmann::json::parse(bytes + at, bytes + at + jsonBytes);
@@ -93,14 +80,53 @@ ExternalLevel decodeExternalLevel(const unsigned char* bytes, size_t n, const st
     // The grid's product, compared without overflow: the record is the file's word.
     const unsigned __int128 expected = (unsigned __int128)e.chunkCounts[0] * uint64_t(e.chunkCounts[1]) *
                                        uint64_t(e.chunkCounts[2]);
-    if (expected != count || count > (n - at - 4) / kPinBytes || (n - at - 4) != count * kPinBytes)
-        damaged("its chunk count does not match its chunk grid");
+    if (expected != count || count > (end - at) / kPinBytes) damaged("its chunk count does not match its chunk grid");
     e.pins.resize(size_t(count));
     for (ZarrChunkPin& pin : e.pins) {
         pin.bytes = get<uint64_t>(bytes, at);
         pin.crc = get<uint32_t>(bytes, at);
     }
     return e;
+}
+
+}  // namespace
+
+std::vector<unsigned char> encodeExternalLevels(const std::vector<ExternalLevel>& levels) {
+    if (levels.empty()) throw std::logic_error("encodeExternalLevels: no level");
+    const bool single = levels.size() == 1;
+    const uint32_t version = single ? 1 : 2;
+    std::vector<unsigned char> out;
+    put(out, kMagic, 8);
+    put(out, &version, 4);
+    if (!single) {
+        const uint32_t count = uint32_t(levels.size());
+        put(out, &count, 4);
+    }
+    for (const ExternalLevel& level : levels) encodeLevel(level, out);
+    const uint32_t crc = crc32Of(out.data(), out.size());
+    put(out, &crc, 4);
+    return out;
+}
+
+std::vector<ExternalLevel> decodeExternalLevels(const unsigned char* bytes, size_t n, const std::string& path) {
+    const std::function<void(const std::string&)> damaged = [&](const std::string& what) {
+        throwIoError(path, "its record of the indexed data is damaged (" + what + ")");
+    };
+    if (n < 28 || std::memcmp(bytes, kMagic, 8) != 0) damaged("wrong magic");
+    uint32_t storedCrc;
+    std::memcpy(&storedCrc, bytes + n - 4, 4);
+    if (storedCrc != crc32Of(bytes, n - 4)) damaged("checksum mismatch");
+    size_t at = 8;
+    const uint32_t version = get<uint32_t>(bytes, at);
+    if (version != 1 && version != 2) damaged("unknown version " + std::to_string(version));
+    const uint32_t count = version == 1 ? 1 : get<uint32_t>(bytes, at);
+    if (count < 1 || count > uint32_t(kMaxLevels)) damaged("it lists " + std::to_string(count) + " levels");
+    std::vector<ExternalLevel> levels;
+    for (uint32_t i = 0; i < count; ++i) {
+        levels.push_back(decodeLevel(bytes, at, n - 4, damaged));
+    }
+    if (at != n - 4) damaged("its chunk count does not match its chunk grid");
+    return levels;
 }
 
 std::string resolveExternalLocation(const std::string& location, const std::string& indexPath) {

@@ -86,6 +86,9 @@ constexpr size_t kWholeHeaderChecksumAt = 240;  // covers bytes [0, 240)
 // covering the header up to it.
 constexpr size_t kExternalAt = 244;
 constexpr size_t kExternalChecksumAt = 260;  // covers bytes [0, 260)
+// Version 7's count of levels lying in the indexed data, and a fourth checksum.
+constexpr size_t kExternalLevelsAt = 264;
+constexpr size_t kExternalLevelsChecksumAt = 268;  // covers bytes [0, 268)
 // How far from unit length a stored direction column may be (they are written normalised).
 constexpr double kUnitTolerance = 1e-9;
 
@@ -163,8 +166,8 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
     ByteWriter w(bytes.data());
     w.putBytes(kHeaderMagic, 8);
     // The oldest version that holds what is written: a store without indexed data stays
-    // readable by builds that read up to version 5.
-    w.put<uint32_t>(h.externalBytes ? 6u : 5u);
+    // readable by builds that read up to version 5, an index of level 0 only by those up to 6.
+    w.put<uint32_t>(h.externalLevels > 1 ? 7u : h.externalBytes ? 6u : 5u);
     w.put<uint32_t>(kStoreHeaderBytes);
     for (int a = 0; a < 3; ++a) w.put<uint64_t>(uint64_t(h.volume.dims[a]));
     for (int a = 0; a < 3; ++a) w.put<double>(h.volume.spacing[a]);
@@ -193,6 +196,10 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
         w.put<uint64_t>(h.externalOffset);
         w.put<uint64_t>(h.externalBytes);
         w.put<uint32_t>(crc32Of(bytes.data(), kExternalChecksumAt));
+        if (h.externalLevels > 1) {
+            w.put<uint32_t>(uint32_t(h.externalLevels));
+            w.put<uint32_t>(crc32Of(bytes.data(), kExternalLevelsChecksumAt));
+        }
     }
     return bytes;
 }
@@ -300,6 +307,18 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
         if (h.externalBytes < 28 || h.externalBytes > (uint64_t(1) << 36) || h.externalOffset < kStoreHeaderBytes ||
             h.externalOffset > h.indexOffset || h.externalBytes > h.indexOffset - h.externalOffset)
             throwIoError(path, "header's record of indexed data lies outside the file's bricks");
+        h.externalLevels = 1;
+    }
+    if (version >= 7) {
+        uint32_t crc, levels;
+        std::memcpy(&crc, bytes + kExternalLevelsChecksumAt, 4);
+        if (crc != crc32Of(bytes, kExternalLevelsChecksumAt))
+            throwIoError(path, "header checksum mismatch in its record of indexed data (the header is corrupt)");
+        std::memcpy(&levels, bytes + kExternalLevelsAt, 4);
+        if (levels < 2 || levels > uint32_t(h.levelCount))
+            throwIoError(path, "header says " + std::to_string(levels) + " of its " + std::to_string(h.levelCount) +
+                                   " levels lie in the indexed data");
+        h.externalLevels = int(levels);
     }
     if (brickCount != uint64_t(totalBricks(h)))
         throwIoError(path, "header's brick count does not match its dimensions and levels");
@@ -311,8 +330,11 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     return h;
 }
 
-int64_t totalBricks(const StoreHeader& header) {
-    const std::vector<BrickLevel> levels = brickLevels(header.volume, header.brickSize, header.levelCount);
+int64_t totalBricks(const StoreHeader& header) { return firstBrickOfLevel(header, header.levelCount); }
+
+int64_t firstBrickOfLevel(const StoreHeader& header, int level) {
+    if (level <= 0) return 0;
+    const std::vector<BrickLevel> levels = brickLevels(header.volume, header.brickSize, level);
     return levels.back().firstBrick + levels.back().layout.brickCount();
 }
 
@@ -392,14 +414,15 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
     if (r.get<uint64_t>() != count) throwIoError(path, "index brick count does not match header");
 
     const uint64_t rawBytes = uint64_t(layout.samplesPerBrick()) * scalarSize(header.volume.type);
+    const int64_t externalEnd = firstBrickOfLevel(header, header.externalLevels);
     const uint64_t maxStored = maxStoredBrickBytes(rawBytes);
     entries.resize(count);
     for (uint64_t id = 0; id < count; ++id) {
         uint32_t flags = 0;
         BrickEntry& e = entries[id] = decodeEntry(bytes + r.at(), flags);
         r.skip(kEntryBytes);
-        // An index's level 0, and only that, is external: no bytes in the file.
-        if (e.external != (header.externalBytes > 0 && id < uint64_t(layout.brickCount())) || flags > 3)
+        // An index's levels that lie in the indexed data, and only those, are external: no bytes here.
+        if (e.external != (id < uint64_t(externalEnd)) || flags > 3)
             throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
         if (e.external) {
             if (e.offset || e.storedBytes || e.checksum || e.compressed || !(e.minValue <= e.maxValue))

@@ -19,6 +19,9 @@
 
 namespace vdiso {
 
+// 7: an index whose coarser levels lie in the indexed data too (an OME-Zarr's own scales): how
+// many levels do, in the header, and their entries flagged external. Indexes of level 0 only
+// are written as version 6.
 // 6: an index of data kept elsewhere (vdiso index; io/store/external_level.h): where its record
 // is, in the header, and level 0's entries flagged external. Stores without one are written as
 // version 5, which older builds read.
@@ -27,7 +30,7 @@ namespace vdiso {
 // 4: the volume's orientation (direction matrix and whether the input had one) in the header.
 // 3: levels of detail (the header's level count; every level's bricks in the index). Version
 // 2 and 3 stores open as before, without orientation; version 2 ones with level 0 only.
-constexpr uint32_t kStoreFormatVersion = 6;
+constexpr uint32_t kStoreFormatVersion = 7;
 constexpr uint32_t kStoreHeaderBytes = 4096;
 constexpr uint32_t kStoreAlignment = 4096;  // brick offsets: direct I/O needs 4 KiB alignment
 constexpr int kHistogramBins = 256;
@@ -83,8 +86,11 @@ struct StoreHeader {
     uint64_t indexOffset = 0, indexBytes = 0;
     double valueMin = 0, valueMax = 0;
     uint64_t storedBrickBytes = 0;  // sum of the bricks' stored bytes (padding excluded), all levels
-    // An index's record of the data it indexes (version 6; 0, 0 for a store holding its data).
+    // An index's record of the data it indexes (version 6; 0, 0 for a store holding its data),
+    // and how many of its levels, from level 0, lie there (1 in version 6; 0 for a store; from
+    // version 7 more: an OME-Zarr's own scales).
     uint64_t externalOffset = 0, externalBytes = 0;
+    int externalLevels = 0;
 };
 
 }  // namespace vdiso
@@ -116,6 +122,8 @@ std::vector<unsigned char> encodeIndex(const std::vector<BrickEntry>& entries,
 
 // Bricks of every level of detail the header describes.
 int64_t totalBricks(const StoreHeader& header);
+// The number of level `level`'s first brick: the bricks of the levels before it (0 for level 0).
+int64_t firstBrickOfLevel(const StoreHeader& header, int level);
 
 // Size in bytes of the raw index of a store with `brickCount` bricks (stored as such before
 // version 5; packed in compressed parts from 5: io/store/index_parts.h).

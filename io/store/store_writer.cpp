@@ -62,6 +62,15 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     const int B = options.brickSize;
     const int levelCount = storeLevelCount(layout, options);
     const std::vector<BrickLevel> levels = brickLevels(info, B, levelCount);
+    // Level l's own source (an OME-Zarr's scale), if any.
+    auto coarseSource = [&](size_t l) -> SliceReader* {
+        return l - 1 < options.coarseSources.size() ? options.coarseSources[l - 1] : nullptr;
+    };
+    for (size_t l = 1; l <= options.coarseSources.size(); ++l)
+        if (SliceReader* s = coarseSource(l);
+            !s || l >= levels.size() || !options.externalRecord || s->info().dims != levels[l].volume.dims ||
+            s->info().type != info.type)
+            throw std::logic_error("store writer: a coarse source that is not its level's");
 
     const StoreResume* resume = options.resume;
     const StoreCheckpoint* from = resume ? resume->from : nullptr;
@@ -99,7 +108,10 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             std::vector<EncodedBrick>& group = writer.group();
             const int64_t firstId = lay.brickId(0, bj, bk);
             const int64_t count = std::min(groupRows, lay.brickCounts[1] - bj) * rowBricks;
-            encoder.encode(window, lay, firstId, count, level.firstBrick == 0, group);
+            const bool level0 = level.firstBrick == 0;
+            const size_t l = size_t(levelOfBrick(levels, level.firstBrick));
+            encoder.encode(window, lay, firstId, count, level0,
+                           options.externalRecord && (level0 || coarseSource(l)), group);
             const uint64_t groupStart = fileEnd;
             fileEnd = placeBricks(group, count, groupStart);
             for (int64_t b = 0; b < count; ++b) {
@@ -124,7 +136,8 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         while (level.nextSlice < dims[2] &&
                (2 * level.nextSlice + 1 <= below || below == fine[2] - 1)) {
             const int64_t z = level.nextSlice;
-            downsampleSlice(info.type, fineWindow, fine, dims, z, window.slice(z));
+            if (SliceReader* own = coarseSource(l)) own->read(window.slice(z), 1);
+            else downsampleSlice(info.type, fineWindow, fine, dims, z, window.slice(z));
             ++level.nextSlice;
             if (l < coarse.size()) feed(l + 1, z);
             const BrickLayout& lay = level.level.layout;
@@ -159,6 +172,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             coarse[l].nextSlice = from->levels[l].nextSlice;
             coarse[l].nextLayer = from->levels[l].nextLayer;
             std::copy(from->levels[l].ring.begin(), from->levels[l].ring.end(), coarse[l].ring->window().bytes);
+            if (SliceReader* own = coarseSource(l + 1)) own->skip(coarse[l].nextSlice);
         }
         out->truncate(fileEnd);
     }
@@ -192,7 +206,11 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             const SliceWindow w = level.ring->window();
             rings.push_back({w.bytes, w.sliceBytes * size_t(w.slots)});
         }
-        if (resume->sourceState) c.source = resume->sourceState(lastSliceOfLayer(layout, bk) + 1);
+        if (resume->sourceState) {
+            std::vector<int64_t> slicesRead{lastSliceOfLayer(layout, bk) + 1};
+            for (const LevelInProgress& level : coarse) slicesRead.push_back(level.nextSlice);
+            c.source = resume->sourceState(slicesRead);
+        }
         writeStoreCheckpoint(resume->checkpointPath, c, rings);
         out->keepOnFailure();  // the checkpoint goes on from the partial file
         lastSave = Clock::now();
@@ -226,6 +244,8 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         if (level.nextLayer != level.level.layout.brickCounts[2])
             throw std::logic_error("store writer: a level of detail was not completed");
     source.finish();
+    for (SliceReader* own : options.coarseSources)
+        if (own) own->finish();
 
     uint64_t externalOffset = 0;
     std::vector<unsigned char> external;
@@ -240,6 +260,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     if (!external.empty()) {
         tail.header.externalOffset = externalOffset;
         tail.header.externalBytes = external.size();
+        tail.header.externalLevels = 1 + int(options.coarseSources.size());
         tail.headerBytes = store_format::encodeHeader(tail.header);
     }
     out->writeAt(tail.index.data(), tail.index.size(), fileEnd);

@@ -44,6 +44,11 @@ struct StoreWriteOptions {
     // sub-block codes, histogram) but not stored, and this gives, once every slice is read,
     // the record of where they are (io/store/external_level.h), written into the file.
     std::function<std::vector<unsigned char>()> externalRecord;
+    // An index of an OME-Zarr's own scales: level l's samples read from coarseSources[l - 1]
+    // (the level's dims, core/brick_levels.h levelDims) instead of filtered from level l - 1,
+    // its bricks measured and not stored like level 0's; levels past the end are filtered.
+    // Each source is read once, in step with level 0. Needs externalRecord.
+    std::vector<SliceReader*> coarseSources;
     // Resumable (vdiso index): StoreResume below. Null: the output is written unnamed.
     const StoreResume* resume = nullptr;
 };
@@ -60,8 +65,9 @@ struct StoreResume {
     std::string partialPath, checkpointPath;
     double everySeconds = 30;
     std::string sourceIdentity;  // what the source is (the caller's words)
-    // The caller's state to save with a checkpoint, once `slicesRead` level-0 slices are read.
-    std::function<std::vector<unsigned char>(int64_t slicesRead)> sourceState;
+    // The caller's state to save with a checkpoint: slicesRead[l], the slices of level l read
+    // (level 0's from the source; a coarser level's from its coarse source, or made).
+    std::function<std::vector<unsigned char>(const std::vector<int64_t>& slicesRead)> sourceState;
     const StoreCheckpoint* from = nullptr;
 };
 

@@ -2,9 +2,13 @@
 // so that every front end opens the array like a store without converting it
 // (io/store/brick_store.h). The array is read once, a layer of chunks at a time (the store
 // writer's pass, io/store/store_writer.h), and the index holds what a store's index holds (each
-// brick's range, sub-block codes, the histogram) and the coarser levels of detail as a store
-// has them, but not level 0's samples: instead, where the array is and each chunk's pin
-// (io/store/external_level.h), so that a changed chunk is refused when read.
+// brick's range, sub-block codes, the histogram), but not level 0's samples: instead, where the
+// array is and each chunk's pin (io/store/external_level.h), so that a changed chunk is refused
+// when read. An OME-Zarr's own coarser scales stand for the coarser levels of detail where they
+// fit them (2^l times level 0's spacing, its origin, the level's shape to within two samples):
+// they are read once too, in step with level 0, measured and pinned like it, and their samples
+// stay where they are; the levels past them are filtered and stored in the index, as a store
+// has them.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +22,9 @@ namespace vdiso {
 
 struct ZarrIndexOptions {
     int level = 0;           // the OME-Zarr multiscale level indexed (0, the finest)
+    // Take the coarser levels from the OME-Zarr's own scales where they fit (false: filter
+    // every coarser level from level 0 and store it in the index, `--own-levels`).
+    bool ownScales = true;
     StoreWriteOptions store;  // brick size, levels of detail, their compression, overwrite
     RemoteOptions remote;
     // Resuming: the index is written as INDEX.partial, with where the pass stands saved as
@@ -30,10 +37,12 @@ struct ZarrIndexOptions {
 
 struct ZarrIndexSummary {
     StoreWriteSummary store;   // fileBytes: the index's size; resumedLayers: from an earlier run
-    int64_t chunks = 0, missingChunks = 0;
-    uint64_t dataBytes = 0;    // the array's chunks as stored
+    int64_t chunks = 0, missingChunks = 0;  // of every scale read
+    uint64_t dataBytes = 0;    // those chunks as stored
     // Why a checkpoint found was not gone on from (empty if none was found, or it was).
     std::string startedOver;
+    int ownScaleLevels = 0;     // coarser levels taken from the OME-Zarr's own scales
+    std::string scalesNotUsed;  // why the next scale was not taken (empty: none was left, or not asked)
 };
 
 // Where the index of `dataPath` goes: `indexPath` when given, else beside local data
