@@ -4,6 +4,7 @@
 
 #include "cli/args.h"
 #include "cli/progress_bar.h"
+#include "io/remote/remote_file.h"
 #include "io/store/zarr_index.h"
 #include "tools/commands.h"
 
@@ -24,7 +25,9 @@ constexpr const char* kHelp =
     "An OME-Zarr's own coarser scales are the coarser levels where they fit them (each 2x the\n"
     "one before on x, y and z, at level 0's origin): read once too and left where they lie, so\n"
     "the index stays a small fraction of the data. Levels past them are filtered from the last\n"
-    "one and kept in the index; the summary says which scale was not taken, and why.\n"
+    "one and kept in the index; the summary says which scale was not taken, and why. For data\n"
+    "at a URL, --own-levels trades a larger index for views that fetch fewer bytes: coarse\n"
+    "bricks then come from the index, not from the scales' whole chunks.\n"
     "\n"
     "The index is written as OUT.partial, and where the pass stands is saved as OUT.resume\n"
     "every half minute or so: a run that stops (Ctrl-C, a failed read, a kill) is gone on\n"
@@ -94,9 +97,13 @@ int runIndex(int argc, char** argv) {
         if (s.store.resumedLayers > 0)
             std::printf("went on from an interrupted run: %lld of %lld layers of bricks were done\n",
                         (long long)s.store.resumedLayers, (long long)s.store.layers);
-        if (s.ownScaleLevels > 0)
+        if (s.ownScaleLevels > 0) {
             std::printf("levels 1-%d from its own scales, read where they lie%s\n", s.ownScaleLevels,
                         s.store.levels > s.ownScaleLevels + 1 ? "; the coarser ones filtered from the last" : "");
+            if (isRemoteLocation(data))
+                std::printf("(a view's coarse bricks come from those scales' whole chunks over the link; "
+                            "--own-levels keeps filtered levels in the index instead: larger, fewer bytes a view)\n");
+        }
         if (!s.scalesNotUsed.empty()) std::printf("%s; the levels from there on are filtered\n", s.scalesNotUsed.c_str());
         const double ratio = double(s.store.fileBytes) / double(std::max<uint64_t>(s.dataBytes, 1));
         std::printf("wrote %s: %lld bricks of %d^3 cells in %d level%s over %lld chunks (%lld missing), "
