@@ -88,9 +88,10 @@ pyb::dict convertArray(pyb::object source, const std::string& name, const std::v
 
 // vdiso.index: the Zarr array at `data` indexed where it lies (vdiso index).
 pyb::dict indexData(const std::string& data, const std::string& index, int64_t level, int64_t brick,
-                    const std::string& levels, bool overwrite, bool restart, double checkpointSeconds,
-                    pyb::object progress) {
+                    const std::string& levels, bool ownScales, bool overwrite, bool restart,
+                    double checkpointSeconds, pyb::object progress) {
     ZarrIndexOptions options;
+    options.ownScales = ownScales;
     options.level = int(checkedInt("scale_level", level, 0, 64));
     options.restart = restart;
     if (!(checkpointSeconds >= 0)) throw std::invalid_argument("checkpoint_seconds: expects seconds, 0 or more");
@@ -106,14 +107,16 @@ pyb::dict indexData(const std::string& data, const std::string& index, int64_t l
     d["data_bytes"] = summary.dataBytes;
     d["resumed_layers"] = summary.store.resumedLayers;
     d["layers"] = summary.store.layers;
+    d["own_scale_levels"] = summary.ownScaleLevels;
+    d["scales_not_used"] = summary.scalesNotUsed;
     return d;
 }
 
 }  // namespace
 
 void bindConvert(pyb::module_& m) {
-    m.def("_index", &indexData, "data"_a, "index"_a, "level"_a, "brick"_a, "levels"_a, "overwrite"_a, "restart"_a,
-          "checkpoint_seconds"_a, "progress"_a);
+    m.def("_index", &indexData, "data"_a, "index"_a, "level"_a, "brick"_a, "levels"_a, "own_scales"_a, "overwrite"_a,
+          "restart"_a, "checkpoint_seconds"_a, "progress"_a);
     m.def("_convert_files", &convertFiles, "inputs"_a, "output"_a, "spacing"_a, "brick"_a, "levels"_a, "compress"_a,
           "overwrite"_a, "progress"_a);
     m.def("_convert_array", &convertArray, "source"_a, "name"_a, "shape"_a, "dtype"_a, "output"_a, "spacing"_a,

@@ -463,6 +463,29 @@ def test_an_indexed_zarr_opens_in_place_like_its_converted_store(tmp_path):
         vdiso.index("s3://bucket/head.zarr")
 
 
+def test_an_ome_zarr_s_own_scales_are_its_coarse_levels(tmp_path):
+    """An OME-Zarr written with zarr-python, scales of every other sample: the index takes them
+    as levels and stays small; own_scales=False filters and stores every level instead."""
+    v = head()
+    data = tmp_path / "head.ome.zarr"
+    group = zarr.open_group(str(data), mode="w")
+    datasets = []
+    for level in range(3):
+        step = 2 ** level
+        group.array(str(level), v[::step, ::step, ::step], chunks=(16, 16, 16))
+        datasets.append({"path": str(level), "coordinateTransformations": [{"type": "scale", "scale": [step] * 3}]})
+    axes = [{"name": a, "type": "space"} for a in "zyx"]
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": datasets}]
+    own = vdiso.index(data, brick=8)
+    made = vdiso.index(data, tmp_path / "made.vdiso", brick=8, own_scales=False)
+    assert own["own_scale_levels"] == 2 and own["scales_not_used"] == ""
+    assert made["own_scale_levels"] == 0
+    assert own["file_bytes"] * 3 < made["file_bytes"]
+    store = vdiso.open(data)
+    assert len(store.extract(500.5, method="sage", view="distant").faces) > 100
+    assert len(store.extract(500.5).faces) == len(vdiso.open(tmp_path / "made.vdiso").extract(500.5).faces)
+
+
 def test_everyday_conveniences(tmp_path, volume_and_cli_store):
     import pickle
 
