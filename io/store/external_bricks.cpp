@@ -133,11 +133,16 @@ ExternalBricks::ExternalBricks(const std::string& indexPath, const StoreHeader& 
         throwIoError(indexPath, "its record of the indexed data lists " + std::to_string(records.size()) +
                                     " levels where its header says " + std::to_string(header.externalLevels));
     const std::vector<BrickLevel> storeLevels = brickLevels(header.volume, header.brickSize, header.levelCount);
+    // The arrays opened at once: at a URL each open is a few round trips.
+    std::vector<std::future<std::unique_ptr<ArrayLevel>>> opening;
+    for (const ExternalLevel& record : records)
+        opening.push_back(std::async(std::launch::async, [&indexPath, &remote, &record] {
+            return std::make_unique<ArrayLevel>(resolveExternalLocation(record.location, indexPath), record.level, remote);
+        }));
     for (size_t l = 0; l < records.size(); ++l) {
-        const std::string location = resolveExternalLocation(records[l].location, indexPath);
         try {
-            m.levels.push_back(std::make_unique<ArrayLevel>(location, records[l].level, remote));
-        } catch (const IoError& e) {
+            m.levels.push_back(opening[l].get());
+        } catch (const IoError& e) {  // (the other opens are waited for as their futures go)
             throwIoError(indexPath, std::string("indexes data that cannot be opened: ") + e.what());
         }
         ArrayLevel& a = *m.levels.back();
