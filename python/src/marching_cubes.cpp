@@ -29,6 +29,13 @@ namespace {
 // on a cluster alike, so the mesh is the same (Python cuts masks and runs by it).
 constexpr int kBrick = 32;
 
+// scikit-image's value of a cell (its "measure of the data near each vertex", for colour maps):
+// the spread max(0, largest corner - level) - min(0, smallest corner - level), the corners read as
+// float32.
+double cellSpread(double top, double bottom, double level) {
+    return std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level);
+}
+
 // scikit-image's `values` (its "measure of the data near each vertex", for colour maps): the
 // largest spread, max(0, largest corner - level) - min(0, smallest corner - level), of the cells
 // whose triangles use the vertex, which are the cells around the edge it lies on (up to four,
@@ -131,7 +138,7 @@ void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, doubl
             if (!(held[o] && held[o + 1] && held[o + 3] && held[o + 4])) continue;
             const S top = std::max(std::max(hi[o], hi[o + 1]), std::max(hi[o + 3], hi[o + 4]));
             const S bottom = std::min(std::min(lo[o], lo[o + 1]), std::min(lo[o + 3], lo[o + 4]));
-            best = std::max(best, std::max(0.0, double(float(top)) - level) - std::min(0.0, double(float(bottom)) - level));
+            best = std::max(best, cellSpread(double(top), double(bottom), level));
         }
         values[v] = float(best);
     }
@@ -252,6 +259,24 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
     pyb::array_t<float> values(spreads.size());
     std::copy(spreads.begin(), spreads.end(), values.mutable_data());
     return meshArrays(std::move(mesh), values, spacing);
+}
+
+// cellSpread of each row of `corners` (K, 8): the cells' samples, gathered by the caller
+// (marching_cubes' values with a mask, python/vdiso/_marching_cubes.py).
+pyb::array_t<float> cellSpreadsOf(pyb::array_t<double, pyb::array::c_style | pyb::array::forcecast> corners, double level) {
+    if (corners.ndim() != 2 || corners.shape(1) != 8) throw std::invalid_argument("corners: expects (K, 8) samples");
+    const auto c = corners.unchecked<2>();
+    pyb::array_t<float> out(corners.shape(0));
+    float* o = out.mutable_data();
+    for (pyb::ssize_t k = 0; k < corners.shape(0); ++k) {
+        double top = c(k, 0), bottom = c(k, 0);
+        for (int i = 1; i < 8; ++i) {
+            top = std::max(top, c(k, i));
+            bottom = std::min(bottom, c(k, i));
+        }
+        o[k] = float(cellSpread(top, bottom, level));
+    }
+    return out;
 }
 
 // marching_cubes of an array-like too large to load (Dask, Zarr, anything sliced along axis 0):
@@ -395,6 +420,7 @@ void bindMarchingCubes(pyb::module_& m) {
           pyb::arg("threads") = pyb::none(), pyb::arg("progress") = pyb::none(), pyb::arg("bricks") = pyb::none(),
           "The isosurface of a 3-D array (see vdiso.marching_cubes).");
     m.attr("_marching_cubes_brick") = kBrick;
+    m.def("_cell_spreads", &cellSpreadsOf, pyb::arg("corners"), pyb::arg("level"));
     m.def("_marching_cubes_in_slabs", &marchingCubesInSlabs, pyb::arg("source"), pyb::arg("name"), pyb::arg("shape"),
           pyb::arg("dtype"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"), pyb::arg("bounds"),
           pyb::arg("progress"), pyb::arg("bricks") = pyb::none(),

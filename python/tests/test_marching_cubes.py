@@ -245,8 +245,27 @@ def test_scikit_images_keywords():
     rng = np.random.default_rng(7)
     for _ in range(3):
         mask = rng.random(volume.shape) > 0.4
-        same(vdiso.marching_cubes(volume, 30.5, mask=mask),
-             skimage.measure.marching_cubes(volume, 30.5, mask=mask, **lorensen))
+        ours = vdiso.marching_cubes(volume, 30.5, mask=mask)
+        theirs = skimage.measure.marching_cubes(volume, 30.5, mask=mask, **lorensen)
+        same(ours, theirs)
+        # The values count the cells the mask keeps only, as scikit-image's.
+        np.testing.assert_array_equal(ours[3], theirs[3][nearest(ours[0], theirs[0])[0]])
+    # No level given: the middle of the values, the masked values about it.
+    half = np.zeros(volume.shape, bool)
+    half[:, :, :16] = True
+    # A mask that leaves a brick of 32 cells out whole: the vertices on its face count the kept
+    # side's cells only, though no triangle of the brick was made to drop.
+    z, y, x = np.mgrid[:23, :27, :70].astype(np.float64)
+    long = (100.0 - 7.0 * np.sqrt((x - 31.6) ** 2 + (y - 13.2) ** 2 + (z - 11.4) ** 2) + 0.3 * y).astype(np.float32)
+    first = np.zeros(long.shape, bool)
+    first[:, :, :33] = True
+    assert len(vdiso._marching_cubes._bricks_marked(first, 1)) < 2
+    ours, theirs = vdiso.marching_cubes(long, 30.5, mask=first), skimage.measure.marching_cubes(long, 30.5, mask=first, **lorensen)
+    same(ours, theirs)
+    np.testing.assert_array_equal(ours[3], theirs[3][nearest(ours[0], theirs[0])[0]])
+    ours, theirs = vdiso.marching_cubes(volume, mask=half), skimage.measure.marching_cubes(volume, mask=half, **lorensen)
+    same(ours, theirs)
+    np.testing.assert_array_equal(ours[3], theirs[3][nearest(ours[0], theirs[0])[0]])
     # Integer samples at the level make triangles of no area, which allow_degenerate=False drops
     # with the vertices that coincide. (scikit-image's float32 interpolation leaves some of its
     # coincident vertices a rounding apart, so it drops fewer: 4784 triangles against 4724 here.)

@@ -16,8 +16,7 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     1, as scikit-image's), faces (F, 3) int32, normals
     (V, 3) float32 pointing away from the values above `level` (outward for a bright object),
     values (V,) float32 as scikit-image's (the largest spread of the samples about `level`, as
-    float32, in the cells around each vertex's edge; with a mask, those cells masked out count
-    too, where scikit-image leaves them out). `volume`: any 3-D
+    float32, in the cells around each vertex's edge that are meshed). `volume`: any 3-D
     array of uint8, int8, uint16, int16, uint32, int32, float32 or float64, C- or F-ordered or
     strided, read in place (never copied to float); bool is read as uint8 in place; float16 is
     copied to float32, and int64 and uint64 (what skimage.measure.label returns) to the 32-bit
@@ -47,8 +46,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     "ascent" (the faces' winding reversed); step_size, the cells' side in samples (the array read
     as a strided view, no copy); allow_degenerate=False merges vertices that coincide and drops
     the triangles that then have no area; mask, a boolean array of the volume's shape: only the
-    triangles of the cells whose far corner (of highest indices) it marks are kept, as
-    scikit-image's; only the bricks of 32^3 cells holding such a cell are meshed (the mask of an
+    triangles of the cells whose far corner (of highest indices) it marks are kept, and the
+    values count those cells only, as scikit-image's; only the bricks of 32^3 cells holding such a cell are meshed (the mask of an
     array read a layer at a time read a layer at a time too), so a small mask saves work. method:
     "lorensen" only; "lewiner" is refused (its ambiguity resolution is not implemented), never
     answered with another surface.
@@ -108,7 +107,9 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         cells = np.floor(verts[faces].mean(axis=1) / (np.asarray(spacing) * step)).astype(np.int64)
         np.clip(cells, 0, np.array([(n - 1) // step for n in shape]) - 1, out=cells)
         far = (cells + 1) * step
-        faces = faces[_mask_at(mask, far[:, 0], far[:, 1], far[:, 2])]
+        kept = _samples_at(mask, far[:, 0], far[:, 1], far[:, 2]).astype(bool, copy=False)
+        values = _values_of_kept_cells(volume, level, step, faces, cells, kept, values)
+        faces = faces[kept]
         verts, faces, normals, values = _used_vertices(verts, faces, normals, values)
     if not allow_degenerate:
         _, first, inverse = np.unique(verts, axis=0, return_index=True, return_inverse=True)
@@ -246,16 +247,67 @@ def _read_as(dtype):
                     else np.float64 if kind in "iu" and size == 8 else dtype)
 
 
-def _mask_at(mask, z, y, x):
-    """mask[z, y, x] at the points given, as bools: a NumPy mask indexed, a Dask or Zarr one
-    read at those points only (vindex)."""
+def _samples_at(array, z, y, x):
+    """array[z, y, x] at the points given: a NumPy array indexed, a Dask or Zarr one read at
+    those points only (vindex)."""
     import numpy as np
-    if isinstance(mask, np.ndarray):
-        return mask[z, y, x].astype(bool, copy=False)
-    got = mask.vindex[z, y, x] if hasattr(mask, "vindex") else np.asarray(mask)[z, y, x]
+    if isinstance(array, np.ndarray):
+        return array[z, y, x]
+    got = array.vindex[z, y, x] if hasattr(array, "vindex") else np.asarray(array)[z, y, x]
     if hasattr(got, "compute"):
         got = got.compute()
-    return np.asarray(got).astype(bool, copy=False)
+    return np.asarray(got)
+
+
+def _values_of_kept_cells(volume, level, step, faces, cells, kept, values):
+    """`values` as scikit-image's with a mask: a vertex's largest spread over the cells it meshes
+    only. The library counted every cell around the vertex's edge; a vertex that a dropped
+    triangle uses, or that lies on a face of a brick not meshed, also lies in a cell the mask
+    leaves out, so its value is made again from the kept triangles' cells (each triangle lies in
+    one), their corners read where they lie.
+    `cells`: each triangle's cell (its first corner, in samples / step); `kept`: the mask's word."""
+    import numpy as np
+    touched = np.zeros(len(values), bool)
+    touched[faces[~kept].ravel()] = True
+    # A brick the mask leaves out is not meshed (_bricks_marked): a vertex on its face has no
+    # dropped triangle there, and all its triangles lie in its bricks' outer cells.
+    brick = _vdiso._marching_cubes_brick
+    outer = ((cells % brick == 0) | (cells % brick == brick - 1)).any(axis=1)
+    again = kept & (touched[faces].any(axis=1) | outer)
+    if not again.any():
+        return values
+    # Made again: the vertices all of whose kept triangles are among those (the others' values
+    # already count only kept cells).
+    uses = np.bincount(faces[kept].ravel(), minlength=len(values))
+    redo = (uses == np.bincount(faces[again].ravel(), minlength=len(values))) & (uses > 0)
+    if level is None:  # the middle of the values, as the library took it (32-bit floats at most)
+        lo, hi = _range_of(volume)
+        level = _vdiso._level_in(None, float(np.float32(lo)), float(np.float32(hi)))
+    first = cells[again] * step
+    corners = [first + np.array([dz, dy, dx]) * step for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)]
+    samples = np.stack([_samples_at(volume, c[:, 0], c[:, 1], c[:, 2]) for c in corners], axis=1)
+    spread = _vdiso._cell_spreads(samples.astype(np.float64), level)
+    best = np.zeros(len(values), np.float32)
+    np.maximum.at(best, faces[again].ravel(), np.repeat(spread, 3))
+    values = values.copy()
+    values[redo] = best[redo]
+    return values
+
+
+def _range_of(volume):
+    """The smallest and largest sample, NaN left out."""
+    import numpy as np
+    if isinstance(volume, np.ndarray):
+        return np.nanmin(volume), np.nanmax(volume)
+    if hasattr(volume, "__dask_graph__"):
+        import dask
+        import dask.array as da
+        return dask.compute(da.nanmin(volume), da.nanmax(volume))
+    lo, hi = np.inf, -np.inf
+    for z in range(volume.shape[0]):
+        layer = np.asarray(volume[z])
+        lo, hi = min(lo, np.nanmin(layer)), max(hi, np.nanmax(layer))
+    return lo, hi
 
 
 def _used_vertices(verts, faces, normals, values):
