@@ -172,7 +172,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
     SeamTrimmer trimmer(source.volume(), source.layout(), pending, options.seamTrimEntries);
     auto identity = [](uint32_t v) { return v; };
     if (options.threads <= 1) {
-        BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
+        BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize, options.trilinear);
         EdgeVertexMap seams;
         BrickPrefetcher prefetcher(source, size_t(options.prefetchBricks), options.prefetchReaders);
         for (int64_t id : bricks) prefetcher.push(id);
@@ -212,7 +212,7 @@ KernelCounters extractItems(const std::vector<Item>& items, BrickSource& source,
         const size_t last = std::min(chunkCount, first + round);
         arena.execute([&] {
             tbb::parallel_for(first, last, [&](size_t c) {
-                BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize);
+                BrickExtractor extractor(source.volume(), source.layout(), options.metaCellSize, options.trilinear);
                 const size_t begin = items.size() * c / chunkCount, end = items.size() * (c + 1) / chunkCount;
                 TriangleMesh& chunkMesh = chunks[c].mesh;
                 chunkMesh.indices.reserve((end - begin) * perBrick * 6);

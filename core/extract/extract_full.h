@@ -74,6 +74,10 @@ struct FullExtractOptions {
     // has a cell on (edge key -> vertex number in the output), the ones another part makes too
     // and that a caller welds across parts. Entries already there are kept.
     EdgeVertexMap* borderVertices = nullptr;
+    // Cells cut as their trilinear interpolant (core/kernel/trilinear_cell.h: ambiguous faces
+    // by the asymptotic decider, tunnels inside a cell): Lewiner's topology, marching_cubes'
+    // method="lewiner". Off: the tables' cut, every front end's.
+    bool trilinear = false;
 };
 
 // The bricks whose range holds options.iso by the min/max tree over source.brickRanges(), in

@@ -128,7 +128,7 @@ KernelCounters extractInPlace(std::span<const BrickItem> items, BrickSource& sou
     for (size_t i = 0; i < n; ++i) bricks[i] = items[i].id;
     const EdgeOwnership ownership(volume.dims, layout, bricks, options.bricks.empty());
     tbb::enumerable_thread_specific<BrickExtractor> extractors(
-        [&] { return BrickExtractor(volume, layout, options.metaCellSize); });
+        [&] { return BrickExtractor(volume, layout, options.metaCellSize, options.trilinear); });
     std::atomic<int64_t> waitNanoseconds{0};
     auto acquireTimed = [&](int64_t id) {
         const auto start = Clock::now();

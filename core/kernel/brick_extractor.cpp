@@ -97,8 +97,9 @@ void computeMetaCellRanges(const T* s, int side, const int cells[3], int M, int 
 }  // namespace
 
 BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout,
-                               int metaCellSize)
-    : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, kMaxMetaCellSize)) {
+                               int metaCellSize, bool trilinear)
+    : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, kMaxMetaCellSize)),
+      mTrilinear(trilinear) {
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);
     mEdgeVertex.resize(corners * corners * corners * 3);

@@ -57,7 +57,11 @@ struct BrickKernel;  // core/kernel/brick_kernel.h
 
 class BrickExtractor {
 public:
-    BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout, int metaCellSize);
+    // `trilinear`: cells whose case can be cut otherwise (ambiguous faces, tunnels) are cut as
+    // their trilinear interpolant is (core/kernel/trilinear_cell.h) in full extractions
+    // (extractBrick, extractMetaCells, extractInPlace and its count); a view's meta-cells
+    // (beginBrick) keep the tables' cut.
+    BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout, int metaCellSize, bool trilinear = false);
 
     int metaCellSize() const { return mMetaCellSize; }
     // Meta-cells per brick (ceil(B/M)^3), numbered x fastest.
@@ -137,6 +141,7 @@ private:
     int64_t mCurrentBrick = -1;
     const void* mCurrentSamples = nullptr;
     KernelCounters mCounters;
+    bool mTrilinear = false;
 };
 
 }  // namespace vdiso

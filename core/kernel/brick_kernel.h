@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -20,6 +21,7 @@
 #include "core/kernel/mc_tables.h"
 #include "core/kernel/placed_mesh.h"
 #include "core/kernel/row_classify.h"
+#include "core/kernel/trilinear_cell.h"
 
 namespace vdiso {
 
@@ -125,6 +127,60 @@ struct BrickKernel {
         for (int e = 0; e < kMcEdgeCount; ++e) {
             const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
             slots[e] = uint32_t(cornerSlot(o[0], o[1], o[2])) + uint32_t(mcEdgeAxis(e));
+        }
+    }
+
+    // Cell (cx, cy, cz)'s corner samples minus the isovalue, in corner order.
+    void cornerValues(int cx, int cy, int cz, double (&f)[8]) const {
+        const T* c = s + sampleIndex(cx, cy, cz);
+        for (int k = 0; k < 8; ++k)
+            f[k] = double(c[sampleIndex(kCornerOffset[k][0], kCornerOffset[k][1], kCornerOffset[k][2]) - sampleIndex(0, 0, 0)]) - iso;
+    }
+    // Cell (cx, cy, cz) of case `caseIndex` cut as its trilinear interpolant (core/kernel/
+    // trilinear_cell.h) into `out`, when the extractor asks for that and the case can be cut
+    // otherwise than the tables cut it; else false.
+    bool trilinearCut(int caseIndex, int cx, int cy, int cz, TrilinearCell& out) const {
+        if (!x.mTrilinear || !trilinearCases()[size_t(caseIndex)]) return false;
+        double f[8];
+        cornerValues(cx, cy, cz, f);
+        trilinearCell(f, out);
+        return true;
+    }
+    static const std::array<bool, kMcCaseCount>& trilinearCases() {
+        static const std::array<bool, kMcCaseCount> cases = [] {
+            std::array<bool, kMcCaseCount> c{};
+            for (int k = 0; k < kMcCaseCount; ++k) c[size_t(k)] = trilinearMayDiffer(k);
+            return c;
+        }();
+        return cases;
+    }
+    // What cell (cx, cy, cz) of case `caseIndex` adds: its triangles to count.triangles and the
+    // vertices a trilinear cut makes inside it to count.vertices.
+    void countCell(int caseIndex, int cx, int cy, int cz, BrickCount& count) const {
+        TrilinearCell cut;
+        if (!trilinearCut(caseIndex, cx, cy, cz, cut)) {
+            count.triangles += mcTriangleCase(caseIndex).triangleCount;
+            return;
+        }
+        count.triangles += cut.triangleCount;
+        count.vertices += cut.centreCount;
+    }
+    // The vertices a trilinear cut of cell (cx, cy, cz) makes inside it, made now (position and
+    // the interpolant's normal there, as the edges' normals point); ids[k]: centre k's number.
+    void makeCentres(const TrilinearCell& cut, int cx, int cy, int cz, uint32_t* ids) {
+        double f[8];
+        cornerValues(cx, cy, cz, f);
+        const glm::dvec3& h = x.mVolume.spacing;
+        for (int k = 0; k < cut.centreCount; ++k) {
+            const double* p = cut.centres[k];
+            double g[3];
+            trilinearGradient(f, p, g);
+            const glm::dvec3 gradient(g[0] / h.x, g[1] / h.y, g[2] / h.z);
+            const double length = glm::length(gradient);
+            const glm::dvec3 normal = length > 0 && std::isfinite(length) ? -gradient / length : glm::dvec3(0, 0, 1);
+            const glm::dvec3 local(double(corner0[0] + cx) + p[0], double(corner0[1] + cy) + p[1], double(corner0[2] + cz) + p[2]);
+            ids[k] = mesh.nextVertex();
+            mesh.addVertex(glm::vec3(x.mVolume.origin + local * h), glm::vec3(normal));
         }
     }
 
@@ -290,7 +346,17 @@ struct BrickKernel {
                 for (int mx = 0; mx < n; ++mx) meta |= uint64_t((mixed & metaMask[mx]) != 0) << mx;
                 for (; mixed; mixed &= mixed - 1) {
                     const int rx = __builtin_ctzll(mixed);
-                    const McPolygonCase& pc = mcPolygonCase(cellRow.caseOf(rx));
+                    const int caseIndex = cellRow.caseOf(rx);
+                    ++counters.cellsActive;
+                    if (TrilinearCell cut; trilinearCut(caseIndex, rx, y, z, cut)) {
+                        uint32_t centre[kTrilinearMaxCentres];
+                        makeCentres(cut, rx, y, z, centre);
+                        auto vertex = [&](int e) { return e < kMcEdgeCount ? edgeSlot[e][rx] : centre[e - kTrilinearCentre]; };
+                        for (int t = 0; t < cut.triangleCount; ++t)
+                            mesh.addTriangle(vertex(cut.edges[3 * t]), vertex(cut.edges[3 * t + 1]), vertex(cut.edges[3 * t + 2]));
+                        continue;
+                    }
+                    const McPolygonCase& pc = mcPolygonCase(caseIndex);
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
                         const uint32_t first = edgeSlot[pc.edges[at]][rx];
                         uint32_t last = edgeSlot[pc.edges[at + 1]][rx];
@@ -300,7 +366,6 @@ struct BrickKernel {
                             last = next;
                         }
                     }
-                    ++counters.cellsActive;
                 }
                 metaRows[size_t(z / M) * size_t(n) + size_t(y / M)] |= meta;
             }
@@ -344,7 +409,7 @@ struct BrickKernel {
                 if (y == ny || z == nz) continue;
                 const CellRow cellRow{r, row(y + 1, z), row(y, z + 1), row(y + 1, z + 1)};
                 for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1)
-                    count.triangles += mcTriangleCase(cellRow.caseOf(__builtin_ctzll(mixed))).triangleCount;
+                    countCell(cellRow.caseOf(__builtin_ctzll(mixed)), __builtin_ctzll(mixed), y, z, count);
             }
         return count;
     }
@@ -366,7 +431,7 @@ struct BrickKernel {
                 for (uint64_t mixed = cellRow.crossed(cellBits); mixed; mixed &= mixed - 1) {
                     const int rx = __builtin_ctzll(mixed);
                     const int caseIndex = cellRow.caseOf(rx);
-                    count.triangles += mcTriangleCase(caseIndex).triangleCount;
+                    countCell(caseIndex, lo[0] + rx, lo[1] + ry, lo[2] + rz, count);
                     for (unsigned crossed = mcCrossedEdges(caseIndex); crossed; crossed &= crossed - 1) {
                         const int e = __builtin_ctz(crossed);
                         const int8_t* o = kCornerOffset[kEdgeCorners[e][0]];
@@ -433,8 +498,22 @@ struct BrickKernel {
                     const int rx = __builtin_ctzll(mixed);
                     const int cx = lo[0] + rx, cy = lo[1] + ry, cz = lo[2] + rz;
                     ++counters.cellsActive;
-                    const McPolygonCase& pc = mcPolygonCase(cellRow.caseOf(rx));
+                    const int caseIndex = cellRow.caseOf(rx);
                     const size_t cellSlot = cornerSlot(cx, cy, cz);
+                    if (TrilinearCell cut; trilinearCut(caseIndex, cx, cy, cz, cut)) {
+                        uint32_t centre[kTrilinearMaxCentres], v[3];
+                        makeCentres(cut, cx, cy, cz, centre);
+                        for (int t = 0; t < cut.triangleCount; ++t) {
+                            for (int k = 0; k < 3; ++k) {
+                                const int e = cut.edges[3 * t + k];
+                                v[k] = e < kMcEdgeCount ? edgeVertex(cellSlot + slotOffset[e], cx, cy, cz, e)
+                                                        : centre[e - kTrilinearCentre];
+                            }
+                            mesh.addTriangle(v[0], v[1], v[2]);
+                        }
+                        continue;
+                    }
+                    const McPolygonCase& pc = mcPolygonCase(caseIndex);
                     for (int p = 0, at = 0; p < pc.polygonCount; at += pc.vertexCount[p++]) {
                         const uint32_t first = edgeVertex(cellSlot + slotOffset[pc.edges[at]], cx, cy, cz, pc.edges[at]);
                         uint32_t last = edgeVertex(cellSlot + slotOffset[pc.edges[at + 1]], cx, cy, cz, pc.edges[at + 1]);

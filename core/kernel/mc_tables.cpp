@@ -135,6 +135,82 @@ constexpr int fanRoot(int caseIndex, const int* loop, int n) {
     return bestRoot;
 }
 
+// The polygons of case `caseIndex` with the ambiguous faces in `joinAbove` (bit f: face f, as
+// faceCorners() numbers them) cut the other way: their below corners separated and the above
+// ones joined across the face. There the walk makes one segment per run of below corners,
+// from the edge where it leaves the run to the edge where it enters it: each crossed edge
+// keeps its role (the start of one segment, the end of another) on that face, so the loops
+// still chain, and the below corner is still on each segment's left. Returns false when the
+// segments do not chain (never: static_assert below for joinAbove 0, tests for the rest).
+constexpr bool buildPolygons(int caseIndex, int joinAbove, McPolygonCase& poly, McTriangleCase* tri, int& maxVertices,
+                             bool& fansOk) {
+    constexpr std::array<std::array<int, 4>, 6> faces = faceCorners();
+    auto above = [&](int corner) { return ((caseIndex >> corner) & 1) != 0; };
+    // next[e]: the edge the segment leaving crossed edge e goes to.
+    int next[kMcEdgeCount] = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+    int incoming[kMcEdgeCount] = {};
+    bool consistent = true;
+    for (int f = 0; f < 6; ++f) {
+        const std::array<int, 4>& q = faces[size_t(f)];
+        const bool ambiguous = above(q[0]) == above(q[2]) && above(q[1]) == above(q[3]) && above(q[0]) != above(q[1]);
+        const bool aroundBelow = ambiguous && ((joinAbove >> f) & 1);
+        for (int i = 0; i < 4; ++i) {
+            // Runs of above corners (or, cut the other way, of below ones), entered at edge i.
+            const bool runKind = !aroundBelow;
+            if (above(q[i]) == runKind || above(q[(i + 1) % 4]) != runKind) continue;
+            int j = (i + 1) % 4;
+            while (above(q[(j + 1) % 4]) == runKind) j = (j + 1) % 4;
+            const int enter = edgeBetween(q[i], q[(i + 1) % 4]);
+            const int leave = edgeBetween(q[j], q[(j + 1) % 4]);
+            const int from = aroundBelow ? leave : enter, to = aroundBelow ? enter : leave;
+            if (next[from] != -1) consistent = false;
+            next[from] = to;
+            ++incoming[to];
+        }
+    }
+    for (int e = 0; e < kMcEdgeCount; ++e) {
+        const bool isCrossed = above(kEdgeCorners[e][0]) != above(kEdgeCorners[e][1]);
+        if ((next[e] != -1) != isCrossed || incoming[e] != int(isCrossed)) consistent = false;
+    }
+    if (!consistent) return false;
+
+    // Chain the segments into loops, each found from its smallest edge id, then fan them.
+    poly = McPolygonCase{};
+    if (tri) *tri = McTriangleCase{};
+    bool visited[kMcEdgeCount] = {};
+    int edgeCount = 0;
+    for (int start = 0; start < kMcEdgeCount; ++start) {
+        if (next[start] == -1 || visited[start]) continue;
+        int loop[kMcEdgeCount] = {};
+        int n = 0;
+        for (int e = start; !visited[e]; e = next[e]) {
+            visited[e] = true;
+            loop[n++] = e;
+        }
+        int root = fanRoot(caseIndex, loop, n);
+        if (root < 0) {
+            fansOk = false;
+            root = 0;
+        }
+        for (int i = 0; i < n; ++i) poly.edges[edgeCount + i] = uint8_t(loop[(root + i) % n]);
+        const uint8_t* v = poly.edges + edgeCount;
+        edgeCount += n;
+        if (poly.polygonCount < kMcMaxPolygons) poly.vertexCount[poly.polygonCount] = uint8_t(n);
+        ++poly.polygonCount;
+        maxVertices = n > maxVertices ? n : maxVertices;
+        for (int i = 1; tri && i + 1 < n; ++i) {
+            if (tri->triangleCount < kMcMaxTriangles) {
+                uint8_t* w = tri->edges + 3 * tri->triangleCount;
+                w[0] = v[0];
+                w[1] = v[i];
+                w[2] = v[i + 1];
+            }
+            ++tri->triangleCount;
+        }
+    }
+    return true;
+}
+
 struct Tables {
     std::array<McPolygonCase, kMcCaseCount> polygons{};
     std::array<McTriangleCase, kMcCaseCount> triangles{};
@@ -146,75 +222,17 @@ struct Tables {
 };
 
 constexpr Tables generate() {
-    constexpr std::array<std::array<int, 4>, 6> faces = faceCorners();
     Tables t;
     for (int caseIndex = 0; caseIndex < kMcCaseCount; ++caseIndex) {
-        auto above = [&](int corner) { return ((caseIndex >> corner) & 1) != 0; };
-
         uint16_t crossed = 0;
         for (int e = 0; e < kMcEdgeCount; ++e) {
-            if (above(kEdgeCorners[e][0]) != above(kEdgeCorners[e][1]))
+            if (((caseIndex >> kEdgeCorners[e][0]) & 1) != ((caseIndex >> kEdgeCorners[e][1]) & 1))
                 crossed |= uint16_t(1u << e);
         }
         t.crossed[caseIndex] = crossed;
-
-        // next[e]: the edge the segment leaving crossed edge e goes to.
-        int next[kMcEdgeCount] = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
-        int incoming[kMcEdgeCount] = {};
-        for (const std::array<int, 4>& q : faces) {
-            for (int i = 0; i < 4; ++i) {
-                if (above(q[i]) || !above(q[(i + 1) % 4]))
-                    continue;  // the walk does not enter a run of above corners here
-                int j = (i + 1) % 4;
-                while (above(q[(j + 1) % 4])) j = (j + 1) % 4;
-                const int enter = edgeBetween(q[i], q[(i + 1) % 4]);
-                const int leave = edgeBetween(q[j], q[(j + 1) % 4]);
-                if (next[enter] != -1) t.consistent = false;
-                next[enter] = leave;
-                ++incoming[leave];
-            }
-        }
-        for (int e = 0; e < kMcEdgeCount; ++e) {
-            const bool isCrossed = (crossed >> e) & 1;
-            if ((next[e] != -1) != isCrossed || incoming[e] != int(isCrossed)) t.consistent = false;
-        }
-
-        // Chain the segments into loops, each found from its smallest edge id, then fan them.
         McPolygonCase& poly = t.polygons[caseIndex];
         McTriangleCase& tri = t.triangles[caseIndex];
-        bool visited[kMcEdgeCount] = {};
-        int edgeCount = 0;
-        for (int start = 0; start < kMcEdgeCount; ++start) {
-            if (next[start] == -1 || visited[start]) continue;
-            int loop[kMcEdgeCount] = {};
-            int n = 0;
-            for (int e = start; !visited[e]; e = next[e]) {
-                visited[e] = true;
-                loop[n++] = e;
-            }
-            int root = fanRoot(caseIndex, loop, n);
-            if (root < 0) {
-                t.fansOk = false;
-                root = 0;
-            }
-            for (int i = 0; i < n; ++i) poly.edges[edgeCount + i] = uint8_t(loop[(root + i) % n]);
-            const uint8_t* v = poly.edges + edgeCount;
-            edgeCount += n;
-            if (poly.polygonCount < kMcMaxPolygons)
-                poly.vertexCount[poly.polygonCount] = uint8_t(n);
-            ++poly.polygonCount;
-            t.maxPolygonVertices = n > t.maxPolygonVertices ? n : t.maxPolygonVertices;
-
-            for (int i = 1; i + 1 < n; ++i) {
-                if (tri.triangleCount < kMcMaxTriangles) {
-                    uint8_t* w = tri.edges + 3 * tri.triangleCount;
-                    w[0] = v[0];
-                    w[1] = v[i];
-                    w[2] = v[i + 1];
-                }
-                ++tri.triangleCount;
-            }
-        }
+        if (!buildPolygons(caseIndex, 0, poly, &tri, t.maxPolygonVertices, t.fansOk)) t.consistent = false;
         t.maxPolygons = poly.polygonCount > t.maxPolygons ? poly.polygonCount : t.maxPolygons;
         t.maxTriangles = tri.triangleCount > t.maxTriangles ? tri.triangleCount : t.maxTriangles;
     }
@@ -241,6 +259,35 @@ const McPolygonCase& mcPolygonCase(int caseIndex) {
 const McTriangleCase& mcTriangleCase(int caseIndex) {
     VDISO_CHECK_LT(unsigned(caseIndex), unsigned(kMcCaseCount));
     return kTables.triangles[caseIndex];
+}
+
+bool mcPolygonsJoined(int caseIndex, int joinAbove, McPolygonCase& out) {
+    VDISO_CHECK_LT(unsigned(caseIndex), unsigned(kMcCaseCount));
+    int maxVertices = 0;
+    bool fansOk = true;
+    return buildPolygons(caseIndex, joinAbove & mcAmbiguousFaces(caseIndex), out, nullptr, maxVertices, fansOk);
+}
+
+int mcAmbiguousFaces(int caseIndex) {
+    constexpr std::array<std::array<int, 4>, 6> faces = faceCorners();
+    int mask = 0;
+    for (int f = 0; f < 6; ++f) {
+        const std::array<int, 4>& q = faces[size_t(f)];
+        const int a = caseIndex >> q[0] & 1, b = caseIndex >> q[1] & 1, c = caseIndex >> q[2] & 1, d = caseIndex >> q[3] & 1;
+        if (a == c && b == d && a != b) mask |= 1 << f;
+    }
+    return mask;
+}
+
+bool mcEdgesShareFace(int e, int f) {
+    VDISO_CHECK_LT(unsigned(e), unsigned(kMcEdgeCount));
+    VDISO_CHECK_LT(unsigned(f), unsigned(kMcEdgeCount));
+    return shareFace(e, f);
+}
+
+const std::array<std::array<int, 4>, 6>& mcFaceCorners() {
+    static constexpr std::array<std::array<int, 4>, 6> faces = faceCorners();
+    return faces;
 }
 
 uint16_t mcCrossedEdges(int caseIndex) {

@@ -25,6 +25,7 @@
 // The tables are built at compile time; the accessors are a bounds check and a load.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "core/kernel/iso.h"
@@ -74,6 +75,19 @@ const McTriangleCase& mcTriangleCase(int caseIndex);
 
 // Bit e set when edge e is crossed in this case.
 uint16_t mcCrossedEdges(int caseIndex);
+
+// The six faces' corners, counter-clockwise seen from outside the cube; face 2a + s is the face
+// where axis a has coordinate s.
+const std::array<std::array<int, 4>, 6>& mcFaceCorners();
+// Whether edges e and f lie on a common face of the cube.
+bool mcEdgesShareFace(int e, int f);
+// Bit f set when face f is ambiguous in this case (two diagonal corners above, two below).
+int mcAmbiguousFaces(int caseIndex);
+// The polygons of the case (as mcPolygonCase gives them) with the ambiguous faces of bit mask
+// `joinAbove` cut the other way: their above corners joined across the face, the below ones
+// separated (core/kernel/trilinear_cell.h decides which). mcPolygonsJoined(c, 0, p) gives
+// mcPolygonCase(c). False when the face cuts do not chain into loops (never, tested).
+bool mcPolygonsJoined(int caseIndex, int joinAbove, McPolygonCase& out);
 
 // Case index of a cell from its eight corner samples, in corner order.
 template <class T>
