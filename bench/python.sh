@@ -30,6 +30,17 @@ if [ "${1:-}" = skimage ]; then
   PYTHONPATH=$build/python:bench /usr/bin/python3 bench/python_vs_skimage.py "${2:-3}"
   exit 0
 fi
+#   bench/python.sh topology [N]  instead: method="lewiner" on blocks of the real scans against the
+#                              trilinear interpolant sampled 16x finer, up to N (15) differing blocks a scan
+#                              (bench/python_trilinear_topology.py)
+if [ "${1:-}" = topology ]; then
+  [ -f data/ch2better.nii.gz ] || scripts/fetch_data.sh
+  for case in "data/ch2.nii.gz 40.5" "data/ch2better.nii.gz 40.5" "256x256x108xi16:data/cranium.raw -423.5" \
+              "256x256x108xi16:data/cranium.raw 200.5"; do
+    PYTHONPATH=$build/python:bench /usr/bin/python3 bench/python_trilinear_topology.py $case 16 "${2:-15}"
+  done
+  exit 0
+fi
 if [ "${1:-}" = dask ]; then
   for mode in slabs memory cluster1 cluster2 slabs memory cluster1 cluster2; do
     $py bench/python_dask_mc.py "${2:-1024}" "${3:-64}" $mode

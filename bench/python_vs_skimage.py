@@ -1,8 +1,10 @@
 """vdiso.marching_cubes against skimage.measure.marching_cubes on the real scans, for
-docs/python.md: triangles against scikit-image's "lorensen" (the surface vdiso makes) and its
-default "lewiner"; whether the vertices are the same points and their values equal; how many
-normals point the same way; the share of the same triangles, and of triangles wound with their
-normals; seconds at 1 thread, median of REPEAT. One JSON line per scan. Used by bench/python.sh skimage.
+docs/python.md: method="lorensen" against scikit-image's (triangles; whether the vertices are
+the same points and their values equal; how many normals point the same way; the share of the
+same triangles, and of triangles wound with their normals) and method="lewiner", the default,
+against scikit-image's (triangles, vertices inside cells, and each surface's Euler
+characteristic and pieces); seconds at 1 thread, median of REPEAT. One JSON line per scan. Used
+by bench/python.sh skimage.
 
     python_vs_skimage.py [REPEAT]"""
 import json
@@ -39,9 +41,20 @@ def by_point(verts):
 
 for name, spec, iso in scans:
     volume = load(spec)
-    (v, f, n, values), vdiso_s = timed(lambda: vdiso.marching_cubes(volume, iso, threads=1))
+    (v, f, n, values), vdiso_s = timed(lambda: vdiso.marching_cubes(volume, iso, threads=1, method="lorensen"))
+    (gv, gf, _, _), vdiso_lewiner_s = timed(lambda: vdiso.marching_cubes(volume, iso, threads=1))
     (lv, lf, ln, lvalues), lorensen_s = timed(lambda: skimage.measure.marching_cubes(volume, iso, method="lorensen"))
     (wv, wf, _, _), lewiner_s = timed(lambda: skimage.measure.marching_cubes(volume, iso))
+
+    def topology(verts, faces):
+        """Euler characteristic V - E + F, and the surface's connected pieces."""
+        import scipy.sparse
+        import scipy.sparse.csgraph
+        edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+        used = np.unique(faces)
+        graph = scipy.sparse.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(verts),) * 2)
+        labels = scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
+        return int(len(used) - len(edges) + len(faces)), int(len(np.unique(labels[used])))
     theirs = by_point(lv)
     match = np.array([theirs.get(tuple(np.round(p, 4)), -1) for p in v])
     same_points = bool((match >= 0).all()) and len(theirs) == len(v)
@@ -66,4 +79,8 @@ for name, spec, iso in scans:
             np.linalg.norm(n[found], axis=1) * np.linalg.norm(ln[match[found]], axis=1), 1e-30))),
         "same_triangles": (len(cycles(f, match) & cycles(lf, np.arange(len(lv)))) / len(f)) if same_points else None,
         "wound_with_normals": along_normals(v, f, n), "lorensen_wound_with_normals": along_normals(lv, lf, ln),
-        "vdiso_1_thread_s": vdiso_s, "lorensen_s": lorensen_s, "lewiner_s": lewiner_s}), flush=True)
+        "vdiso_1_thread_s": vdiso_s, "lorensen_s": lorensen_s, "lewiner_s": lewiner_s,
+        "vdiso_lewiner_triangles": len(gf),
+        "vdiso_lewiner_inside_cells": int(((np.abs(gv - np.round(gv)) > 1e-3).sum(axis=1) > 1).sum()),
+        "vdiso_lewiner_euler_pieces": topology(gv, gf), "lewiner_euler_pieces": topology(wv, wf),
+        "lorensen_euler_pieces": topology(lv, lf), "vdiso_lewiner_1_thread_s": vdiso_lewiner_s}), flush=True)

@@ -55,12 +55,13 @@ void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, doubl
         int axis;
         bool interior;
         const unsigned char* first;  // interior: the column at (-1, -1) across the edge
+        bool inCell;  // a vertex inside cell `at` (method="lewiner"'s, core/kernel/trilinear_cell.h)
     };
     auto edgeOf = [&](size_t v, Edge& e) {
         // Floors by truncation and one comparison (no libm call: a third of the pass's time).
         int64_t whole[3];
         double frac[3];
-        double farthest = -1;
+        double farthest = -1, next = -1;
         for (int a = 0; a < 3; ++a) {
             const double g = positions[v][a] / spacing[a];
             whole[a] = int64_t(g);
@@ -68,9 +69,20 @@ void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, doubl
             frac[a] = g - double(whole[a]);
             const double off = std::min(frac[a], 1.0 - frac[a]);
             if (off > farthest) {
+                next = farthest;
                 farthest = off;
                 e.axis = a;
+            } else {
+                next = std::max(next, off);
             }
+        }
+        // Off the grid's lines on two axes: inside a cell; its value is that cell's spread.
+        e.inCell = next > 1e-3;
+        if (e.inCell) {
+            for (int a = 0; a < 3; ++a) e.at[a] = std::clamp<int64_t>(whole[a], 0, dims[a] - 2);
+            e.interior = false;
+            e.first = nullptr;
+            return;
         }
         for (int a = 0; a < 3; ++a)
             e.at[a] = a == e.axis ? std::clamp<int64_t>(whole[a], 0, dims[a] - 2) : whole[a] + (frac[a] >= 0.5);
@@ -102,6 +114,21 @@ void cellSpreads(const StridedSamples& s, int64_t firstRow, int64_t depth, doubl
     for (size_t v = 0; v < n; ++v) {
         const Edge e = ring[v % kAhead];
         if (v + kAhead < n) fetchAhead(v + kAhead);
+        if (e.inCell) {
+            values[v] = 0;
+            if (e.at[2] < firstRow || e.at[2] + 1 >= rowEnd) continue;  // (its layer holds its rows)
+            S top = 0, bottom = 0;
+            for (int k = 0; k < 8; ++k) {
+                const unsigned char* q = base + (e.at[0] + (k & 1)) * s.strides[0] + (e.at[1] + (k >> 1 & 1)) * s.strides[1] +
+                                         (e.at[2] + (k >> 2) - firstRow) * s.strides[2];
+                S sample;
+                std::memcpy(&sample, q, sizeof sample);
+                top = k == 0 || sample > top ? sample : top;
+                bottom = k == 0 || sample < bottom ? sample : bottom;
+            }
+            values[v] = float(cellSpread(double(top), double(bottom), level));
+            continue;
+        }
         const int b = (e.axis + 1) % 3, c = (e.axis + 2) % 3;
         const int64_t sa = s.strides[e.axis], sb = s.strides[b], sc = s.strides[c];
         // The 3 x 3 columns of two samples along the edge around it, as their largest and
@@ -215,7 +242,8 @@ pyb::tuple meshArrays(TriangleMesh&& mesh, pyb::array_t<float> values, const std
 // as a part of the array (FullExtractOptions::bricks): the triangles of their cells, vertices
 // numbered as the whole array's would be.
 pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLevel, std::array<double, 3> spacing,
-                         std::optional<int64_t> threads, pyb::object progress, std::optional<std::vector<int64_t>> bricks) {
+                         std::optional<int64_t> threads, pyb::object progress, std::optional<std::vector<int64_t>> bricks,
+                         bool trilinear) {
     // Every check on the arguments and the array's size comes before any pass over its samples.
     const StridedSamples samples = stridedSamplesOf(volume, "volume");
     checkLevelAndSpacing(givenLevel, spacing);
@@ -231,6 +259,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
         for (const BrickRange& r : source.brickRanges()) range = unite(range, r);
         level = levelIn(givenLevel, range);
         FullExtractOptions options{level, kDefaultMetaCellSize, threadCount};
+        options.trilinear = trilinear;
         if (bricks) {
             std::sort(bricks->begin(), bricks->end());
             bricks->erase(std::unique(bricks->begin(), bricks->end()), bricks->end());
@@ -287,7 +316,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
                                 const pyb::dtype& dtype, std::optional<double> givenLevel,
                                 std::array<double, 3> spacing, std::optional<int64_t> threads,
                                 const std::vector<int64_t>& bounds, pyb::object progress,
-                                std::optional<std::vector<int64_t>> bricks) {
+                                std::optional<std::vector<int64_t>> bricks, bool trilinear) {
     checkLevelAndSpacing(givenLevel, spacing);
     if (bricks) {
         std::sort(bricks->begin(), bricks->end());
@@ -311,6 +340,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
         ArraySlices slices(source, info, type, name, bounds);
         SlabExtractOptions options;
         options.extract = FullExtractOptions{*level, kDefaultMetaCellSize, threadCount};
+        options.extract.trilinear = trilinear;
         options.brickSize = kBrick;
         options.onlyBricks = bricks;
         options.layerDone = appendValues(info, *level, values);
@@ -330,7 +360,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
 // _join_slab_parts.
 pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, const pyb::dtype& dtype,
                        int64_t firstLayer, int64_t endLayer, double level, std::array<double, 3> spacing,
-                       int64_t threads) {
+                       int64_t threads, bool trilinear) {
     checkLevelAndSpacing(level, spacing);
     const std::string name = "rows of the array";
     const FileScalar type = fileScalarOfDtype(dtype, name.c_str());
@@ -341,6 +371,7 @@ pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, cons
         ArraySlices slices(rows, info, type, name, {});
         SlabExtractOptions options;
         options.extract = FullExtractOptions{level, kDefaultMetaCellSize, int(checkedInt("threads", threads, 1, 256))};
+        options.extract.trilinear = trilinear;
         options.layerDone = appendValues(info, level, values);
         part = extractSlabPart(slices, options, firstLayer, endLayer);
     });
@@ -418,16 +449,16 @@ void bindMarchingCubes(pyb::module_& m) {
     m.def("marching_cubes", &marchingCubes, pyb::arg("volume"), pyb::arg("level") = pyb::none(),
           pyb::arg("spacing") = std::array<double, 3>{1.0, 1.0, 1.0}, pyb::kw_only(),
           pyb::arg("threads") = pyb::none(), pyb::arg("progress") = pyb::none(), pyb::arg("bricks") = pyb::none(),
-          "The isosurface of a 3-D array (see vdiso.marching_cubes).");
+          pyb::arg("trilinear") = false, "The isosurface of a 3-D array (see vdiso.marching_cubes).");
     m.attr("_marching_cubes_brick") = kBrick;
     m.def("_cell_spreads", &cellSpreadsOf, pyb::arg("corners"), pyb::arg("level"));
     m.def("_marching_cubes_in_slabs", &marchingCubesInSlabs, pyb::arg("source"), pyb::arg("name"), pyb::arg("shape"),
           pyb::arg("dtype"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"), pyb::arg("bounds"),
-          pyb::arg("progress"), pyb::arg("bricks") = pyb::none(),
+          pyb::arg("progress"), pyb::arg("bricks") = pyb::none(), pyb::arg("trilinear") = false,
           "marching_cubes of an array-like read a layer of bricks at a time (only `bricks` meshed, when given).");
     m.def("_mesh_slab_part", &meshSlabPart, pyb::arg("rows"), pyb::arg("shape"), pyb::arg("dtype"),
           pyb::arg("first_layer"), pyb::arg("end_layer"), pyb::arg("level"), pyb::arg("spacing"), pyb::arg("threads"),
-          "One run of layers of an array meshed alone (a Dask worker's part of marching_cubes).");
+          pyb::arg("trilinear") = false, "One run of layers of an array meshed alone (a Dask worker's part of marching_cubes).");
     m.def("_join_slab_parts", &joinSlabPartArrays, pyb::arg("parts"), pyb::arg("level"), pyb::arg("spacing"),
           "marching_cubes' arrays from the parts of _mesh_slab_part, welded.");
     m.def("_level_in", [](std::optional<double> level, float lo, float hi) { return levelIn(level, {lo, hi}); },

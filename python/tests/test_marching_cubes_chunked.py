@@ -71,6 +71,17 @@ def test_a_zarr_array_and_any_array_like_are_read_a_layer_at_a_time():
     assert max(stop - start for start, stop in rows.asked) <= 35
 
 
+def test_noise_gives_the_in_memory_mesh_with_its_vertices_inside_cells():
+    """method="lewiner" on noise: cells cut with vertices inside them, on the bricks' seams too,
+    the same arrays whether read in memory, a layer at a time, or on any thread count."""
+    v = np.random.default_rng(5).random((70, 40, 36)).astype(np.float32)
+    expected = vdiso.marching_cubes(v, 0.5, threads=1)
+    inside = (np.abs(expected[0] - np.round(expected[0])) > 1e-3).sum(axis=1) > 1
+    assert inside.sum() > 10
+    assert_identical(vdiso.marching_cubes(da.from_array(v, chunks=(16, 40, 36)), 0.5), expected)
+    assert_identical(vdiso.marching_cubes(zarr.array(v, chunks=(20, 40, 36)), 0.5, threads=2), expected)
+
+
 @pytest.mark.parametrize("dtype", [np.bool_, np.int8, np.int64, np.uint64, np.float16, np.float64])
 def test_every_dtype_gives_the_in_memory_mesh(dtype):
     v = wavy()
@@ -240,6 +251,12 @@ def test_a_closed_surface_meshed_on_a_cluster_has_no_crack(cluster_client):
     _, uses = np.unique(edges, axis=0, return_counts=True)
     assert len(faces) > 10000 and (uses == 2).all()  # no boundary edge: no crack, no duplicate vertex at a seam
     assert len(np.unique(verts, axis=0)) == len(verts)
+
+
+def test_noise_meshed_on_a_cluster_gives_the_in_memory_mesh(cluster_client):
+    v = np.random.default_rng(6).random((100, 30, 34)).astype(np.float32)  # cells with vertices inside
+    assert_identical(vdiso.marching_cubes(da.from_array(v, chunks=(25, 30, 34)), 0.5, client=cluster_client),
+                     vdiso.marching_cubes(v, 0.5))
 
 
 def test_a_cluster_is_given_a_dask_array(cluster_client):

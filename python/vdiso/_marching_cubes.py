@@ -6,9 +6,9 @@ from ._args import _float, _int, _z_chunk_bounds
 
 
 def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent", step_size=1,
-                   allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None, client=None):
+                   allow_degenerate=True, method="lewiner", mask=None, threads=None, progress=None, client=None):
     """marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_direction="descent",
-    step_size=1, allow_degenerate=True, method="lorensen", mask=None, threads=None, progress=None,
+    step_size=1, allow_degenerate=True, method="lewiner", mask=None, threads=None, progress=None,
     client=None) -> (verts, faces, normals, values)
 
     The isosurface `level` of a 3-D array, as skimage.measure.marching_cubes returns it: verts
@@ -16,19 +16,24 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     1, as scikit-image's), faces (F, 3) int32, normals
     (V, 3) float32 pointing away from the values above `level` (outward for a bright object),
     values (V,) float32 as scikit-image's (the largest spread of the samples about `level`, as
-    float32, in the cells around each vertex's edge that are meshed). `volume`: any 3-D
+    float32, in the cells around each vertex's edge that are meshed; a vertex inside a cell, that
+    cell's). `volume`: any 3-D
     array of uint8, int8, uint16, int16, uint32, int32, float32 or float64, C- or F-ordered or
     strided, read in place (never copied to float); bool is read as uint8 in place; float16 is
     copied to float32, and int64 and uint64 (what skimage.measure.label returns) to the 32-bit
     integers when their values fit, else to float64. `level` None: the middle of the array's
     range (NaN left out), found by the library after its checks of the array; a level outside
     the values is a ValueError (as scikit-image), a level with no
-    surface gives empty arrays (scikit-image raises RuntimeError). The triangles of
-    `vdiso extract --method octree`, on `threads` threads (None: all cores): Lorensen and Cline's
-    cases, ambiguous cells not resolved, as scikit-image's method="lorensen" (the same vertices
-    and as many triangles, an ambiguous cell sometimes cut along its other diagonal), not its
-    default "lewiner" (which resolves them and makes a few more triangles). progress:
-    callable(done, total) in samples; Ctrl-C stops the call within a fraction of a second.
+    surface gives empty arrays (scikit-image raises RuntimeError). The library's octree
+    extraction, on `threads` threads (None: all cores). method="lewiner" (the default, as
+    scikit-image's): the surface has the topology of the trilinear interpolant of the samples,
+    as Lewiner et al. guarantee (ambiguous faces cut by the asymptotic decider, tunnels inside
+    a cell found), with a vertex inside a few cells where no triangulation of the crossings
+    alone is clean; scikit-image's own "lewiner" departs from that topology on some cells
+    (docs/python.md). method="lorensen": Lorensen and Cline's cases, ambiguous cells not
+    resolved: scikit-image's "lorensen" (the same vertices, as many triangles) and every other
+    vdiso front end's cut. progress: callable(done, total) in samples; Ctrl-C stops the call
+    within a fraction of a second.
 
     A Dask or Zarr array, or any array-like with shape, dtype and slicing along axis 0 that is
     not a NumPy array, is never loaded whole: it is read once, in order, a layer of 35 slices at
@@ -48,9 +53,8 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     the triangles that then have no area; mask, a boolean array of the volume's shape: only the
     triangles of the cells whose far corner (of highest indices) it marks are kept, and the
     values count those cells only, as scikit-image's; only the bricks of 32^3 cells holding such a cell are meshed (the mask of an
-    array read a layer at a time read a layer at a time too), so a small mask saves work. method:
-    "lorensen" only; "lewiner" is refused (its ambiguity resolution is not implemented), never
-    answered with another surface.
+    array read a layer at a time read a layer at a time too), so a small mask saves work;
+    method, above.
     """
     import numpy as np
     chunked = not isinstance(volume, np.ndarray) and _sliceable(volume)
@@ -68,9 +72,9 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         raise ValueError(f"spacing: expects 3 numbers (z, y, x), not {len(spacing)}")
     spacing = tuple(_float(s, "spacing") for s in spacing)
     unit = spacing == (1.0, 1.0, 1.0)
-    if method != "lorensen":
-        raise ValueError(f"method: {method!r} is not implemented: vdiso's surface is scikit-image's "
-                         "method=\"lorensen\" (ambiguous cells not resolved); pass method=\"lorensen\"")
+    if method not in ("lewiner", "lorensen"):
+        raise ValueError(f"method: expects \"lewiner\" or \"lorensen\", not {method!r}")
+    trilinear = method == "lewiner"
     if gradient_direction not in ("descent", "ascent"):
         raise ValueError(f"gradient_direction: expects \"descent\" or \"ascent\", not {gradient_direction!r}")
     step = _int(step_size, "step_size")
@@ -87,19 +91,19 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
         if not hasattr(volume, "__dask_graph__"):
             raise ValueError(f"client: meshes a Dask array on the cluster, not a {type(volume).__name__}")
         verts, faces, normals, values = _on_cluster(volume, level, tuple(s * step for s in spacing), step, threads,
-                                                    client, progress)
+                                                    client, progress, trilinear)
     elif chunked:
         rows = _SlabView(volume, step)
         name = f"{type(volume).__module__}.{type(volume).__name__}"
         verts, faces, normals, values = _vdiso._marching_cubes_in_slabs(
             rows if rows.wrapped else volume, name, list(rows.shape), rows.dtype, level,
             tuple(s * step for s in spacing), threads, _z_chunk_bounds(rows, list(rows.shape)), progress,
-            bricks=None if mask is None or 0 in shape else _bricks_marked(mask, step))
+            bricks=None if mask is None or 0 in shape else _bricks_marked(mask, step), trilinear=trilinear)
     else:
         verts, faces, normals, values = _vdiso.marching_cubes(
             volume[::step, ::step, ::step] if step > 1 else volume, level, tuple(s * step for s in spacing),
             threads=threads, progress=progress,
-            bricks=None if mask is None or 0 in shape else _bricks_marked(mask, step))
+            bricks=None if mask is None or 0 in shape else _bricks_marked(mask, step), trilinear=trilinear)
     if mask is not None:
         # A triangle lies in one cell, its centroid inside it (or on its faces): the cell's
         # first corner is the centroid's floor, in samples. scikit-image tests a cell's far
@@ -123,7 +127,7 @@ def marching_cubes(volume, level=None, spacing=(1.0, 1.0, 1.0), *, gradient_dire
     return verts, faces, normals, values
 
 
-def _on_cluster(volume, level, spacing, step, threads, client, progress):
+def _on_cluster(volume, level, spacing, step, threads, client, progress, trilinear):
     """marching_cubes' arrays of the Dask array `volume` meshed on `client`'s workers, a run of
     layers of bricks a task (_vdiso._mesh_slab_part), welded here (_vdiso._join_slab_parts)."""
     import dask
@@ -154,7 +158,7 @@ def _on_cluster(volume, level, spacing, step, threads, client, progress):
     for first, end in zip(cuts, cuts[1:]):
         r0, r1 = max(first * brick - 1, 0), min(end * brick + 2, shape[0])
         tasks.append(dask.delayed(_mesh_run, pure=True)(volume[r0:r1], shape, readable, first, end, level,
-                                                         spacing, each))
+                                                         spacing, each, trilinear))
         samples.append((r1 - r0) * shape[1] * shape[2])
     futures = client.compute(tasks)
     done, total = 0, sum(samples)
@@ -170,10 +174,11 @@ def _on_cluster(volume, level, spacing, step, threads, client, progress):
     return _vdiso._join_slab_parts(parts, level, spacing)
 
 
-def _mesh_run(rows, shape, dtype, first, end, level, spacing, threads):
+def _mesh_run(rows, shape, dtype, first, end, level, spacing, threads, trilinear):
     """A worker's task: layers [first, end) meshed from their slices `rows`."""
     import numpy as np
-    return _vdiso._mesh_slab_part(np.ascontiguousarray(rows), shape, dtype, first, end, level, spacing, threads)
+    return _vdiso._mesh_slab_part(np.ascontiguousarray(rows), shape, dtype, first, end, level, spacing, threads,
+                                  trilinear)
 
 
 def _sliceable(volume):
