@@ -520,6 +520,17 @@ def test_everyday_conveniences(tmp_path, volume_and_cli_store):
         assert len(meshio.read(tmp_path / "skin.vtu").cells_dict["triangle"]) == len(mesh)
         verts, faces, values = mesh.napari_surface()
         assert np.array_equal(verts[:, ::-1], mesh.vertices) and faces is not None and len(values) == len(verts)
+        # trimesh and PyVista when importable (Debian 12 has neither): else an ImportError naming them.
+        for method, package in (("to_trimesh", "trimesh"), ("to_pyvista", "pyvista")):
+            try:
+                __import__(package)
+            except ImportError:
+                with pytest.raises(ImportError, match=rf"Mesh.{method}\(\) needs the {package} package"):
+                    getattr(mesh, method)()
+                continue
+            handed = getattr(mesh, method)()
+            assert len(handed.faces if package == "trimesh" else handed.points) == (
+                len(mesh.faces) if package == "trimesh" else len(mesh.vertices))
     with pytest.raises(ValueError, match="closed"):
         store.extract(500.5)
     assert "closed" in repr(store)

@@ -274,7 +274,37 @@ def _mesh_napari(self):
     return (np.ascontiguousarray(self.vertices[:, ::-1]), self.faces, np.zeros(len(self.vertices), np.float32))
 
 
+def _import(package, method):
+    """`package` imported, or an ImportError that says which method needs it."""
+    import importlib
+    try:
+        return importlib.import_module(package)
+    except ImportError:
+        raise ImportError(f"Mesh.{method}() needs the {package} package, which is not installed "
+                          f"(Debian 12 has none: pip install {package})") from None
+
+
+def _mesh_to_trimesh(self):
+    """The triangles as a trimesh.Trimesh (vertices world (x, y, z), faces, the vertex normals),
+    as made: not merged or processed by trimesh. Needs trimesh."""
+    trimesh = _import("trimesh", "to_trimesh")
+    return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, vertex_normals=self.normals, process=False)
+
+
+def _mesh_to_pyvista(self):
+    """The triangles as a pyvista.PolyData (points world (x, y, z), triangle faces, point data
+    "Normals"). Needs pyvista."""
+    import numpy as np
+    pyvista = _import("pyvista", "to_pyvista")
+    faces = np.hstack([np.full((len(self.faces), 1), 3, dtype=np.int64), self.faces.astype(np.int64)])
+    data = pyvista.PolyData(np.asarray(self.vertices, dtype=np.float32), faces.ravel())
+    data.point_data["Normals"] = self.normals
+    return data
+
+
 Mesh.to_meshio = _mesh_to_meshio
+Mesh.to_trimesh = _mesh_to_trimesh
+Mesh.to_pyvista = _mesh_to_pyvista
 Mesh.napari_surface = _mesh_napari
 
 
