@@ -459,6 +459,19 @@ TEST_F(ZarrIndex, DataAtAUrlIndexedIntoALocalFile) {
                                     " --brick 8 --quiet");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(extract(env, path("v3.vdiso"), "v3_index.ply"), extract("", path("v3.store"), "v3_store.ply"));
+    // Each shard opened once and its index read once; a brick's inner chunks fetched together,
+    // a shard's neighbours in one range: at most a request a chunk beyond those (and the
+    // metadata's few), where opening a shard for each read took 171.
+    const auto stats = test::runCommand(env + VDISO_BINARY + " extract " + path("v3.vdiso") +
+                                        " --iso 1000.5 --method octree --stats - --quiet");
+    ASSERT_EQ(stats.exitCode, 0) << stats.output;
+    auto field = [&](const std::string& name) {
+        const size_t at = stats.output.find("\"" + name + "\":");
+        return at == std::string::npos ? -1.0 : std::stod(stats.output.substr(at + name.size() + 3));
+    };
+    EXPECT_GT(field("chunks_read"), 20) << stats.output;
+    const double shards = 3 * 3 * 2;  // 45 x 41 x 38 samples in shards of 20
+    EXPECT_LE(field("chunk_requests"), field("chunks_read") + 2 * shards + 8) << stats.output;
     // The bucket refuses the third layer of shards' chunks: the index stops, naming the URL,
     // and the next run goes on from its checkpoint, to the uninterrupted index's bytes.
     ASSERT_TRUE(test::controlS3(s3.port(), R"({"op":"fault","action":"status","status":403,"code":"AccessDenied",)"

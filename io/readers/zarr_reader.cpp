@@ -401,7 +401,7 @@ std::vector<std::optional<std::vector<unsigned char>>> ZarrVolume::stored(const 
     for (const auto& entry : byShard) shards.push_back(&entry);
     mKeys->forEach(shards.size(), [&](size_t s) {
         const std::string& key = shards[s]->first;
-        std::optional<ZarrKeys::Object> object = mKeys->open(key, 0);
+        const std::shared_ptr<const ZarrKeys::Object> object = shardObject(key);
         if (!object) return;  // a missing shard: every inner chunk the fill value
         const std::shared_ptr<const std::vector<uint64_t>> index = shardIndex(key, *object);
         std::vector<size_t> wanted = shards[s]->second;
@@ -434,6 +434,21 @@ std::vector<std::optional<std::vector<unsigned char>>> ZarrVolume::stored(const 
         }
     });
     return out;
+}
+
+std::shared_ptr<const ZarrKeys::Object> ZarrVolume::shardObject(const std::string& key) const {
+    auto opened = [&]() -> std::shared_ptr<const ZarrKeys::Object> {
+        std::optional<ZarrKeys::Object> object = mKeys->open(key, 0);
+        return object ? std::make_shared<const ZarrKeys::Object>(std::move(*object)) : nullptr;
+    };
+    if (!mKeys->isRemote()) return opened();  // a file: opened for the read (a folder of shards has many)
+    {
+        std::lock_guard lock(mShardMutex);
+        if (auto it = mShardObjects.find(key); it != mShardObjects.end()) return it->second;
+    }
+    std::shared_ptr<const ZarrKeys::Object> object = opened();
+    std::lock_guard lock(mShardMutex);
+    return mShardObjects.emplace(key, std::move(object)).first->second;
 }
 
 std::shared_ptr<const std::vector<uint64_t>> ZarrVolume::shardIndex(const std::string& key,

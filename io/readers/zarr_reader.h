@@ -90,6 +90,8 @@ private:
     Place place(const Dims3& c) const;
     // A shard's index, (offset, size) per inner chunk, read and checked once.
     std::shared_ptr<const std::vector<uint64_t>> shardIndex(const std::string& key, const ZarrKeys::Object& object) const;
+    // A shard opened (null: missing); at a URL once, then kept (an open is a request).
+    std::shared_ptr<const ZarrKeys::Object> shardObject(const std::string& key) const;
 
     std::unique_ptr<ZarrKeys> mKeys;
     std::unique_ptr<Image> mImage;
@@ -99,6 +101,7 @@ private:
     uint32_t mMetadataCrc = 0;
     mutable std::mutex mShardMutex;
     mutable std::map<std::string, std::shared_ptr<const std::vector<uint64_t>>> mShardIndexes;
+    mutable std::map<std::string, std::shared_ptr<const ZarrKeys::Object>> mShardObjects;  // at a URL
 };
 
 // Throws IoError naming the store (and the chunk, for chunk errors) on any problem; for a level

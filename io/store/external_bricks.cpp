@@ -58,9 +58,9 @@ struct ExternalBricks::Impl {
         throwIoError(array.where(c), "changed since it was indexed (" + what + "): " + again);
     }
 
-    ChunkSamples load(const ArrayLevel& level, const Dims3& c) {
+    // Chunk c's stored bytes checked against its pin, and decoded.
+    ChunkSamples decodeChecked(const ArrayLevel& level, const Dims3& c, const std::optional<std::vector<unsigned char>>& stored) {
         const ZarrVolume& array = level.array;
-        const auto stored = array.stored({c})[0];
         const ZarrChunkPin& pin = level.record.pins[size_t(array.chunkNumber(c))];
         if (!stored) {
             if (pin.bytes != ZarrChunkPin::kMissing)
@@ -80,47 +80,71 @@ struct ExternalBricks::Impl {
         return samples;
     }
 
-    // Chunk c of level `l`'s decoded samples, read once however many bricks ask for it at once.
-    ChunkSamples chunk(int l, const Dims3& c) {
+    // Chunks cs of level `l`, decoded, each read once however many bricks ask for it at once:
+    // those not held are fetched together (at a URL in parallel; a shard's neighbours in one
+    // range: ZarrVolume::stored).
+    std::vector<ChunkSamples> chunks(int l, const std::vector<Dims3>& cs) {
         const ArrayLevel& level = *levels[size_t(l)];
-        const int64_t key = level.array.chunkNumber(c) * kMaxLevels + l;
+        auto keyOf = [&](const Dims3& c) { return level.array.chunkNumber(c) * kMaxLevels + l; };
+        std::vector<std::shared_future<ChunkSamples>> futures(cs.size());
+        std::vector<size_t> mine;
+        std::vector<std::promise<ChunkSamples>> promises;
+        promises.reserve(cs.size());
         std::unique_lock lock(mutex);
-        if (auto it = slots.find(key); it != slots.end()) {
-            used.splice(used.begin(), used, it->second.used);
-            const std::shared_future<ChunkSamples> samples = it->second.samples;
-            lock.unlock();
-            return samples.get();
-        }
-        std::promise<ChunkSamples> promise;
-        used.push_front(key);
-        slots.emplace(key, Slot{promise.get_future().share(), used.begin(), 0});
-        lock.unlock();
-        ChunkSamples samples;
-        try {
-            samples = load(level, c);
-        } catch (...) {
-            promise.set_exception(std::current_exception());
-            lock.lock();
-            used.erase(slots.at(key).used);
-            slots.erase(key);
-            throw;
-        }
-        promise.set_value(samples);
-        lock.lock();
-        slots.at(key).bytes = samples->size();
-        heldBytes += samples->size();
-        // The least recently used read chunks go while over budget (the one just read stays).
-        for (auto it = std::prev(used.end()); heldBytes > cacheBytes && it != used.begin();) {
-            auto slot = slots.find(*it);
-            auto next = std::prev(it);
-            if (slot->second.bytes) {
-                heldBytes -= slot->second.bytes;
-                slots.erase(slot);
-                used.erase(it);
+        for (size_t i = 0; i < cs.size(); ++i) {
+            const int64_t key = keyOf(cs[i]);
+            if (auto it = slots.find(key); it != slots.end()) {
+                used.splice(used.begin(), used, it->second.used);
+                futures[i] = it->second.samples;
+                continue;
             }
-            it = next;
+            promises.emplace_back();
+            used.push_front(key);
+            futures[i] = slots.emplace(key, Slot{promises.back().get_future().share(), used.begin(), 0}).first->second.samples;
+            mine.push_back(i);
         }
-        return samples;
+        lock.unlock();
+        if (!mine.empty()) {
+            size_t done = 0;
+            try {
+                std::vector<Dims3> wanted;
+                for (const size_t i : mine) wanted.push_back(cs[i]);
+                const auto stored = level.array.stored(wanted);
+                for (; done < mine.size(); ++done) promises[done].set_value(decodeChecked(level, wanted[done], stored[done]));
+            } catch (...) {
+                lock.lock();
+                for (size_t k = done; k < mine.size(); ++k) {
+                    promises[k].set_exception(std::current_exception());
+                    const int64_t key = keyOf(cs[mine[k]]);
+                    used.erase(slots.at(key).used);
+                    slots.erase(key);
+                }
+                throw;
+            }
+            lock.lock();
+            for (const size_t i : mine) {
+                Slot& slot = slots.at(keyOf(cs[i]));
+                slot.bytes = futures[i].get()->size();
+                heldBytes += slot.bytes;
+            }
+            // The least recently used read chunks go while over budget (the ones just read stay).
+            for (auto it = std::prev(used.end()); heldBytes > cacheBytes && it != used.begin();) {
+                auto slot = slots.find(*it);
+                auto next = std::prev(it);
+                const bool justRead = std::any_of(mine.begin(), mine.end(), [&](size_t i) { return keyOf(cs[i]) == *it; });
+                if (slot->second.bytes && !justRead) {
+                    heldBytes -= slot->second.bytes;
+                    slots.erase(slot);
+                    used.erase(it);
+                }
+                it = next;
+            }
+            lock.unlock();
+        }
+        std::vector<ChunkSamples> out;
+        out.reserve(cs.size());
+        for (auto& f : futures) out.push_back(f.get());
+        return out;
     }
 };
 
@@ -214,12 +238,12 @@ void ExternalBricks::assemble(int64_t id, unsigned char* dst) const {
         first[a] = lo / chunk[a];
         count[a] = hi / chunk[a] - first[a] + 1;
     }
-    std::vector<ChunkSamples> chunks;
-    chunks.reserve(size_t(count[0] * count[1] * count[2]));
+    std::vector<Dims3> wanted;
+    wanted.reserve(size_t(count[0] * count[1] * count[2]));
     for (int64_t kz = 0; kz < count[2]; ++kz)
         for (int64_t ky = 0; ky < count[1]; ++ky)
-            for (int64_t kx = 0; kx < count[0]; ++kx)
-                chunks.push_back(m.chunk(l, {first[0] + kx, first[1] + ky, first[2] + kz}));
+            for (int64_t kx = 0; kx < count[0]; ++kx) wanted.push_back({first[0] + kx, first[1] + ky, first[2] + kz});
+    const std::vector<ChunkSamples> chunks = m.chunks(l, wanted);
     // Rows as gatherBrick makes them (io/store/brick_encoder.cpp): the part inside the array
     // copied a chunk's run at a time, the ends clamped.
     const int64_t nx = dims[0];

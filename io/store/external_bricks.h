@@ -4,7 +4,8 @@
 // (a scale one or two samples short of its level's dims is clamped at its own last sample,
 // as the index read it: io/readers/edge_padded_reader.h), copied from the chunks that hold
 // them (any chunk shape), through one cache of decoded chunks so that bricks sharing a chunk
-// fetch and decode it once. Every chunk is checked against its pin as it is read: a chunk
+// fetch and decode it once; a brick's chunks not held are fetched together (at a URL in
+// parallel, a shard's neighbouring inner chunks in one range). Every chunk is checked against its pin as it is read: a chunk
 // whose bytes changed since indexing is refused, naming it.
 #pragma once
 
