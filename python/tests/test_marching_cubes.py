@@ -219,6 +219,12 @@ def test_lorensen_is_scikit_images_and_lewiner_is_the_trilinear_topology():
     on_edges = (np.abs(lewiner[0] - np.round(lewiner[0])) > 1e-3).sum(axis=1) <= 1
     assert 0 < (~on_edges).sum() < 0.02 * len(lewiner[0])
     assert np.array_equal(np.unique(np.round(lewiner[0][on_edges].astype(np.float64), 3), axis=0), rounded[0])
+    # A vertex inside a cell has that cell's spread about the level as its value.
+    cells = np.floor(lewiner[0][~on_edges]).astype(int)
+    corners = np.stack([volume[cells[:, 0] + dz, cells[:, 1] + dy, cells[:, 2] + dx]
+                        for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)], axis=1).astype(np.float64)
+    spread = np.maximum(0, corners.max(axis=1) - 0.5) - np.minimum(0, corners.min(axis=1) - 0.5)
+    np.testing.assert_array_equal(lewiner[3][~on_edges], spread.astype(np.float32))
     f = lewiner[1]
     directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
     assert len(np.unique(directed, axis=0)) == len(directed)  # wound one way: no directed edge twice
