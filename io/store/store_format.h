@@ -59,7 +59,7 @@ struct BrickEntry {
     float minValue = 0;        // min and max over the samples of the brick's cells
     float maxValue = 0;        //   (ghosts excluded: they only feed normals)
     bool compressed = false;
-    bool external = false;     // level 0 of an index: the samples are in the indexed array, no bytes here
+    bool external = false;     // a level of an index that lies in the indexed data (level 0, own scales): no bytes here
 };
 
 // A histogram of every sample in the volume, counted once each: bins of equal width over
