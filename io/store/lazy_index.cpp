@@ -61,15 +61,65 @@ void LazyIndex::readInBackground(uint64_t begin, size_t readers) {
             for (;;) {
                 uint64_t part = 0;
                 {
+                    // Chosen and claimed at once: two readers never take one part (the second
+                    // would wait on the first's answer instead of asking for another).
                     std::lock_guard lock(mLock);
                     uint64_t i = mDirectory.parts();
                     while (i > first && mState[i - 1] != State::Missing) --i;
                     if (i == first || mStop) return;
                     part = i - 1;
+                    mState[part] = State::OnItsWay;
                 }
-                if (!readParts(part, part + 1, true)) return;
+                if (!fetchParts({part}, true)) return;
             }
         });
+}
+
+bool LazyIndex::fetchParts(const std::vector<uint64_t>& mine, bool background) const {
+    std::vector<std::unique_ptr<unsigned char[]>> stored(mine.size());
+    std::vector<ByteRange> ranges(mine.size());
+    for (size_t k = 0; k < mine.size(); ++k) {
+        const uint64_t i = mine[k];
+        const size_t n = size_t(mDirectory.offsets[i + 1] - mDirectory.offsets[i]);
+        stored[k] = std::make_unique_for_overwrite<unsigned char[]>(n);
+        ranges[k] = {mOffset + mDirectory.offsets[i], n, stored[k].get()};
+    }
+    std::exception_ptr failure;
+    std::vector<char> good(mine.size(), 0), unpacked(mine.size(), 0);
+    auto unpack = [&](size_t k) {
+        const uint64_t i = mine[k];
+        good[k] = store_format::unpackIndexPart(mDirectory, i, stored[k].get(),
+                                               mRaw.get() + i * store_format::kIndexPartBytes);
+        unpacked[k] = 1;
+        return good[k] != 0;
+    };
+    try {
+        // A remote disk cache keeps a part once it unpacks (its checksum passes).
+        // In the background, a transfer in flight ends when the index is closed.
+        mSource.readMany(ranges, "index", unpack, background ? &mStop : nullptr);
+        tbb::parallel_for(size_t(0), mine.size(), [&](size_t k) {
+            if (!unpacked[k]) unpack(k);
+        });
+    } catch (...) {
+        failure = std::current_exception();
+    }
+    int64_t corrupt = -1;
+    {
+        std::lock_guard lock(mLock);
+        for (size_t k = 0; k < mine.size(); ++k) {
+            mState[mine[k]] = good[k] ? State::Here : State::Missing;
+            if (good[k]) mReady[mine[k]].store(true, std::memory_order_release);
+            else if (corrupt < 0 && !failure) corrupt = int64_t(mine[k]);
+        }
+    }
+    mChanged.notify_all();
+    if ((failure || corrupt >= 0) && background) return false;
+    if (failure) std::rethrow_exception(failure);
+    if (corrupt >= 0)
+        throwIoError(mSource.name(), "index part " + std::to_string(corrupt) + " of " +
+                                         std::to_string(mDirectory.parts()) +
+                                         " is corrupt (checksum mismatch or bad zstd data)");
+    return true;
 }
 
 bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const {
@@ -83,51 +133,7 @@ bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const 
                     mine.push_back(i);
                 }
         }
-        if (!mine.empty()) {
-            std::vector<std::unique_ptr<unsigned char[]>> stored(mine.size());
-            std::vector<ByteRange> ranges(mine.size());
-            for (size_t k = 0; k < mine.size(); ++k) {
-                const uint64_t i = mine[k];
-                const size_t n = size_t(mDirectory.offsets[i + 1] - mDirectory.offsets[i]);
-                stored[k] = std::make_unique_for_overwrite<unsigned char[]>(n);
-                ranges[k] = {mOffset + mDirectory.offsets[i], n, stored[k].get()};
-            }
-            std::exception_ptr failure;
-            std::vector<char> good(mine.size(), 0), unpacked(mine.size(), 0);
-            auto unpack = [&](size_t k) {
-                const uint64_t i = mine[k];
-                good[k] = store_format::unpackIndexPart(mDirectory, i, stored[k].get(),
-                                                       mRaw.get() + i * store_format::kIndexPartBytes);
-                unpacked[k] = 1;
-                return good[k] != 0;
-            };
-            try {
-                // A remote disk cache keeps a part once it unpacks (its checksum passes).
-                // In the background, a transfer in flight ends when the index is closed.
-                mSource.readMany(ranges, "index", unpack, background ? &mStop : nullptr);
-                tbb::parallel_for(size_t(0), mine.size(), [&](size_t k) {
-                    if (!unpacked[k]) unpack(k);
-                });
-            } catch (...) {
-                failure = std::current_exception();
-            }
-            int64_t corrupt = -1;
-            {
-                std::lock_guard lock(mLock);
-                for (size_t k = 0; k < mine.size(); ++k) {
-                    mState[mine[k]] = good[k] ? State::Here : State::Missing;
-                    if (good[k]) mReady[mine[k]].store(true, std::memory_order_release);
-                    else if (corrupt < 0 && !failure) corrupt = int64_t(mine[k]);
-                }
-            }
-            mChanged.notify_all();
-            if ((failure || corrupt >= 0) && background) return false;
-            if (failure) std::rethrow_exception(failure);
-            if (corrupt >= 0)
-                throwIoError(mSource.name(), "index part " + std::to_string(corrupt) + " of " +
-                                                 std::to_string(mDirectory.parts()) +
-                                                 " is corrupt (checksum mismatch or bad zstd data)");
-        }
+        if (!mine.empty() && !fetchParts(mine, background)) return false;
         std::unique_lock lock(mLock);
         auto settled = [&] {
             for (uint64_t i = first; i < last; ++i)

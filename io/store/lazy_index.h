@@ -60,6 +60,9 @@ private:
     // Reads the parts [first, last) not here, as need() says; `background`: gives up quietly
     // on a failure (false; the parts are left Missing) and stops when asked to.
     bool readParts(uint64_t first, uint64_t last, bool background) const;
+    // Reads parts `mine`, claimed (OnItsWay) by the caller, and settles them; false, in the
+    // background, when that failed (else it throws).
+    bool fetchParts(const std::vector<uint64_t>& mine, bool background) const;
 
     const ByteSource& mSource;
     uint64_t mOffset;
