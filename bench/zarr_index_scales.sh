@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# vdiso index of an OME-Zarr that has its own scales: the index that takes them as its coarse
-# levels (the default) against the one that filters and stores its own (--own-levels), and both
-# against zarr-python reading every chunk. The generated head at N^3 u16, written by
+# vdiso index of an OME-Zarr that has its own scales: the index that takes scale 1 as its level 1
+# (the default; levels 2 on filtered from it and kept in the index), the one that takes every
+# scale that fits (--scale-levels 16), and the one that filters and stores every level
+# (--own-levels), against zarr-python reading every chunk. The generated head at N^3 u16, written by
 # vdiso_bench_inputs as OME-Zarr 0.4 with SCALES levels (a nearest-neighbour pyramid: level l is
 # every 2^l-th sample), blosc-lz4 chunks of CHUNK^3, into data/bench/z${N}s/ (made when missing).
 # Local, the folder in the page cache; whole processes on all cores, alternated, median of RUNS:
 #   zarr-python: level 0's chunks, then every scale's (a layer of chunks at a time);
-#   vdiso index, own scales and --own-levels: time, and the index's size against the data;
+#   vdiso index, each way: time, and the index's size against the data;
 #   the first SAGE normal and distant views from each index (extract_s, chunks read);
 # then, unless SKIP_REMOTE=1, the same folder in the bucket (bench/bucket_server.sh's endpoint,
 # DELAY_MS before each first byte, 1 Gbit/s): both indexes made from s3:// into local files,
@@ -49,13 +50,14 @@ declare -A t
 for ((r = 0; r < runs; ++r)); do
   t[zarr0]+="$(seconds zarr_read "$zarr/0") "
   t[zarrall]+="$(seconds zarr_read "${all_scales[@]}") "
-  t[own]+="$(seconds $v index "$zarr" --index "$dir/own.vdiso" --quiet --force) "
+  t[one]+="$(seconds $v index "$zarr" --index "$dir/one.vdiso" --quiet --force) "
+  t[own]+="$(seconds $v index "$zarr" --index "$dir/own.vdiso" --scale-levels 16 --quiet --force) "
   t[made]+="$(seconds $v index "$zarr" --index "$dir/made.vdiso" --own-levels --quiet --force) "
 done
 median() { python3 -c "import statistics, sys; v = [float(x) for x in sys.argv[1:]]; print('%.2f (%s)' % (statistics.median(v), ', '.join('%.2f' % x for x in v)))" $1; }
 echo "zarr-python reads level 0: $(median "${t[zarr0]}") s"
 echo "zarr-python reads every scale: $(median "${t[zarrall]}") s"
-for k in own made; do
+for k in one own made; do
   size=$(stat -c %s "$dir/$k.vdiso")
   echo "vdiso index ($k levels): $(median "${t[$k]}") s; index $(python3 -c "print('%.2f MB, %.3f%% of the data' % ($size / 1e6, 100 * $size / $data))")"
   for view in normal distant; do
@@ -72,8 +74,9 @@ if [ -z "${SKIP_REMOTE:-}" ]; then
   source bench/bucket_server.sh
   start_bucket_server "$delay" 1000
   url=s3://bucket/head${n}s.ome.zarr
-  for k in own made; do
+  for k in one own made; do
     extra=()
+    [ $k = own ] && extra=(--scale-levels 16)
     [ $k = made ] && extra=(--own-levels)
     echo "vdiso index from $url ($k levels): $(seconds $v index "$url" --index "$dir/remote_$k.vdiso" "${extra[@]}" "${remote[@]}" --quiet --force) s"
     echo "  SAGE normal view, index + s3:// chunks, whole process: $(seconds $v extract "$dir/remote_$k.vdiso" --iso "$iso" --method sage "${remote[@]}" --stats "$work/$k.json") s, \

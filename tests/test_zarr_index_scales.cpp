@@ -111,10 +111,10 @@ std::vector<Scale> tentScales(int count) {
     return scales;
 }
 
-ZarrIndexOptions indexOptions(bool ownScales) {
+ZarrIndexOptions indexOptions(bool ownScales) {  // every scale that fits, or none
     ZarrIndexOptions o;
     o.store.brickSize = 8;  // 45 x 41 x 38 samples: 6 x 5 x 5 bricks, levels 0-3
-    o.ownScales = ownScales;
+    o.scaleLevels = ownScales ? 16 : 0;
     return o;
 }
 
@@ -154,8 +154,12 @@ TEST_F(ZarrIndexScales, ScalesThatFitAreReadWhereTheyLie) {
         EXPECT_GT(sa.view.coarseBricks, 0) << what;
         test::expectSameMesh(ma, mb, what + " distant");
     }
-    // From the command line: said, and turned off by --own-levels.
-    auto r = test::runVdiso("index " + path("img2.zarr") + " --brick 8 --index " + path("cli.vdiso"));
+    // From the command line: level 1 by default, more by --scale-levels, none by --own-levels.
+    auto r = test::runVdiso("index " + path("img2.zarr") + " --brick 8 --index " + path("one.vdiso"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("level 1 from its own scale 1"), std::string::npos) << r.output;
+    test::expectSameStore(BrickStoreReader(path("one.vdiso")), BrickStoreReader(path("img2.zarr.made.vdiso")), "level 1");
+    r = test::runVdiso("index " + path("img2.zarr") + " --brick 8 --scale-levels 2 --index " + path("cli.vdiso"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("levels 1-2 from its own scales"), std::string::npos) << r.output;
     r = test::runVdiso("info " + path("cli.vdiso"));

@@ -22,12 +22,12 @@ constexpr const char* kHelp =
     "a chunk that changes afterwards is refused when read. Then 'vdiso extract DATA ...' (a\n"
     "folder finds its index beside it) or 'vdiso extract OUT ...'.\n"
     "\n"
-    "An OME-Zarr's own coarser scales are the coarser levels where they fit them (each 2x the\n"
-    "one before on x, y and z, at level 0's origin): read once too and left where they lie, so\n"
-    "the index stays a small fraction of the data. Levels past them are filtered from the last\n"
-    "one and kept in the index; the summary says which scale was not taken, and why. For data\n"
-    "at a URL, --own-levels trades a larger index for views that fetch fewer bytes: coarse\n"
-    "bricks then come from the index, not from the scales' whole chunks.\n"
+    "An OME-Zarr's first coarser scale is level 1 where it fits (2x level 0 on x, y and z, at\n"
+    "its origin): read once too and left where it lies, which keeps out of the index the one\n"
+    "coarse level that weighs (an eighth of the data). The levels past it are filtered from it\n"
+    "and kept in the index (2 % of the data or so): a coarser scale's chunks each cover much of\n"
+    "the volume, which a view would fetch whole. --scale-levels N takes up to N scales; the\n"
+    "summary says which scale was not taken, and why.\n"
     "\n"
     "The index is written as OUT.partial, and where the pass stands is saved as OUT.resume\n"
     "every half minute or so: a run that stops (Ctrl-C, a failed read, a kill) is gone on\n"
@@ -36,6 +36,8 @@ constexpr const char* kHelp =
     "  --index OUT             where the index goes (default: DATA.vdiso beside a local DATA;\n"
     "                          needed for a URL)\n"
     "  --scale-level N         the OME-Zarr multiscales level to index (default 0, the finest)\n"
+    "  --scale-levels N        coarser levels taken from the image's own scales, at most N\n"
+    "                          (default 1; 0: --own-levels)\n"
     "  --own-levels            make every coarser level with vdiso's filter and keep it in the\n"
     "                          index, rather than take the image's own scales\n"
     "  --restart               start over, not from an interrupted run's OUT.resume\n"
@@ -67,7 +69,9 @@ int runIndex(int argc, char** argv) {
             options.checkpointSeconds = parseDouble(a, args.value(a));
             if (!(options.checkpointSeconds >= 0)) throw UsageError(a + " expects seconds, 0 or more");
         } else if (a == "--own-levels") {
-            options.ownScales = false;
+            options.scaleLevels = 0;
+        } else if (a == "--scale-levels") {
+            options.scaleLevels = int(parseInt(a, args.value(a), 0, 16));
         } else if (a == "--restart") {
             options.restart = true;
         } else if (a == "--quiet") {
@@ -98,11 +102,13 @@ int runIndex(int argc, char** argv) {
             std::printf("went on from an interrupted run: %lld of %lld layers of bricks were done\n",
                         (long long)s.store.resumedLayers, (long long)s.store.layers);
         if (s.ownScaleLevels > 0) {
-            std::printf("levels 1-%d from its own scales, read where they lie%s\n", s.ownScaleLevels,
-                        s.store.levels > s.ownScaleLevels + 1 ? "; the coarser ones filtered from the last" : "");
-            if (isRemoteLocation(data))
+            const std::string which = s.ownScaleLevels == 1 ? "level 1 from its own scale 1"
+                                                              : "levels 1-" + std::to_string(s.ownScaleLevels) + " from its own scales";
+            std::printf("%s, read where it lies%s\n", which.c_str(),
+                        s.store.levels > s.ownScaleLevels + 1 ? "; the coarser ones filtered from it and kept here" : "");
+            if (isRemoteLocation(data) && s.ownScaleLevels > 1)
                 std::printf("(a view's coarse bricks come from those scales' whole chunks over the link; "
-                            "--own-levels keeps filtered levels in the index instead: larger, fewer bytes a view)\n");
+                            "--scale-levels 1 keeps the coarser ones in the index instead)\n");
         }
         if (!s.scalesNotUsed.empty()) std::printf("%s; the levels from there on are filtered\n", s.scalesNotUsed.c_str());
         const double ratio = double(s.store.fileBytes) / double(std::max<uint64_t>(s.dataBytes, 1));

@@ -131,8 +131,9 @@ ZarrIndexSummary indexZarr(const std::string& dataPath, const std::string& index
     ZarrIndexSummary summary;
     const VolumeInfo info = storeVolumeFor(levels[0].volume->info(), options.store, levels[0].volume->name());
     const int levelCount = storeLevelCount(BrickLayout(info.dims, options.store.brickSize), options.store);
-    if (options.ownScales && levelCount > 1)
-        for (auto& scale : ownScales(dataPath, *levels[0].volume, options.level, levelCount - 1, options.remote,
+    if (options.scaleLevels > 0 && levelCount > 1)
+        for (auto& scale : ownScales(dataPath, *levels[0].volume, options.level,
+                                     std::min(levelCount - 1, options.scaleLevels), options.remote,
                                        summary.scalesNotUsed))
             levels.push_back(IndexedLevel{{}, std::move(scale)});
     const std::string location = externalLocationFor(dataPath, indexPath);

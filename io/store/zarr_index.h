@@ -4,11 +4,11 @@
 // writer's pass, io/store/store_writer.h), and the index holds what a store's index holds (each
 // brick's range, sub-block codes, the histogram), but not level 0's samples: instead, where the
 // array is and each chunk's pin (io/store/external_level.h), so that a changed chunk is refused
-// when read. An OME-Zarr's own coarser scales stand for the coarser levels of detail where they
-// fit them (2^l times level 0's spacing, its origin, the level's shape to within two samples):
-// they are read once too, in step with level 0, measured and pinned like it, and their samples
-// stay where they are; the levels past them are filtered and stored in the index, as a store
-// has them.
+// when read. An OME-Zarr's own coarser scales stand for the first coarser levels of detail
+// (ZarrIndexOptions::scaleLevels of them, one by default) where they fit them (2^l times level
+// 0's spacing, its origin, the level's shape to within two samples): they are read once too, in
+// step with level 0, measured and pinned like it, and their samples stay where they are; the
+// levels past them are filtered from the last and stored in the index, as a store has them.
 #pragma once
 
 #include <cstdint>
@@ -22,9 +22,12 @@ namespace vdiso {
 
 struct ZarrIndexOptions {
     int level = 0;           // the OME-Zarr multiscale level indexed (0, the finest)
-    // Take the coarser levels from the OME-Zarr's own scales where they fit (false: filter
-    // every coarser level from level 0 and store it in the index, `--own-levels`).
-    bool ownScales = true;
+    // How many coarser levels, at most, are taken from the OME-Zarr's own scales where they fit
+    // (`--scale-levels`; 0: every coarser level filtered from level 0 and stored, `--own-levels`).
+    // One by default: level 1 is an eighth of the data, and a coarser scale's chunks each cover
+    // so much of the volume that a view from a bucket would fetch most of them whole (the
+    // 2048^3 head's normal view: 61 of scale 2's 64 chunks, 146 MB).
+    int scaleLevels = 1;
     StoreWriteOptions store;  // brick size, levels of detail, their compression, overwrite
     RemoteOptions remote;
     // Resuming: the index is written as INDEX.partial, with where the pass stands saved as

@@ -88,10 +88,10 @@ pyb::dict convertArray(pyb::object source, const std::string& name, const std::v
 
 // vdiso.index: the Zarr array at `data` indexed where it lies (vdiso index).
 pyb::dict indexData(const std::string& data, const std::string& index, int64_t level, int64_t brick,
-                    const std::string& levels, bool ownScales, bool overwrite, bool restart,
+                    const std::string& levels, int64_t scaleLevels, bool overwrite, bool restart,
                     double checkpointSeconds, pyb::object progress) {
     ZarrIndexOptions options;
-    options.ownScales = ownScales;
+    options.scaleLevels = int(checkedInt("scale_levels", scaleLevels, 0, 16));
     options.level = int(checkedInt("scale_level", level, 0, 64));
     options.restart = restart;
     if (!(checkpointSeconds >= 0)) throw std::invalid_argument("checkpoint_seconds: expects seconds, 0 or more");
@@ -115,7 +115,7 @@ pyb::dict indexData(const std::string& data, const std::string& index, int64_t l
 }  // namespace
 
 void bindConvert(pyb::module_& m) {
-    m.def("_index", &indexData, "data"_a, "index"_a, "level"_a, "brick"_a, "levels"_a, "own_scales"_a, "overwrite"_a,
+    m.def("_index", &indexData, "data"_a, "index"_a, "level"_a, "brick"_a, "levels"_a, "scale_levels"_a, "overwrite"_a,
           "restart"_a, "checkpoint_seconds"_a, "progress"_a);
     m.def("_convert_files", &convertFiles, "inputs"_a, "output"_a, "spacing"_a, "brick"_a, "levels"_a, "compress"_a,
           "overwrite"_a, "progress"_a);

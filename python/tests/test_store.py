@@ -465,7 +465,7 @@ def test_an_indexed_zarr_opens_in_place_like_its_converted_store(tmp_path):
 
 def test_an_ome_zarr_s_own_scales_are_its_coarse_levels(tmp_path):
     """An OME-Zarr written with zarr-python, scales of every other sample: the index takes them
-    as levels and stays small; own_scales=False filters and stores every level instead."""
+    as levels and stays small; scale_levels=0 filters and stores every level instead."""
     v = head()
     data = tmp_path / "head.ome.zarr"
     group = zarr.open_group(str(data), mode="w")
@@ -476,8 +476,8 @@ def test_an_ome_zarr_s_own_scales_are_its_coarse_levels(tmp_path):
         datasets.append({"path": str(level), "coordinateTransformations": [{"type": "scale", "scale": [step] * 3}]})
     axes = [{"name": a, "type": "space"} for a in "zyx"]
     group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": datasets}]
-    own = vdiso.index(data, brick=8)
-    made = vdiso.index(data, tmp_path / "made.vdiso", brick=8, own_scales=False)
+    own = vdiso.index(data, brick=8, scale_levels=2)
+    made = vdiso.index(data, tmp_path / "made.vdiso", brick=8, scale_levels=0)
     assert own["own_scale_levels"] == 2 and own["scales_not_used"] == ""
     assert made["own_scale_levels"] == 0
     assert own["file_bytes"] * 3 < made["file_bytes"]

@@ -313,9 +313,9 @@ def open(path, *, s3_endpoint="", anonymous=False, disk_cache=""):  # noqa: A001
     return Store(path, s3_endpoint=s3_endpoint, anonymous=anonymous, disk_cache=disk_cache)
 
 
-def index(data, index=None, *, scale_level=0, brick=32, levels="auto", own_scales=True, overwrite=False,
+def index(data, index=None, *, scale_level=0, brick=32, levels="auto", scale_levels=1, overwrite=False,
           restart=False, checkpoint_seconds=30, progress=None):
-    """index(data, index=None, *, scale_level=0, brick=32, levels="auto", own_scales=True, overwrite=False,
+    """index(data, index=None, *, scale_level=0, brick=32, levels="auto", scale_levels=1, overwrite=False,
     restart=False, checkpoint_seconds=30, progress=None) -> dict
 
     Indexes a Zarr array or OME-Zarr image (a folder, or an http(s):// or s3:// URL) where it
@@ -323,14 +323,15 @@ def index(data, index=None, *, scale_level=0, brick=32, levels="auto", own_scale
     data + ".vdiso") or vdiso.open(index) reads it like a store, without a converted copy.
     A call that stops (Ctrl-C, a failed read) leaves INDEX.partial and INDEX.resume, where the
     pass stood at most about checkpoint_seconds before; the same call again goes on from there
-    (restart=True starts over). An OME-Zarr's own 2x scales are the coarse levels where they
-    fit, read where they lie (own_scales=False: vdiso's filtered levels, kept in the index).
+    (restart=True starts over). An OME-Zarr's own 2x scales are the first `scale_levels` coarse
+    levels where they fit, read where they lie (`vdiso index --scale-levels`; 0: vdiso's filtered
+    levels, kept in the index).
     Returns what was written: the index's path and bytes ("index", "file_bytes"), the chunks
     indexed, the data's bytes as stored ("data_bytes"), the layers of bricks an interrupted
     call had done ("resumed_layers" of "layers"), the levels taken from the image's scales
     ("own_scale_levels") and why the next scale was not ("scales_not_used")."""
     return _vdiso._index(str(data), "" if index is None else str(index), _int(scale_level, "scale_level"),
-                         _int(brick, "brick"), str(levels), bool(own_scales), bool(overwrite), bool(restart),
+                         _int(brick, "brick"), str(levels), _int(scale_levels, "scale_levels"), bool(overwrite), bool(restart),
                          float(checkpoint_seconds), progress)
 
 
