@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 #include <vector>
@@ -19,6 +20,19 @@
 
 namespace vdiso {
 namespace {
+
+TEST(TrilinearCell, NonFiniteSamplesAreCutAsTheTablesCutThem) {
+    const double f[8] = {1.0, -1.0, -1.0, 1.0, std::numeric_limits<double>::infinity(), -1.0, -1.0,
+                         std::numeric_limits<double>::quiet_NaN()};
+    int c = 0;
+    for (int k = 0; k < 8; ++k) c |= int(f[k] > 0) << k;
+    TrilinearCell cut;
+    trilinearCell(f, cut);
+    const McTriangleCase& t = mcTriangleCase(c);
+    ASSERT_EQ(cut.triangleCount, t.triangleCount);
+    EXPECT_EQ(cut.centreCount, 0);
+    for (int k = 0; k < 3 * t.triangleCount; ++k) EXPECT_EQ(cut.edges[k], t.edges[k]);
+}
 
 TEST(TrilinearCell, FaceCutsChainForEveryChoiceAndNoneIsTheTables) {
     for (int c = 0; c < kMcCaseCount; ++c) {

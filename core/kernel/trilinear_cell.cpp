@@ -370,8 +370,13 @@ void trilinearCell(const double f[8], TrilinearCell& out) {
         caseIndex |= int(f[c] > 0) << c;
         finite = finite && std::isfinite(f[c]);
     }
-    // Not a trilinear interpolant: the tables' cut.
-    const int joinAbove = finite ? joinedFaces(f, caseIndex) : 0;
+    if (!finite) {  // not a trilinear interpolant (inf, NaN): the tables' cut
+        const McTriangleCase& t = mcTriangleCase(caseIndex);
+        out.triangleCount = t.triangleCount;
+        std::copy_n(t.edges, 3 * t.triangleCount, out.edges);
+        return;
+    }
+    const int joinAbove = joinedFaces(f, caseIndex);
     McPolygonCase loops;
     mcPolygonsJoined(caseIndex, joinAbove, loops);
     int first[kMcEdgeCount], size[kMcEdgeCount];
@@ -385,7 +390,7 @@ void trilinearCell(const double f[8], TrilinearCell& out) {
     // (a piece may have two loops: there is one such pair).
     int tubeWith[kMcEdgeCount];
     std::fill_n(tubeWith, loops.polygonCount, -1);
-    if (finite) {
+    {
         Groups<8> faces[2] = {faceGroups(f, caseIndex, joinAbove, false), faceGroups(f, caseIndex, joinAbove, true)};
         int piece[2][kMcEdgeCount];  // [above][loop]
         for (int p = 0; p < loops.polygonCount; ++p) {
