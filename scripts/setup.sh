@@ -32,7 +32,7 @@ if [ "$profile" != demo ]; then
     clang libclang-rt-dev                   # the sanitizer build and the fuzz targets (libFuzzer)
     libopenmpi-dev openmpi-bin              # vdiso-mpi (mpi/): built only when MPI is found
     nginx-light python3-botocore curl openssl   # the remote stores' test servers (tests/remote/)
-    python3-pytest python3-skimage python3-zarr python3-dask python3-distributed python3-meshio   # the Python module's tests
+    python3-pytest python3-skimage python3-scipy python3-zarr python3-dask python3-distributed python3-meshio   # the Python module's tests (scipy: marching_cubes' topology tests)
   )
 fi
 # `scripts/setup.sh bench`: also what the benchmarks compare against (VTK's Flying Edges from
