@@ -30,6 +30,17 @@ def load(spec):
     return np.fromfile(path, {"u8": np.uint8, "u16": np.uint16, "i16": np.int16, "f32": np.float32}[kind]).reshape(z, y, x)
 
 
+def topology(verts, faces):
+    """A triangle mesh's Euler characteristic V - E + F and its connected pieces (scipy)."""
+    import scipy.sparse
+    import scipy.sparse.csgraph
+    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    used = np.unique(faces)
+    graph = scipy.sparse.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(verts),) * 2)
+    labels = scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
+    return int(len(used) - len(edges) + len(faces)), int(len(np.unique(labels[used])))
+
+
 def rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 

@@ -10,21 +10,11 @@ import json
 import sys
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.csgraph
 import skimage.measure
 from scipy.ndimage import map_coordinates
 
 import vdiso
-from python_mc import load
-
-
-def topology(verts, faces):
-    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
-    used = np.unique(faces)
-    graph = scipy.sparse.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(verts),) * 2)
-    labels = scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
-    return int(len(used) - len(edges) + len(faces)), int(len(np.unique(labels[used])))
+from python_mc import load, topology
 
 
 spec, iso = sys.argv[1], float(sys.argv[2])

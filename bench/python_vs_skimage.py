@@ -16,7 +16,7 @@ import numpy as np
 import skimage.measure
 
 import vdiso
-from python_mc import load
+from python_mc import load, topology
 
 repeat = int(sys.argv[1]) if len(sys.argv) > 1 else 3
 scans = [("ch2better", "data/ch2better.nii.gz", 40.5), ("ch2", "data/ch2.nii.gz", 40.5),
@@ -45,16 +45,6 @@ for name, spec, iso in scans:
     (gv, gf, _, _), vdiso_lewiner_s = timed(lambda: vdiso.marching_cubes(volume, iso, threads=1))
     (lv, lf, ln, lvalues), lorensen_s = timed(lambda: skimage.measure.marching_cubes(volume, iso, method="lorensen"))
     (wv, wf, _, _), lewiner_s = timed(lambda: skimage.measure.marching_cubes(volume, iso))
-
-    def topology(verts, faces):
-        """Euler characteristic V - E + F, and the surface's connected pieces."""
-        import scipy.sparse
-        import scipy.sparse.csgraph
-        edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
-        used = np.unique(faces)
-        graph = scipy.sparse.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(verts),) * 2)
-        labels = scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
-        return int(len(used) - len(edges) + len(faces)), int(len(np.unique(labels[used])))
     theirs = by_point(lv)
     match = np.array([theirs.get(tuple(np.round(p, 4)), -1) for p in v])
     same_points = bool((match >= 0).all()) and len(theirs) == len(v)

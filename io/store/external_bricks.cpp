@@ -29,9 +29,8 @@ struct ArrayLevel {
     ZarrVolume array;
     ExternalLevel record;
     BrickLevel level;
-    Dims3 arrayDims;  // the array's own (its level's, or one or two samples fewer)
     ArrayLevel(const std::string& location, int omeLevel, const RemoteOptions& remote)
-        : array(location, omeLevel, remote), arrayDims(array.info().dims) {}
+        : array(location, omeLevel, remote) {}
 };
 
 }  // namespace
@@ -177,9 +176,9 @@ ExternalBricks::ExternalBricks(const std::string& indexPath, const StoreHeader& 
         const VolumeInfo& v = a.array.info();
         const Dims3& want = a.level.volume.dims;
         std::string problem;
-        // Level 0 is the volume; a coarser level may be up to two samples short of its dims.
+        // Level 0 is the volume; a coarser level may be a few samples short of its dims.
         bool fits = true;
-        for (int k = 0; k < 3; ++k) fits = fits && v.dims[k] <= want[k] && v.dims[k] >= want[k] - (l ? 2 : 0);
+        for (int k = 0; k < 3; ++k) fits = fits && v.dims[k] <= want[k] && v.dims[k] >= want[k] - (l ? kScaleSamplesShort : 0);
         if (!fits)
             problem = "it is " + dimsText(v.dims) + " samples, the index's level " + std::to_string(l) + " " + dimsText(want);
         else if (v.type != header.volume.type)
@@ -225,7 +224,7 @@ void ExternalBricks::assemble(int64_t id, unsigned char* dst) const {
         throw std::logic_error("ExternalBricks::assemble: a brick of a level kept in the index file");
     const Dims3 coord = layout.brickCoord(id - level.level.firstBrick);
     const Dims3& chunk = level.array.chunkShape();
-    const Dims3& dims = level.arrayDims;
+    const Dims3& dims = level.array.info().dims;  // its level's, or one or two samples fewer
     const int side = layout.side();
     const size_t sampleBytes = scalarSize(level.array.info().type);
     // A sample of the level, clamped to its faces and then to the array's own last sample.

@@ -26,6 +26,11 @@
 
 namespace vdiso {
 
+// How many samples a coarser level's array may be short of its level's dims on an axis (a scale
+// of every other sample, ceil(n / 2) long, is one short of level 1 on an even axis): the index
+// clamps it at its last sample.
+constexpr int kScaleSamplesShort = 2;
+
 struct ExternalLevel {
     std::string location;
     int level = 0;  // the OME-Zarr level (multiscales dataset) read

@@ -62,9 +62,9 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     const int B = options.brickSize;
     const int levelCount = storeLevelCount(layout, options);
     const std::vector<BrickLevel> levels = brickLevels(info, B, levelCount);
-    // Level l's own source (an OME-Zarr's scale), if any.
+    // Level l's (>= 1) own source (an OME-Zarr's scale), if any.
     auto coarseSource = [&](size_t l) -> SliceReader* {
-        return l - 1 < options.coarseSources.size() ? options.coarseSources[l - 1] : nullptr;
+        return l <= options.coarseSources.size() ? options.coarseSources[l - 1] : nullptr;
     };
     for (size_t l = 1; l <= options.coarseSources.size(); ++l)
         if (SliceReader* s = coarseSource(l);
@@ -98,9 +98,12 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
     BrickEncoder encoder(info.type, options);
     BrickGroupWriter writer(out->fd(), out->path());
 
-    // Encodes and writes layer `bk` of a level, its slices in `window`, a group of rows at a
+    // Encodes and writes layer `bk` of level l, its slices in `window`, a group of rows at a
     // time, each written in the order made while the next is encoded.
-    auto emitLayer = [&](const SliceWindow& window, const BrickLevel& level, int64_t bk) {
+    auto emitLayer = [&](const SliceWindow& window, size_t l, int64_t bk) {
+        const BrickLevel& level = levels[l];
+        // An index's level 0, and the levels read from its own scales, are measured only.
+        const bool external = options.externalRecord && (l == 0 || coarseSource(l));
         const BrickLayout& lay = level.layout;
         const int64_t rowBricks = lay.brickCounts[0];
         const int64_t groupRows = brickRowsPerGroup(lay);
@@ -108,10 +111,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             std::vector<EncodedBrick>& group = writer.group();
             const int64_t firstId = lay.brickId(0, bj, bk);
             const int64_t count = std::min(groupRows, lay.brickCounts[1] - bj) * rowBricks;
-            const bool level0 = level.firstBrick == 0;
-            const size_t l = size_t(levelOfBrick(levels, level.firstBrick));
-            encoder.encode(window, lay, firstId, count, level0,
-                           options.externalRecord && (level0 || coarseSource(l)), group);
+            encoder.encode(window, lay, firstId, count, l == 0, external, group);
             const uint64_t groupStart = fileEnd;
             fileEnd = placeBricks(group, count, groupStart);
             for (int64_t b = 0; b < count; ++b) {
@@ -143,7 +143,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
             const BrickLayout& lay = level.level.layout;
             // (Two layers can end on the volume's last slice.)
             while (level.nextLayer < lay.brickCounts[2] && lastSliceOfLayer(lay, level.nextLayer) == z)
-                emitLayer(window, level.level, level.nextLayer++);
+                emitLayer(window, l, level.nextLayer++);
         }
     };
 
@@ -229,7 +229,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         if (bk + 1 < layout.brickCounts[2])
             prefetch = std::async(std::launch::async, readSlices, std::ref(source), window,
                                   lastSliceOfLayer(layout, bk) + 1, lastSliceOfLayer(layout, bk + 1) + 1);
-        emitLayer(window, levels[0], bk);
+        emitLayer(window, 0, bk);
         // The slices the next layer does not read again are final for level 1 now; the reader
         // fills other slots meanwhile.
         if (!coarse.empty()) {
@@ -244,8 +244,7 @@ StoreWriteSummary writeBrickStore(SliceReader& source, const std::string& outPat
         if (level.nextLayer != level.level.layout.brickCounts[2])
             throw std::logic_error("store writer: a level of detail was not completed");
     source.finish();
-    for (SliceReader* own : options.coarseSources)
-        if (own) own->finish();
+    for (SliceReader* own : options.coarseSources) own->finish();
 
     uint64_t externalOffset = 0;
     std::vector<unsigned char> external;

@@ -6,13 +6,13 @@
 #include <optional>
 #include <sstream>
 
+#include "core/brick_levels.h"
 #include "core/settings_error.h"
 #include "io/error.h"
-#include "core/brick_levels.h"
 #include "io/readers/edge_padded_reader.h"
 #include "io/readers/zarr_reader.h"
-#include "io/store/brick_encoder.h"
 #include "io/remote/remote_file.h"
+#include "io/store/brick_encoder.h"
 #include "io/store/external_level.h"
 #include "io/store/store_checkpoint.h"
 
@@ -92,8 +92,8 @@ void decodePinnedLayers(const std::vector<unsigned char>& bytes, std::vector<Ind
 // The OME-Zarr scales after `level0`'s that stand for the store's levels 1, 2, ... (at most
 // `most`), opened: scale `level0 + l` is level l when its spacing is 2^l times level 0's on x, y
 // and z, its origin level 0's (vdiso's coarse sample s stands at level-0 sample s 2^l), its
-// samples of level 0's type, and it is at most two samples short of the level's dims on each
-// axis (core/brick_levels.h levelDims). The first that is not ends them; `why` says why.
+// samples of level 0's type, and it is at most kScaleSamplesShort samples short of the level's
+// dims on each axis (core/brick_levels.h levelDims). The first that is not ends them; `why` says why.
 std::vector<std::unique_ptr<ZarrVolume>> ownScales(const std::string& dataPath, const ZarrVolume& level0, int first,
                                                    int most, const RemoteOptions& remote, std::string& why) {
     std::vector<std::unique_ptr<ZarrVolume>> scales;
@@ -109,7 +109,7 @@ std::vector<std::unique_ptr<ZarrVolume>> ownScales(const std::string& dataPath, 
                 problem = "its spacing is not " + std::to_string(int64_t(factor)) + " times level " + std::to_string(first) + "'s on every axis";
             else if (std::abs(v.origin[a] - v0.origin[a]) > 1e-6 * v0.spacing[a])
                 problem = "its origin is not level " + std::to_string(first) + "'s (its samples stand between vdiso's)";
-            else if (v.dims[a] > want[a] || v.dims[a] < want[a] - 2)
+            else if (v.dims[a] > want[a] || v.dims[a] < want[a] - kScaleSamplesShort)
                 problem = "its shape is not that of a level of " + std::to_string(int64_t(factor)) + "x cells";
         }
         if (problem.empty() && v.type != v0.type) problem = "its samples are of another type";
