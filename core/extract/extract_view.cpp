@@ -170,7 +170,8 @@ struct BrickVisit {
     bool keepCell(int x, int y, int z) {
         if (!cellTests) return true;
         const bool keep = t.mCellTimer(t.mStats.view.cellTestSeconds, [&] {
-            return culler.cullScreenBox(corners.cellBox(x, y, z)) == Cull::None;
+            PixelRect r;  // cullScreenBox's test of the cell's box, its rectangle rounded at once
+            return !corners.cellRect(x, y, z, r) || (!r.empty() && !t.mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1));
         });
         t.mStats.view.cellsCulled += !keep;
         return keep;

@@ -98,7 +98,7 @@ void computeMetaCellRanges(const T* s, int side, const int cells[3], int M, int 
 
 BrickExtractor::BrickExtractor(const VolumeInfo& volume, const BrickLayout& layout,
                                int metaCellSize, bool trilinear)
-    : mVolume(volume), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, kMaxMetaCellSize)),
+    : mVolume(volume), mGradientScale(0.5 / volume.spacing), mLayout(layout), mMetaCellSize(std::clamp(metaCellSize, 1, kMaxMetaCellSize)),
       mTrilinear(trilinear) {
     mMetaPerAxis = (layout.brickSize + mMetaCellSize - 1) / mMetaCellSize;
     const size_t corners = size_t(layout.brickSize + 1);

@@ -114,6 +114,7 @@ private:
     friend struct BrickKernel;
 
     VolumeInfo mVolume;
+    glm::dvec3 mGradientScale;  // 1 / (2 spacing): a central difference to a gradient component
     BrickLayout mLayout;
     int mMetaCellSize;
     int mMetaPerAxis;

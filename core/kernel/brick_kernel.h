@@ -98,12 +98,13 @@ struct BrickKernel {
         }
     }
 
+    // The central-difference gradient at sample i (multiplied by 1 / (2 h): a division each
+    // was a third of a vertex's arithmetic).
     glm::dvec3 gradientAt(size_t i) const {
-        const glm::dvec3& h = x.mVolume.spacing;
+        const glm::dvec3& g = x.mGradientScale;
         const size_t sy = size_t(side), sz = size_t(side) * side;
-        return {(double(s[i + 1]) - double(s[i - 1])) / (2 * h.x),
-                (double(s[i + sy]) - double(s[i - sy])) / (2 * h.y),
-                (double(s[i + sz]) - double(s[i - sz])) / (2 * h.z)};
+        return {(double(s[i + 1]) - double(s[i - 1])) * g.x, (double(s[i + sy]) - double(s[i - sy])) * g.y,
+                (double(s[i + sz]) - double(s[i - sz])) * g.z};
     }
 
     // The vertex on edge `e` of cell (cx, cy, cz), with its normal, made the first time it is
@@ -240,7 +241,7 @@ struct BrickKernel {
         glm::dvec3 normal(0.0);
         // A gradient through a non-finite sample is inf or NaN: the edge's direction then.
         if (length > 0 && std::isfinite(length))
-            normal = -gradient / length;
+            normal = gradient * (-1.0 / length);
         else
             normal[axis] = s1 > s0 ? -1.0 : 1.0;
         return glm::vec3(normal);

@@ -6,7 +6,7 @@
 namespace vdiso {
 
 CornerProjection::CornerProjection(const glm::dmat4& gridToClip, int width, int height, int metaCellSize)
-    : mWidth(width), mHeight(height), mSide(metaCellSize + 1) {
+    : mWidth(width), mHeight(height), mImage(width, height), mSide(metaCellSize + 1) {
     for (int r = 0; r < 4; ++r) mRow[r] = {gridToClip[0][r], gridToClip[1][r], gridToClip[2][r], gridToClip[3][r]};
     const size_t corners = size_t(mSide) * size_t(mSide) * size_t(mSide);
     mClip.resize(corners);

@@ -25,6 +25,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec4.hpp>
 
+#include "core/view/point_rects.h"
 #include "core/view/screen_box.h"
 
 namespace vdiso {
@@ -51,25 +52,24 @@ public:
 
     // The screen box of the meta-cell's local cell (x, y, z), whose eight corners were projected;
     // a box crossing the near plane when one of them is not in front of it (w > 0, z + w > 0).
-    // Inline: asked for every crossed cell of every visible meta-cell.
     ScreenBox cellBox(int x, int y, int z) const {
-        // Rows (y, z), (y + 1, z), (y, z + 1) and (y + 1, z + 1) of the front bits.
-        const size_t row = size_t(z * mSide + y), s = size_t(mSide), plane = s * s;
-        const uint64_t front = mFront[row] & mFront[row + 1] & mFront[row + s] & mFront[row + s + 1];
-        if ((front >> x & 3) != 3) return BoxProjector::nearPlaneBox();
-        const double* p = &mPixel[size_t(cornerIndex(x, y, z))].x;
-        __m128d lo = _mm_loadu_pd(p), hi = lo;
-        const size_t at[7] = {1, s, s + 1, plane, plane + 1, plane + s, plane + s + 1};
-        for (size_t k : at) {
-            const __m128d c = _mm_loadu_pd(p + 2 * k);
-            lo = _mm_min_pd(lo, c);
-            hi = _mm_max_pd(hi, c);
-        }
+        __m128d lo, hi;
+        if (!cornerBounds(x, y, z, lo, hi)) return BoxProjector::nearPlaneBox();
         const __m128d slack = _mm_set1_pd(kBoxSlack);
         alignas(16) double l[2], h[2];
         _mm_store_pd(l, _mm_sub_pd(lo, slack));
         _mm_store_pd(h, _mm_add_pd(hi, slack));
         return {l[0], h[0], l[1], h[1], false};
+    }
+    // The pixel centres of cellBox(x, y, z), rounded as ViewCuller::pixelRect rounds a box and
+    // clamped to the image (empty when none of them is on it); false when the box crosses the
+    // near plane: such a cell is refined, never culled. Inline: asked for every crossed cell of
+    // every visible meta-cell.
+    bool cellRect(int x, int y, int z, PixelRect& r) const {
+        __m128d lo, hi;
+        if (!cornerBounds(x, y, z, lo, hi)) return false;
+        r = cellCentreRect(lo, hi, kBoxSlack, mImage);
+        return true;
     }
 
     // The pixel position of the point at fraction t along the edge from corner `corner`
@@ -87,6 +87,23 @@ public:
     }
 
 private:
+    // The least and greatest (x, y) of cell (x, y, z)'s eight projected corners; false when one
+    // of them is not in front of the near plane.
+    bool cornerBounds(int x, int y, int z, __m128d& lo, __m128d& hi) const {
+        // Rows (y, z), (y + 1, z), (y, z + 1) and (y + 1, z + 1) of the front bits.
+        const size_t row = size_t(z * mSide + y), s = size_t(mSide), plane = s * s;
+        const uint64_t front = mFront[row] & mFront[row + 1] & mFront[row + s] & mFront[row + s + 1];
+        if ((front >> x & 3) != 3) return false;
+        const double* p = &mPixel[size_t(cornerIndex(x, y, z))].x;
+        lo = hi = _mm_loadu_pd(p);
+        const size_t at[7] = {1, s, s + 1, plane, plane + 1, plane + s, plane + s + 1};
+        for (size_t k : at) {
+            const __m128d c = _mm_loadu_pd(p + 2 * k);
+            lo = _mm_min_pd(lo, c);
+            hi = _mm_max_pd(hi, c);
+        }
+        return true;
+    }
     // Camera::project's pixel position of clip point c (c.w > 0).
     glm::dvec2 pixelOf(const glm::dvec4& c) const {
         const double r = 1.0 / c.w;
@@ -103,6 +120,7 @@ private:
 
     glm::dvec4 mRow[4];  // rows x, y, z, w of gridToClip
     double mWidth, mHeight;
+    ImageLanes mImage;
     int mSide;                         // metaCellSize + 1
     std::vector<glm::dvec4> mClip;     // by cornerIndex
     std::vector<glm::dvec2> mPixel;    // pixelOf(mClip), for corners in front

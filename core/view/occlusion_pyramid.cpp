@@ -54,6 +54,8 @@ OcclusionPyramid::OcclusionPyramid(int width, int height) : mWidth(width), mHeig
         for (int wx = 0; wx < wordsX; ++wx) clear(wx, wordsY - 1);
     }
     mWords = mClearWords;
+    mTilesX = size_t(mWordsX[0]);
+    mFewLevels = levels() <= 2;
 }
 
 void OcclusionPyramid::clear() {

@@ -23,24 +23,12 @@ bool PolygonCoverage::folds(const glm::dvec2* v, int count) {
     return positive && negative;
 }
 
-namespace {
-constexpr double kRasterSlack = 1.0 / 64;  // GL's sub-pixel snapping is 1/256 or finer
-}  // namespace
-
-PixelRect PolygonCoverage::slackRect(const ScreenBox& box) const {
-    // Clamped to the image before the conversion (a vertex far off it holds no int).
-    const double w = mPyramid.width(), h = mPyramid.height();
-    return {ceilToInt(std::clamp(box.left - kRasterSlack - 0.5, 0.0, w)),
-            ceilToInt(std::clamp(box.top - kRasterSlack - 0.5, 0.0, h)),
-            floorToInt(std::clamp(box.right + kRasterSlack - 0.5, -1.0, w - 1)),
-            floorToInt(std::clamp(box.bottom + kRasterSlack - 0.5, -1.0, h - 1))};
-}
-
 // Whether an uncovered pixel centre lies inside the triangle or within kRasterSlack pixels of
 // each of its edges' lines. Degenerate triangles draw nothing.
 bool PolygonCoverage::nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const {
     const glm::dvec2 corners[3] = {p0, p1, p2};
-    const PixelRect r = slackRect(boxOfPoints(corners, 3));
+    PixelRect r, centres;
+    polygonRects(corners, 3, mImage, r, centres);
     if (!uncoveredCentreIn(r)) return false;
     const TriangleEdgeFunctions f = TriangleEdgeFunctions::of(p0, p1, p2);
     if (f.degenerate) return false;

@@ -11,6 +11,7 @@
 #include <glm/vec2.hpp>
 
 #include "core/view/occlusion_pyramid.h"
+#include "core/view/point_rects.h"
 #include "core/view/scan_convert.h"
 #include "core/view/screen_box.h"
 #include "core/view/tile_coverage.h"
@@ -19,7 +20,9 @@
 namespace vdiso {
 
 // The pixel centres a polygon whose box is `box` can cover (scan_convert.h's rules: columns
-// [first at or after left, first at or after right), rows likewise), clamped to the image.
+// [first at or after left, first at or after right), rows likewise), clamped to the image: the
+// rule polygonRects (core/view/point_rects.h) rounds two coordinates at a time, written one at
+// a time.
 inline PixelRect centresOfBox(const ScreenBox& box, int width, int height) {
     return {std::max(detail::firstCentreAtOrAfter(box.left, width), 0),
             std::max(detail::firstCentreAtOrAfter(box.top, height), 0),
@@ -32,7 +35,8 @@ public:
     // bottomUp: mark pixel centres bottom-up (false: insert each fan triangle top-down, WISE);
     // scanPolygons: scan-convert the polygon whole (false: each fan triangle on its own).
     PolygonCoverage(OcclusionPyramid& pyramid, bool bottomUp, bool scanPolygons)
-        : mPyramid(pyramid), mBottomUp(bottomUp), mScanPolygons(scanPolygons), mSimd(simdLevel()) {}
+        : mPyramid(pyramid), mBottomUp(bottomUp), mScanPolygons(scanPolygons), mSimd(simdLevel()),
+          mImage(pyramid.width(), pyramid.height()) {}
 
     // Marks the pixel centres the polygon (count vertices in pixel coordinates, a fan from v[0])
     // covers. With keepOnlyNew, returns whether it covered a centre not covered before, or one
@@ -47,7 +51,6 @@ public:
     static bool folds(const glm::dvec2* v, int count);
 
 private:
-    bool uncoveredCentresInBox(const ScreenBox& box, PixelRect& r) const;
     bool coverCentres(const glm::dvec2* v, int count, const PixelRect& r, bool keepOnlyNew);
     // Covers the outline's centres (within r, its box's or a larger one's) tile by tile
     // (core/view/tile_coverage.h), or by rows beyond kTileCoverageEdges vertices; whether one was new.
@@ -58,8 +61,6 @@ private:
         return fresh;
     }
     bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const;
-    // The pixel centres within kRasterSlack of a polygon's box, clamped to the image.
-    PixelRect slackRect(const ScreenBox& box) const;
     bool uncoveredCentreIn(const PixelRect& r) const {
         return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
     }
@@ -67,6 +68,7 @@ private:
     OcclusionPyramid& mPyramid;
     bool mBottomUp, mScanPolygons;
     SimdLevel mSimd;  // chosen once (core/simd.h)
+    ImageLanes mImage;
 };
 
 // Inline: called for every polygon, and most are answered by the box test. With keepOnlyNew
@@ -74,24 +76,24 @@ private:
 // asked first: a polygon with no uncovered centre there covers nothing new and lies near none
 // (most hidden polygons: one query), and where the two rectangles are the same (most
 // polygons) the box's needs no query of its own. A polygon that then covers nothing new left
-// the pyramid as it was, so the slack still holds an uncovered centre.
+// the pyramid as it was, so the slack still holds an uncovered centre. Both rectangles are
+// rounded at once (core/view/point_rects.h).
 inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnlyNew) {
     bool coversNew = false;
-    const ScreenBox box = boxOfPoints(v, count);
+    PixelRect slack, r;
+    polygonRects(v, count, mImage, slack, r);
     if (!mBottomUp) {
         for (int k = 2; k < count; ++k) {
             const glm::dvec2 triangle[3] = {v[0], v[k - 1], v[k]};
             coversNew |= mPyramid.insertTriangleTopDown(triangle);
         }
         if (!keepOnlyNew) return true;
-        if (coversNew || !uncoveredCentreIn(slackRect(box))) return coversNew;
+        if (coversNew || !uncoveredCentreIn(slack)) return coversNew;
     } else if (!keepOnlyNew) {
-        if (PixelRect r; uncoveredCentresInBox(box, r)) coverCentres(v, count, r, false);
+        if (uncoveredCentreIn(r)) coverCentres(v, count, r, false);
         return true;
     } else {
-        const PixelRect slack = slackRect(box);
         if (!uncoveredCentreIn(slack)) return false;
-        const PixelRect r = centresOfBox(box, mPyramid.width(), mPyramid.height());
         const bool sameRect = r.x0 == slack.x0 && r.y0 == slack.y0 && r.x1 == slack.x1 && r.y1 == slack.y1;
         if (sameRect || uncoveredCentreIn(r)) coversNew = coverCentres(v, count, r, true);
         if (coversNew) return true;
@@ -110,7 +112,9 @@ inline void PolygonCoverage::mark(const glm::dvec2* v, int count) {
         cover(v, count, false);
         return;
     }
-    if (PixelRect r; uncoveredCentresInBox(boxOfPoints(v, count), r)) coverCentres(v, count, r, true);
+    PixelRect slack, r;
+    polygonRects(v, count, mImage, slack, r);
+    if (uncoveredCentreIn(r)) coverCentres(v, count, r, true);
 }
 
 // Covers the centres of r (the polygon's box's, with one uncovered) that the polygon covers;
@@ -134,16 +138,6 @@ inline bool PolygonCoverage::coverCentres(const glm::dvec2* v, int count, const 
         }
     }
     return coversNew;
-}
-
-// The pixel centres of the polygon's box, when one of them is not covered yet. A polygon covers
-// only centres in columns [first at or after xMin, first at or after xMax) and likewise rows
-// (core/view/scan_convert.h's rules), so when this is false its scan conversion, and its fan
-// triangles', would mark nothing: where cells are about a pixel, most polygons are answered
-// here, and most of the rest hold a single centre.
-inline bool PolygonCoverage::uncoveredCentresInBox(const ScreenBox& box, PixelRect& r) const {
-    r = centresOfBox(box, mPyramid.width(), mPyramid.height());
-    return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
 }
 
 }  // namespace vdiso
