@@ -297,6 +297,8 @@ TEST(TileCoverage, EveryPathCoversWhatTheRowsCover) {
             Polygon poly = randomPolygon(rng, w, h, trial % 2 == 0);
             if (trial % 3 == 0)  // a few pixels, where cells are about a pixel
                 for (glm::dvec2& p : poly) p = poly[0] + (p - poly[0]) * (3.0 / 100.0);
+            else if (trial % 3 == 1 && trial % 2 == 1)  // a pixel or two: one tile, one or two rows
+                for (glm::dvec2& p : poly) p = poly[0] + (p - poly[0]) * (1.5 / 100.0);
             PixelRect r = centresOfBox(boxOfPoints(poly.data(), int(poly.size())), w, h);
             if (r.empty()) continue;
             if (trial % 5 == 0) r = {0, 0, w - 1, h - 1};

@@ -175,6 +175,59 @@ bool coverPolygonInTile(const glm::dvec2* v, int n, const PixelRect& rect, Occlu
     return (mask & ~word) != 0 && pyramid.coverTile(tx, ty, mask);
 }
 
+#if VDISO_HAS_AVX2_PATHS
+// coverPolygonInTile with AVX2, four edges a register: per row, their four crossings made at
+// once by the same operations in the same order (IEEE division; vroundpd's ceiling is exact),
+// each edge's step to the tile's byte counters made by one variable shift (zero once the
+// crossing lies right of the tile) and negated for an upward edge, and the four steps summed
+// into the row's counters (64-bit sums of byte steps: the bytes never carry, as in the
+// baseline's). Lanes past the last edge are flat and never count. Up to 8 edges.
+VDISO_TARGET_AVX2 bool coverPolygonInTileAvx2(const glm::dvec2* v, int n, const PixelRect& rect, OcclusionPyramid& pyramid) {
+    const int tx = rect.x0 >> 3, ty = rect.y0 >> 3;
+    const uint64_t word = pyramid.tileWord(tx, ty);
+    if (word == kFull) return false;
+    int finite = 1;
+    for (int k = 0; k < n; ++k) finite &= int(std::isfinite(v[k].x)) & int(std::isfinite(v[k].y));
+    if (!finite) return false;
+    const __m256d lo = _mm256_set1_pd(-1.0), hi = _mm256_set1_pd(double(pyramid.width()) + 1.0);
+    const __m256d half = _mm256_set1_pd(0.5);
+    const __m256i tileColumn = _mm256_set1_epi64x(int64_t(tx) * 8), ones = _mm256_set1_epi64x(int64_t(kByteOnes));
+    uint64_t counters[2] = {kByteZero, kByteZero};
+    for (int first = 0; first < n; first += 4) {
+        alignas(32) double ax[4], ay[4], bx[4], by[4];
+        for (int k = 0; k < 4; ++k) {
+            const int e = first + k;
+            const glm::dvec2 a = e < n ? v[e] : v[0], b = e < n ? v[e + 1 == n ? 0 : e + 1] : v[0];
+            ax[k] = a.x, ay[k] = a.y, bx[k] = b.x, by[k] = b.y;
+        }
+        const __m256d aX = _mm256_load_pd(ax), aY = _mm256_load_pd(ay), bX = _mm256_load_pd(bx), bY = _mm256_load_pd(by);
+        const __m256d down = _mm256_cmp_pd(aY, bY, _CMP_LT_OQ);
+        const __m256d xTop = _mm256_blendv_pd(bX, aX, down), xBottom = _mm256_blendv_pd(aX, bX, down);
+        const __m256d yTop = _mm256_min_pd(aY, bY), yBottom = _mm256_max_pd(aY, bY);
+        const __m256d dx = _mm256_sub_pd(xBottom, xTop), dy = _mm256_sub_pd(yBottom, yTop);
+        const __m256i up = _mm256_castpd_si256(_mm256_cmp_pd(aY, bY, _CMP_NLT_UQ));  // all ones: negate
+        for (int row = rect.y0; row <= rect.y1; ++row) {
+            const __m256d yc = _mm256_set1_pd(row + 0.5);
+            const __m256d active = _mm256_and_pd(_mm256_cmp_pd(yTop, yc, _CMP_LE_OQ), _mm256_cmp_pd(yc, yBottom, _CMP_LT_OQ));
+            // An inactive edge's quotient may be inf or NaN: replaced before any rounding.
+            const __m256d x = _mm256_and_pd(_mm256_add_pd(xTop, _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(yc, yTop), dx), dy)), active);
+            const __m256d ceiling = _mm256_round_pd(_mm256_sub_pd(_mm256_min_pd(_mm256_max_pd(x, lo), hi), half),
+                                                    _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+            __m256i at = _mm256_sub_epi64(_mm256_cvtepi32_epi64(_mm256_cvtpd_epi32(ceiling)), tileColumn);
+            at = _mm256_and_si256(at, _mm256_cmpgt_epi64(at, _mm256_setzero_si256()));  // at <= 0: every byte
+            __m256i step = _mm256_and_si256(_mm256_sllv_epi64(ones, _mm256_slli_epi64(at, 3)), _mm256_castpd_si256(active));
+            step = _mm256_sub_epi64(_mm256_xor_si256(step, up), up);
+            const __m128i pair = _mm_add_epi64(_mm256_castsi256_si128(step), _mm256_extracti128_si256(step, 1));
+            counters[row - rect.y0] += uint64_t(_mm_cvtsi128_si64(pair)) + uint64_t(_mm_extract_epi64(pair, 1));
+        }
+    }
+    uint64_t mask = 0;
+    for (int row = rect.y0; row <= rect.y1; ++row)
+        mask |= nonzeroBytes(counters[row - rect.y0] ^ kByteZero) << (8 * (row & 7));
+    return (mask & ~word) != 0 && pyramid.coverTile(tx, ty, mask);
+}
+#endif
+
 }  // namespace
 
 bool coverPolygonTiles(const glm::dvec2* v, int n, const PixelRect& rect, OcclusionPyramid& pyramid,
@@ -182,6 +235,12 @@ bool coverPolygonTiles(const glm::dvec2* v, int n, const PixelRect& rect, Occlus
     newCentres = false;
     if (n > kTileCoverageEdges) return false;
     if ((rect.x0 >> 3) == (rect.x1 >> 3) && (rect.y0 >> 3) == (rect.y1 >> 3) && rect.y1 - rect.y0 < 2) {
+#if VDISO_HAS_AVX2_PATHS
+        if (simd == SimdLevel::Avx2 && n <= 8) {
+            newCentres = coverPolygonInTileAvx2(v, n, rect, pyramid);
+            return true;
+        }
+#endif
         newCentres = coverPolygonInTile(v, n, rect, pyramid);
         return true;
     }
