@@ -76,7 +76,7 @@ inline PixelRect cellCentreRect(__m128d lo, __m128d hi, double slack, const Imag
 // A polygon's slack rectangle (the centres within kRasterSlack of its box: PolygonCoverage's
 // slackRect) and centre rectangle (the centres it can cover: centresOfBox), both clamped to the
 // image, from its n >= 1 vertices (finite, pixel coordinates).
-inline void polygonRects(const glm::dvec2* v, int n, const ImageLanes& image, PixelRect& slack, PixelRect& centres) {
+[[gnu::always_inline]] inline void polygonRects(const glm::dvec2* v, int n, const ImageLanes& image, PixelRect& slack, PixelRect& centres) {
     __m128d lo = _mm_loadu_pd(&v[0].x), hi = lo;
     for (int k = 1; k < n; ++k) {
         const __m128d p = _mm_loadu_pd(&v[k].x);

@@ -61,7 +61,7 @@ private:
         return fresh;
     }
     bool nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2& p1, const glm::dvec2& p2) const;
-    bool uncoveredCentreIn(const PixelRect& r) const {
+    [[gnu::always_inline]] bool uncoveredCentreIn(const PixelRect& r) const {
         return !r.empty() && !mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1);
     }
 
