@@ -25,7 +25,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec4.hpp>
 
-#include "core/view/point_rects.h"
+#include "core/view/pixel_rect.h"
 #include "core/view/screen_box.h"
 
 namespace vdiso {
@@ -68,7 +68,8 @@ public:
     bool cellRect(int x, int y, int z, PixelRect& r) const {
         __m128d lo, hi;
         if (!cornerBounds(x, y, z, lo, hi)) return false;
-        r = cellCentreRect(lo, hi, kBoxSlack, mImage);
+        const __m128d slack = _mm_set1_pd(kBoxSlack);
+        r = boxCentresOnImage(_mm_sub_pd(lo, slack), _mm_add_pd(hi, slack), mImage);
         return true;
     }
 

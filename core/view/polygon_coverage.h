@@ -11,7 +11,7 @@
 #include <glm/vec2.hpp>
 
 #include "core/view/occlusion_pyramid.h"
-#include "core/view/point_rects.h"
+#include "core/view/pixel_rect.h"
 #include "core/view/scan_convert.h"
 #include "core/view/screen_box.h"
 #include "core/view/tile_coverage.h"
@@ -21,7 +21,7 @@ namespace vdiso {
 
 // The pixel centres a polygon whose box is `box` can cover (scan_convert.h's rules: columns
 // [first at or after left, first at or after right), rows likewise), clamped to the image: the
-// rule polygonRects (core/view/point_rects.h) rounds two coordinates at a time, written one at
+// rule polygonRects (core/view/pixel_rect.h) rounds two coordinates at a time, written one at
 // a time.
 inline PixelRect centresOfBox(const ScreenBox& box, int width, int height) {
     return {std::max(detail::firstCentreAtOrAfter(box.left, width), 0),
@@ -77,7 +77,7 @@ private:
 // (most hidden polygons: one query), and where the two rectangles are the same (most
 // polygons) the box's needs no query of its own. A polygon that then covers nothing new left
 // the pyramid as it was, so the slack still holds an uncovered centre. Both rectangles are
-// rounded at once (core/view/point_rects.h).
+// rounded at once (core/view/pixel_rect.h).
 inline bool PolygonCoverage::cover(const glm::dvec2* v, int count, bool keepOnlyNew) {
     bool coversNew = false;
     PixelRect slack, r;

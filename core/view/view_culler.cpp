@@ -10,7 +10,7 @@ namespace vdiso {
 ViewCuller::ViewCuller(const BrickSource& source, const Camera& camera, const OcclusionPyramid& pyramid,
                        double iso, bool estimateBox)
     : mSource(source), mCamera(camera), mPyramid(pyramid), mIso(iso), mEstimateBox(estimateBox),
-      mProjector(camera), mGridToClip(camera.viewProjection() * source.volume().gridToWorld()) {
+      mProjector(camera), mImage(camera.width, camera.height), mGridToClip(camera.viewProjection() * source.volume().gridToWorld()) {
     const VolumeInfo& volume = source.volume();
     for (int k = 0; k < 3; ++k)
         mEyeInBricks[k] = (camera.eye[k] - volume.origin[k]) / volume.spacing[k] / double(source.layout().brickSize);

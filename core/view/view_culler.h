@@ -19,22 +19,12 @@
 #include "core/camera.h"
 #include "core/trees/minmax_tree.h"
 #include "core/view/occlusion_pyramid.h"
-#include "core/view/pixel_round.h"
+#include "core/view/pixel_rect.h"
 #include "core/view/screen_box.h"
 
 namespace vdiso {
 
 enum class Cull { None, Range, Frustum, SubPixel, Occlusion };
-
-// Pixel centres [x0, x1] x [y0, y1] (inclusive; possibly empty, possibly off the image).
-struct PixelRect {
-    int x0, y0, x1, y1;
-    bool empty() const { return x0 > x1 || y0 > y1; }
-    bool overlaps(const PixelRect& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
-    PixelRect intersection(const PixelRect& o) const {
-        return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
-    }
-};
 
 class ViewCuller {
 public:
@@ -81,6 +71,7 @@ private:
     double mIso;
     bool mEstimateBox;
     BoxProjector mProjector;
+    ImageLanes mImage;
     glm::dmat4 mGridToClip;
     glm::dvec3 mEyeInBricks;
 };
@@ -88,11 +79,8 @@ private:
 // Inline: asked for every cell of every visible meta-cell.
 inline PixelRect ViewCuller::pixelRect(const ScreenBox& box) const {
     if (box.crossesNearPlane) return {0, 0, mCamera.width - 1, mCamera.height - 1};
-    // Clamped a pixel beyond the image before the rounding: a box far off it has
-    // coordinates no int holds. (NaN boxes never get here: cullScreenBox culls them.)
-    const double w = mCamera.width, h = mCamera.height;
-    return {ceilToInt(std::clamp(box.left - 0.5, -1.0, w)), ceilToInt(std::clamp(box.top - 0.5, -1.0, h)),
-            floorToInt(std::clamp(box.right - 0.5, -1.0, w)), floorToInt(std::clamp(box.bottom - 0.5, -1.0, h))};
+    // (NaN boxes never get here: cullScreenBox culls them.)
+    return boxCentres(_mm_setr_pd(box.left, box.top), _mm_setr_pd(box.right, box.bottom), mImage);
 }
 
 inline Cull ViewCuller::cullScreenBox(const ScreenBox& box) const {
@@ -103,7 +91,8 @@ inline Cull ViewCuller::cullScreenBox(const ScreenBox& box) const {
     if (box.right < 0.5 || box.left > mCamera.width - 0.5 || box.bottom < 0.5 ||
         box.top > mCamera.height - 0.5)
         return Cull::Frustum;
-    const PixelRect r = pixelRect(box);
+    // Within the image now, so its centres there are the box's (empty exactly when it has none).
+    const PixelRect r = boxCentresOnImage(_mm_setr_pd(box.left, box.top), _mm_setr_pd(box.right, box.bottom), mImage);
     if (r.empty()) return Cull::SubPixel;  // no pixel centre: nothing shows
     if (mPyramid.isOccluded(r.x0, r.y0, r.x1, r.y1)) return Cull::Occlusion;
     return Cull::None;

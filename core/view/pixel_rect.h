@@ -1,12 +1,12 @@
-// The pixel-centre rectangles of the per-cell and per-polygon tests, rounded two coordinates at
-// a time (SSE2, the x86-64 baseline): a cell's from its projected corners, a polygon's slack and
-// centre rectangles from its vertices. The same integers as the scalar roundings they replace,
-// to the bit (ViewCuller::pixelRect of a cell's box; PolygonCoverage's slackRect and
-// centresOfBox of a polygon's box; each clamped to the image as OcclusionPyramid::isOccluded
-// clamps): the same operations in the same order on each coordinate, ceil and floor by
-// truncation as core/view/pixel_round.h. Every crossed cell and every polygon of a visible
-// meta-cell asks for these; rounded one coordinate at a time they were about a fifth of the
-// visibility work's instructions.
+// Rectangles of pixel centres, and the roundings that make them from screen boxes two
+// coordinates at a time (SSE2, the x86-64 baseline): a tree node's or meta-cell's box
+// (boxCentres, ViewCuller's test), a cell's from its projected corners, a polygon's slack and
+// centre rectangles from its vertices. The integers are those of the scalar roundings written
+// one coordinate at a time (scan_convert.h's firstCentreAtOrAfter, pixel_round.h's ceil and
+// floor by truncation), to the bit: the same operations in the same order on each coordinate
+// (tests/test_pixel_rect.cpp). Every crossed cell and polygon of a visible meta-cell asks for
+// these; rounded one coordinate at a time they were about a fifth of the visibility work's
+// instructions.
 #pragma once
 
 #include <algorithm>
@@ -15,9 +15,17 @@
 
 #include <glm/vec2.hpp>
 
-#include "core/view/view_culler.h"
-
 namespace vdiso {
+
+// Pixel centres [x0, x1] x [y0, y1] (inclusive; possibly empty, possibly off the image).
+struct PixelRect {
+    int x0, y0, x1, y1;
+    bool empty() const { return x0 > x1 || y0 > y1; }
+    bool overlaps(const PixelRect& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
+    PixelRect intersection(const PixelRect& o) const {
+        return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+    }
+};
 
 // GL's sub-pixel snapping is 1/256 or finer: a polygon's rasterizer-rounding check
 // (core/view/polygon_coverage.h) looks this far beyond its box.
@@ -63,13 +71,20 @@ struct ImageLanes {
         : size(_mm_setr_pd(width, height)), last(_mm_setr_epi32(width - 1, height - 1, 0, 0)) {}
 };
 
-// The centres of the box [lo - slack, hi + slack] (lanes x, y of finite corners), as
-// ViewCuller::pixelRect rounds a box, clamped to the image: empty when none lies on it (off
-// the image, or between centres).
-inline PixelRect cellCentreRect(__m128d lo, __m128d hi, double slack, const ImageLanes& image) {
-    const __m128d half = _mm_set1_pd(0.5), minusOne = _mm_set1_pd(-1.0), s = _mm_set1_pd(slack);
-    const __m128i x0 = detail::ceilLanes(detail::clampLanes(_mm_sub_pd(_mm_sub_pd(lo, s), half), minusOne, image.size));
-    const __m128i x1 = detail::floorLanes(detail::clampLanes(_mm_sub_pd(_mm_add_pd(hi, s), half), minusOne, image.size));
+// The pixel centres of the box [lo, hi] (lanes x, y; not NaN): columns from the first centre at
+// or after lo.x to the last at or before hi.x, rows likewise, each end clamped to [-1, size]
+// first (a box far off the image holds no int).
+inline PixelRect boxCentres(__m128d lo, __m128d hi, const ImageLanes& image) {
+    const __m128d half = _mm_set1_pd(0.5), minusOne = _mm_set1_pd(-1.0);
+    return detail::rectOf(detail::ceilLanes(detail::clampLanes(_mm_sub_pd(lo, half), minusOne, image.size)),
+                          detail::floorLanes(detail::clampLanes(_mm_sub_pd(hi, half), minusOne, image.size)));
+}
+// boxCentres clamped to the image (as OcclusionPyramid::isOccluded clamps): empty when none of
+// them lies on it.
+inline PixelRect boxCentresOnImage(__m128d lo, __m128d hi, const ImageLanes& image) {
+    const __m128d half = _mm_set1_pd(0.5), minusOne = _mm_set1_pd(-1.0);
+    const __m128i x0 = detail::ceilLanes(detail::clampLanes(_mm_sub_pd(lo, half), minusOne, image.size));
+    const __m128i x1 = detail::floorLanes(detail::clampLanes(_mm_sub_pd(hi, half), minusOne, image.size));
     return detail::rectOf(detail::maxLanes(x0, _mm_setzero_si128()), detail::minLanes(x1, image.last));
 }
 

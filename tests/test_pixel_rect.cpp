@@ -1,6 +1,6 @@
-// core/view/point_rects.h: the cell and polygon rectangles rounded two coordinates at a time are
-// the integers the scalar roundings of the boxes give, on random points, points on and a hair
-// beside pixel centres and pixel edges, and points far off the image.
+// core/view/pixel_rect.h: the box, cell and polygon rectangles rounded two coordinates at a time
+// are the integers the scalar roundings of the boxes give, on random points, points on and a
+// hair beside pixel centres and pixel edges, and points far off the image.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,20 +10,22 @@
 
 #include "core/view/corner_projection.h"
 #include "core/view/pixel_round.h"
-#include "core/view/point_rects.h"
+#include "core/view/pixel_rect.h"
 #include "core/view/polygon_coverage.h"
 #include "core/view/screen_box.h"
 
 namespace vdiso {
 namespace {
 
-// The scalar rules, one coordinate at a time: ViewCuller::pixelRect of a box then the clamp of
-// OcclusionPyramid::isOccluded (for a cell), the slack rectangle of a polygon's box as
-// PolygonCoverage rounded it, and centresOfBox.
-PixelRect cellRule(const ScreenBox& box, int width, int height) {
+// The scalar rules, one coordinate at a time: the centres of a box (as ViewCuller rounded
+// them), then clamped to the image as OcclusionPyramid::isOccluded clamps; the slack rectangle
+// of a polygon's box as PolygonCoverage rounded it; and centresOfBox.
+PixelRect boxRule(const ScreenBox& box, int width, int height) {
     const double w = width, h = height;
-    const PixelRect r{ceilToInt(std::clamp(box.left - 0.5, -1.0, w)), ceilToInt(std::clamp(box.top - 0.5, -1.0, h)),
-                      floorToInt(std::clamp(box.right - 0.5, -1.0, w)), floorToInt(std::clamp(box.bottom - 0.5, -1.0, h))};
+    return {ceilToInt(std::clamp(box.left - 0.5, -1.0, w)), ceilToInt(std::clamp(box.top - 0.5, -1.0, h)),
+            floorToInt(std::clamp(box.right - 0.5, -1.0, w)), floorToInt(std::clamp(box.bottom - 0.5, -1.0, h))};
+}
+PixelRect onImage(const PixelRect& r, int width, int height) {
     return {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, width - 1), std::min(r.y1, height - 1)};
 }
 PixelRect slackRule(const ScreenBox& box, int width, int height) {
@@ -52,7 +54,7 @@ double coordinate(std::mt19937_64& rng, int side) {
     }
 }
 
-TEST(PointRects, CellRectanglesAreTheBoxRoundingsToTheBit) {
+TEST(PixelRect, BoxRectanglesAreTheScalarRoundingsToTheBit) {
     std::mt19937_64 rng(7);
     for (const int side : {1, 7, 64, 1000}) {
         const int width = side, height = side + 3;
@@ -62,17 +64,21 @@ TEST(PointRects, CellRectanglesAreTheBoxRoundingsToTheBit) {
             double y[2] = {coordinate(rng, height), coordinate(rng, height)};
             std::sort(x, x + 2);
             std::sort(y, y + 2);
+            // A cell's box is its corners' widened by CornerProjection::kBoxSlack.
             for (const double slack : {0.0, CornerProjection::kBoxSlack}) {
                 const ScreenBox box{x[0] - slack, x[1] + slack, y[0] - slack, y[1] + slack, false};
-                const PixelRect got = cellCentreRect(_mm_setr_pd(x[0], y[0]), _mm_setr_pd(x[1], y[1]), slack, image);
-                ASSERT_TRUE(same(got, cellRule(box, width, height)))
+                const __m128d lo = _mm_setr_pd(box.left, box.top), hi = _mm_setr_pd(box.right, box.bottom);
+                const PixelRect want = boxRule(box, width, height);
+                ASSERT_TRUE(same(boxCentres(lo, hi, image), want))
+                    << side << " box " << x[0] << "," << y[0] << " - " << x[1] << "," << y[1];
+                ASSERT_TRUE(same(boxCentresOnImage(lo, hi, image), onImage(want, width, height)))
                     << side << " box " << x[0] << "," << y[0] << " - " << x[1] << "," << y[1];
             }
         }
     }
 }
 
-TEST(PointRects, PolygonRectanglesAreTheBoxRoundingsToTheBit) {
+TEST(PixelRect, PolygonRectanglesAreTheScalarRoundingsToTheBit) {
     std::mt19937_64 rng(11);
     std::uniform_int_distribution<int> vertices(1, 7);
     for (const int side : {1, 7, 64, 1000}) {
