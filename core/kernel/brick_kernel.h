@@ -213,7 +213,7 @@ struct BrickKernel {
         const glm::dvec3 position =
             x.mVolume.origin + (glm::dvec3(corner0[0], corner0[1], corner0[2]) + local3) *
                                    x.mVolume.spacing;
-        const glm::vec3 normal = edgeNormal(i0, step, axis);
+        const glm::vec3 normal = edgeNormal(i0, step, axis, t);
         if constexpr (kPlaced)
             if (!owned) {  // its owner, in another chunk, makes it: a placeholder until then
                 const uint32_t placeholder = mesh.addPlaceholder(key, glm::vec3(position), normal);
@@ -234,8 +234,11 @@ struct BrickKernel {
     // holding the edge gives the same normal (the
     // ghost samples cover the differences), so a welded vertex may get it from either.
     glm::vec3 edgeNormal(size_t i0, size_t step, int axis) const {
+        return edgeNormal(i0, step, axis, crossingFraction(double(s[i0]), double(s[i0 + step]), iso));
+    }
+    // The same, with the edge's crossing fraction t already known.
+    glm::vec3 edgeNormal(size_t i0, size_t step, int axis, double t) const {
         const double s0 = double(s[i0]), s1 = double(s[i0 + step]);
-        const double t = crossingFraction(s0, s1, iso);
         const glm::dvec3 gradient = glm::mix(gradientAt(i0), gradientAt(i0 + step), t);
         const double length = glm::length(gradient);
         glm::dvec3 normal(0.0);
