@@ -97,7 +97,7 @@ const char* const kExtractHelp =
     "                            \"fov\":30,\"width\":800,\"height\":600}\n"
     "  --size WxH                image size (default 800x800)\n"
     "  --stats STATS.json        write one JSON object of statistics ('-' for stdout)\n"
-    "  --metacell M              meta-cell size in cells, 1 to 32 (default 4)\n"
+    "  --metacell M              meta-cell size in cells, 1 to 32 (default 8)\n"
     "  --threads N               extraction threads (default: the machine's cores); sage and\n"
     "                            wise split the image into N vertical strips, one traversal each\n"
     "  --prefetch N              bricks a reader thread loads ahead of the extraction\n"

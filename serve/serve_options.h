@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/kernel/brick_extractor.h"
 #include "io/remote/remote_options.h"
 
 namespace vdiso::serve {
@@ -22,7 +23,7 @@ struct ServeOptions {
     // Encoded cacheable chunks kept for every viewer (serve/shared_chunks.h), split likewise.
     uint64_t chunkCacheBytes = uint64_t(256) << 20;
     int threads = 1;  // image strips per frame
-    int metaCellSize = 4;
+    int metaCellSize = kDefaultMetaCellSize;
     double lodError = 1.0;  // levels of detail: the final frame's error in pixels; 0: level 0 only
     std::string webRoot;  // the viewer's folder (web/)
     std::string token;    // empty: a random one

@@ -28,7 +28,7 @@ constexpr const char* kHelp =
     "                      none, each viewer's frames encode their own)\n"
     "  --threads N         extraction threads per frame: image strips (default: the\n"
     "                      machine's cores)\n"
-    "  --metacell M        meta-cell size in cells, 1 to 32 (default 4)\n"
+    "  --metacell M        meta-cell size in cells, 1 to 32 (default 8)\n"
     "  --lod-error P       levels of detail: each frame's surface is extracted where it is\n"
     "                      nearest at the coarsest level whose cells span at most P pixels\n"
     "                      (default 1; 0: full resolution only); on stores with levels a\n"

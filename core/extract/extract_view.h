@@ -92,6 +92,8 @@ public:
 
 struct ViewExtractOptions {
     double iso = 0;
+    // Halved for a level whose meta-cells would be under 4 pixels wherever they are
+    // (extract_view.cpp's viewMetaCellSize), down to 4.
     int metaCellSize = kDefaultMetaCellSize;
     bool scanPolygons = true;  // false: scan-convert each fan triangle on its own
     bool estimateBox = true;   // false: the exact 8-corner box

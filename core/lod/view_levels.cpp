@@ -33,13 +33,27 @@ void ViewLevels::confineTo(const BrickRegion* region) {
     mRegion = region;
 }
 
-int ViewLevels::levelOf(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b) const {
-    if (count() == 1 || node.coarseLevel == MinMaxNode::kNoLevel) return 0;
-    double depth = INFINITY;  // the least view depth of the box's corners
+double ViewLevels::leastDepth(const glm::dvec3& a, const glm::dvec3& b) const {
+    double depth = INFINITY;
     for (int k = 0; k < 8; ++k) {
         const glm::dvec3 corner{(k & 1) ? b.x : a.x, (k & 2) ? b.y : a.y, (k & 4) ? b.z : a.z};
         depth = std::min(depth, glm::dot(corner - mEye, mForward));
     }
+    return depth;
+}
+
+double ViewLevels::largestCellPixels(int level) const {
+    const VolumeInfo& v = mLevels[0]->source.volume();
+    const int64_t lo[3] = {0, 0, 0}, hi[3] = {v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1};
+    glm::dvec3 a, b;
+    mLevels[0]->culler.worldBox(lo, hi, a, b);
+    const double depth = leastDepth(a, b);
+    return depth > 0.0 ? mLevels[size_t(level)]->cellSize * mFocalPixels / depth : INFINITY;
+}
+
+int ViewLevels::levelOf(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b) const {
+    if (count() == 1 || node.coarseLevel == MinMaxNode::kNoLevel) return 0;
+    const double depth = leastDepth(a, b);
     if (!(depth > 0.0)) return 0;
     const int coarsest = std::min<int>(node.coarseLevel, count() - 1);
     for (int l = coarsest; l >= std::max<int>(node.fineLevel, 1); --l)

@@ -38,6 +38,10 @@ public:
 
     // The level node (whose world box is [a, b]) is extracted at; 0: at level 0 or below.
     int levelOf(const MinMaxNode& node, const glm::dvec3& a, const glm::dvec3& b) const;
+    // The most pixels a cell of `level` spans anywhere in the volume, as levelOf measures a
+    // node's: the level's largest cell side over the least view depth of the volume's corners
+    // (infinite when one is at or behind the eye).
+    double largestCellPixels(int level) const;
 
     struct Brick {
         int level;
@@ -68,6 +72,8 @@ public:
     unsigned seamFaces(const MinMaxNode& node, int level) const;
 
 private:
+    // The least view depth of the corners of the world box [a, b].
+    double leastDepth(const glm::dvec3& a, const glm::dvec3& b) const;
     // Whether level l's brick at node holds the isovalue.
     bool holdsIso(const MinMaxNode& node, int l) const;
     // The faces of `node` inside the volume (those with a neighbour), in seamFaces' bits.
