@@ -128,7 +128,8 @@ private:
     BrickLookAhead mLookAhead;
     PointSet mThinParts;
     // The visibility work's share of the time (ViewCounters).
-    SampledTimer mCellTimer, mProjectionTimer, mCoverageTimer, mBoxTimer, mMetaCellTimer;
+    SampledTimer mCellTimer, mProjectionTimer, mCoverageTimer, mBoxTimer;
+    SampledTimer mMetaCellTimer{1};  // every one: a meta-cell of 8^3 cells is long enough to time
 };
 
 // One brick of sample type T in the traversal: the visitor of its meta-cell walk
@@ -268,8 +269,9 @@ struct BrickVisit {
     }
 
     // One meta-cell that shows, extracted and scan-converted. Timed by meta-cell (extraction
-    // and scan conversion are interleaved polygon by polygon), one in SampledTimer::kEvery: two
-    // clock reads each were 2-3 % of a served frame's samples (head1024, 90 K meta-cells).
+    // and scan conversion are interleaved polygon by polygon), each one: sampled one in 128,
+    // a distant view's few hundred meta-cells gave a scan time of a few samples. (Meta-cells of
+    // 4 cells had made the clock reads 2-3 % of a served frame: head1024, 90 K meta-cells.)
     void extract(const int lo[3]) {
         const int n = extractor.metaCellsPerAxis();
         t.mMetaCellTimer(t.mStats.view.scanSeconds, [&] {
