@@ -175,6 +175,21 @@ bool coverPolygonInTile(const glm::dvec2* v, int n, const PixelRect& rect, Occlu
     return (mask & ~word) != 0 && pyramid.coverTile(tx, ty, mask);
 }
 
+// Edge k of a polygon of n vertices runs from vertex from[n][k / 4][k % 4] to to[n][k / 4][k % 4]
+// (k + 1, or 0 after the last); past the last edge both are vertex 0: a flat edge, which never
+// counts. For the AVX2 path's registers of four edges, up to 8 edges.
+struct EdgeEnds {
+    uint8_t from[9][2][4], to[9][2][4];
+    constexpr EdgeEnds() : from(), to() {
+        for (int n = 1; n <= 8; ++n)
+            for (int e = 0; e < 8; ++e) {
+                from[n][e / 4][e % 4] = uint8_t(e < n ? e : 0);
+                to[n][e / 4][e % 4] = uint8_t(e < n ? (e + 1 == n ? 0 : e + 1) : 0);
+            }
+    }
+};
+constexpr EdgeEnds kEdgeEnds{};
+
 #if VDISO_HAS_AVX2_PATHS
 // coverPolygonInTile with AVX2, four edges a register: per row, their four crossings made at
 // once by the same operations in the same order (IEEE division; vroundpd's ceiling is exact),
@@ -186,26 +201,22 @@ VDISO_TARGET_AVX2 bool coverPolygonInTileAvx2(const glm::dvec2* v, int n, const 
     const int tx = rect.x0 >> 3, ty = rect.y0 >> 3;
     const uint64_t word = pyramid.tileWord(tx, ty);
     if (word == kFull) return false;
-    int finite = 1;
-    for (int k = 0; k < n; ++k) finite &= int(std::isfinite(v[k].x)) & int(std::isfinite(v[k].y));
-    if (!finite) return false;
     const __m256d lo = _mm256_set1_pd(-1.0), hi = _mm256_set1_pd(double(pyramid.width()) + 1.0);
     const __m256d half = _mm256_set1_pd(0.5);
     const __m256i tileColumn = _mm256_set1_epi64x(int64_t(tx) * 8), ones = _mm256_set1_epi64x(int64_t(kByteOnes));
     uint64_t counters[2] = {kByteZero, kByteZero};
+    __m256d notFinite = _mm256_setzero_pd();  // x - x is not 0 for an infinity or a NaN
     for (int first = 0; first < n; first += 4) {
         // Built from scalars, not stored to an array and loaded: the wide load of four narrow
         // stores waits for them (it was a fifth of this function's time).
-        int ia[4], ib[4];
-        for (int k = 0; k < 4; ++k) {
-            const int e = first + k;
-            ia[k] = e < n ? e : 0;
-            ib[k] = e < n ? (e + 1 == n ? 0 : e + 1) : 0;
-        }
+        const uint8_t* ia = kEdgeEnds.from[n][first >> 2];
+        const uint8_t* ib = kEdgeEnds.to[n][first >> 2];
         const __m256d aX = _mm256_setr_pd(v[ia[0]].x, v[ia[1]].x, v[ia[2]].x, v[ia[3]].x);
         const __m256d aY = _mm256_setr_pd(v[ia[0]].y, v[ia[1]].y, v[ia[2]].y, v[ia[3]].y);
         const __m256d bX = _mm256_setr_pd(v[ib[0]].x, v[ib[1]].x, v[ib[2]].x, v[ib[3]].x);
         const __m256d bY = _mm256_setr_pd(v[ib[0]].y, v[ib[1]].y, v[ib[2]].y, v[ib[3]].y);
+        notFinite = _mm256_or_pd(notFinite, _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(aX, aX), _mm256_setzero_pd(), _CMP_NEQ_UQ),
+                                                         _mm256_cmp_pd(_mm256_sub_pd(aY, aY), _mm256_setzero_pd(), _CMP_NEQ_UQ)));
         const __m256d down = _mm256_cmp_pd(aY, bY, _CMP_LT_OQ);
         const __m256d xTop = _mm256_blendv_pd(bX, aX, down), xBottom = _mm256_blendv_pd(aX, bX, down);
         const __m256d yTop = _mm256_min_pd(aY, bY), yBottom = _mm256_max_pd(aY, bY);
@@ -226,6 +237,7 @@ VDISO_TARGET_AVX2 bool coverPolygonInTileAvx2(const glm::dvec2* v, int n, const 
             counters[row - rect.y0] += uint64_t(_mm_cvtsi128_si64(pair)) + uint64_t(_mm_extract_epi64(pair, 1));
         }
     }
+    if (_mm256_movemask_pd(notFinite)) return false;  // as buildScanEdges: such a polygon covers nothing
     uint64_t mask = 0;
     for (int row = rect.y0; row <= rect.y1; ++row)
         mask |= nonzeroBytes(counters[row - rect.y0] ^ kByteZero) << (8 * (row & 7));
