@@ -1,7 +1,8 @@
 // A remote store's index read by parts (io/store/lazy_index.h): parts asked for are read and
 // unpacked; closing the index abandons the parts still in flight in the background instead of
 // waiting for their transfers (a one-shot view would otherwise wait at exit for parts it never
-// needed).
+// needed); the directory is taken from the header's copy without a read, and read where it lies
+// when the copy is damaged.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -15,6 +16,8 @@
 #include "io/store/byte_source.h"
 #include "io/store/index_parts.h"
 #include "io/store/lazy_index.h"
+#include "io/store/store_format.h"
+#include "tests/test_util.h"
 
 namespace vdiso {
 namespace {
@@ -67,6 +70,56 @@ TEST(LazyIndex, PartsAskedForAreReadAndClosingAbandonsTheBackground) {
         ASSERT_EQ(source.mHeld.load(), 2);
     }  // returns only because the held reads are cancelled
     EXPECT_EQ(source.mCancelled.load(), 2);
+}
+
+// A file's bytes in memory, counting the reads asked of it.
+class CountingSource final : public ByteSource {
+public:
+    explicit CountingSource(std::vector<unsigned char> bytes) : mBytes(std::move(bytes)) {}
+    const std::string& name() const override { return mName; }
+    uint64_t size() const override { return mBytes.size(); }
+    const char* method() const override { return "memory"; }
+    void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck&) const override {
+        ++mReads;
+        std::memcpy(dst, mBytes.data() + offset, n);
+    }
+    mutable std::atomic<int> mReads{0};
+
+private:
+    std::vector<unsigned char> mBytes;
+    std::string mName = "memory://store";
+};
+
+TEST(LazyIndex, TheHeadersCopyOfTheDirectorySparesItsRead) {
+    test::ScratchDir dir;
+    const std::string path = dir.file("head.vdiso");
+    const test::CommandResult r = test::runVdiso("synth " + path + " --kind head --size 96 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::vector<unsigned char> bytes = test::readFile(path);
+    const StoreHeader header = store_format::decodeHeader(bytes.data(), bytes.size(), path);
+    const uint64_t raw = store_format::indexBytes(uint64_t(store_format::totalBricks(header)));
+    const uint64_t directoryBytes = store_format::indexDirectoryBytes(raw);
+    // The writer put the index's directory, byte for byte, in the header.
+    ASSERT_EQ(header.indexDirectoryCopy.size(), directoryBytes);
+    EXPECT_EQ(std::memcmp(header.indexDirectoryCopy.data(), bytes.data() + header.indexOffset, directoryBytes), 0);
+
+    CountingSource source(bytes);
+    LazyIndex withCopy(source, header.indexOffset, header.indexBytes, raw, header.indexDirectoryCopy);
+    EXPECT_EQ(source.mReads.load(), 0);
+    withCopy.need(0, raw);
+    // A damaged copy is passed over: the directory is read where it lies, and the index is the same.
+    std::vector<unsigned char> damaged = header.indexDirectoryCopy;
+    damaged[damaged.size() / 2] ^= 0x40;
+    CountingSource again(bytes);
+    LazyIndex withDamagedCopy(again, header.indexOffset, header.indexBytes, raw, damaged);
+    EXPECT_EQ(again.mReads.load(), 1);
+    withDamagedCopy.need(0, raw);
+    EXPECT_EQ(std::memcmp(withCopy.raw(), withDamagedCopy.raw(), raw), 0);
+
+    // A header without a copy (as written before it, or one that does not fit) decodes to none;
+    // the copy's bytes are not part of the header's checksums, so older builds read it as before.
+    std::fill(bytes.begin() + store_format::kDirectoryCopyAt, bytes.begin() + kStoreHeaderBytes, 0);
+    EXPECT_TRUE(store_format::decodeHeader(bytes.data(), bytes.size(), path).indexDirectoryCopy.empty());
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include "io/store/brick_measure.h"
 #include "io/crc32.h"
 #include "io/error.h"
+#include "io/store/index_parts.h"
 #include "io/store/store_format.h"
 
 namespace vdiso {
@@ -352,6 +353,10 @@ StoreTail finishStore(const VolumeInfo& volume, const StoreWriteOptions& options
     header.indexOffset = indexOffset;
     tail.index = store_format::encodeIndex(entries, histogram, subBlocks);
     header.indexBytes = tail.index.size();
+    // The index's directory (its first bytes) copied into the header where it fits.
+    const uint64_t directoryBytes = store_format::indexDirectoryBytes(store_format::indexBytes(entries.size()));
+    if (directoryBytes <= store_format::kDirectoryCopyMost && directoryBytes <= tail.index.size())
+        header.indexDirectoryCopy.assign(tail.index.begin(), tail.index.begin() + ptrdiff_t(directoryBytes));
     tail.headerBytes = store_format::encodeHeader(header);
     return tail;
 }

@@ -77,7 +77,7 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     if (mHeader.formatVersion >= 5 && mSource->remote()) {
         // The entries now; the sub-block codes as they are asked for (io/store/lazy_index.h).
         mLazyIndex = std::make_unique<LazyIndex>(*mSource, mHeader.indexOffset, mHeader.indexBytes,
-                                                 store_format::indexBytes(count));
+                                                 store_format::indexBytes(count), mHeader.indexDirectoryCopy);
         mLazyIndex->need(0, mCodesAt);
         raw = mLazyIndex->raw();
         store_format::decodeIndex(raw, size_t(mCodesAt), false, mHeader, mLayout, mPath, mIndex, mHistogram);

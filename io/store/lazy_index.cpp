@@ -10,24 +10,37 @@
 
 namespace vdiso {
 
-LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes)
+LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes,
+                     std::span<const unsigned char> directoryCopy)
     : mSource(source), mOffset(offset) {
     const uint64_t directoryBytes = store_format::indexDirectoryBytes(rawBytes);
     if (storedBytes < directoryBytes) throwIoError(source.name(), "index is missing or corrupt (too short)");
-    std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
-    // A remote disk cache keeps the directory once it decodes (its checksum passes); what the
-    // check decoded last is the directory as read.
     std::optional<store_format::IndexDirectory> decoded;
-    source.read(offset, directory.size(), directory.data(), "index directory", [&](size_t) {
+    // The header's copy, when it is this directory (its checksum passes): no read.
+    if (directoryCopy.size() == directoryBytes) {
         try {
-            decoded = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+            decoded = store_format::decodeIndexDirectory(directoryCopy.data(), storedBytes, rawBytes, source.name());
         } catch (const IoError&) {
             decoded.reset();
         }
-        return decoded.has_value();
-    });
-    mDirectory = decoded ? std::move(*decoded)
-                         : store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+    }
+    if (decoded) {
+        mDirectory = std::move(*decoded);
+    } else {
+        std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
+        // A remote disk cache keeps the directory once it decodes (its checksum passes); what
+        // the check decoded last is the directory as read.
+        source.read(offset, directory.size(), directory.data(), "index directory", [&](size_t) {
+            try {
+                decoded = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+            } catch (const IoError&) {
+                decoded.reset();
+            }
+            return decoded.has_value();
+        });
+        mDirectory = decoded ? std::move(*decoded)
+                             : store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+    }
     // Untouched until a part lands: the pages of parts never asked for are never faulted in.
     mRaw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
     mReady = std::make_unique<std::atomic<bool>[]>(size_t(mDirectory.parts()));

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -31,8 +32,11 @@ namespace vdiso {
 class LazyIndex {
 public:
     // Reads and validates the directory of the packed index of `storedBytes` at `offset` of
-    // `source` (one read), which unpacks to rawBytes. No part is read yet. Throws IoError.
-    LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes);
+    // `source` (one read), which unpacks to rawBytes; or takes `directoryCopy` (the header's,
+    // StoreHeader::indexDirectoryCopy) without a read when it decodes. No part is read yet.
+    // Throws IoError.
+    LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedBytes, uint64_t rawBytes,
+              std::span<const unsigned char> directoryCopy = {});
     // Stops the background reading: the parts in flight are abandoned (their transfers end).
     ~LazyIndex();
     LazyIndex(const LazyIndex&) = delete;

@@ -201,6 +201,12 @@ std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& h) 
             w.put<uint32_t>(crc32Of(bytes.data(), kExternalLevelsChecksumAt));
         }
     }
+    if (const size_t n = h.indexDirectoryCopy.size(); n > 0 && n <= kDirectoryCopyMost) {
+        ByteWriter copy(bytes.data() + kDirectoryCopyAt);
+        copy.putBytes(kDirectoryCopyMagic, 8);
+        copy.put<uint32_t>(uint32_t(n));
+        copy.putBytes(h.indexDirectoryCopy.data(), n);
+    }
     return bytes;
 }
 
@@ -327,6 +333,13 @@ StoreHeader decodeHeader(const unsigned char* bytes, size_t n, const std::string
     if (version < 5 ? h.indexBytes != raw
                     : h.indexBytes < packedIndexMin(raw) || h.indexBytes > packedIndexMax(raw))
         throwIoError(path, "header's index size does not match its brick count");
+    // The directory's copy, when there is one; checked where it is used (io/store/lazy_index.h).
+    if (version >= 5 && std::memcmp(bytes + kDirectoryCopyAt, kDirectoryCopyMagic, 8) == 0) {
+        uint32_t copyBytes;
+        std::memcpy(&copyBytes, bytes + kDirectoryCopyAt + 8, 4);
+        if (copyBytes > 0 && copyBytes <= kDirectoryCopyMost)
+            h.indexDirectoryCopy.assign(bytes + kDirectoryCopyAt + 12, bytes + kDirectoryCopyAt + 12 + copyBytes);
+    }
     return h;
 }
 

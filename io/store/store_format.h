@@ -91,6 +91,13 @@ struct StoreHeader {
     // version 7 more: an OME-Zarr's own scales).
     uint64_t externalOffset = 0, externalBytes = 0;
     int externalLevels = 0;
+    // A copy of the packed index's directory (io/store/index_parts.h), kept in the header's
+    // spare bytes when it fits (store_format::kDirectoryCopyMost): a remote open then reads
+    // the header and goes straight to the index's parts, one round trip fewer. Empty when it
+    // does not fit or the file has none. Not part of any format version: builds that do not
+    // know it leave those bytes alone, and a copy that does not decode is ignored (the
+    // directory is read where it lies).
+    std::vector<unsigned char> indexDirectoryCopy;
 };
 
 }  // namespace vdiso
@@ -102,6 +109,12 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the store is little-en
 constexpr char kHeaderMagic[8] = {'V', 'D', 'I', 'S', 'O', 'B', 'S', 'T'};
 constexpr char kIndexMagic[8] = {'V', 'D', 'I', 'S', 'O', 'I', 'D', 'X'};
 constexpr size_t kEntryBytes = 32;
+
+// The directory's copy in the header: its magic at kDirectoryCopyAt, then its length (uint32)
+// and its bytes, at most kDirectoryCopyMost.
+constexpr size_t kDirectoryCopyAt = 1024;
+constexpr char kDirectoryCopyMagic[8] = {'V', 'D', 'I', 'S', 'O', 'D', 'I', 'R'};
+constexpr size_t kDirectoryCopyMost = kStoreHeaderBytes - kDirectoryCopyAt - 12;
 
 std::array<unsigned char, kStoreHeaderBytes> encodeHeader(const StoreHeader& header);
 
