@@ -22,8 +22,9 @@
 namespace vdiso {
 namespace {
 
-// A packed index in memory. Reads asked for with a cancel flag (the background's) wait until it
-// is set, as a transfer from a server that has not answered yet would, and then fail.
+// Bytes in memory (a packed index, or a whole store), counting the reads asked of them. Reads
+// asked for with a cancel flag (the background's) wait until it is set, as a transfer from a
+// server that has not answered yet would, and then fail.
 class HeldSource final : public ByteSource {
 public:
     explicit HeldSource(std::vector<unsigned char> bytes) : mBytes(std::move(bytes)) {}
@@ -31,6 +32,7 @@ public:
     uint64_t size() const override { return mBytes.size(); }
     const char* method() const override { return "memory"; }
     void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck&) const override {
+        ++mReads;
         std::memcpy(dst, mBytes.data() + offset, n);
     }
     void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact,
@@ -41,7 +43,7 @@ public:
         ++mCancelled;
         throw IoError(mName + ": read cancelled");
     }
-    mutable std::atomic<int> mHeld{0}, mCancelled{0};
+    mutable std::atomic<int> mHeld{0}, mCancelled{0}, mReads{0};
 
 private:
     std::vector<unsigned char> mBytes;
@@ -72,24 +74,6 @@ TEST(LazyIndex, PartsAskedForAreReadAndClosingAbandonsTheBackground) {
     EXPECT_EQ(source.mCancelled.load(), 2);
 }
 
-// A file's bytes in memory, counting the reads asked of it.
-class CountingSource final : public ByteSource {
-public:
-    explicit CountingSource(std::vector<unsigned char> bytes) : mBytes(std::move(bytes)) {}
-    const std::string& name() const override { return mName; }
-    uint64_t size() const override { return mBytes.size(); }
-    const char* method() const override { return "memory"; }
-    void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck&) const override {
-        ++mReads;
-        std::memcpy(dst, mBytes.data() + offset, n);
-    }
-    mutable std::atomic<int> mReads{0};
-
-private:
-    std::vector<unsigned char> mBytes;
-    std::string mName = "memory://store";
-};
-
 TEST(LazyIndex, TheHeadersCopyOfTheDirectorySparesItsRead) {
     test::ScratchDir dir;
     const std::string path = dir.file("head.vdiso");
@@ -103,14 +87,14 @@ TEST(LazyIndex, TheHeadersCopyOfTheDirectorySparesItsRead) {
     ASSERT_EQ(header.indexDirectoryCopy.size(), directoryBytes);
     EXPECT_EQ(std::memcmp(header.indexDirectoryCopy.data(), bytes.data() + header.indexOffset, directoryBytes), 0);
 
-    CountingSource source(bytes);
+    HeldSource source(bytes);
     LazyIndex withCopy(source, header.indexOffset, header.indexBytes, raw, header.indexDirectoryCopy);
     EXPECT_EQ(source.mReads.load(), 0);
     withCopy.need(0, raw);
     // A damaged copy is passed over: the directory is read where it lies, and the index is the same.
     std::vector<unsigned char> damaged = header.indexDirectoryCopy;
     damaged[damaged.size() / 2] ^= 0x40;
-    CountingSource again(bytes);
+    HeldSource again(bytes);
     LazyIndex withDamagedCopy(again, header.indexOffset, header.indexBytes, raw, damaged);
     EXPECT_EQ(again.mReads.load(), 1);
     withDamagedCopy.need(0, raw);
