@@ -170,7 +170,6 @@ public:
 private:
     struct TopDownTriangle;
 
-
     uint64_t& wordRef(int level, int wx, int wy) {
         return mWords[mLevelOffset[size_t(level)] + size_t(wy) * mWordsX[size_t(level)] +
                       size_t(wx)];

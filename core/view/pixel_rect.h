@@ -71,26 +71,34 @@ struct ImageLanes {
         : size(_mm_setr_pd(width, height)), last(_mm_setr_epi32(width - 1, height - 1, 0, 0)) {}
 };
 
-// The pixel centres of the box [lo, hi] (lanes x, y; not NaN): columns from the first centre at
-// or after lo.x to the last at or before hi.x, rows likewise, each end clamped to [-1, size]
-// first (a box far off the image holds no int).
-inline PixelRect boxCentres(__m128d lo, __m128d hi, const ImageLanes& image) {
+namespace detail {
+// The first centre at or after each lane of lo and the last at or before each lane of hi, each
+// end clamped to [-1, size] first (a box far off the image holds no int).
+inline void centreLanes(__m128d lo, __m128d hi, const ImageLanes& image, __m128i& first, __m128i& last) {
     const __m128d half = _mm_set1_pd(0.5), minusOne = _mm_set1_pd(-1.0);
-    return detail::rectOf(detail::ceilLanes(detail::clampLanes(_mm_sub_pd(lo, half), minusOne, image.size)),
-                          detail::floorLanes(detail::clampLanes(_mm_sub_pd(hi, half), minusOne, image.size)));
+    first = ceilLanes(clampLanes(_mm_sub_pd(lo, half), minusOne, image.size));
+    last = floorLanes(clampLanes(_mm_sub_pd(hi, half), minusOne, image.size));
+}
+}  // namespace detail
+
+// The pixel centres of the box [lo, hi] (lanes x, y; not NaN): columns from the first centre at
+// or after lo.x to the last at or before hi.x, rows likewise (each within a pixel of the image).
+inline PixelRect boxCentres(__m128d lo, __m128d hi, const ImageLanes& image) {
+    __m128i first, last;
+    detail::centreLanes(lo, hi, image, first, last);
+    return detail::rectOf(first, last);
 }
 // boxCentres clamped to the image (as OcclusionPyramid::isOccluded clamps): empty when none of
 // them lies on it.
 inline PixelRect boxCentresOnImage(__m128d lo, __m128d hi, const ImageLanes& image) {
-    const __m128d half = _mm_set1_pd(0.5), minusOne = _mm_set1_pd(-1.0);
-    const __m128i x0 = detail::ceilLanes(detail::clampLanes(_mm_sub_pd(lo, half), minusOne, image.size));
-    const __m128i x1 = detail::floorLanes(detail::clampLanes(_mm_sub_pd(hi, half), minusOne, image.size));
-    return detail::rectOf(detail::maxLanes(x0, _mm_setzero_si128()), detail::minLanes(x1, image.last));
+    __m128i first, last;
+    detail::centreLanes(lo, hi, image, first, last);
+    return detail::rectOf(detail::maxLanes(first, _mm_setzero_si128()), detail::minLanes(last, image.last));
 }
 
-// A polygon's slack rectangle (the centres within kRasterSlack of its box: PolygonCoverage's
-// slackRect) and centre rectangle (the centres it can cover: centresOfBox), both clamped to the
-// image, from its n >= 1 vertices (finite, pixel coordinates).
+// A polygon's slack rectangle (the centres within kRasterSlack of its box, where
+// PolygonCoverage looks first) and centre rectangle (the centres it can cover: centresOfBox),
+// both clamped to the image, from its n >= 1 vertices (finite, pixel coordinates).
 [[gnu::always_inline]] inline void polygonRects(const glm::dvec2* v, int n, const ImageLanes& image, PixelRect& slack, PixelRect& centres) {
     __m128d lo = _mm_loadu_pd(&v[0].x), hi = lo;
     for (int k = 1; k < n; ++k) {

@@ -5,7 +5,6 @@
 #include <span>
 
 #include "core/view/edge_function.h"
-#include "core/view/pixel_round.h"
 #include "core/view/scan_convert.h"
 
 namespace vdiso {

@@ -20,7 +20,7 @@
 // one; AVX2 four rows at once, each crossing and each tile's counters in one register. Both
 // give the same bits. Either way, a polygon whose centres lie in one or two rows of one tile
 // (most, where cells are a pixel or two) takes a path of its own: every edge on every row, no
-// branch on the data, the same bits again.
+// branch on the data (with AVX2 four edges a register, up to 8), the same bits again.
 #pragma once
 
 #include <cstdint>
