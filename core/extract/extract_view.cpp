@@ -127,6 +127,9 @@ private:
     TriangleMesh mCaps;  // streaming: the current brick's seam caps
     BrickLookAhead mLookAhead;
     PointSet mThinParts;
+    // Bit y * width + x: a point in mThinParts falls on pixel (x, y) (as drawThinParts rounds
+    // it). Only the first point on a pixel can be drawn there, so later ones are not made.
+    std::vector<uint64_t> mThinPixels;
     // The visibility work's share of the time (ViewCounters).
     SampledTimer mCellTimer, mProjectionTimer, mCoverageTimer, mBoxTimer;
     SampledTimer mMetaCellTimer{1};  // every one: a meta-cell of 8^3 cells is long enough to time
@@ -344,9 +347,19 @@ void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samp
     const int fine = std::max(at.level - 3, 0);  // sub-blocks of 1 to 4 coarse cells
     // A point on a pixel not covered now (the brick's own surface drawn), and a box whose pixels
     // are not all covered now.
+    // A pixel that already has a point waiting gets no second (drawThinParts would skip it):
+    // the point's normal, an eigenvector, was most of a distant CT frame's thin-part work.
+    if (mThinPixels.empty()) mThinPixels.assign((size_t(mPyramid.width()) * size_t(mPyramid.height()) + 63) / 64, 0);
     auto wanted = [&](const glm::dvec3& position) {
         glm::ivec2 pixel;
-        return pixelOf(position, pixel) && !mPyramid.isCovered(pixel.x, pixel.y);
+        if (!pixelOf(position, pixel) || mPyramid.isCovered(pixel.x, pixel.y)) return false;
+        if (!pixelOf(glm::dvec3(glm::vec3(position)), pixel)) return false;  // as it is stored
+        const size_t bit = size_t(pixel.y) * size_t(mPyramid.width()) + size_t(pixel.x);
+        uint64_t& word = mThinPixels[bit / 64];
+        const uint64_t mask = uint64_t(1) << (bit % 64);
+        if (word & mask) return false;
+        word |= mask;
+        return true;
     };
     const ViewCuller& culler = mLevels.culler(at.level);
     auto shows = [&](const glm::dvec3& a, const glm::dvec3& b) {
@@ -359,8 +372,11 @@ void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samp
 void ViewTraversal::drawThinParts() {
     for (size_t k = 0; k < mThinParts.size(); ++k) {
         glm::ivec2 p;
-        // Covered by what came after, or by an earlier point.
-        if (!pixelOf(glm::dvec3(mThinParts.positions[k]), p) || mPyramid.isCovered(p.x, p.y)) continue;
+        if (!pixelOf(glm::dvec3(mThinParts.positions[k]), p)) continue;
+        const size_t bit = size_t(p.y) * size_t(mPyramid.width()) + size_t(p.x);
+        mThinPixels[bit / 64] &= ~(uint64_t(1) << (bit % 64));
+        // Covered by what came after.
+        if (mPyramid.isCovered(p.x, p.y)) continue;
         mPoints.positions.push_back(mThinParts.positions[k]);
         mPoints.normals.push_back(mThinParts.normals[k]);
         mPyramid.coverSpan(p.y, p.x, p.x);
