@@ -44,10 +44,13 @@ void ExtractSession::reconfigure(ExtractSettings settings) {
     if (!mCache || settings.cacheMb != mSettings.cacheMb) {
         auto cache = std::make_unique<BrickCache>(mStore, settings.cacheMb << 20);  // may throw: nothing changed
         // Meta-cell ranges are kept across the frames of a path, for as many bricks as the cache.
-        auto ranges = std::make_unique<MetaCellRangeCache>(cache->budgetBytes() / mStore.brickBytes());
+        const size_t keptBricks = cache->budgetBytes() / mStore.brickBytes();
+        auto ranges = std::make_unique<MetaCellRangeCache>(keptBricks);
+        auto lostParts = std::make_unique<LostPartMemo>(keptBricks);
         mTree.reset();  // built over the old cache's levels
         mCache = std::move(cache);
         mRanges = std::move(ranges);
+        mLostParts = std::move(lostParts);
     }
     mSettings = std::move(settings);
     mTreeSeconds = 0;
@@ -74,6 +77,7 @@ ExtractFrame ExtractSession::extract(const std::optional<Camera>& camera, const 
         if (!camera) throw SettingsError("camera", "is needed by the view-dependent methods, sage and wise");
         ViewExtractOptions v = viewExtractOptions(s, f.plan);
         v.rangeCache = &*mRanges;
+        v.lostParts = &*mLostParts;
         v.tree = &*mTree;
         f.stats = extractViewDependent(*mCache, *camera, v, f.mesh, f.points, progress);
     } else {

@@ -13,6 +13,7 @@
 #include "core/camera.h"
 #include "core/extract/extract_stats.h"
 #include "core/mesh.h"
+#include "core/lod/thin_parts.h"
 #include "core/trees/meta_cell_range_cache.h"
 #include "core/trees/minmax_tree.h"
 #include "core/orientation.h"
@@ -83,6 +84,7 @@ private:
     ExtractSettings mSettings;
     std::unique_ptr<BrickCache> mCache;
     std::unique_ptr<MetaCellRangeCache> mRanges;
+    std::unique_ptr<LostPartMemo> mLostParts;  // as many bricks as the ranges
     std::optional<MinMaxTree> mTree;
     double mTreeSeconds = 0;
     TriangleMesh mSpareMesh;  // recycle()'s, for the next frame

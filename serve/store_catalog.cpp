@@ -88,6 +88,7 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
         s.defaultIso = iso ? *iso : s.reader->histogram().otsuThreshold();
         s.cache = std::make_unique<BrickCache>(*s.reader, cacheBytes / paths.size());
         s.ranges = std::make_unique<MetaCellRangeCache>(s.cache->budgetBytes() / s.reader->brickBytes());
+        s.lostParts = std::make_unique<LostPartMemo>(s.cache->budgetBytes() / s.reader->brickBytes());
         s.tree = std::make_unique<MinMaxTree>(s.cache->levels(), s.cache->brickRanges());
         s.chunks = std::make_unique<SharedChunks>(chunkBytes / paths.size());
         s.description = describe(s);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cache/brick_cache.h"
+#include "core/lod/thin_parts.h"
 #include "core/trees/meta_cell_range_cache.h"
 #include "core/trees/minmax_tree.h"
 #include "io/store/brick_store.h"
@@ -24,6 +25,7 @@ struct ServedStore {
     // The meta-cell ranges of its bricks, kept across frames and clients (as many bricks as the
     // cache holds).
     std::unique_ptr<MetaCellRangeCache> ranges;
+    std::unique_ptr<LostPartMemo> lostParts;  // as many bricks as the ranges
     // The min/max tree over every level's bricks, built once for every frame.
     std::unique_ptr<MinMaxTree> tree;
     // Its cacheable chunks as encoded once for every client (serve/shared_chunks.h).

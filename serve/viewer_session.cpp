@@ -337,6 +337,7 @@ std::string ViewerSession::extractPass(const ViewMessage& view, Clock::time_poin
         options.prefetchBricks = 0;
     }
     options.rangeCache = store.ranges.get();
+    options.lostParts = store.lostParts.get();
     options.tree = store.tree.get();
     const CacheCounters before = store.cache->counters();
     std::string status = "complete", error;

@@ -365,8 +365,16 @@ void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samp
     auto shows = [&](const glm::dvec3& a, const glm::dvec3& b) {
         return culler.cullScreenBox(culler.screenBox(a, b)) == Cull::None;
     };
-    appendThinPartPoints(mLevels.source(at.level), at.local, samples, mLevels.source(fine), at.level - fine,
-                         mOptions.iso, mCamera.eye, mThinParts, wanted, shows);
+    const LevelSource& coarse = mLevels.source(at.level);
+    auto find = [&] { return findLostParts(coarse, at.local, samples, mLevels.source(fine), at.level - fine, mOptions.iso); };
+    LostPartMemo::Held kept;
+    std::vector<LostPart> found;
+    if (mOptions.lostParts)
+        kept = mOptions.lostParts->get(at.id, mOptions.iso, find);
+    else
+        found = find();
+    appendLostPartPoints(coarse, at.local, samples, kept ? *kept : found, mOptions.iso, mCamera.eye, mThinParts, wanted,
+                         shows);
 }
 
 void ViewTraversal::drawThinParts() {

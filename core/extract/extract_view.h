@@ -34,6 +34,7 @@
 #include "core/extract/extract_stats.h"
 #include "core/mesh.h"
 #include "core/view/occlusion_pyramid.h"
+#include "core/lod/thin_parts.h"
 #include "core/trees/meta_cell_range_cache.h"
 #include "core/trees/minmax_tree.h"
 #include "core/progress.h"
@@ -135,6 +136,9 @@ struct ViewExtractOptions {
     // When set, bricks' meta-cell ranges are kept there from one extraction to the next (frames
     // of a moving camera over the same source and meta-cell size).
     MetaCellRangeCache* rangeCache = nullptr;
+    // When set, the parts coarse bricks lose (core/lod/thin_parts.h) are kept there likewise
+    // (frames over the same source).
+    LostPartMemo* lostParts = nullptr;
     // When set, the min/max tree over the source, built once for many extractions (frames of a
     // moving camera): MinMaxTree(source.levels(), source.brickRanges()). Otherwise each
     // extraction builds its own (a 2560^3 volume's 512,000 bricks take tens of ms).

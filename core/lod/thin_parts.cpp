@@ -151,16 +151,11 @@ void appendBoxPoints(const CoarseSamples<T>& c, const CornerPlace& place, const 
 
 }  // namespace
 
-void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
-                          int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
-                          const std::function<bool(const glm::dvec3&)>& wanted,
-                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows) {
+std::vector<LostPart> findLostParts(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
+                                    int levelsBetween, double iso) {
     const BrickLayout& cl = coarse.layout();
     const BrickLayout& fl = fine.layout();
-    const VolumeInfo& volume = coarse.volume();
     const Dims3 cc = cl.brickCoord(brick);
-    const CornerPlace place{volume.origin + glm::dvec3(cc[0], cc[1], cc[2]) * double(cl.brickSize) * volume.spacing,
-                            volume.spacing};
     const int64_t ratio = int64_t(1) << levelsBetween;  // fine cells per coarse cell
     int cells[3];
     int64_t f0[3], f1[3];  // the fine bricks under the coarse one, [f0, f1) per axis
@@ -171,7 +166,8 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
                                   ((cc[k] * cl.brickSize + cells[k]) * ratio + fl.brickSize - 1) / fl.brickSize);
     }
     const int C = subBlockCells(fl.brickSize);
-    visitScalarType(volume.type, [&](auto zero) {
+    std::vector<LostPart> parts;
+    visitScalarType(coarse.volume().type, [&](auto zero) {
         using T = decltype(zero);
         const CoarseSamples<T> c{static_cast<const T*>(samples), cl.side()};
         for (int64_t fz = f0[2]; fz < f1[2]; ++fz)
@@ -233,11 +229,40 @@ void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* 
                                             : iso - least < kKeptReach * fineDown ? 1.0
                                                                                  : 0.0;
                         if (sign == 0.0) continue;
-                        if (shows && !shows(place(lo[0], lo[1], lo[2]), place(hi[0], hi[1], hi[2]))) continue;
-                        appendBoxPoints(c, place, lo, hi, sign, least, most, iso, eye, out, wanted);
+                        parts.push_back({{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, sign, least, most});
                     }
                 }
     });
+    return parts;
 }
+
+void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, std::span<const LostPart> parts,
+                          double iso, const glm::dvec3& eye, PointSet& out,
+                          const std::function<bool(const glm::dvec3&)>& wanted,
+                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows) {
+    if (parts.empty()) return;
+    const BrickLayout& cl = coarse.layout();
+    const VolumeInfo& volume = coarse.volume();
+    const Dims3 cc = cl.brickCoord(brick);
+    const CornerPlace place{volume.origin + glm::dvec3(cc[0], cc[1], cc[2]) * double(cl.brickSize) * volume.spacing,
+                            volume.spacing};
+    visitScalarType(volume.type, [&](auto zero) {
+        using T = decltype(zero);
+        const CoarseSamples<T> c{static_cast<const T*>(samples), cl.side()};
+        for (const LostPart& p : parts) {
+            if (shows && !shows(place(p.lo[0], p.lo[1], p.lo[2]), place(p.hi[0], p.hi[1], p.hi[2]))) continue;
+            appendBoxPoints(c, place, p.lo, p.hi, p.sign, p.least, p.most, iso, eye, out, wanted);
+        }
+    });
+}
+
+void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
+                          int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
+                          const std::function<bool(const glm::dvec3&)>& wanted,
+                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows) {
+    const std::vector<LostPart> parts = findLostParts(coarse, brick, samples, fine, levelsBetween, iso);
+    appendLostPartPoints(coarse, brick, samples, parts, iso, eye, out, wanted, shows);
+}
+
 
 }  // namespace vdiso

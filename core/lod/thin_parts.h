@@ -22,11 +22,14 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <span>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "core/brick_source.h"
 #include "core/mesh.h"
+#include "core/trees/brick_memo.h"
 
 namespace vdiso {
 
@@ -41,6 +44,31 @@ inline bool crossesClearly(const BrickRange& r, double iso) {
     const double up = double(r.maxValue) - iso, down = iso - double(r.minValue);
     return up > 0 && down >= 0 && std::min(up, down) >= kClearCrossing * std::max(up, down);
 }
+
+// A box of a coarse brick's corners [lo, hi] (inclusive on each axis) where the coarse level
+// lost a part: a peak (sign -1) or a trough (+1), the coarse samples there running from `least`
+// to `most`. What the view does not change: found once for a brick and isovalue, its points
+// made for each camera.
+struct LostPart {
+    int lo[3], hi[3];
+    double sign, least, most;
+};
+
+// Lost parts kept across the frames of a camera, by brick and isovalue (core/trees/brick_memo.h).
+using LostPartMemo = BrickMemo<std::vector<LostPart>>;
+
+// The boxes of coarse brick `brick` (in `coarse`'s numbering; `samples` its samples) where the
+// surface of `fine` (the level levelsBetween >= 1 finer) is lost, in the order
+// appendThinPartPoints takes them.
+std::vector<LostPart> findLostParts(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
+                                    int levelsBetween, double iso);
+
+// Appends the points of `parts` (findLostParts' for the same brick, samples and isovalue), as
+// appendThinPartPoints does.
+void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, std::span<const LostPart> parts,
+                          double iso, const glm::dvec3& eye, PointSet& out,
+                          const std::function<bool(const glm::dvec3&)>& wanted = nullptr,
+                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows = nullptr);
 
 // Appends the points of coarse brick `brick` (in `coarse`'s numbering; `samples` its samples)
 // for the surface of `fine` (the level levelsBetween >= 1 finer) it loses; `eye` in world units.
