@@ -3,8 +3,6 @@
 // (core/lod/thin_parts.h).
 #include <gtest/gtest.h>
 
-#include <cmath>
-
 #include "cache/brick_cache.h"
 #include "core/camera.h"
 #include "core/extract/extract_view.h"
@@ -86,14 +84,7 @@ TEST(BrickMemo, FramesWithKeptLostPartsDrawTheSamePoints) {
     test::ScratchDir dir;
     const Dims3 dims{96, 96, 96};
     test::MemoryVolume volume(dims, ScalarType::U16);
-    uint16_t* v = reinterpret_cast<uint16_t*>(volume.bytes().data());
-    for (int64_t z = 0; z < dims[2]; ++z)
-        for (int64_t y = 0; y < dims[1]; ++y)
-            for (int64_t x = 0; x < dims[0]; ++x) {
-                const double r = std::hypot(x - 48.0, y - 48.0, z - 48.0);
-                const bool plate = y == std::lround(72 + 0.25 * x + 0.1 * z) && x >= 8 && x < 56 && z >= 8 && z < 88;
-                v[(z * dims[1] + y) * dims[0] + x] = plate || r < 24 ? 1000 : 100;
-            }
+    test::fillBallBesidePlate(volume);
     StoreWriteOptions w;
     w.brickSize = 8;
     writeBrickStore(volume, dir.file("plate.vdiso"), w);

@@ -221,14 +221,7 @@ TEST(Levels, ThinPlateStaysAtADistance) {
     test::ScratchDir dir;
     const Dims3 dims{96, 96, 96};
     test::MemoryVolume volume(dims, ScalarType::U16);
-    uint16_t* v = reinterpret_cast<uint16_t*>(volume.bytes().data());
-    for (int64_t z = 0; z < dims[2]; ++z)
-        for (int64_t y = 0; y < dims[1]; ++y)
-            for (int64_t x = 0; x < dims[0]; ++x) {
-                const double r = std::hypot(x - 48.0, y - 48.0, z - 48.0);
-                const bool plate = y == std::lround(72 + 0.25 * x + 0.1 * z) && x >= 8 && x < 56 && z >= 8 && z < 88;
-                v[(z * dims[1] + y) * dims[0] + x] = plate || r < 24 ? 1000 : 100;
-            }
+    test::fillBallBesidePlate(volume);
     const BrickStoreReader store(writeStore(volume, dir.file("plate.vdiso"), 8, StoreWriteOptions::kLevelsUntilOneBrick));
     const TriangleMesh full = fullSurface(store, 550);
     for (double scale : {10.0, 20.0}) {

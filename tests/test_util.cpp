@@ -97,6 +97,18 @@ void MemoryVolume::read(void* dst, int64_t count) {
     mNextZ += count;
 }
 
+void fillBallBesidePlate(MemoryVolume& volume) {
+    const Dims3& dims = volume.info().dims;
+    uint16_t* v = reinterpret_cast<uint16_t*>(volume.bytes().data());
+    for (int64_t z = 0; z < dims[2]; ++z)
+        for (int64_t y = 0; y < dims[1]; ++y)
+            for (int64_t x = 0; x < dims[0]; ++x) {
+                const double r = std::hypot(x - 48.0, y - 48.0, z - 48.0);
+                const bool plate = y == std::lround(72 + 0.25 * x + 0.1 * z) && x >= 8 && x < 56 && z >= 8 && z < 88;
+                v[(z * dims[1] + y) * dims[0] + x] = plate || r < 24 ? 1000 : 100;
+            }
+}
+
 double MemoryVolume::at(int64_t x, int64_t y, int64_t z) const {
     const int64_t i = x + mInfo.dims[0] * (y + mInfo.dims[1] * z);
     return visitScalarType(mInfo.type, [&](auto zero) {

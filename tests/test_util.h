@@ -92,6 +92,11 @@ private:
     int64_t mNextZ = 0;
 };
 
+// A u16 ball (radius 24 about the centre of 96^3, 1000 inside, 100 outside) beside a plate one
+// voxel thick (y = 72 + x / 4 + z / 10 rounded, x in [8, 56), z in [8, 88)), isovalue 550: the
+// coarse levels of detail lose the plate (core/lod/thin_parts.h).
+void fillBallBesidePlate(MemoryVolume& volume);  // volume: 96^3 u16
+
 // Reads everything a source delivers, in slabs of `slab` slices (uneven on purpose).
 std::vector<unsigned char> readAllSamples(SliceReader& source, int64_t slab = 3);
 
