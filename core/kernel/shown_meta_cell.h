@@ -80,19 +80,31 @@ void extractShownMetaCell(BrickKernel<T, Mesh>& kernel, int m, View& view, const
         sampleAt[e] = kernel.sampleIndex(o[0], o[1], o[2]) - kernel.sampleIndex(0, 0, 0);
         sampleStep[e] = axis == 0 ? 1 : axis == 1 ? size_t(kernel.side) : size_t(kernel.side) * kernel.side;
     }
+    // rank[a][r]: the place of local coordinate r on axis a (x, y) in the front-to-back order. A row's
+    // crossed cells, and a layer's rows that hold any, are taken by their bits in that order,
+    // not by testing every place (whose branch on the bit mispredicted, and which was 3 % of a
+    // view's instructions).
+    int rank[2][kMaxMetaCellSize];
+    for (int a = 0; a < 2; ++a)
+        for (int k = 0; k < hi[a] - lo[a]; ++k) rank[a][order[a][k] - lo[a]] = k;
+    uint64_t rowsHeld[kMaxMetaCellSize];  // bit rank[1][ry] of [rz]: row (ry, rz) holds a crossed cell
+    for (int rz = 0; rz < nz; ++rz) {
+        rowsHeld[rz] = 0;
+        for (int ry = 0; ry < ny; ++ry) rowsHeld[rz] |= uint64_t(crossed[rz][ry] != 0) << rank[1][ry];
+    }
     KernelCounters& counters = kernel.counters();
     ++counters.metaCellsActive;
     counters.cellsVisited += int64_t(nx) * ny * nz;
     for (int iz = 0; iz < nz; ++iz)
-        for (int iy = 0; iy < ny; ++iy) {
-            const int cz = order[2][iz], cy = order[1][iy];
+        for (uint64_t rows = rowsHeld[order[2][iz] - lo[2]]; rows != 0; rows &= rows - 1) {
+            const int cz = order[2][iz], cy = order[1][__builtin_ctzll(rows)];
             const int rz = cz - lo[2], ry = cy - lo[1];
             const uint64_t mixed = crossed[rz][ry];
-            if (mixed == 0) continue;
             const CellRow cellRow{above[rz][ry], above[rz][ry + 1], above[rz + 1][ry], above[rz + 1][ry + 1]};
-            for (int ix = 0; ix < nx; ++ix) {
-                const int cx = order[0][ix], rx = cx - lo[0];
-                if (!(mixed >> rx & 1)) continue;
+            uint64_t ranked = 0;
+            for (uint64_t m = mixed; m != 0; m &= m - 1) ranked |= uint64_t(1) << rank[0][__builtin_ctzll(m)];
+            for (; ranked != 0; ranked &= ranked - 1) {
+                const int cx = order[0][__builtin_ctzll(ranked)], rx = cx - lo[0];
                 if (!view.keepCell(rx, ry, rz)) continue;
                 ++counters.cellsActive;
                 const McPolygonCase& pc = mcPolygonCase(cellRow.caseOf(rx));
