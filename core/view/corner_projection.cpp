@@ -32,7 +32,8 @@ void CornerProjection::project(const int64_t first[3], const uint64_t* rows) {
             double base[4];
             for (int r = 0; r < 4; ++r) base[r] = (mRow[r].w + mRow[r].z * gz) + mRow[r].y * gy;
             const __m128d baseXY = _mm_loadu_pd(base), baseZW = _mm_loadu_pd(base + 2);
-            uint64_t front = mFront[size_t(z * mSide + y)];
+            uint64_t inFront = 0;  // of the row's corners projected now (the others keep their bits)
+            const uint64_t projected = bits;
             double* clip = &mClip[size_t(cornerIndex(0, y, z))].x;
             double* pixel = &mPixel[size_t(cornerIndex(0, y, z))].x;
             for (; bits; bits &= bits - 1) {
@@ -45,13 +46,13 @@ void CornerProjection::project(const int64_t first[3], const uint64_t* rows) {
                 // In front: w > 0 and z + w > 0 (lanes: z + w, w).
                 const __m128d w = _mm_unpackhi_pd(zw, zw);
                 const int positive = _mm_movemask_pd(_mm_cmpgt_pd(_mm_add_pd(zw, _mm_unpackhi_pd(zw, _mm_setzero_pd())), _mm_setzero_pd()));
-                const uint64_t bit = uint64_t(1) << x;
-                front = positive == 3 ? front | bit : front & ~bit;
+                inFront |= uint64_t(positive == 3) << x;
                 // pixelOf: ((x, y) / w * (0.5, -0.5) + 0.5) * (width, height).
                 const __m128d ndc = _mm_mul_pd(xy, _mm_div_pd(_mm_set1_pd(1.0), w));
                 _mm_storeu_pd(pixel + 2 * x, _mm_mul_pd(_mm_add_pd(_mm_mul_pd(ndc, half), _mm_set1_pd(0.5)), size));
             }
-            mFront[size_t(z * mSide + y)] = front;
+            uint64_t& front = mFront[size_t(z * mSide + y)];
+            front = (front & ~projected) | inFront;
         }
 }
 
