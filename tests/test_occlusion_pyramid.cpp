@@ -128,6 +128,28 @@ TEST(OcclusionPyramid, SpansAndQueriesMatchBruteForce) {
                     << w << "x" << h << " round " << round << " rect " << x0 << "," << y0
                     << " - " << x1 << "," << y1;
                 (want ? occludedAnswers : visibleAnswers) += 1;
+                // findUncovered visits exactly the uncovered pixels of the rectangle within the
+                // image, each once, and stops at the first its callback accepts.
+                const int cx0 = std::max(x0, 0), cy0 = std::max(y0, 0), cx1 = std::min(x1, w - 1), cy1 = std::min(y1, h - 1);
+                if (cx0 > cx1 || cy0 > cy1) continue;
+                std::vector<uint8_t> seen(size_t(w) * h, 0);
+                size_t visits = 0;
+                EXPECT_FALSE(pyramid.findUncovered(cx0, cy0, cx1, cy1, [&](int x, int y) {
+                    ++visits;
+                    seen[size_t(y) * w + x] += 1;
+                    return false;
+                }));
+                size_t expected = 0;
+                for (int y = cy0; y <= cy1; ++y)
+                    for (int x = cx0; x <= cx1; ++x) {
+                        const bool open = !model.covered[size_t(y) * w + x];
+                        expected += open;
+                        ASSERT_EQ(seen[size_t(y) * w + x], open ? 1 : 0) << x << "," << y;
+                    }
+                EXPECT_EQ(visits, expected);
+                size_t untilFirst = 0;
+                EXPECT_EQ(pyramid.findUncovered(cx0, cy0, cx1, cy1, [&](int, int) { return ++untilFirst == 1; }), expected > 0);
+                EXPECT_EQ(untilFirst, std::min<size_t>(expected, 1));
             }
         }
         // Fill the image completely: every query is occluded, answered by the top word alone

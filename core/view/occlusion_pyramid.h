@@ -108,6 +108,23 @@ public:
         return missing == 0;
     }
 
+    // Calls found(x, y) for the pixels of [x0, x1] x [y0, y1] (within the image) not covered,
+    // a tile at a time, until it returns true; whether it did. Covered pixels cost nothing.
+    template <class Found>
+    bool findUncovered(int x0, int y0, int x1, int y1, Found&& found) const {
+        for (int ty = y0 >> 3; ty <= y1 >> 3; ++ty) {
+            const uint64_t rows = rowsMask(std::max(y0 - ty * 8, 0), std::min(y1 - ty * 8, 7));
+            for (int tx = x0 >> 3; tx <= x1 >> 3; ++tx) {
+                uint64_t open = ~tileWord(tx, ty) & rows & columnsMask(std::max(x0 - tx * 8, 0), std::min(x1 - tx * 8, 7));
+                for (; open != 0; open &= open - 1) {
+                    const int bit = __builtin_ctzll(open);
+                    if (found(tx * 8 + (bit & 7), ty * 8 + (bit >> 3))) return true;
+                }
+            }
+        }
+        return false;
+    }
+
     // Bits of columns c0..c1 of every row of an 8x8 word, and of every column of rows r0..r1
     // (inclusive, 0..7, c0 <= c1, r0 <= r1).
     // By table (two of 64 words): made by shifts they were a third of a one-tile query.

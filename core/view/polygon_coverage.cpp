@@ -31,14 +31,11 @@ bool PolygonCoverage::nearUncoveredCentre(const glm::dvec2& p0, const glm::dvec2
     if (!uncoveredCentreIn(r)) return false;
     const TriangleEdgeFunctions f = TriangleEdgeFunctions::of(p0, p1, p2);
     if (f.degenerate) return false;
-    for (int y = r.y0; y <= r.y1; ++y)
-        for (int x = r.x0; x <= r.x1; ++x) {
-            if (mPyramid.isCovered(x, y)) continue;
-            bool inside = true;
-            for (int e = 0; e < 3 && inside; ++e) inside = f.distance(e, x + 0.5, y + 0.5) >= -kRasterSlack;
-            if (inside) return true;
-        }
-    return false;
+    return mPyramid.findUncovered(r.x0, r.y0, r.x1, r.y1, [&](int x, int y) {
+        bool inside = true;
+        for (int e = 0; e < 3 && inside; ++e) inside = f.distance(e, x + 0.5, y + 0.5) >= -kRasterSlack;
+        return inside;
+    });
 }
 
 }  // namespace vdiso
