@@ -81,7 +81,13 @@ bool OcclusionPyramid::isOccludedBeyond2x2(int x0, int y0, int x1, int y1) const
         }
         return true;
     }
-    return queryWord(levels() - 1, 0, 0, x0, y0, x1, y1);
+    // From the lowest level one of whose words holds the whole rectangle: the levels above
+    // would each read a word only to come down to it.
+    int level = 1;
+    while (level < levels() - 1 &&
+           ((x0 ^ x1) >> (3 * level + 3) != 0 || (y0 ^ y1) >> (3 * level + 3) != 0))
+        ++level;
+    return queryWord(level, x0 >> (3 * level + 3), y0 >> (3 * level + 3), x0, y0, x1, y1);
 }
 
 // [x0, x1] x [y0, y1] lies in the image and in the region of word (wx, wy) of the level.
