@@ -1,25 +1,17 @@
 #include "io/crc32.h"
 
-#include <algorithm>
 #include <array>
 
-#include <zlib.h>
+#include <libdeflate.h>
 
 namespace vdiso {
 
-uint32_t crc32Of(const void* data, size_t n) { return crc32Update(uint32_t(crc32(0L, Z_NULL, 0)), data, n); }
+uint32_t crc32Of(const void* data, size_t n) { return crc32Update(0, data, n); }
 
-uint32_t crc32Update(uint32_t start, const void* data, size_t n) {
-    uLong crc = start;
-    const auto* p = static_cast<const Bytef*>(data);
-    while (n > 0) {  // zlib takes at most 4 GB a call
-        const uInt chunk = uInt(std::min<size_t>(n, size_t(1) << 30));
-        crc = crc32(crc, p, chunk);
-        p += chunk;
-        n -= chunk;
-    }
-    return uint32_t(crc);
-}
+// libdeflate's CRC-32 folds with carry-less multiplies where the CPU has them: 13.5 GB/s on
+// this project's machine where zlib's tables gave 3.9 (a brick's checksum is part of its
+// decoding: bench/log.md). The same polynomial and the same running value as zlib's crc32.
+uint32_t crc32Update(uint32_t start, const void* data, size_t n) { return libdeflate_crc32(start, data, n); }
 
 uint32_t crc32cOf(const void* data, size_t n) {
     static const auto table = [] {

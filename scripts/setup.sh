@@ -9,6 +9,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libglm-dev libtbb-dev zlib1g-dev libzstd-dev liblz4-dev libpng-dev
+  libdeflate-dev                          # CRC-32 of stored bytes (io/crc32.h)
   libosmesa6-dev nlohmann-json3-dev
   libboost-dev libmeshoptimizer-dev       # vdiso serve: Beast (HTTP, WebSocket), geometry codecs
   libtiff-dev                             # TIFF stacks (io/readers/tiff_reader.h)
