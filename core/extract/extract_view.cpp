@@ -13,6 +13,7 @@
 #include "core/kernel/brick_kernel.h"
 #include "core/check.h"
 #include "core/extract/brick_look_ahead.h"
+#include "core/extract/thin_part_draw.h"
 #include "core/extract/traversal_cursor.h"
 #include "core/lod/face_cap.h"
 #include "core/lod/thin_parts.h"
@@ -67,7 +68,8 @@ public:
           mCuller(mLevels.culler(0)),
           mCoverage(mPyramid, options.bottomUp, options.scanPolygons),
           mLookAhead(source, tree, mLevels, size_t(std::max(options.prefetchBricks, 0)), options.prefetchReaders,
-                     size_t(std::max(options.prefetchNear, 0)), options.coverage != nullptr) {
+                     size_t(std::max(options.prefetchNear, 0)), options.coverage != nullptr),
+          mThinParts(mPixels, mPyramid) {
         mLevels.confineTo(options.region);
         coverOutsideStrip(mPyramid, column0, column1);
         mParts.resize(size_t(mLevels.count()));
@@ -81,11 +83,8 @@ private:
     friend struct BrickVisit;
 
     void count(Cull cull);
-    // The pixel a point falls on; false when it is off the image or not on the image plane.
-    bool pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const;
-    // Adds to mThinParts the points of coarse brick `at`'s lost thin parts that fall on pixels
-    // not covered yet; drawThinParts() draws those still not covered, one a pixel, and covers
-    // them.
+    // Makes in mThinParts the points of coarse brick `at`'s lost thin parts that fall on pixels
+    // not covered yet; drawThinParts() draws those still not covered.
     void thinPartPoints(const ViewLevels::Brick& at, const void* samples);
     void drawThinParts();
 
@@ -126,10 +125,7 @@ private:
     }
     TriangleMesh mCaps;  // streaming: the current brick's seam caps
     BrickLookAhead mLookAhead;
-    PointSet mThinParts;
-    // Bit y * width + x: a point in mThinParts falls on pixel (x, y) (as drawThinParts rounds
-    // it). Only the first point on a pixel can be drawn there, so later ones are not made.
-    std::vector<uint64_t> mThinPixels;
+    ThinPartDraw mThinParts;
     // The visibility work's share of the time (ViewCounters).
     SampledTimer mCellTimer, mProjectionTimer, mCoverageTimer, mBoxTimer;
     SampledTimer mMetaCellTimer{1};  // every one: a meta-cell of 8^3 cells is long enough to time
@@ -335,32 +331,11 @@ void ViewTraversal::count(Cull cull) {
     }
 }
 
-bool ViewTraversal::pixelOf(const glm::dvec3& position, glm::ivec2& pixel) const {
-    const glm::dvec3 p = mPixels.project(position);
-    if (!(p.z >= 0.0 && p.z <= 1.0 && p.x >= 0.0 && p.y >= 0.0 && p.x < mPyramid.width() && p.y < mPyramid.height()))
-        return false;
-    pixel = {int(p.x), int(p.y)};
-    return true;
-}
-
 void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samples) {
     const int fine = std::max(at.level - 3, 0);  // sub-blocks of 1 to 4 coarse cells
-    // A point on a pixel not covered now (the brick's own surface drawn), and a box whose pixels
-    // are not all covered now.
-    // A pixel that already has a point waiting gets no second (drawThinParts would skip it):
-    // the point's normal, an eigenvector, was most of a distant CT frame's thin-part work.
-    if (mThinPixels.empty()) mThinPixels.assign((size_t(mPyramid.width()) * size_t(mPyramid.height()) + 63) / 64, 0);
-    auto wanted = [&](const glm::dvec3& position) {
-        glm::ivec2 pixel;
-        if (!pixelOf(position, pixel) || mPyramid.isCovered(pixel.x, pixel.y)) return false;
-        if (!pixelOf(glm::dvec3(glm::vec3(position)), pixel)) return false;  // as it is stored
-        const size_t bit = size_t(pixel.y) * size_t(mPyramid.width()) + size_t(pixel.x);
-        uint64_t& word = mThinPixels[bit / 64];
-        const uint64_t mask = uint64_t(1) << (bit % 64);
-        if (word & mask) return false;
-        word |= mask;
-        return true;
-    };
+    // A point on a pixel not covered now (the brick's own surface drawn) and with none waiting,
+    // and a box whose pixels are not all covered now.
+    auto wanted = [&](const glm::dvec3& position) { return mThinParts.take(position); };
     const ViewCuller& culler = mLevels.culler(at.level);
     auto shows = [&](const glm::dvec3& a, const glm::dvec3& b) {
         return culler.cullScreenBox(culler.screenBox(a, b)) == Cull::None;
@@ -373,26 +348,14 @@ void ViewTraversal::thinPartPoints(const ViewLevels::Brick& at, const void* samp
         kept = mOptions.lostParts->get(at.id, mOptions.iso, find);
     else
         found = find();
-    appendLostPartPoints(coarse, at.local, samples, kept ? *kept : found, mOptions.iso, mCamera.eye, mThinParts, wanted,
-                         shows);
+    appendLostPartPoints(coarse, at.local, samples, kept ? *kept : found, mOptions.iso, mCamera.eye,
+                         mThinParts.waiting(), wanted, shows);
 }
 
 void ViewTraversal::drawThinParts() {
-    for (size_t k = 0; k < mThinParts.size(); ++k) {
-        glm::ivec2 p;
-        if (!pixelOf(glm::dvec3(mThinParts.positions[k]), p)) continue;
-        const size_t bit = size_t(p.y) * size_t(mPyramid.width()) + size_t(p.x);
-        mThinPixels[bit / 64] &= ~(uint64_t(1) << (bit % 64));
-        // Covered by what came after.
-        if (mPyramid.isCovered(p.x, p.y)) continue;
-        mPoints.positions.push_back(mThinParts.positions[k]);
-        mPoints.normals.push_back(mThinParts.normals[k]);
-        mPyramid.coverSpan(p.y, p.x, p.x);
-        ++mStats.view.points;
-        ++mStats.view.thinPartPoints;
-    }
-    mPyramid.propagate();
-    mThinParts.clear();
+    const int64_t drawn = mThinParts.draw(mPoints);
+    mStats.view.points += drawn;
+    mStats.view.thinPartPoints += drawn;
 }
 
 std::vector<int64_t> ViewTraversal::run() {

@@ -102,7 +102,7 @@ void extractShownMetaCell(BrickKernel<T, Mesh>& kernel, int m, View& view, const
             const uint64_t mixed = crossed[rz][ry];
             const CellRow cellRow{above[rz][ry], above[rz][ry + 1], above[rz + 1][ry], above[rz + 1][ry + 1]};
             uint64_t ranked = 0;
-            for (uint64_t m = mixed; m != 0; m &= m - 1) ranked |= uint64_t(1) << rank[0][__builtin_ctzll(m)];
+            for (uint64_t left = mixed; left != 0; left &= left - 1) ranked |= uint64_t(1) << rank[0][__builtin_ctzll(left)];
             for (; ranked != 0; ranked &= ranked - 1) {
                 const int cx = order[0][__builtin_ctzll(ranked)], rx = cx - lo[0];
                 if (!view.keepCell(rx, ry, rz)) continue;
