@@ -19,24 +19,18 @@ double surfaceArea(const TriangleMesh& mesh) {
     return area;
 }
 
-void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle) {
+void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle, uint32_t firstOwnVertex) {
     const size_t end = mesh.indices.size();
     if (3 * firstTriangle >= end) return;
-    const size_t corners = end - 3 * firstTriangle;
-    uint32_t lo = UINT32_MAX, hi = 0;
-    for (size_t i = 3 * firstTriangle; i < end; ++i) {
-        lo = std::min(lo, mesh.indices[i]);
-        hi = std::max(hi, mesh.indices[i]);
-    }
-    // The vertices these triangles made lie at the top of the numbers, at most one a corner; a
-    // few welded from far earlier (a brick's seams) would stretch an array over every vertex
-    // between, each brick of a view paying for the whole mesh made before it. So the top
-    // numbers, as many as the corners, are summed in an array and the rest in a list sorted by
-    // vertex; each vertex's sum is added up in triangle order either way. (With four times the
-    // corners, the array and its pass over mostly earlier bricks' vertices cost a distant CT
-    // orbit 0.5 % more instructions.)
-    const uint32_t dense = uint32_t(std::max<int64_t>(int64_t(lo), int64_t(hi) + 1 - int64_t(corners)));
-    std::vector<glm::vec3> faces(size_t(hi - dense) + 1, glm::vec3(0.0f));
+    uint32_t hi = 0;
+    for (size_t i = 3 * firstTriangle; i < end; ++i) hi = std::max(hi, mesh.indices[i]);
+    // The vertices these triangles' brick made are numbered from firstOwnVertex: their sums
+    // are kept in an array; a few welded from earlier bricks (a brick's seams), which would
+    // stretch an array over every vertex between, go to a list sorted by vertex. Each vertex's
+    // sum is added up in triangle order either way. (The array had been as long as the
+    // triangles' corners, several times the vertices of their own.)
+    const uint32_t dense = std::min(firstOwnVertex, hi + 1);
+    std::vector<glm::vec3> faces(size_t(hi) + 1 - size_t(dense), glm::vec3(0.0f));
     std::vector<std::pair<uint32_t, glm::vec3>> far;  // (vertex, a triangle's face) below `dense`
     auto held = [&](uint32_t v) { return size_t(v - mesh.firstVertex); };
     for (size_t i = 3 * firstTriangle; i < end; i += 3) {

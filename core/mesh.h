@@ -80,8 +80,9 @@ double surfaceArea(const TriangleMesh& mesh);
 // against those triangles (against the sum of their area-weighted face normals, which the
 // winding orients) to that sum's direction. A gradient normal points the wrong way where a part
 // is about a cell thin and central differences span it: on coarse levels of detail such
-// vertices were drawn nearly black. Indices must refer to vertices the mesh holds.
-void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle);
+// vertices were drawn nearly black. Indices must refer to vertices the mesh holds; the
+// triangles' own vertices (their brick's) are numbered from firstOwnVertex, and few are not.
+void orientNormalsToFaces(TriangleMesh& mesh, size_t firstTriangle, uint32_t firstOwnVertex);
 
 // Seen from `eye`, lit from it with two-sided lighting (a triangle's normals turned for its
 // back), each vertex of triangles [firstTriangle, triangleCount()) whose normal would face away

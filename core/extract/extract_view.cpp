@@ -409,6 +409,7 @@ std::vector<int64_t> ViewTraversal::run() {
         // surface that the surface behind it fills is left to that: the points there would
         // shade it otherwise). Streamed, at the end of the brick.
         const size_t firstTriangle = mMesh.triangleCount();
+        const uint32_t firstVertex = mMesh.nextVertex();
         visitScalarType(mSource.volume().type, [&](auto zero) {
             BrickVisit<decltype(zero)>(*this, at, handle.samples(), use)
                 .run(capFaces, mOptions.stream ? mCaps : mMesh);
@@ -416,7 +417,7 @@ std::vector<int64_t> ViewTraversal::run() {
         if (level > 0 && mOptions.points && use != ViewStream::Use::Whole) thinPartPoints(at, handle.samples());
         // Coarse cells are often as wide as the parts they cross (mesh.h).
         if (level > 0) {
-            orientNormalsToFaces(mMesh, firstTriangle);
+            orientNormalsToFaces(mMesh, firstTriangle, firstVertex);
             splitVerticesFacingAway(mMesh, firstTriangle, glm::vec3(mCamera.eye));
         }
         if (mOptions.stream) {
