@@ -80,10 +80,10 @@ void extractShownMetaCell(BrickKernel<T, Mesh>& kernel, int m, View& view, const
         sampleAt[e] = kernel.sampleIndex(o[0], o[1], o[2]) - kernel.sampleIndex(0, 0, 0);
         sampleStep[e] = axis == 0 ? 1 : axis == 1 ? size_t(kernel.side) : size_t(kernel.side) * kernel.side;
     }
-    // rank[a][r]: the place of local coordinate r on axis a (x, y) in the front-to-back order. A row's
-    // crossed cells, and a layer's rows that hold any, are taken by their bits in that order,
-    // not by testing every place (whose branch on the bit mispredicted, and which was 3 % of a
-    // view's instructions).
+    // rank[a][r]: the place of local coordinate r on axis a (x, y) in the front-to-back order.
+    // A row's crossed cells, and a layer's rows that hold any, are taken by their bits in that
+    // order, not by testing every place (whose branch on the bit mispredicted, and which was
+    // 3 % of a view's instructions).
     int rank[2][kMaxMetaCellSize];
     for (int a = 0; a < 2; ++a)
         for (int k = 0; k < hi[a] - lo[a]; ++k) rank[a][order[a][k] - lo[a]] = k;

@@ -83,7 +83,7 @@ bool OcclusionPyramid::isOccludedBeyond2x2(int x0, int y0, int x1, int y1) const
     }
     // From the lowest level one of whose words holds the whole rectangle: the levels above
     // would each read a word only to come down to it.
-    int level = 1;
+    int level = std::min(1, levels() - 1);
     while (level < levels() - 1 &&
            ((x0 ^ x1) >> (3 * level + 3) != 0 || (y0 ^ y1) >> (3 * level + 3) != 0))
         ++level;
