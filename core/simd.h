@@ -2,7 +2,7 @@
 // (meshoptimizer's and Masked Occlusion Culling's way): the x86-64 baseline (SSE2) is always
 // built, and AVX2 paths are compiled beside it for functions marked VDISO_TARGET_AVX2, so one
 // binary runs everywhere and uses AVX2 where the CPU has it. Every path gives the same bits
-// (tests/test_scan_convert.cpp runs each on the same input).
+// (tests/test_scan_convert.cpp and tests/test_screen_box.cpp run each on the same input).
 //
 // VDISO_SIMD=baseline in the environment at start-up keeps to the baseline (for comparing the
 // paths in one binary, or ruling one out).

@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "core/camera.h"
+#include "core/simd.h"
 #include "core/view/corner_projection.h"
 #include "core/view/screen_box.h"
 #include "core/volume.h"
@@ -305,6 +306,66 @@ TEST(ScreenBox, SubPixelPointIsTheOnlyCoveredCentre) {
         }
     }
     EXPECT_GT(points, 1000);
+}
+
+// CornerProjection's paths (core/simd.h) project the same bits: every cell's box (and whether a
+// corner is behind the near plane) and every edge's placed point, for random rows of corners of
+// grids in view and of grids around the eye.
+TEST(CornerProjection, EveryPathProjectsTheSameBits) {
+    if (!simdLevelRuns(SimdLevel::Avx2)) GTEST_SKIP() << "the CPU runs the baseline only";
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    constexpr int M = 8, S = M + 1;
+    int boxes = 0, behind = 0, points = 0;
+    for (int cam = 0; cam < 60; ++cam) {
+        const Camera c = randomCamera(rng);
+        VolumeInfo grid;
+        grid.spacing = glm::dvec3(0.002 + 0.05 * unit(rng), 0.002 + 0.05 * unit(rng), 0.002 + 0.05 * unit(rng));
+        // Half the grids around the eye: some corners behind it or the near plane.
+        grid.origin = cam % 2 ? c.eye - grid.spacing * 36.0 : glm::dvec3(unit(rng), unit(rng), unit(rng)) - 0.5;
+        const glm::dmat4 gridToClip = c.viewProjection() * grid.gridToWorld();
+        CornerProjection base(gridToClip, c.width, c.height, M, SimdLevel::Baseline);
+        CornerProjection wide(gridToClip, c.width, c.height, M, SimdLevel::Avx2);
+        for (int m = 0; m < 20; ++m) {
+            const int64_t first[3] = {int64_t(unit(rng) * 64), int64_t(unit(rng) * 64), int64_t(unit(rng) * 64)};
+            uint64_t rows[S * S];
+            for (uint64_t& r : rows) r = m % 4 == 0 ? (uint64_t(1) << S) - 1 : rng() & ((uint64_t(1) << S) - 1);
+            base.project(first, rows);
+            wide.project(first, rows);
+            auto has = [&](int x, int y, int z) { return rows[z * S + y] >> x & 1; };
+            for (int z = 0; z < M; ++z)
+                for (int y = 0; y < M; ++y)
+                    for (int x = 0; x < M; ++x) {
+                        bool all = true;
+                        for (int k = 0; k < 8; ++k) all = all && has(x + (k & 1), y + (k >> 1 & 1), z + (k >> 2));
+                        if (!all) continue;
+                        const ScreenBox a = base.cellBox(x, y, z), b = wide.cellBox(x, y, z);
+                        ASSERT_EQ(a.crossesNearPlane, b.crossesNearPlane);
+                        behind += a.crossesNearPlane;
+                        ++boxes;
+                        EXPECT_EQ(std::memcmp(&a.left, &b.left, sizeof a.left), 0);
+                        EXPECT_EQ(std::memcmp(&a.right, &b.right, sizeof a.right), 0);
+                        EXPECT_EQ(std::memcmp(&a.top, &b.top, sizeof a.top), 0);
+                        EXPECT_EQ(std::memcmp(&a.bottom, &b.bottom, sizeof a.bottom), 0);
+                    }
+            for (int z = 0; z <= M; ++z)
+                for (int y = 0; y <= M; ++y)
+                    for (int x = 0; x <= M; ++x)
+                        for (int axis = 0; axis < 3; ++axis) {
+                            const int to[3] = {x + (axis == 0), y + (axis == 1), z + (axis == 2)};
+                            if (to[axis] > M || !has(x, y, z) || !has(to[0], to[1], to[2])) continue;
+                            const double t = unit(rng);
+                            glm::dvec2 pa, pb;
+                            const int corner = base.cornerIndex(x, y, z);
+                            ASSERT_EQ(base.place(corner, axis, t, pa), wide.place(corner, axis, t, pb));
+                            ++points;
+                            EXPECT_EQ(std::memcmp(&pa, &pb, sizeof pa), 0);
+                        }
+        }
+    }
+    EXPECT_GT(boxes, 1000);
+    EXPECT_GT(behind, 10);
+    EXPECT_GT(points, 10000);
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec4.hpp>
 
+#include "core/simd.h"
 #include "core/view/pixel_rect.h"
 #include "core/view/screen_box.h"
 
@@ -37,8 +38,11 @@ public:
     static constexpr double kBoxSlack = 1.0 / (1 << 20);
 
     // gridToClip: the camera's view-projection times the volume's grid-to-world map (OpenGL clip
-    // space); the image is width x height pixels; corners of meta-cells of metaCellSize cells a side.
-    CornerProjection(const glm::dmat4& gridToClip, int width, int height, int metaCellSize);
+    // space); the image is width x height pixels; corners of meta-cells of metaCellSize cells a
+    // side. `simd` (core/simd.h): the baseline makes a corner's clip coordinates two at a time,
+    // AVX2 four; both give the same bits.
+    CornerProjection(const glm::dmat4& gridToClip, int width, int height, int metaCellSize,
+                     SimdLevel simd = simdLevel());
 
     // Local corner (x, y, z) of the meta-cell being projected, each in [0, metaCellSize].
     int cornerIndex(int x, int y, int z) const { return (z * mSide + y) * mSide + x; }
@@ -88,6 +92,8 @@ public:
     }
 
 private:
+    void projectAvx2(const int64_t first[3], const uint64_t* rows);  // project()'s AVX2 path
+
     // The least and greatest (x, y) of cell (x, y, z)'s eight projected corners; false when one
     // of them is not in front of the near plane.
     bool cornerBounds(int x, int y, int z, __m128d& lo, __m128d& hi) const {
@@ -120,6 +126,7 @@ private:
     }
 
     glm::dvec4 mRow[4];  // rows x, y, z, w of gridToClip
+    SimdLevel mSimd;
     double mWidth, mHeight;
     ImageLanes mImage;
     int mSide;                         // metaCellSize + 1
