@@ -3,8 +3,11 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstdint>
+
+#include "core/check.h"
 
 namespace vdiso {
 
@@ -24,19 +27,20 @@ inline double clockPairSeconds() {
     return seconds;
 }
 
-// Times one call in `every` (a power of two; kEvery unless said) of a frequent one (a per-cell
-// test, a polygon's coverage) and counts it `every` times, less the clock's own cost: a clock
-// read costs about what such a call does, so reading it around every call would double what it
-// measures. A sample over kInterrupted is dropped: the thread was taken off its core (counted
-// 32 times, one such sample made a frame's coverage seven times its whole extraction). One in
-// 128: at one in 32 the clock reads were 1.7 % of a SAGE frame; a normal view still takes
-// thousands of samples a timer. Calls long enough to time each (a meta-cell) take every = 1.
+// Times one call in `every` (a power of two, checked; kEvery unless said) of a frequent one (a
+// per-cell test, a polygon's coverage) and counts it `every` times, less the clock's own cost: a
+// clock read costs about what such a call does, so reading it around every call would double
+// what it measures. A sample over kInterrupted is dropped: the thread was taken off its core
+// (counted 32 times, one such sample made a frame's coverage seven times its whole extraction).
+// One in 128: at one in 32 the clock reads were 1.7 % of a SAGE frame; a normal view still
+// takes thousands of samples a timer. Calls long enough to time each (a meta-cell) take
+// every = 1.
 class SampledTimer {
 public:
     static constexpr uint32_t kEvery = 128;
     static constexpr double kInterrupted = 200e-6;
 
-    explicit SampledTimer(uint32_t every = kEvery) : mEvery(every) {}
+    explicit SampledTimer(uint32_t every = kEvery) : mEvery(every) { VDISO_CHECK(std::has_single_bit(every)); }
 
     // One place that makes the call, so that it inlines as it would untimed.
     template <class F>

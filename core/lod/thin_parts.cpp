@@ -256,13 +256,4 @@ void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* 
     });
 }
 
-void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
-                          int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
-                          const std::function<bool(const glm::dvec3&)>& wanted,
-                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows) {
-    const std::vector<LostPart> parts = findLostParts(coarse, brick, samples, fine, levelsBetween, iso);
-    appendLostPartPoints(coarse, brick, samples, parts, iso, eye, out, wanted, shows);
-}
-
-
 }  // namespace vdiso

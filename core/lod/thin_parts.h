@@ -58,24 +58,16 @@ struct LostPart {
 using LostPartMemo = BrickMemo<std::vector<LostPart>>;
 
 // The boxes of coarse brick `brick` (in `coarse`'s numbering; `samples` its samples) where the
-// surface of `fine` (the level levelsBetween >= 1 finer) is lost, in the order
-// appendThinPartPoints takes them.
+// surface of `fine` (the level levelsBetween >= 1 finer) is lost.
 std::vector<LostPart> findLostParts(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
                                     int levelsBetween, double iso);
 
-// Appends the points of `parts` (findLostParts' for the same brick, samples and isovalue), as
-// appendThinPartPoints does.
+// Appends the points of `parts` (findLostParts' for the same brick, samples and isovalue), box
+// by box in their order; `eye` in world units. `shows` (if given) is asked about each box (its
+// world corners) before its samples are looked at, and `wanted` about each point's position
+// before its normal is worked out.
 void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, std::span<const LostPart> parts,
                           double iso, const glm::dvec3& eye, PointSet& out,
-                          const std::function<bool(const glm::dvec3&)>& wanted = nullptr,
-                          const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows = nullptr);
-
-// Appends the points of coarse brick `brick` (in `coarse`'s numbering; `samples` its samples)
-// for the surface of `fine` (the level levelsBetween >= 1 finer) it loses; `eye` in world units.
-// `wanted` (if given) is asked about each point's position before its normal is worked out, and
-// `shows` about each box that lost its part (its world corners) before its samples are looked at.
-void appendThinPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, const BrickSource& fine,
-                          int levelsBetween, double iso, const glm::dvec3& eye, PointSet& out,
                           const std::function<bool(const glm::dvec3&)>& wanted = nullptr,
                           const std::function<bool(const glm::dvec3&, const glm::dvec3&)>& shows = nullptr);
 

@@ -15,32 +15,29 @@ LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedB
     : mSource(source), mOffset(offset) {
     const uint64_t directoryBytes = store_format::indexDirectoryBytes(rawBytes);
     if (storedBytes < directoryBytes) throwIoError(source.name(), "index is missing or corrupt (too short)");
-    std::optional<store_format::IndexDirectory> decoded;
-    // The header's copy, when it is this directory (its checksum passes): no read.
-    if (directoryCopy.size() == directoryBytes) {
+    // The directory of `bytes`, or none when they do not decode as it (its checksum fails).
+    auto tryDecode = [&](const unsigned char* bytes) -> std::optional<store_format::IndexDirectory> {
         try {
-            decoded = store_format::decodeIndexDirectory(directoryCopy.data(), storedBytes, rawBytes, source.name());
+            return store_format::decodeIndexDirectory(bytes, storedBytes, rawBytes, source.name());
         } catch (const IoError&) {
-            decoded.reset();
+            return std::nullopt;
         }
-    }
-    if (decoded) {
-        mDirectory = std::move(*decoded);
-    } else {
+    };
+    // The header's copy, when it is this directory: no read.
+    std::optional<store_format::IndexDirectory> decoded;
+    if (directoryCopy.size() == directoryBytes) decoded = tryDecode(directoryCopy.data());
+    if (!decoded) {
         std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
-        // A remote disk cache keeps the directory once it decodes (its checksum passes); what
-        // the check decoded last is the directory as read.
+        // A remote disk cache keeps the directory once it decodes; what the check decoded last
+        // is the directory as read.
         source.read(offset, directory.size(), directory.data(), "index directory", [&](size_t) {
-            try {
-                decoded = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
-            } catch (const IoError&) {
-                decoded.reset();
-            }
+            decoded = tryDecode(directory.data());
             return decoded.has_value();
         });
-        mDirectory = decoded ? std::move(*decoded)
-                             : store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
+        // Decoded again where it failed, for the error naming what is wrong.
+        if (!decoded) decoded = store_format::decodeIndexDirectory(directory.data(), storedBytes, rawBytes, source.name());
     }
+    mDirectory = std::move(*decoded);
     // Untouched until a part lands: the pages of parts never asked for are never faulted in.
     mRaw = std::make_unique_for_overwrite<unsigned char[]>(size_t(rawBytes));
     mReady = std::make_unique<std::atomic<bool>[]>(size_t(mDirectory.parts()));
