@@ -22,6 +22,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <span>
@@ -85,7 +86,7 @@ public:
     // and an IoError saying so is thrown; unlike a failure, it ends no other read.
     void read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact = {},
               const std::atomic<bool>* cancel = nullptr) const;
-    // The ranges at once, as many in flight as the pool allows; throws the first error.
+    // The ranges at once, as many in flight as the session allows; throws the first error.
     void readMany(std::span<const ByteRange> ranges, const RangeCheck& intact = {},
                   const std::atomic<bool>* cancel = nullptr) const;
     // n bytes at `offset` in one GET, of which `pieces` (within dst) are wanted: with a disk
@@ -93,6 +94,19 @@ public:
     // (or found damaged: `intact(k)` checks piece k).
     void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
                       const RangeCheck& intact = {}) const;
+
+    // readCovering without waiting, and without a thread held while the request waits: done(error)
+    // is called once, with null when dst holds the bytes, on the session's transfer thread (it
+    // must be quick), or on this thread before the call returns when no request is needed or the
+    // read fails at once. dst, `cancel` and what `intact` looks at must live until then. The same
+    // errors as readCovering, as an exception_ptr.
+    using ReadDone = std::function<void(std::exception_ptr)>;
+    void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, RangeCheck intact,
+                           const std::atomic<bool>* cancel, ReadDone done) const;
+    // Requests worth keeping in flight now (TransferLoop::wantedInFlight: twice what the link
+    // carries), within [least, most], and how many are (all of the session's objects').
+    size_t wantedInFlight(size_t least, size_t most) const;
+    size_t inFlight() const;
 
     // Requests sent (tries included) and object bytes received by the session.
     uint64_t requests() const;
@@ -109,9 +123,19 @@ private:
         size_t bytes = 0;
         std::string etag, lastModified;
     };
-    // One ranged GET with its tries; `opening` accepts a shorter range (a small object's head)
-    // and pins nothing.
+    // One ranged GET with its tries, pauses and redirects; `opening` accepts a shorter range (a
+    // small object's head) and pins nothing. fetchAsync calls done(answer, null) or (null, error)
+    // once, as readCoveringAsync says; fetch waits for it.
+    using FetchDone = std::function<void(const Answer*, std::exception_ptr)>;
     Answer fetch(uint64_t offset, size_t n, void* dst, bool opening, const std::atomic<bool>* cancel = nullptr) const;
+    void fetchAsync(uint64_t offset, size_t n, void* dst, bool opening, const std::atomic<bool>* cancel,
+                    FetchDone done) const;
+    // A fetch's steps on the transfer thread: send a try; judge one that ended (an answer, a
+    // failure thrown, or the pause before the next try).
+    struct Fetch;
+    void sendTry(const std::shared_ptr<Fetch>& f) const;
+    void tryEnded(const std::shared_ptr<Fetch>& f, CURLcode rc) const;
+    bool judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseMs) const;
 
     struct Impl;
     std::unique_ptr<Impl> mImpl;

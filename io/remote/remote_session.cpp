@@ -24,9 +24,6 @@ struct RemoteSession::Impl {
     RemoteOptions options;
     CURLSH* share = nullptr;
     std::mutex shareLocks[CURL_LOCK_DATA_LAST];
-    std::mutex poolLock;
-    std::condition_variable poolFree;
-    int inUse = 0;
     mutable std::mutex bucketsLock;
     std::map<std::string, S3Location> buckets;  // resolved once per bucket
     mutable std::mutex firstBytesLock;
@@ -60,7 +57,7 @@ RemoteSession::RemoteSession(const RemoteOptions& options) : mImpl(std::make_uni
     // The connection cache keeps the pool's connections, in use or idle: libcurl's default (5)
     // closed the oldest idle one whenever more were open, and with 16-32 requests in flight
     // nearly every request connected anew.
-    d.loop = std::make_unique<TransferLoop>(long(d.options.connections));
+    d.loop = std::make_unique<TransferLoop>(long(d.options.connections), size_t(d.options.connections));
 }
 
 RemoteSession::~RemoteSession() {
@@ -68,7 +65,7 @@ RemoteSession::~RemoteSession() {
     if (mImpl->share) curlLibrary().share_cleanup(mImpl->share);
 }
 
-CURLcode RemoteSession::perform(CURL* curl) { return mImpl->loop->perform(curl); }
+TransferLoop& RemoteSession::loop() { return *mImpl->loop; }
 
 const RemoteOptions& RemoteSession::options() const { return mImpl->options; }
 
@@ -117,28 +114,14 @@ CURL* RemoteSession::take() {
     if (inForkedChild(d.pid))
         throw IoError("a remote store or array opened before fork() cannot be read in the child process: "
                       "open it again there (a pickled vdiso.Store opens itself again)");
-    {
-        std::unique_lock lock(d.poolLock);
-        d.poolFree.wait(lock, [&] { return d.inUse < d.options.connections; });
-        ++d.inUse;
-    }
     CURL* c = curlLibrary().easy_init();
-    if (!c) {
-        give(nullptr);
-        throw std::bad_alloc();
-    }
+    if (!c) throw std::bad_alloc();
     curlLibrary().easy_setopt(c, CURLOPT_SHARE, d.share);
     return c;
 }
 
 void RemoteSession::give(CURL* c) {
-    Impl& d = *mImpl;
     if (c) curlLibrary().easy_cleanup(c);
-    {
-        std::lock_guard lock(d.poolLock);
-        --d.inUse;
-    }
-    d.poolFree.notify_one();
 }
 
 void RemoteSession::forEach(size_t n, const std::function<void(size_t)>& work) const {

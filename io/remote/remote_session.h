@@ -16,6 +16,7 @@
 
 #include "io/remote/remote_options.h"
 #include "io/remote/s3_location.h"
+#include "io/remote/transfer_loop.h"
 
 namespace vdiso {
 
@@ -30,15 +31,16 @@ public:
 
     const RemoteOptions& options() const;
 
-    // A new easy handle set to share the session's caches, waiting while `connections` are in
-    // use; give it back (it is cleaned up) when its one transfer ends. Throws IoError in a
-    // process forked from the one that made the session.
+    // A new easy handle set to share the session's caches; give it back (it is cleaned up) when
+    // its one transfer ends. Throws IoError in a process forked from the one that made the
+    // session.
     CURL* take();
     void give(CURL* curl);
-    // Runs the handle's transfer as curl_easy_perform does, on the session's one thread of
-    // transfers (io/remote/transfer_loop.h), where the sockets of every request in flight are
-    // waited on together; its callbacks run on that thread.
-    CURLcode perform(CURL* curl);
+    // The session's one thread of transfers (io/remote/transfer_loop.h), where the sockets of
+    // every request in flight are waited on together, at most `connections` transfers at once
+    // (the others wait their turn): submit, perform, timers, and the requests worth keeping in
+    // flight.
+    TransferLoop& loop();
 
     // Calls work(i) for i in [0, n), on up to `connections` threads at once (this one among
     // them): each call waits on the network, not a core. The first exception ends the rest

@@ -1,5 +1,8 @@
 #include "io/remote/transfer_loop.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <unistd.h>
 
 #include "io/error.h"
@@ -8,7 +11,8 @@
 
 namespace vdiso {
 
-TransferLoop::TransferLoop(long maxConnections) : mPid(::getpid()) {
+TransferLoop::TransferLoop(long maxConnections, size_t maxInFlight)
+    : mPid(::getpid()), mMaxInFlight(std::max<size_t>(maxInFlight, 1)) {
     const CurlLibrary& curl = curlLibrary();
     mMulti = curl.multi_init();
     if (!mMulti) throw IoError("libcurl cannot make a multi handle: remote data cannot be read");
@@ -30,38 +34,110 @@ TransferLoop::~TransferLoop() {
     curlLibrary().multi_cleanup(mMulti);
 }
 
-CURLcode TransferLoop::perform(CURL* easy) {
-    Pending pending;
-    pending.easy = easy;
-    std::unique_lock lock(mLock);
-    mSubmitted.push_back(&pending);
+void TransferLoop::submit(CURL* easy, Done done) {
+    auto* p = new Pending{easy, std::move(done), {}};
+    std::lock_guard lock(mLock);
+    mSubmitted.push_back(p);
+    ++mInFlight;
     curlLibrary().multi_wakeup(mMulti);
-    pending.finished.wait(lock, [&] { return pending.done; });
-    return pending.result;
+}
+
+CURLcode TransferLoop::perform(CURL* easy) {
+    std::mutex m;
+    std::condition_variable finished;
+    bool done = false;
+    CURLcode result = CURLE_OK;
+    submit(easy, [&](CURLcode rc) {
+        // Under the lock, so that this caller (whose stack holds m) cannot return before the call.
+        std::lock_guard lock(m);
+        result = rc;
+        done = true;
+        finished.notify_one();
+    });
+    std::unique_lock lock(m);
+    finished.wait(lock, [&] { return done; });
+    return result;
+}
+
+void TransferLoop::after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner) {
+    std::lock_guard lock(mLock);
+    mTimers.push_back({Clock::now() + std::chrono::milliseconds(std::max<int64_t>(ms, 0)), std::move(fn),
+                       std::move(sooner)});
+    curlLibrary().multi_wakeup(mMulti);
+}
+
+size_t TransferLoop::inFlight() const {
+    std::lock_guard lock(mLock);
+    return mInFlight;
+}
+
+void TransferLoop::noteEnded(Clock::time_point started, Clock::time_point now) {
+    const double seconds = std::chrono::duration<double>(now - started).count();
+    std::lock_guard lock(mLock);
+    if (mEnds.size() < kEndsKept) mEnds.emplace_back(now, seconds);
+    else mEnds[mEndsNext++ % kEndsKept] = {now, seconds};
+}
+
+size_t TransferLoop::wantedInFlight(size_t least, size_t most) const {
+    std::lock_guard lock(mLock);
+    if (mEnds.size() < kEndsToTell) return std::clamp(least, size_t(1), most);
+    Clock::time_point first = mEnds[0].first, last = mEnds[0].first;
+    double seconds = 0;
+    for (const auto& [at, took] : mEnds) {
+        first = std::min(first, at);
+        last = std::max(last, at);
+        seconds += took;
+    }
+    const double span = std::chrono::duration<double>(last - first).count();
+    if (span <= 0) return most;
+    // Little's law: requests in flight = requests ending a second x the time one takes.
+    const double endsPerSecond = double(mEnds.size() - 1) / span;
+    const double carried = endsPerSecond * seconds / double(mEnds.size());
+    return std::clamp(size_t(std::ceil(2 * carried)), std::max<size_t>(least, 1), most);
 }
 
 void TransferLoop::run() {
     const CurlLibrary& curl = curlLibrary();
-    // Under the lock, so that the waiter (whose stack holds `p`) cannot return before the call.
-    auto finish = [&](Pending* p, CURLcode result) {
-        std::lock_guard lock(mLock);
-        p->result = result;
-        p->done = true;
-        p->finished.notify_one();
-    };
     std::vector<Pending*> added;
+    std::vector<std::function<void()>> due;
     size_t active = 0;
     for (;;) {
         bool quit;
+        Clock::time_point now = Clock::now();
+        Clock::time_point nextDue = now + std::chrono::milliseconds(kTickMs);
         {
             std::lock_guard lock(mLock);
-            added.swap(mSubmitted);
+            while (active + added.size() < mMaxInFlight && !mSubmitted.empty()) {
+                added.push_back(mSubmitted.front());
+                mSubmitted.pop_front();
+            }
+            for (size_t k = 0; k < mTimers.size();) {
+                if (mTimers[k].due <= now || (mTimers[k].sooner && mTimers[k].sooner())) {
+                    due.push_back(std::move(mTimers[k].fn));
+                    mTimers[k] = std::move(mTimers.back());
+                    mTimers.pop_back();
+                } else {
+                    nextDue = std::min(nextDue, mTimers[k].due);
+                    ++k;
+                }
+            }
             quit = mQuit;
         }
+        for (auto& fn : due) fn();
+        due.clear();
         for (Pending* p : added) {
+            p->started = now;
             curl.easy_setopt(p->easy, CURLOPT_PRIVATE, static_cast<void*>(p));
-            if (curl.multi_add_handle(mMulti, p->easy) == CURLM_OK) ++active;
-            else finish(p, CURLE_FAILED_INIT);
+            if (curl.multi_add_handle(mMulti, p->easy) == CURLM_OK) {
+                ++active;
+            } else {
+                {
+                    std::lock_guard lock(mLock);
+                    --mInFlight;
+                }
+                p->done(CURLE_FAILED_INIT);
+                delete p;
+            }
         }
         added.clear();
         if (quit && active == 0) return;
@@ -76,11 +152,19 @@ void TransferLoop::run() {
             curl.easy_getinfo(easy, CURLINFO_PRIVATE, &user);
             curl.multi_remove_handle(mMulti, easy);
             --active;
-            finish(reinterpret_cast<Pending*>(user), result);
+            auto* p = reinterpret_cast<Pending*>(user);
+            noteEnded(p->started, Clock::now());
+            {
+                std::lock_guard lock(mLock);
+                --mInFlight;
+            }
+            p->done(result);
+            delete p;
         }
-        // Until a socket is ready, a submission wakes it, or the tick (libcurl's own timers
-        // shorten it).
-        curl.multi_poll(mMulti, nullptr, 0, int(kTickMs), nullptr);
+        // Until a socket is ready, a submission wakes it, a timer is due or the tick (libcurl's
+        // own timers shorten it).
+        const auto waitMs = std::chrono::duration_cast<std::chrono::milliseconds>(nextDue - Clock::now()).count();
+        curl.multi_poll(mMulti, nullptr, 0, int(std::clamp<int64_t>(waitMs, 0, kTickMs)), nullptr);
     }
 }
 

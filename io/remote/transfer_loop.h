@@ -1,18 +1,31 @@
 // One thread that runs every transfer of a session (io/remote/remote_session.h) through
 // libcurl's multi interface: the sockets of all requests in flight are waited on together, by
-// one poll, where curl_easy_perform on each reader's thread made a multi handle, a wake-up pipe
-// and a poll loop of its own for every request.
+// one poll, and a request in flight holds no thread of its own.
 //
-// perform(easy) is curl_easy_perform's contract for a caller on any thread: the transfer runs on
-// the loop's thread (so do its callbacks: they must be thread-safe towards the caller, which
-// waits meanwhile), and the result is returned once the handle has left the loop. The handle is
-// the caller's before and after. Progress callbacks are called at least every kTickMs while a
-// transfer waits, for cancellation and straggler checks. The loop's thread lives as long as the
-// object; no transfer may be running when it goes. In a process forked from the one that made
-// it there is no such thread: going there leaves the parent's handles alone.
+// submit(easy, done) starts the handle's transfer and returns at once; done(result) is called on
+// the loop's thread once the handle has left the loop (the handle is the caller's again), and
+// must be quick: it may submit again or set a timer (after), not wait. perform(easy) is
+// curl_easy_perform's contract for a caller on any thread: submit, then wait. The transfers'
+// own callbacks run on the loop's thread too. At most `maxInFlight` transfers run at once; the
+// others wait their turn in the order they came. Progress callbacks are called at least every
+// kTickMs while a transfer waits, for cancellation and straggler checks.
+//
+// The loop measures what its transfers take (each one's time from start to end, and how many end
+// a second) and gives the requests in flight that keep the link busy: twice what it carries now
+// by Little's law, so a window too small to fill the link doubles a round trip, and one that
+// fills it settles at twice the link's delay-bandwidth product in requests (wantedInFlight).
+//
+// The loop's thread lives as long as the object; no transfer may be running when it goes. In a
+// process forked from the one that made it there is no such thread: going there leaves the
+// parent's handles alone.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -28,28 +41,53 @@ class TransferLoop {
 public:
     static constexpr long kTickMs = 100;
 
-    // maxConnections: connections the loop keeps open, in use or idle (CURLMOPT_MAXCONNECTS).
-    // Throws IoError when libcurl cannot make a multi handle.
-    explicit TransferLoop(long maxConnections);
+    // maxConnections: connections the loop keeps open, in use or idle (CURLMOPT_MAXCONNECTS);
+    // maxInFlight: transfers running at once. Throws IoError when libcurl cannot make a multi
+    // handle.
+    TransferLoop(long maxConnections, size_t maxInFlight);
     ~TransferLoop();
     TransferLoop(const TransferLoop&) = delete;
     TransferLoop& operator=(const TransferLoop&) = delete;
 
+    using Done = std::function<void(CURLcode)>;
+    void submit(CURL* easy, Done done);
     CURLcode perform(CURL* easy);
+    // Calls fn on the loop's thread once `ms` have passed, or at the first tick at which
+    // sooner() (if given) says true.
+    void after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner = {});
+
+    // Requests worth keeping in flight (see above), within [least, most]; `least` until enough
+    // transfers have ended to tell.
+    size_t wantedInFlight(size_t least, size_t most) const;
+    // Transfers submitted and not yet done (running or waiting their turn).
+    size_t inFlight() const;
 
 private:
+    using Clock = std::chrono::steady_clock;
     struct Pending {
         CURL* easy = nullptr;
-        CURLcode result = CURLE_OK;
-        bool done = false;
-        std::condition_variable finished;
+        Done done;
+        Clock::time_point started;
+    };
+    struct Timer {
+        Clock::time_point due;
+        std::function<void()> fn;
+        std::function<bool()> sooner;
     };
     void run();
+    void noteEnded(Clock::time_point started, Clock::time_point now);
 
     CURLM* mMulti = nullptr;
     pid_t mPid;  // the process whose thread runs the loop
-    std::mutex mLock;
-    std::vector<Pending*> mSubmitted;  // not yet added to the multi handle
+    size_t mMaxInFlight;
+    mutable std::mutex mLock;
+    std::deque<Pending*> mSubmitted;  // not yet added to the multi handle
+    std::vector<Timer> mTimers;       // under mLock
+    size_t mInFlight = 0;             // under mLock: submitted, not done
+    // The last kEndsKept ends, as a ring: when each came and how long its transfer ran.
+    static constexpr size_t kEndsKept = 64, kEndsToTell = 16;
+    std::vector<std::pair<Clock::time_point, double>> mEnds;  // under mLock
+    size_t mEndsNext = 0;
     bool mQuit = false;
     std::thread mThread;
 };
