@@ -150,6 +150,8 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
     if (const RemoteFile* remote = store.remote()) {
         s.add("remote_requests", remote->requests()).add("remote_bytes", remote->bytesFetched());
         s.add("remote_stragglers", remote->stragglers());
+        // What the link held at the end, in requests (RemoteFile::wantedInFlight, unbounded).
+        s.add("remote_in_flight_wanted", remote->wantedInFlight(1, 1 << 20));
         s.add("disk_cache_hits", remote->diskCacheHits()).add("disk_cache_bytes", remote->diskCacheBytes());
     }
     // An index: the indexed array's chunks read, as stored, and its requests when remote.

@@ -71,29 +71,37 @@ size_t TransferLoop::inFlight() const {
     return mInFlight;
 }
 
-void TransferLoop::noteEnded(Clock::time_point started, Clock::time_point now) {
-    const double seconds = std::chrono::duration<double>(now - started).count();
+void TransferLoop::noteEnded(const Pending& p, Clock::time_point now) {
+    const CurlLibrary& curl = curlLibrary();
+    curl_off_t bytes = 0, firstByteUs = 0;
+    curl.easy_getinfo(p.easy, CURLINFO_SIZE_DOWNLOAD_T, &bytes);
+    curl.easy_getinfo(p.easy, CURLINFO_STARTTRANSFER_TIME_T, &firstByteUs);
+    if (bytes <= 0 || firstByteUs <= 0) return;  // no answer: nothing learnt of the link
     std::lock_guard lock(mLock);
-    if (mEnds.size() < kEndsKept) mEnds.emplace_back(now, seconds);
-    else mEnds[mEndsNext++ % kEndsKept] = {now, seconds};
+    const double firstByte = double(firstByteUs) * 1e-6;
+    mLeastFirstByte = mLeastFirstByte > 0 ? std::min(mLeastFirstByte, firstByte) : firstByte;
+    const End end{p.started, now, double(bytes)};
+    if (mEnds.size() < kEndsKept) mEnds.push_back(end);
+    else mEnds[mEndsNext++ % kEndsKept] = end;
 }
 
 size_t TransferLoop::wantedInFlight(size_t least, size_t most) const {
+    least = std::max<size_t>(least, 1);
+    most = std::max(most, least);
     std::lock_guard lock(mLock);
-    if (mEnds.size() < kEndsToTell) return std::clamp(least, size_t(1), most);
-    Clock::time_point first = mEnds[0].first, last = mEnds[0].first;
-    double seconds = 0;
-    for (const auto& [at, took] : mEnds) {
-        first = std::min(first, at);
-        last = std::max(last, at);
-        seconds += took;
+    if (mEnds.size() < kEndsToTell) return least;
+    Clock::time_point first = mEnds[0].started, last = mEnds[0].ended;
+    double bytes = 0;
+    for (const End& e : mEnds) {
+        first = std::min(first, e.started);
+        last = std::max(last, e.ended);
+        bytes += e.bytes;
     }
     const double span = std::chrono::duration<double>(last - first).count();
     if (span <= 0) return most;
-    // Little's law: requests in flight = requests ending a second x the time one takes.
-    const double endsPerSecond = double(mEnds.size() - 1) / span;
-    const double carried = endsPerSecond * seconds / double(mEnds.size());
-    return std::clamp(size_t(std::ceil(2 * carried)), std::max<size_t>(least, 1), most);
+    const double perRequest = bytes / double(mEnds.size());
+    const double held = bytes / span * mLeastFirstByte / perRequest;  // requests the link holds
+    return std::clamp(size_t(std::ceil(2 * held)) + 2, least, most);
 }
 
 void TransferLoop::run() {
@@ -153,7 +161,7 @@ void TransferLoop::run() {
             curl.multi_remove_handle(mMulti, easy);
             --active;
             auto* p = reinterpret_cast<Pending*>(user);
-            noteEnded(p->started, Clock::now());
+            noteEnded(*p, Clock::now());
             {
                 std::lock_guard lock(mLock);
                 --mInFlight;

@@ -10,10 +10,14 @@
 // others wait their turn in the order they came. Progress callbacks are called at least every
 // kTickMs while a transfer waits, for cancellation and straggler checks.
 //
-// The loop measures what its transfers take (each one's time from start to end, and how many end
-// a second) and gives the requests in flight that keep the link busy: twice what it carries now
-// by Little's law, so a window too small to fill the link doubles a round trip, and one that
-// fills it settles at twice the link's delay-bandwidth product in requests (wantedInFlight).
+// The loop measures the link as its transfers find it, as BBR does: the bytes it delivers a
+// second (the last transfers' bytes over the time from the first one's start to the last one's
+// end, so that answers sharing the link and ending together count at its rate), the least time to an answer's first byte (the round trip
+// without queueing: over the session, so that requests queued behind others do not raise it)
+// and the bytes a request brings. wantedInFlight gives twice the delay-bandwidth product in
+// requests, plus two: a window too small to fill the link finds the rate it delivers grow
+// with it, and so about doubles a round trip; one that fills it settles at twice what the link
+// holds, whatever the number of threads reading.
 //
 // The loop's thread lives as long as the object; no transfer may be running when it goes. In a
 // process forked from the one that made it there is no such thread: going there leaves the
@@ -67,7 +71,7 @@ private:
     struct Pending {
         CURL* easy = nullptr;
         Done done;
-        Clock::time_point started;
+        Clock::time_point started;  // added to the multi handle
     };
     struct Timer {
         Clock::time_point due;
@@ -75,7 +79,7 @@ private:
         std::function<bool()> sooner;
     };
     void run();
-    void noteEnded(Clock::time_point started, Clock::time_point now);
+    void noteEnded(const Pending& p, Clock::time_point now);
 
     CURLM* mMulti = nullptr;
     pid_t mPid;  // the process whose thread runs the loop
@@ -84,10 +88,16 @@ private:
     std::deque<Pending*> mSubmitted;  // not yet added to the multi handle
     std::vector<Timer> mTimers;       // under mLock
     size_t mInFlight = 0;             // under mLock: submitted, not done
-    // The last kEndsKept ends, as a ring: when each came and how long its transfer ran.
+    // The last kEndsKept answers, as a ring: when each ended and its bytes; the least time to a
+    // first byte seen. Under mLock.
     static constexpr size_t kEndsKept = 64, kEndsToTell = 16;
-    std::vector<std::pair<Clock::time_point, double>> mEnds;  // under mLock
+    struct End {
+        Clock::time_point started, ended;
+        double bytes;
+    };
+    std::vector<End> mEnds;
     size_t mEndsNext = 0;
+    double mLeastFirstByte = 0;  // seconds; 0: none yet
     bool mQuit = false;
     std::thread mThread;
 };
