@@ -9,6 +9,7 @@
 
 #include "core/huge_pages.h"
 #include "io/error.h"
+#include "io/remote/remote_file.h"
 
 namespace vdiso {
 
@@ -144,36 +145,33 @@ void BrickCache::abandonLocked(size_t slot) {
     mLoadedOf[slot].notify_all();
 }
 
-std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> ids) {
-    const int count = int(ids.size());
+std::vector<size_t> BrickCache::claimAllLocked(std::span<const int64_t> ids, bool single) {
     std::vector<size_t> slots;
-    {
-        std::unique_lock lock(mMutex);
-        bool anyHeld = false;
-        for (const int64_t id : ids) anyHeld = anyHeld || mSlotOfBrick.count(id) > 0;
-        if (!anyHeld && count > 1) {
-            try {
-                for (const int64_t id : ids) slots.push_back(claimLocked(id));
-            } catch (...) {
-                for (const size_t slot : slots) abandonLocked(slot);
-                throw;
-            }
-            mCounters.requests += uint64_t(count);
-            mCounters.misses += uint64_t(count);
-        }
+    if (ids.empty() || (ids.size() == 1 && !single)) return slots;
+    for (const int64_t id : ids)
+        if (mSlotOfBrick.count(id) > 0) return slots;
+    try {
+        for (const int64_t id : ids) slots.push_back(claimLocked(id));
+    } catch (...) {
+        for (const size_t slot : slots) abandonLocked(slot);
+        throw;
     }
-    if (slots.empty()) return BrickSource::acquireTogether(ids);  // one by one, as they are
+    mCounters.requests += ids.size();
+    mCounters.misses += ids.size();
+    return slots;
+}
 
-    double readSeconds = 0, decodeSeconds = 0;
+std::vector<BrickHandle> BrickCache::settle(std::span<const int64_t> ids, const std::vector<size_t>& slots,
+                                            const std::vector<std::span<const unsigned char>>& stored,
+                                            double readSeconds) {
+    const size_t count = ids.size();
+    double decodeSeconds = 0;
     size_t storedBytes = 0;
     try {
-        auto start = Clock::now();
-        const std::vector<std::span<const unsigned char>> stored = mStore.readStoredBricks(ids);
-        readSeconds = secondsSince(start);
-        start = Clock::now();
-        for (int k = 0; k < count; ++k) {
-            storedBytes += stored[size_t(k)].size();
-            mStore.decodeBrick(ids[size_t(k)], stored[size_t(k)], mSlots[slots[size_t(k)]].samples);
+        const auto start = Clock::now();
+        for (size_t k = 0; k < count; ++k) {
+            storedBytes += stored[k].size();
+            mStore.decodeBrick(ids[k], stored[k], mSlots[slots[k]].samples);
         }
         decodeSeconds = secondsSince(start);
     } catch (...) {
@@ -182,16 +180,92 @@ std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> id
         throw;
     }
     std::vector<BrickHandle> handles;
+    handles.reserve(count);
     std::lock_guard lock(mMutex);
-    for (int k = 0; k < count; ++k) {
-        mSlots[slots[size_t(k)]].loading = false;
-        mLoadedOf[slots[size_t(k)]].notify_all();
-        handles.emplace_back(this, ids[size_t(k)], mSlots[slots[size_t(k)]].samples);
+    for (size_t k = 0; k < count; ++k) {
+        mSlots[slots[k]].loading = false;
+        mLoadedOf[slots[k]].notify_all();
+        handles.emplace_back(this, ids[k], mSlots[slots[k]].samples);
     }
     mCounters.readSeconds += readSeconds;
     mCounters.decodeSeconds += decodeSeconds;
     mCounters.bytesRead += storedBytes;
     return handles;
+}
+
+std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> ids) {
+    std::vector<size_t> slots;
+    {
+        std::lock_guard lock(mMutex);
+        slots = claimAllLocked(ids, false);
+    }
+    if (slots.empty()) return BrickSource::acquireTogether(ids);  // one by one, as they are
+    std::vector<std::span<const unsigned char>> stored;
+    const auto start = Clock::now();
+    try {
+        stored = mStore.readStoredBricks(ids);
+    } catch (...) {
+        std::lock_guard lock(mMutex);
+        for (const size_t slot : slots) abandonLocked(slot);
+        throw;
+    }
+    return settle(ids, slots, stored, secondsSince(start));
+}
+
+namespace {
+
+struct CacheLoad final : BrickLoad {
+    std::vector<int64_t> ids;
+    std::vector<size_t> slots;
+    std::shared_ptr<BrickStoreReader::StoredRead> read;  // shared: its type is the store's own
+    Clock::time_point started;
+};
+
+}  // namespace
+
+std::unique_ptr<BrickLoad> BrickCache::startAcquire(std::span<const int64_t> ids, std::function<void()> arrived,
+                                                    const std::atomic<bool>* cancel) {
+    if (!loadsInBackground()) return nullptr;
+    auto load = std::make_unique<CacheLoad>();
+    {
+        std::lock_guard lock(mMutex);
+        load->slots = claimAllLocked(ids, true);
+    }
+    if (load->slots.empty()) return nullptr;
+    load->ids.assign(ids.begin(), ids.end());
+    load->started = Clock::now();
+    try {
+        load->read = mStore.startStoredBricks(ids, std::move(arrived), cancel);
+    } catch (...) {
+        std::lock_guard lock(mMutex);
+        for (const size_t slot : load->slots) abandonLocked(slot);
+        throw;
+    }
+    return load;
+}
+
+std::vector<BrickHandle> BrickCache::finishAcquire(BrickLoad& l) {
+    auto& load = static_cast<CacheLoad&>(l);
+    const double readSeconds = secondsSince(load.started);
+    std::vector<std::span<const unsigned char>> stored;
+    try {
+        stored = mStore.finishStoredBricks(*load.read);
+    } catch (...) {
+        std::lock_guard lock(mMutex);
+        for (const size_t slot : load.slots) abandonLocked(slot);
+        throw;
+    }
+    return settle(load.ids, load.slots, stored, readSeconds);
+}
+
+size_t BrickCache::loadsWanted() const {
+    const RemoteFile* remote = mStore.remote();
+    return remote ? remote->wantedInFlight(kLeastLoads, size_t(remote->connections())) : 0;
+}
+
+size_t BrickCache::loadsInFlight() const {
+    const RemoteFile* remote = mStore.remote();
+    return remote ? remote->inFlight() : 0;
 }
 
 void BrickCache::release(int64_t id) {

@@ -54,6 +54,17 @@ public:
     // is held are read in one request (over a network, one GET where there were several).
     bool readsTogether(int64_t a, int64_t b) const override { return mStore.readsTogether(a, b); }
     std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids) override;
+    // A store at a URL loads in the background: its request sent, no thread held while it waits
+    // (BrickStoreReader::startStoredBricks); the bricks are decoded by finishAcquire's caller.
+    bool loadsInBackground() const override { return mStore.readsInBackground(); }
+    std::unique_ptr<BrickLoad> startAcquire(std::span<const int64_t> ids, std::function<void()> arrived,
+                                            const std::atomic<bool>* cancel) override;
+    std::vector<BrickHandle> finishAcquire(BrickLoad& load) override;
+    // At least kLeastLoads until the transfers have told how many the link wants, at most the
+    // remote session's connections.
+    static constexpr size_t kLeastLoads = 16;
+    size_t loadsWanted() const override;
+    size_t loadsInFlight() const override;
     bool isResident(int64_t id) const override;
     int64_t brickCapacity() const override { return int64_t(mSlotCount); }
 
@@ -90,6 +101,13 @@ private:
     // failed (the brick forgotten, its waiters woken).
     size_t claimLocked(int64_t id);
     void abandonLocked(size_t slot);
+    // Bricks `ids` none of which is held, claimed into slots (pinned, loading), counted as
+    // misses; empty when one is held (or there is one id only and `single` is false).
+    std::vector<size_t> claimAllLocked(std::span<const int64_t> ids, bool single);
+    // Decodes the stored bricks into their claimed slots and hands them out; on a failure the
+    // slots are given back and the error is thrown.
+    std::vector<BrickHandle> settle(std::span<const int64_t> ids, const std::vector<size_t>& slots,
+                                    const std::vector<std::span<const unsigned char>>& stored, double readSeconds);
 
     const BrickStoreReader& mStore;
     std::vector<BrickRange> mRanges;

@@ -7,8 +7,11 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -58,6 +61,12 @@ private:
     const void* mSamples = nullptr;
 };
 
+// Bricks on their way (BrickSource::startAcquire); what it holds is the source's own.
+class BrickLoad {
+public:
+    virtual ~BrickLoad() = default;
+};
+
 class BrickSource {
 public:
     virtual ~BrickSource() = default;
@@ -84,6 +93,30 @@ public:
     // acquired at once: one read where the source can. Handles in the order of `ids`. By
     // default, one acquire after another.
     virtual std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids);
+    // Acquires that hold no thread while the bricks are on their way (a store at a URL, whose
+    // requests wait a round trip). startAcquire(ids, arrived, cancel) begins acquireTogether(ids)
+    // and returns at once; `arrived` is called once, on any thread, possibly before startAcquire
+    // returns (quick: it may note and wake, not call the source), when finishAcquire will not
+    // wait. finishAcquire decodes and gives the handles in the order of `ids`, or throws what
+    // acquire throws. Every load started must be finished before the source goes, wanted or not
+    // (`cancel`, once set, makes its request end sooner). Null from startAcquire: a brick of `ids`
+    // is held or loading already (acquire them as usual). Sources without them
+    // (loadsInBackground false) return null always.
+    virtual bool loadsInBackground() const { return false; }
+    virtual std::unique_ptr<BrickLoad> startAcquire(std::span<const int64_t> ids, std::function<void()> arrived,
+                                                    const std::atomic<bool>* cancel) {
+        (void)ids, (void)arrived, (void)cancel;
+        return nullptr;
+    }
+    virtual std::vector<BrickHandle> finishAcquire(BrickLoad& load) {
+        (void)load;
+        return {};
+    }
+    // Loads worth having in flight now, over every reader of the source (the link's delay times
+    // its bandwidth, as its transfers measure it), and how many are; 0, 0 for a source that
+    // does not load in the background.
+    virtual size_t loadsWanted() const { return 0; }
+    virtual size_t loadsInFlight() const { return 0; }
     // Whether acquire(id) would find the brick in memory now (a hint: it may be gone by then).
     // Readers ahead skip such bricks. False when the source cannot tell.
     virtual bool isResident(int64_t) const { return false; }

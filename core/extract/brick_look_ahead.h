@@ -40,9 +40,11 @@
 namespace vdiso {
 
 // How far ahead a traversal reads a store over the network, where a request waits a round trip
-// where a disk read waits a seek, so many more are kept in flight: per image strip `readers`
-// reader threads, `bricks` bricks found ahead, of which `near` are read before they are known
-// to show. vdiso extract and vdiso serve both read a remote store so.
+// where a disk read waits a seek, so many more are kept in flight: `bricks` bricks found ahead,
+// of which `near` are read before they are known to show, and per image strip `readers` reader
+// threads where each waits on its read (an indexed array's chunks); a store's own bricks load in
+// the background, two readers a strip keeping as many in flight as the link holds
+// (BrickPrefetcher). vdiso extract and vdiso serve both read a remote store so.
 struct RemoteReadAhead {
     static constexpr int kReaders = 32, kBricks = 128, kNear = 32;
 };

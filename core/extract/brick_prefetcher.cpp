@@ -7,8 +7,11 @@ namespace vdiso {
 BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead, int readers)
     : mSource(source), mLookahead(lookahead) {
     if (mLookahead == 0) return;
+    mBackground = source.loadsInBackground();
+    if (mBackground) readers = std::min(readers, kBackgroundReaders);
     try {
-        for (int k = 0; k < std::max(readers, 1); ++k) mThreads.emplace_back([this] { run(); });
+        for (int k = 0; k < std::max(readers, 1); ++k)
+            mThreads.emplace_back([this] { mBackground ? runInBackground() : run(); });
     } catch (...) {
         stop();  // the threads already started, joined: no destructor runs after a throw
         throw;
@@ -22,6 +25,7 @@ void BrickPrefetcher::stop() {
         std::lock_guard lock(mMutex);
         mStop = true;
     }
+    mCancelLoads = true;
     mChanged.notify_all();
     for (std::thread& t : mThreads)
         if (t.joinable()) t.join();
@@ -108,6 +112,64 @@ size_t BrickPrefetcher::skippedLoaded() const {
     return mSkippedLoaded;
 }
 
+BrickPrefetcher::Run BrickPrefetcher::takeRunLocked(size_t i) {
+    // With it, the bricks it is read with (next to it in a store's file) found among the next
+    // items: one read for them all, where the source can. A brick joins when it reads
+    // together with one already in (BrickSource::readsTogether), so the run is a chain.
+    Run run{{mItems[i], i}};
+    auto joins = [&](int64_t id) {
+        for (const auto& [brick, item] : run)
+            if (id == brick) return false;
+        for (const auto& [brick, item] : run)
+            if (mSource.readsTogether(brick, id)) return true;
+        return false;
+    };
+    const size_t end = std::min({mPublished, i + kRunWindow, mConsumed + 1 + mLookahead});
+    for (bool grew = true; grew && run.size() < kMaxRun;) {
+        grew = false;
+        for (size_t j = i + 1; j < end && run.size() < kMaxRun; ++j) {
+            if (mTaken[j] || mItems[j] == kCancelled) continue;
+            if (joins(mItems[j])) {
+                run.emplace_back(mItems[j], j);
+                mTaken[j] = 1;
+                grew = true;
+            }
+        }
+    }
+    // Then offered bricks that join it, not in memory already (one would make the source
+    // read them one by one).
+    for (bool grew = true; grew && run.size() < kMaxRun;) {
+        grew = false;
+        for (size_t k = 0; k < mOffered.size() && run.size() < kMaxRun; ++k)
+            if (mOffered[k] != kCancelled && joins(mOffered[k]) && !mSource.isResident(mOffered[k])) {
+                run.emplace_back(mOffered[k], kOfferedItem);
+                mOffered[k] = kCancelled;  // read once
+                grew = true;
+            }
+    }
+    return run;
+}
+
+void BrickPrefetcher::keepLocked(const Run& run, std::vector<BrickHandle>& bricks) {
+    for (size_t k = 0; k < run.size(); ++k) {
+        const size_t item = run[k].second;
+        if (item == kOfferedItem) {  // in the source now; its pin goes with `bricks`
+            ++mOfferedLoaded;
+            continue;
+        }
+        // The extraction may have got there meanwhile and acquired the brick itself; or it has
+        // stopped.
+        if (item < mConsumed || mStop) {
+            mSkippedLoaded += !mUsed[item];
+            continue;  // its pin goes with `bricks`
+        }
+        // Readers finish out of order: keep the pins sorted for consumed().
+        auto at = mPinned.end();
+        while (at != mPinned.begin() && std::prev(at)->first > item) --at;
+        mPinned.emplace(at, item, std::move(bricks[k]));
+    }
+}
+
 void BrickPrefetcher::run() {
     for (;;) {
         std::unique_lock lock(mMutex);
@@ -125,40 +187,7 @@ void BrickPrefetcher::run() {
         // the requests over a network): this one hands what is left to the next.
         if (availableLocked() > 0) mChanged.notify_one();
         if (mItems[i] == kCancelled || mTaken[i]) continue;
-        // With it, the bricks it is read with (next to it in a store's file) found among the next
-        // items: one read for them all, where the source can. A brick joins when it reads
-        // together with one already in (BrickSource::readsTogether), so the run is a chain.
-        std::vector<std::pair<int64_t, size_t>> run{{mItems[i], i}};  // brick, item
-        auto joins = [&](int64_t id) {
-            for (const auto& [brick, item] : run)
-                if (id == brick) return false;
-            for (const auto& [brick, item] : run)
-                if (mSource.readsTogether(brick, id)) return true;
-            return false;
-        };
-        const size_t end = std::min({mPublished, i + kRunWindow, mConsumed + 1 + mLookahead});
-        for (bool grew = true; grew && run.size() < kMaxRun;) {
-            grew = false;
-            for (size_t j = i + 1; j < end && run.size() < kMaxRun; ++j) {
-                if (mTaken[j] || mItems[j] == kCancelled) continue;
-                if (joins(mItems[j])) {
-                    run.emplace_back(mItems[j], j);
-                    mTaken[j] = 1;
-                    grew = true;
-                }
-            }
-        }
-        // Then offered bricks that join it, not in memory already (one would make the source
-        // read them one by one).
-        for (bool grew = true; grew && run.size() < kMaxRun;) {
-            grew = false;
-            for (size_t k = 0; k < mOffered.size() && run.size() < kMaxRun; ++k)
-                if (mOffered[k] != kCancelled && joins(mOffered[k]) && !mSource.isResident(mOffered[k])) {
-                    run.emplace_back(mOffered[k], kOfferedItem);
-                    mOffered[k] = kCancelled;  // read once
-                    grew = true;
-                }
-        }
+        const Run run = takeRunLocked(i);
         lock.unlock();
         std::vector<BrickHandle> bricks;
         try {
@@ -173,23 +202,90 @@ void BrickPrefetcher::run() {
             return;
         }
         lock.lock();
-        for (size_t k = 0; k < run.size(); ++k) {
-            const size_t item = run[k].second;
-            if (item == kOfferedItem) {  // in the source now; its pin goes with `bricks`
-                ++mOfferedLoaded;
-                continue;
-            }
-            // The extraction may have got there meanwhile and acquired the brick itself.
-            if (item < mConsumed) {
-                mSkippedLoaded += !mUsed[item];
-                continue;  // its pin goes with `bricks`
-            }
-            // Readers finish out of order: keep the pins sorted for consumed().
-            auto at = mPinned.end();
-            while (at != mPinned.begin() && std::prev(at)->first > item) --at;
-            mPinned.emplace(at, item, std::move(bricks[k]));
-        }
+        keepLocked(run, bricks);
         lock.unlock();  // `bricks` releases the pins of those passed, outside the lock
+    }
+}
+
+void BrickPrefetcher::loadReadyLocked(Load* load) {
+    if (--load->waits > 0) return;
+    mArrived.push_back(load);
+    mChanged.notify_one();
+}
+
+void BrickPrefetcher::runInBackground() {
+    // While the source wants more in flight than there are but this strip has nothing of its
+    // own on the way to wake it, it looks again this often (another strip's load may end).
+    constexpr auto kRoomCheck = std::chrono::milliseconds(5);
+    auto target = [&] { return std::max(mNext, mConsumed + 1); };
+    std::unique_lock lock(mMutex);
+    for (;;) {
+        if (!mArrived.empty()) {  // decoding what came first: the extraction may be waiting for it
+            std::unique_ptr<Load> load(mArrived.back());
+            mArrived.pop_back();
+            lock.unlock();
+            std::vector<BrickHandle> bricks;
+            try {
+                bricks = mSource.finishAcquire(*load->load);
+            } catch (...) {
+                // Left for the extraction's own acquire to meet and report.
+            }
+            lock.lock();
+            --mLoading;
+            if (!bricks.empty()) keepLocked(load->run, bricks);
+            if (mStop && mLoading == 0) mChanged.notify_all();
+            lock.unlock();  // `bricks` releases the pins of those passed, outside the lock
+            bricks.clear();
+            load.reset();
+            lock.lock();
+            continue;
+        }
+        const bool work = !mStop && target() < mPublished && target() < mConsumed + 1 + mLookahead;
+        if (mLoading == 0 && (mStop || (!work && mClosed && target() >= mItems.size()))) {
+            mChanged.notify_all();  // the other reader may be waiting for the last arrival
+            return;
+        }
+        if (!work) {
+            mChanged.wait(lock);
+            continue;
+        }
+        if (mSource.loadsInFlight() >= mSource.loadsWanted()) {
+            mChanged.wait_for(lock, kRoomCheck);
+            continue;
+        }
+        const size_t i = target();
+        mNext = i + 1;
+        if (mItems[i] == kCancelled || mTaken[i]) continue;
+        auto* load = new Load{takeRunLocked(i), nullptr, 2};
+        ++mLoading;
+        lock.unlock();
+        std::vector<int64_t> ids;
+        for (const auto& [brick, item] : load->run) ids.push_back(brick);
+        auto arrived = [this, load] {
+            std::lock_guard hold(mMutex);
+            loadReadyLocked(load);
+        };
+        std::unique_ptr<BrickLoad> started;
+        try {
+            started = mSource.startAcquire(ids, arrived, &mCancelLoads);
+            // A brick of the run is held or loading already: its first brick alone, if it is not.
+            // (Never acquired here: a reader that waited on a brick loading would keep the loads
+            // that arrived, this one's among them, from being finished.)
+            if (!started && ids.size() > 1) {
+                load->run.resize(1);
+                started = mSource.startAcquire(std::span<const int64_t>(ids.data(), 1), arrived, &mCancelLoads);
+            }
+        } catch (...) {
+            // Left for the extraction's own acquire to meet and report, as a failed read is.
+        }
+        lock.lock();
+        if (started) {
+            load->load = std::move(started);
+            loadReadyLocked(load);
+        } else {
+            --mLoading;
+            delete load;
+        }
     }
 }
 

@@ -15,10 +15,12 @@
 // extraction's own acquire to meet and report.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -34,8 +36,14 @@ public:
     // `readers` threads, each loading one brick at a time, or with it the bricks among the next
     // items that the source reads with it (BrickSource::readsTogether: next to it in a store's
     // file), in one read.
+    //
+    // From a source that loads in the background (BrickSource::loadsInBackground: a store at a
+    // URL) a reader does not wait on its read: it starts loads while the source wants more in
+    // flight (loadsWanted over loadsInFlight, every reader of the source counted) and decodes
+    // those that have arrived (finishAcquire), so the requests in flight follow the link, not
+    // the threads; then at most kBackgroundReaders threads, whatever `readers` says.
     BrickPrefetcher(BrickSource& source, size_t lookahead, int readers = kDefaultReaders);
-    static constexpr int kDefaultReaders = 2;
+    static constexpr int kDefaultReaders = 2, kBackgroundReaders = 2;
     ~BrickPrefetcher();
     BrickPrefetcher(const BrickPrefetcher&) = delete;
     BrickPrefetcher& operator=(const BrickPrefetcher&) = delete;
@@ -68,7 +76,25 @@ public:
     size_t offeredLoaded() const;
 
 private:
+    // A run of bricks read together: (brick, item) pairs, the item kOfferedItem for an offered one.
+    using Run = std::vector<std::pair<int64_t, size_t>>;
+    // A run on its way from a source that loads in the background; `waits` counts down its
+    // arrival and its load's being stored here, either first.
+    struct Load {
+        Run run;
+        std::unique_ptr<BrickLoad> load;
+        int waits = 2;
+    };
     void run();
+    void runInBackground();
+    // Under the lock: item i's run (it, then the bricks read with it among the next items, then
+    // offered ones), marked taken.
+    Run takeRunLocked(size_t i);
+    // Under the lock: the run's bricks pinned for their items; what is left in `bricks` (bricks
+    // passed meanwhile, offered ones) the caller releases outside the lock.
+    void keepLocked(const Run& run, std::vector<BrickHandle>& bricks);
+    // A load's arrival or its storing: the second puts it on mArrived.
+    void loadReadyLocked(Load* load);
     // Under the lock: items a reader could take now (within the published list and the
     // look-ahead). Work that appears wakes one reader, which wakes the next while more is left.
     size_t availableLocked() const;
@@ -94,6 +120,11 @@ private:
     mutable std::mutex mMutex;
     std::condition_variable mChanged;
     std::vector<std::thread> mThreads;
+    // Loading in the background.
+    bool mBackground = false;
+    size_t mLoading = 0;            // loads started, not yet finished
+    std::vector<Load*> mArrived;    // arrived and stored, to finish (owned)
+    std::atomic<bool> mCancelLoads{false};  // set by stop(): the requests in flight end
 };
 
 }  // namespace vdiso

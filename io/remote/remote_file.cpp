@@ -187,4 +187,6 @@ size_t RemoteFile::wantedInFlight(size_t least, size_t most) const {
 
 size_t RemoteFile::inFlight() const { return mImpl->session->loop().inFlight(); }
 
+int RemoteFile::connections() const { return mImpl->session->options().connections; }
+
 }  // namespace vdiso

@@ -107,6 +107,8 @@ public:
     // carries), within [least, most], and how many are (all of the session's objects').
     size_t wantedInFlight(size_t least, size_t most) const;
     size_t inFlight() const;
+    // Requests the session runs at once at most (RemoteOptions::connections, clamped).
+    int connections() const;
 
     // Requests sent (tries included) and object bytes received by the session.
     uint64_t requests() const;

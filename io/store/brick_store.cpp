@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <new>
 #include <stdexcept>
@@ -170,20 +171,9 @@ bool BrickStoreReader::readsTogether(int64_t a, int64_t b) const {
     return y->offset >= end && y->offset - end < kStoreAlignment;  // only alignment padding between
 }
 
-std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(std::span<const int64_t> ids) const {
-    for (const int64_t id : ids)
-        if (id < 0 || id >= int64_t(mIndex.size()))
-            throwIoError(mPath, "no brick " + std::to_string(id) + " (the store has " + std::to_string(mIndex.size()) + ")");
-    if (ids.empty()) throw std::logic_error("readStoredBricks: no bricks");
-    const size_t count = ids.size();
-    if (mIndex[size_t(ids[0])].external) {  // its samples as they are, from the indexed array's chunks
-        if (count > 1) throw std::logic_error("readStoredBricks: an indexed array's bricks are read one at a time");
-        thread_local AlignedBuffer buffer;
-        unsigned char* dst = buffer.reserve(brickBytes());
-        mExternal->assemble(ids[0], dst);
-        return {std::span<const unsigned char>(dst, brickBytes())};
-    }
+uint64_t BrickStoreReader::coveringRange(std::span<const int64_t> ids, size_t& bytes) const {
     // In file order, each stored right after the one before.
+    const size_t count = ids.size();
     std::vector<size_t> order(count);
     for (size_t k = 0; k < count; ++k) order[k] = k;
     std::sort(order.begin(), order.end(),
@@ -193,30 +183,115 @@ std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(s
             throw std::logic_error("readStoredBricks: bricks not stored one after another");
     const BrickEntry& firstEntry = mIndex[size_t(ids[order.front()])];
     const BrickEntry& lastEntry = mIndex[size_t(ids[order.back()])];
-    const size_t bytes = size_t(lastEntry.offset - firstEntry.offset) + lastEntry.storedBytes;
-    thread_local AlignedBuffer buffer;
-    unsigned char* dst = buffer.reserve(bytes);
+    bytes = size_t(lastEntry.offset - firstEntry.offset) + lastEntry.storedBytes;
+    return firstEntry.offset;
+}
+
+std::vector<ByteRange> BrickStoreReader::piecesOf(std::span<const int64_t> ids, uint64_t first,
+                                                  unsigned char* dst) const {
     std::vector<ByteRange> pieces;  // in the order of ids
+    pieces.reserve(ids.size());
     for (const int64_t id : ids) {
         const BrickEntry& e = mIndex[size_t(id)];
-        pieces.push_back({e.offset, e.storedBytes, dst + (e.offset - firstEntry.offset)});
+        pieces.push_back({e.offset, e.storedBytes, dst + (e.offset - first)});
     }
+    return pieces;
+}
+
+std::vector<std::span<const unsigned char>> BrickStoreReader::checkedPieces(std::span<const int64_t> ids,
+                                                                            std::span<const ByteRange> pieces,
+                                                                            std::span<const int8_t> intact) const {
+    std::vector<std::span<const unsigned char>> stored;
+    stored.reserve(ids.size());
+    for (size_t k = 0; k < ids.size(); ++k) {
+        stored.emplace_back(static_cast<const unsigned char*>(pieces[k].dst), pieces[k].bytes);
+        const bool good = intact[k] < 0 ? crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(ids[k])].checksum
+                                        : intact[k] == 1;
+        if (!good) failBrick(ids[k], "checksum mismatch (the brick is corrupt)");
+    }
+    return stored;
+}
+
+namespace {
+
+void checkBrickIds(std::span<const int64_t> ids, size_t bricks, const std::string& path) {
+    for (const int64_t id : ids)
+        if (id < 0 || id >= int64_t(bricks))
+            throwIoError(path, "no brick " + std::to_string(id) + " (the store has " + std::to_string(bricks) + ")");
+    if (ids.empty()) throw std::logic_error("readStoredBricks: no bricks");
+}
+
+}  // namespace
+
+std::vector<std::span<const unsigned char>> BrickStoreReader::readStoredBricks(std::span<const int64_t> ids) const {
+    checkBrickIds(ids, mIndex.size(), mPath);
+    const size_t count = ids.size();
+    if (mIndex[size_t(ids[0])].external) {  // its samples as they are, from the indexed array's chunks
+        if (count > 1) throw std::logic_error("readStoredBricks: an indexed array's bricks are read one at a time");
+        thread_local AlignedBuffer buffer;
+        unsigned char* dst = buffer.reserve(brickBytes());
+        mExternal->assemble(ids[0], dst);
+        return {std::span<const unsigned char>(dst, brickBytes())};
+    }
+    size_t bytes = 0;
+    const uint64_t first = coveringRange(ids, bytes);
+    thread_local AlignedBuffer buffer;
+    unsigned char* dst = buffer.reserve(bytes);
+    const std::vector<ByteRange> pieces = piecesOf(ids, first, dst);
     // A remote source's disk cache keeps a brick only once its checksum passes; what its last
-    // check of a piece found (the bytes as read) is not computed again below.
+    // check of a piece found (the bytes as read) is not computed again.
     std::vector<int8_t> intact(count, -1);  // -1: not checked by the source
     auto check = [&](size_t k) {
         intact[k] = crc32Of(pieces[k].dst, pieces[k].bytes) == mIndex[size_t(ids[k])].checksum;
         return intact[k] == 1;
     };
-    mSource->readCovering(firstEntry.offset, bytes, dst, pieces, "brick data", check);
-    std::vector<std::span<const unsigned char>> stored;
-    stored.reserve(count);
-    for (size_t k = 0; k < count; ++k) {
-        stored.emplace_back(static_cast<const unsigned char*>(pieces[k].dst), pieces[k].bytes);
-        if (intact[k] == 0 || (intact[k] < 0 && !check(k)))
-            failBrick(ids[k], "checksum mismatch (the brick is corrupt)");
+    mSource->readCovering(first, bytes, dst, pieces, "brick data", check);
+    return checkedPieces(ids, pieces, intact);
+}
+
+struct BrickStoreReader::StoredRead {
+    std::vector<int64_t> ids;
+    AlignedBuffer buffer;
+    std::vector<ByteRange> pieces;
+    std::vector<int8_t> intact;  // as readStoredBricks keeps it
+    std::exception_ptr error;
+};
+
+bool BrickStoreReader::readsInBackground() const { return !mExternal && mSource->readsInBackground(); }
+
+std::shared_ptr<BrickStoreReader::StoredRead> BrickStoreReader::startStoredBricks(std::span<const int64_t> ids,
+                                                                                   std::function<void()> arrived,
+                                                                                   const std::atomic<bool>* cancel) const {
+    checkBrickIds(ids, mIndex.size(), mPath);
+    auto read = std::make_shared<StoredRead>();
+    StoredRead* r = read.get();
+    r->ids.assign(ids.begin(), ids.end());
+    try {
+        if (mIndex[size_t(ids[0])].external) throw std::logic_error("startStoredBricks: an indexed array's brick");
+        size_t bytes = 0;
+        const uint64_t first = coveringRange(ids, bytes);
+        unsigned char* dst = r->buffer.reserve(bytes);
+        r->pieces = piecesOf(ids, first, dst);
+        r->intact.assign(ids.size(), -1);
+        auto check = [this, r](size_t k) {
+            r->intact[k] = crc32Of(r->pieces[k].dst, r->pieces[k].bytes) == mIndex[size_t(r->ids[k])].checksum;
+            return r->intact[k] == 1;
+        };
+        mSource->readCoveringAsync(first, bytes, dst, r->pieces, "brick data", check, cancel,
+                                   [r, arrived = std::move(arrived)](std::exception_ptr e) {
+                                       r->error = e;
+                                       arrived();
+                                   });
+    } catch (...) {
+        r->error = std::current_exception();
+        arrived();
     }
-    return stored;
+    return read;
+}
+
+std::vector<std::span<const unsigned char>> BrickStoreReader::finishStoredBricks(StoredRead& read) const {
+    if (read.error) std::rethrow_exception(read.error);
+    return checkedPieces(read.ids, read.pieces, read.intact);
 }
 
 void BrickStoreReader::decodeBrick(int64_t id, std::span<const unsigned char> stored,

@@ -19,6 +19,8 @@
 #pragma once
 
 #include <array>
+#include <atomic>
+#include <functional>
 #include <memory>
 #include <cstdint>
 #include <optional>
@@ -114,10 +116,32 @@ public:
     // readStoredBrick says. In file order each must follow the one before (readsTogether chains
     // them); std::logic_error otherwise.
     std::vector<std::span<const unsigned char>> readStoredBricks(std::span<const int64_t> ids) const;
+    // readStoredBricks in two halves, for a caller that keeps many requests in flight without a
+    // thread waiting on each (readsInBackground: a store at a URL). startStoredBricks sends the
+    // request and returns; `arrived` is called once, on any thread (quick: it may note and wake,
+    // not read or decode), when finishStoredBricks will not wait, and the read must live until
+    // then. finishStoredBricks gives the stored bytes, in the read's own buffer (valid while it
+    // lives), or throws what readStoredBricks throws. Once `cancel` (if given) is set, the request
+    // ends and finishStoredBricks throws. Not for an indexed array's bricks (readsInBackground
+    // says false for an index).
+    struct StoredRead;
+    bool readsInBackground() const;
+    std::shared_ptr<StoredRead> startStoredBricks(std::span<const int64_t> ids, std::function<void()> arrived,
+                                                  const std::atomic<bool>* cancel) const;
+    std::vector<std::span<const unsigned char>> finishStoredBricks(StoredRead& read) const;
     void decodeBrick(int64_t id, std::span<const unsigned char> stored, void* dst) const;
 
 private:
     [[noreturn]] void failBrick(int64_t id, const std::string& what) const;
+    // Where bricks `ids` (a chain readStoredBricks takes) lie: the range covering them, and each
+    // one's piece of it at dst + (its offset - the range's).
+    uint64_t coveringRange(std::span<const int64_t> ids, size_t& bytes) const;
+    std::vector<ByteRange> piecesOf(std::span<const int64_t> ids, uint64_t first, unsigned char* dst) const;
+    // The stored bytes of pieces read, each checked unless intact[k] says (1 good, 0 bad, -1 not
+    // checked yet); throws naming the brick whose checksum fails.
+    std::vector<std::span<const unsigned char>> checkedPieces(std::span<const int64_t> ids,
+                                                               std::span<const ByteRange> pieces,
+                                                               std::span<const int8_t> intact) const;
 
     std::unique_ptr<ByteSource> mSource;
     std::string mPath;

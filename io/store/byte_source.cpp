@@ -16,6 +16,17 @@ void ByteSource::readMany(std::span<const ByteRange> ranges, const char* what, c
     for (const ByteRange& r : ranges) read(r.offset, r.bytes, r.dst, what);
 }
 
+void ByteSource::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
+                                   const char* what, RangeCheck intact, const std::atomic<bool>*,
+                                   ReadDone done) const {
+    try {
+        readCovering(offset, n, dst, pieces, what, intact);
+    } catch (...) {
+        return done(std::current_exception());
+    }
+    done(nullptr);
+}
+
 namespace {
 
 class LocalFileSource final : public ByteSource {
@@ -99,6 +110,11 @@ public:
                       const RangeCheck& intact) const override {
         mFile.readCovering(offset, n, dst, pieces, intact);
     }
+    void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, const char*,
+                           RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const override {
+        mFile.readCoveringAsync(offset, n, dst, std::move(pieces), std::move(intact), cancel, std::move(done));
+    }
+    bool readsInBackground() const override { return true; }
 
 private:
     RemoteFile mFile;

@@ -5,9 +5,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <exception>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "io/remote/remote_file.h"
 #include "io/remote/remote_options.h"
@@ -50,6 +53,17 @@ public:
         (void)intact;
         read(offset, n, dst, what);
     }
+    // readCovering without holding this thread while the bytes are on their way: done(error) is
+    // called once, with null when dst holds them. A remote source sends the request and returns
+    // (RemoteFile::readCoveringAsync: done on its transfer thread, and quick); a local one reads
+    // at once and calls done before returning. dst, `intact`'s targets and `cancel` must live
+    // until done.
+    using ReadDone = std::function<void(std::exception_ptr)>;
+    virtual void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
+                                   const char* what, RangeCheck intact, const std::atomic<bool>* cancel,
+                                   ReadDone done) const;
+    // Whether readCoveringAsync returns before the bytes come (a remote source).
+    virtual bool readsInBackground() const { return false; }
     // "buffered", "direct", "fadvise" (local), "http", "https", "s3" (remote).
     virtual const char* method() const = 0;
     // The remote object behind it, or null for a local file.
