@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,31 +24,65 @@ namespace vdiso {
 namespace {
 
 // Bytes in memory (a packed index, or a whole store), counting the reads asked of them. Reads
-// asked for with a cancel flag (the background's) wait until it is set, as a transfer from a
-// server that has not answered yet would, and then fail.
+// asked for in the background (readCoveringAsync with a cancel flag) are held, as a transfer from
+// a server that has not answered yet would be, until the flag is set: then they fail, on a
+// thread of the source's own, as a remote source's transfer thread reports them.
 class HeldSource final : public ByteSource {
 public:
     explicit HeldSource(std::vector<unsigned char> bytes) : mBytes(std::move(bytes)) {}
+    ~HeldSource() override {
+        {
+            std::lock_guard lock(mLock);
+            mQuit = true;
+        }
+        if (mWatcher.joinable()) mWatcher.join();
+    }
     const std::string& name() const override { return mName; }
     uint64_t size() const override { return mBytes.size(); }
     const char* method() const override { return "memory"; }
+    bool readsInBackground() const override { return true; }
     void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck&) const override {
         ++mReads;
         std::memcpy(dst, mBytes.data() + offset, n);
     }
-    void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact,
-                  const std::atomic<bool>* cancel) const override {
-        if (!cancel) return ByteSource::readMany(ranges, what, intact);
+    void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, const char* what,
+                           RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const override {
+        if (!cancel) return ByteSource::readCoveringAsync(offset, n, dst, pieces, what, intact, cancel, done);
         ++mHeld;
-        while (!cancel->load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-        ++mCancelled;
-        throw IoError(mName + ": read cancelled");
+        std::lock_guard lock(mLock);
+        mHeldReads.emplace_back(cancel, std::move(done));
+        if (!mWatcher.joinable()) mWatcher = std::thread([this] { watch(); });
     }
     mutable std::atomic<int> mHeld{0}, mCancelled{0}, mReads{0};
 
 private:
+    void watch() const {
+        for (;;) {
+            std::vector<ReadDone> ended;
+            {
+                std::lock_guard lock(mLock);
+                for (size_t k = 0; k < mHeldReads.size();)
+                    if (mHeldReads[k].first->load()) {
+                        ended.push_back(std::move(mHeldReads[k].second));
+                        mHeldReads.erase(mHeldReads.begin() + ptrdiff_t(k));
+                    } else {
+                        ++k;
+                    }
+                if (mQuit && mHeldReads.empty()) return;
+            }
+            for (ReadDone& done : ended) {
+                ++mCancelled;
+                done(std::make_exception_ptr(IoError(mName + ": read cancelled")));
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }
+    }
     std::vector<unsigned char> mBytes;
     std::string mName = "memory://index";
+    mutable std::mutex mLock;
+    mutable std::vector<std::pair<const std::atomic<bool>*, ReadDone>> mHeldReads;
+    mutable std::thread mWatcher;
+    bool mQuit = false;
 };
 
 std::vector<unsigned char> rawIndex(size_t bytes) {

@@ -64,25 +64,81 @@ void LazyIndex::load(uint64_t begin, uint64_t end) const {
 
 void LazyIndex::readInBackground(uint64_t begin, size_t readers) {
     const uint64_t first = mDirectory.partOf(begin);
-    for (size_t k = 0; k < std::max<size_t>(readers, 1); ++k)
-        mBackground.emplace_back([this, first] {
-            // Each reader takes the last part neither here nor on its way, alone, so that a
-            // part is here as soon as its own answer is.
-            for (;;) {
-                uint64_t part = 0;
-                {
-                    // Chosen and claimed at once: two readers never take one part (the second
-                    // would wait on the first's answer instead of asking for another).
-                    std::lock_guard lock(mLock);
-                    uint64_t i = mDirectory.parts();
+    readers = std::max<size_t>(readers, 1);
+    mBackground.emplace_back([this, first, readers] {
+        // `readers` parts in flight at once, each asked for alone (a part is here as soon as
+        // its own answer is), the last part neither here nor on its way first; a source that
+        // reads in the background holds no thread while they wait, and this one unpacks them.
+        struct Part {
+            uint64_t i;
+            std::unique_ptr<unsigned char[]> stored;
+            std::atomic<int8_t> good{-1};  // -1: not unpacked yet (a disk cache's check unpacks)
+            std::exception_ptr failure;
+        };
+        std::mutex arrivedLock;
+        std::condition_variable arrivedChanged;
+        std::vector<Part*> arrived;
+        size_t inFlight = 0;
+        bool failed = false;
+        for (;;) {
+            std::vector<std::unique_ptr<Part>> starting;
+            {
+                // Chosen and claimed at once: a part is never asked for twice.
+                std::lock_guard lock(mLock);
+                uint64_t i = mDirectory.parts();
+                while (!failed && !mStop && inFlight + starting.size() < readers) {
                     while (i > first && mState[i - 1] != State::Missing) --i;
-                    if (i == first || mStop) return;
-                    part = i - 1;
-                    mState[part] = State::OnItsWay;
+                    if (i == first) break;
+                    mState[--i] = State::OnItsWay;
+                    starting.push_back(std::make_unique<Part>());
+                    starting.back()->i = i;
                 }
-                if (!fetchParts({part}, true)) return;
             }
-        });
+            for (std::unique_ptr<Part>& owned : starting) {
+                Part* part = owned.release();  // until it arrives
+                const size_t n = size_t(mDirectory.offsets[part->i + 1] - mDirectory.offsets[part->i]);
+                part->stored = std::make_unique_for_overwrite<unsigned char[]>(n);
+                ++inFlight;
+                // A remote disk cache keeps a part once it unpacks (its checksum passes).
+                auto unpack = [this, part](size_t) {
+                    part->good = store_format::unpackIndexPart(mDirectory, part->i, part->stored.get(),
+                                                               mRaw.get() + part->i * store_format::kIndexPartBytes);
+                    return part->good == 1;
+                };
+                mSource.readCoveringAsync(mOffset + mDirectory.offsets[part->i], n, part->stored.get(), {}, "index",
+                                          unpack, &mStop, [&, part](std::exception_ptr e) {
+                                              std::lock_guard lock(arrivedLock);
+                                              part->failure = e;
+                                              arrived.push_back(part);
+                                              arrivedChanged.notify_one();
+                                          });
+            }
+            if (inFlight == 0) return;
+            std::vector<Part*> landed;
+            {
+                std::unique_lock lock(arrivedLock);
+                arrivedChanged.wait(lock, [&] { return !arrived.empty(); });
+                landed.swap(arrived);
+            }
+            for (Part* p : landed) {
+                std::unique_ptr<Part> part(p);
+                --inFlight;
+                if (!part->failure && part->good < 0)
+                    part->good = store_format::unpackIndexPart(mDirectory, part->i, part->stored.get(),
+                                                               mRaw.get() + part->i * store_format::kIndexPartBytes);
+                const bool good = !part->failure && part->good == 1;
+                // A part that failed is left Missing, to be read when asked for (and its error met);
+                // the background gives up.
+                failed = failed || !good;
+                {
+                    std::lock_guard lock(mLock);
+                    mState[part->i] = good ? State::Here : State::Missing;
+                    if (good) mReady[part->i].store(true, std::memory_order_release);
+                }
+                mChanged.notify_all();
+            }
+        }
+    });
 }
 
 bool LazyIndex::fetchParts(const std::vector<uint64_t>& mine, bool background) const {

@@ -54,8 +54,9 @@ public:
             if (!mReady[i].load(std::memory_order_acquire)) return load(begin, end);
     }
 
-    // Starts reading every part holding raw bytes from `begin` on, the last part first, in
-    // `readers` threads of its own, each reading a part at a time.
+    // Starts reading every part holding raw bytes from `begin` on, the last part first,
+    // `readers` at once, on one thread of its own that unpacks them (from a source that reads
+    // in the background, no thread waits on a part).
     void readInBackground(uint64_t begin, size_t readers);
 
 private:
