@@ -235,8 +235,10 @@ std::unique_ptr<BrickLoad> BrickCache::startAcquire(std::span<const int64_t> ids
     load->ids.assign(ids.begin(), ids.end());
     load->started = Clock::now();
     try {
+        ++mLoadsInFlight;
         load->read = mStore.startStoredBricks(ids, std::move(arrived), cancel);
     } catch (...) {
+        --mLoadsInFlight;
         std::lock_guard lock(mMutex);
         for (const size_t slot : load->slots) abandonLocked(slot);
         throw;
@@ -247,6 +249,7 @@ std::unique_ptr<BrickLoad> BrickCache::startAcquire(std::span<const int64_t> ids
 std::vector<BrickHandle> BrickCache::finishAcquire(BrickLoad& l) {
     auto& load = static_cast<CacheLoad&>(l);
     const double readSeconds = secondsSince(load.started);
+    --mLoadsInFlight;
     std::vector<std::span<const unsigned char>> stored;
     try {
         stored = mStore.finishStoredBricks(*load.read);
@@ -263,10 +266,7 @@ size_t BrickCache::loadsWanted() const {
     return remote ? remote->wantedInFlight(kLeastLoads, size_t(remote->connections())) : 0;
 }
 
-size_t BrickCache::loadsInFlight() const {
-    const RemoteFile* remote = mStore.remote();
-    return remote ? remote->inFlight() : 0;
-}
+size_t BrickCache::loadsInFlight() const { return mLoadsInFlight.load(std::memory_order_relaxed); }
 
 void BrickCache::release(int64_t id) {
     std::lock_guard lock(mMutex);

@@ -11,6 +11,7 @@
 // loading waits for it instead of reading it twice.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <list>
 #include <memory>
@@ -64,6 +65,7 @@ public:
     // remote session's connections.
     static constexpr size_t kLeastLoads = 16;
     size_t loadsWanted() const override;
+    // Loads started and not yet finished (the index's own requests are not counted).
     size_t loadsInFlight() const override;
     bool isResident(int64_t id) const override;
     int64_t brickCapacity() const override { return int64_t(mSlotCount); }
@@ -124,6 +126,7 @@ private:
     // Per slot: the threads waiting for its load. One for all woke every waiter at every brick
     // loaded (the 16-32 readers of a remote store: most of a view's wake-ups).
     std::unique_ptr<std::condition_variable[]> mLoadedOf;
+    std::atomic<size_t> mLoadsInFlight{0};
 };
 
 }  // namespace vdiso

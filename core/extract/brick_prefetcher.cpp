@@ -220,9 +220,13 @@ void BrickPrefetcher::runInBackground() {
     auto target = [&] { return std::max(mNext, mConsumed + 1); };
     std::unique_lock lock(mMutex);
     for (;;) {
-        if (!mArrived.empty()) {  // decoding what came first: the extraction may be waiting for it
-            std::unique_ptr<Load> load(mArrived.back());
-            mArrived.pop_back();
+        if (!mArrived.empty()) {
+            // Decoded first: the arrived run the extraction comes to first (it may be waiting).
+            auto first = std::min_element(mArrived.begin(), mArrived.end(), [](const Load* a, const Load* b) {
+                return a->run.front().second < b->run.front().second;
+            });
+            std::unique_ptr<Load> load(*first);
+            mArrived.erase(first);
             lock.unlock();
             std::vector<BrickHandle> bricks;
             try {
@@ -256,37 +260,43 @@ void BrickPrefetcher::runInBackground() {
         const size_t i = target();
         mNext = i + 1;
         if (mItems[i] == kCancelled || mTaken[i]) continue;
-        auto* load = new Load{takeRunLocked(i), nullptr, 2};
-        ++mLoading;
+        const Run run = takeRunLocked(i);
         lock.unlock();
-        std::vector<int64_t> ids;
-        for (const auto& [brick, item] : load->run) ids.push_back(brick);
-        auto arrived = [this, load] {
+        // Where a brick of the run is held or loading already, each of the others on its own.
+        // (Never acquired here: a reader that waited on a brick loading would keep the loads
+        // that arrived, that one's among them, from being finished.)
+        if (!startLoad(run) && run.size() > 1)
+            for (const auto& brick : run) startLoad(Run{brick});
+        lock.lock();
+    }
+}
+
+bool BrickPrefetcher::startLoad(const Run& run) {
+    auto* load = new Load{run, nullptr, 2};
+    std::vector<int64_t> ids;
+    for (const auto& [brick, item] : run) ids.push_back(brick);
+    {
+        std::lock_guard lock(mMutex);
+        ++mLoading;
+    }
+    std::unique_ptr<BrickLoad> started;
+    try {
+        started = mSource.startAcquire(ids, [this, load] {
             std::lock_guard hold(mMutex);
             loadReadyLocked(load);
-        };
-        std::unique_ptr<BrickLoad> started;
-        try {
-            started = mSource.startAcquire(ids, arrived, &mCancelLoads);
-            // A brick of the run is held or loading already: its first brick alone, if it is not.
-            // (Never acquired here: a reader that waited on a brick loading would keep the loads
-            // that arrived, this one's among them, from being finished.)
-            if (!started && ids.size() > 1) {
-                load->run.resize(1);
-                started = mSource.startAcquire(std::span<const int64_t>(ids.data(), 1), arrived, &mCancelLoads);
-            }
-        } catch (...) {
-            // Left for the extraction's own acquire to meet and report, as a failed read is.
-        }
-        lock.lock();
-        if (started) {
-            load->load = std::move(started);
-            loadReadyLocked(load);
-        } else {
-            --mLoading;
-            delete load;
-        }
+        }, &mCancelLoads);
+    } catch (...) {
+        // Left for the extraction's own acquire to meet and report, as a failed read is.
     }
+    std::lock_guard lock(mMutex);
+    if (!started) {
+        --mLoading;
+        delete load;
+        return false;
+    }
+    load->load = std::move(started);
+    loadReadyLocked(load);
+    return true;
 }
 
 }  // namespace vdiso
