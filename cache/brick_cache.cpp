@@ -145,9 +145,9 @@ void BrickCache::abandonLocked(size_t slot) {
     mLoadedOf[slot].notify_all();
 }
 
-std::vector<size_t> BrickCache::claimAllLocked(std::span<const int64_t> ids, bool single) {
+std::vector<size_t> BrickCache::claimAllLocked(std::span<const int64_t> ids) {
     std::vector<size_t> slots;
-    if (ids.empty() || (ids.size() == 1 && !single)) return slots;
+    if (ids.size() < 2) return slots;
     for (const int64_t id : ids)
         if (mSlotOfBrick.count(id) > 0) return slots;
     try {
@@ -197,7 +197,7 @@ std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> id
     std::vector<size_t> slots;
     {
         std::lock_guard lock(mMutex);
-        slots = claimAllLocked(ids, false);
+        slots = claimAllLocked(ids);
     }
     if (slots.empty()) return BrickSource::acquireTogether(ids);  // one by one, as they are
     std::vector<std::span<const unsigned char>> stored;
@@ -215,9 +215,13 @@ std::vector<BrickHandle> BrickCache::acquireTogether(std::span<const int64_t> id
 namespace {
 
 struct CacheLoad final : BrickLoad {
-    std::vector<int64_t> ids;
-    std::vector<size_t> slots;
-    std::shared_ptr<BrickStoreReader::StoredRead> read;  // shared: its type is the store's own
+    std::vector<int64_t> ids;  // as asked for
+    // Of them, those this load claimed (the others were held or loading), in runs stored one
+    // after another in the file, each read in one request: run r is ids[at[r]...], its slots
+    // likewise.
+    std::vector<std::vector<size_t>> runs;  // positions in ids
+    std::vector<size_t> slotAt;             // by position in ids; unused for those not claimed
+    std::vector<std::shared_ptr<BrickStoreReader::StoredRead>> reads;  // shared: the store's own type
     Clock::time_point started;
 };
 
@@ -227,21 +231,45 @@ std::unique_ptr<BrickLoad> BrickCache::startAcquire(std::span<const int64_t> ids
                                                     const std::atomic<bool>* cancel) {
     if (!loadsInBackground()) return nullptr;
     auto load = std::make_unique<CacheLoad>();
+    load->ids.assign(ids.begin(), ids.end());
+    load->slotAt.assign(ids.size(), SIZE_MAX);
+    std::vector<size_t> claimed;  // positions
     {
         std::lock_guard lock(mMutex);
-        load->slots = claimAllLocked(ids, true);
+        try {
+            for (size_t k = 0; k < ids.size(); ++k)
+                if (mSlotOfBrick.count(ids[k]) == 0) {
+                    load->slotAt[k] = claimLocked(ids[k]);
+                    claimed.push_back(k);
+                }
+        } catch (...) {
+            for (const size_t k : claimed) abandonLocked(load->slotAt[k]);
+            throw;
+        }
+        mCounters.requests += claimed.size();
+        mCounters.misses += claimed.size();
     }
-    if (load->slots.empty()) return nullptr;
-    load->ids.assign(ids.begin(), ids.end());
+    if (claimed.empty()) return nullptr;
+    // In file order, cut where a brick does not follow the one before.
+    std::sort(claimed.begin(), claimed.end(), [&](size_t a, size_t b) {
+        return mStore.index()[size_t(ids[a])].offset < mStore.index()[size_t(ids[b])].offset;
+    });
+    for (size_t k = 0; k < claimed.size(); ++k) {
+        if (k == 0 || !mStore.readsTogether(ids[claimed[k - 1]], ids[claimed[k]])) load->runs.emplace_back();
+        load->runs.back().push_back(claimed[k]);
+    }
     load->started = Clock::now();
-    try {
-        ++mLoadsInFlight;
-        load->read = mStore.startStoredBricks(ids, std::move(arrived), cancel);
-    } catch (...) {
-        --mLoadsInFlight;
-        std::lock_guard lock(mMutex);
-        for (const size_t slot : load->slots) abandonLocked(slot);
-        throw;
+    // `arrived` once every run's read has.
+    auto left = std::make_shared<std::atomic<size_t>>(load->runs.size());
+    auto runArrived = [left, arrived = std::move(arrived)] {
+        if (--*left == 0) arrived();
+    };
+    ++mLoadsInFlight;
+    for (const std::vector<size_t>& run : load->runs) {
+        std::vector<int64_t> runIds;
+        for (const size_t k : run) runIds.push_back(ids[k]);
+        // (startStoredBricks reports its failures through the read, to finishAcquire.)
+        load->reads.push_back(mStore.startStoredBricks(runIds, runArrived, cancel));
     }
     return load;
 }
@@ -250,15 +278,35 @@ std::vector<BrickHandle> BrickCache::finishAcquire(BrickLoad& l) {
     auto& load = static_cast<CacheLoad&>(l);
     const double readSeconds = secondsSince(load.started);
     --mLoadsInFlight;
-    std::vector<std::span<const unsigned char>> stored;
-    try {
-        stored = mStore.finishStoredBricks(*load.read);
-    } catch (...) {
-        std::lock_guard lock(mMutex);
-        for (const size_t slot : load.slots) abandonLocked(slot);
-        throw;
+    std::vector<BrickHandle> handles(load.ids.size());
+    std::exception_ptr failure;
+    for (size_t r = 0; r < load.runs.size(); ++r) {
+        const std::vector<size_t>& run = load.runs[r];
+        std::vector<int64_t> runIds;
+        std::vector<size_t> slots;
+        for (const size_t k : run) {
+            runIds.push_back(load.ids[k]);
+            slots.push_back(load.slotAt[k]);
+        }
+        std::vector<std::span<const unsigned char>> stored;
+        try {
+            if (failure) std::rethrow_exception(failure);  // the runs after a failure given back too
+            stored = mStore.finishStoredBricks(*load.reads[r]);
+        } catch (...) {
+            if (!failure) failure = std::current_exception();
+            std::lock_guard lock(mMutex);
+            for (const size_t slot : slots) abandonLocked(slot);
+            continue;
+        }
+        try {
+            std::vector<BrickHandle> settled = settle(runIds, slots, stored, r == 0 ? readSeconds : 0);
+            for (size_t j = 0; j < run.size(); ++j) handles[run[j]] = std::move(settled[j]);
+        } catch (...) {  // settle gave the slots back
+            failure = std::current_exception();
+        }
     }
-    return settle(load.ids, load.slots, stored, readSeconds);
+    if (failure) std::rethrow_exception(failure);
+    return handles;
 }
 
 size_t BrickCache::loadsWanted() const {

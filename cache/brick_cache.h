@@ -57,6 +57,9 @@ public:
     std::vector<BrickHandle> acquireTogether(std::span<const int64_t> ids) override;
     // A store at a URL loads in the background: its request sent, no thread held while it waits
     // (BrickStoreReader::startStoredBricks); the bricks are decoded by finishAcquire's caller.
+    // Bricks of `ids` held or loading already are left out (their handles from finishAcquire
+    // are empty), and the others read in as many requests as runs of them lie apart in the file;
+    // null only when every one is held.
     bool loadsInBackground() const override { return mStore.readsInBackground(); }
     std::unique_ptr<BrickLoad> startAcquire(std::span<const int64_t> ids, std::function<void()> arrived,
                                             const std::atomic<bool>* cancel) override;
@@ -103,9 +106,9 @@ private:
     // failed (the brick forgotten, its waiters woken).
     size_t claimLocked(int64_t id);
     void abandonLocked(size_t slot);
-    // Bricks `ids` none of which is held, claimed into slots (pinned, loading), counted as
-    // misses; empty when one is held (or there is one id only and `single` is false).
-    std::vector<size_t> claimAllLocked(std::span<const int64_t> ids, bool single);
+    // Bricks `ids` (two or more) none of which is held, claimed into slots (pinned, loading),
+    // counted as misses; empty when one is held.
+    std::vector<size_t> claimAllLocked(std::span<const int64_t> ids);
     // Decodes the stored bricks into their claimed slots and hands them out; on a failure the
     // slots are given back and the error is thrown.
     std::vector<BrickHandle> settle(std::span<const int64_t> ids, const std::vector<size_t>& slots,

@@ -97,11 +97,12 @@ public:
     // requests wait a round trip). startAcquire(ids, arrived, cancel) begins acquireTogether(ids)
     // and returns at once; `arrived` is called once, on any thread, possibly before startAcquire
     // returns (quick: it may note and wake, not call the source), when finishAcquire will not
-    // wait. finishAcquire decodes and gives the handles in the order of `ids`, or throws what
-    // acquire throws. Every load started must be finished before the source goes, wanted or not
-    // (`cancel`, once set, makes its request end sooner). Null from startAcquire: a brick of `ids`
-    // is held or loading already (acquire them as usual). Sources without them
-    // (loadsInBackground false) return null always.
+    // wait. finishAcquire decodes and gives the handles in the order of `ids`, an empty one for
+    // a brick that was held or loading already (left out of the load), or throws what acquire
+    // throws. Every load started must be finished before the source goes, wanted or not
+    // (`cancel`, once set, makes its requests end sooner). Null from startAcquire: every brick of
+    // `ids` is held or loading already. Sources without them (loadsInBackground false) return
+    // null always.
     virtual bool loadsInBackground() const { return false; }
     virtual std::unique_ptr<BrickLoad> startAcquire(std::span<const int64_t> ids, std::function<void()> arrived,
                                                     const std::atomic<bool>* cancel) {

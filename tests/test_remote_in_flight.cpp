@@ -6,11 +6,16 @@
 
 #include <dirent.h>
 
+#include <condition_variable>
+#include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
+#include "cache/brick_cache.h"
 #include "io/remote/remote_file.h"
+#include "io/store/brick_store.h"
 #include "tests/loopback_servers.h"
 #include "tests/test_util.h"
 
@@ -110,6 +115,53 @@ TEST_F(RemoteInFlight, AViewKeepsItsRequestsInFlightWithoutAThreadEach) {
     r = test::runCommand(view + "-o " + mDir.file("local.ply") + " " + mDir.file("bkt/fine.vdiso"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(test::readFile(mDir.file("remote.ply")), test::readFile(mDir.file("local.ply")));
+}
+
+// The cache's background loads (BrickCache::startAcquire) from a store at a URL: bricks held
+// already are left out (an empty handle), the others read in one request per run of them lying
+// one after another in the file, the samples those of the local file; a load of held bricks only
+// is none.
+TEST_F(RemoteInFlight, ABackgroundLoadLeavesOutWhatIsHeld) {
+    test::CommandResult r = test::runVdiso("synth " + mDir.file("bkt/head.vdiso") + " --kind head --size 96 --quiet");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    LoopbackServer nginx = test::startNginx(mDir.file("bkt"), mDir.path().string(), mDir.file("nginx.log"));
+    StoreOpenOptions options;
+    BrickStoreReader remote("http://127.0.0.1:" + std::to_string(nginx.port()) + "/head.vdiso", options);
+    BrickStoreReader local(mDir.file("bkt/head.vdiso"));
+    BrickCache cache(remote, uint64_t(64) << 20);
+    ASSERT_TRUE(cache.loadsInBackground());
+    // Three x-neighbours, one after another in the file.
+    const std::vector<int64_t> ids = {0, 1, 2};
+    ASSERT_TRUE(remote.readsTogether(0, 1) && remote.readsTogether(1, 2));
+    BrickHandle held = cache.acquire(1);
+    const uint64_t before = remote.remote()->requests();
+
+    std::mutex lock;
+    std::condition_variable changed;
+    bool arrived = false;
+    auto signal = [&] {
+        std::lock_guard hold(lock);
+        arrived = true;
+        changed.notify_one();
+    };
+    std::unique_ptr<BrickLoad> load = cache.startAcquire(ids, signal, nullptr);
+    ASSERT_TRUE(load);
+    {
+        std::unique_lock hold(lock);
+        changed.wait(hold, [&] { return arrived; });
+    }
+    std::vector<BrickHandle> handles = cache.finishAcquire(*load);
+    ASSERT_EQ(handles.size(), 3u);
+    EXPECT_EQ(handles[1].samples(), nullptr);
+    EXPECT_EQ(remote.remote()->requests() - before, 2u);  // bricks 0 and 2 lie apart now
+    std::vector<unsigned char> expected(remote.brickBytes());
+    for (const size_t k : {size_t(0), size_t(2)}) {
+        ASSERT_NE(handles[k].samples(), nullptr);
+        local.readBrick(ids[k], expected.data());
+        EXPECT_EQ(std::memcmp(handles[k].samples(), expected.data(), expected.size()), 0) << "brick " << ids[k];
+    }
+    EXPECT_EQ(cache.loadsInFlight(), 0u);
+    EXPECT_FALSE(cache.startAcquire(ids, signal, nullptr));  // all held now
 }
 
 }  // namespace

@@ -153,6 +153,7 @@ BrickPrefetcher::Run BrickPrefetcher::takeRunLocked(size_t i) {
 void BrickPrefetcher::keepLocked(const Run& run, std::vector<BrickHandle>& bricks) {
     for (size_t k = 0; k < run.size(); ++k) {
         const size_t item = run[k].second;
+        if (!bricks[k].samples()) continue;  // held or loading already when a background load started
         if (item == kOfferedItem) {  // in the source now; its pin goes with `bricks`
             ++mOfferedLoaded;
             continue;
@@ -262,11 +263,9 @@ void BrickPrefetcher::runInBackground() {
         if (mItems[i] == kCancelled || mTaken[i]) continue;
         const Run run = takeRunLocked(i);
         lock.unlock();
-        // Where a brick of the run is held or loading already, each of the others on its own.
         // (Never acquired here: a reader that waited on a brick loading would keep the loads
         // that arrived, that one's among them, from being finished.)
-        if (!startLoad(run) && run.size() > 1)
-            for (const auto& brick : run) startLoad(Run{brick});
+        startLoad(run);
         lock.lock();
     }
 }

@@ -95,8 +95,8 @@ private:
     void keepLocked(const Run& run, std::vector<BrickHandle>& bricks);
     // A load's arrival or its storing: the second puts it on mArrived.
     void loadReadyLocked(Load* load);
-    // Starts loading the run's bricks (BrickSource::startAcquire); false, nothing started, where
-    // one is held or loading already or the start failed.
+    // Starts loading the run's bricks not held or loading already (BrickSource::startAcquire);
+    // false, nothing started, where every one is or the start failed.
     bool startLoad(const Run& run);
     // Under the lock: items a reader could take now (within the published list and the
     // look-ahead). Work that appears wakes one reader, which wakes the next while more is left.
