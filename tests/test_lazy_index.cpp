@@ -92,13 +92,30 @@ std::vector<unsigned char> rawIndex(size_t bytes) {
 }
 
 TEST(LazyIndex, PartsAskedForAreReadAndClosingAbandonsTheBackground) {
-    const std::vector<unsigned char> raw = rawIndex(3 * store_format::kIndexPartBytes + 100);  // 4 parts
+    // 4 parts that zstd cannot shrink: about 1 MB stored each, a request each.
+    std::vector<unsigned char> raw(3 * store_format::kIndexPartBytes + 100);
+    uint64_t x = 88172645463325252ull;
+    for (unsigned char& b : raw) {
+        x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+        b = static_cast<unsigned char>(x);
+    }
     const std::vector<unsigned char> packed = store_format::packIndex(raw);
     HeldSource source(packed);
     {
         LazyIndex index(source, 0, packed.size(), raw.size());
         index.need(0, raw.size());  // in the foreground: read at once
         EXPECT_EQ(std::memcmp(index.raw(), raw.data(), raw.size()), 0);
+        EXPECT_EQ(source.mReads.load(), 1 + 4);  // the directory, then a part a request
+    }
+    {
+        // Parts that shrink to a few KB are read together, up to LazyIndex::kRequestBytes.
+        const std::vector<unsigned char> small = rawIndex(raw.size());
+        const std::vector<unsigned char> smallPacked = store_format::packIndex(small);
+        HeldSource smallSource(smallPacked);
+        LazyIndex index(smallSource, 0, smallPacked.size(), small.size());
+        index.need(0, small.size());
+        EXPECT_EQ(std::memcmp(index.raw(), small.data(), small.size()), 0);
+        EXPECT_EQ(smallSource.mReads.load(), 1 + 1);  // the directory, then the parts at once
     }
     {
         LazyIndex index(source, 0, packed.size(), raw.size());

@@ -1,6 +1,9 @@
 #include "io/store/lazy_index.h"
 
 #include <algorithm>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
 #include <optional>
 
 #include <tbb/parallel_for.h>
@@ -59,136 +62,165 @@ LazyIndex::~LazyIndex() {
 }
 
 void LazyIndex::load(uint64_t begin, uint64_t end) const {
-    readParts(mDirectory.partOf(begin), mDirectory.partOf(end - 1) + 1, false);
+    readParts(mDirectory.partOf(begin), mDirectory.partOf(end - 1) + 1);
 }
 
-void LazyIndex::readInBackground(uint64_t begin, size_t readers) {
+// Consecutive parts read in one request: their stored bytes, one buffer, and what became of
+// each (unpacked by the source's check when it has a disk cache, else after the answer).
+struct LazyIndex::PartsRequest {
+    std::vector<uint64_t> parts;
+    std::unique_ptr<unsigned char[]> stored;
+    std::unique_ptr<std::atomic<int8_t>[]> good;  // per part: -1 not unpacked yet, 0 corrupt, 1 here
+    std::exception_ptr failure;
+};
+
+std::vector<std::vector<uint64_t>> LazyIndex::requestsFor(const std::vector<uint64_t>& parts) const {
+    std::vector<std::vector<uint64_t>> requests;
+    uint64_t bytes = 0;
+    for (const uint64_t i : parts) {
+        const uint64_t n = mDirectory.offsets[i + 1] - mDirectory.offsets[i];
+        if (requests.empty() || requests.back().back() + 1 != i || bytes + n > kRequestBytes) {
+            requests.emplace_back();
+            bytes = 0;
+        }
+        requests.back().push_back(i);
+        bytes += n;
+    }
+    return requests;
+}
+
+void LazyIndex::startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived) const {
+    const uint64_t first = mDirectory.offsets[r.parts.front()];
+    const size_t n = size_t(mDirectory.offsets[r.parts.back() + 1] - first);
+    r.stored = std::make_unique_for_overwrite<unsigned char[]>(n);
+    r.good = std::make_unique<std::atomic<int8_t>[]>(r.parts.size());
+    std::vector<ByteRange> pieces;
+    for (size_t k = 0; k < r.parts.size(); ++k) {
+        const uint64_t i = r.parts[k];
+        r.good[k] = -1;
+        pieces.push_back({mOffset + mDirectory.offsets[i], size_t(mDirectory.offsets[i + 1] - mDirectory.offsets[i]),
+                          r.stored.get() + (mDirectory.offsets[i] - first)});
+    }
+    // A remote disk cache keeps a part once it unpacks (its checksum passes).
+    auto unpack = [this, req = &r, at = pieces](size_t k) {
+        req->good[k] = store_format::unpackIndexPart(mDirectory, req->parts[k], static_cast<unsigned char*>(at[k].dst),
+                                                     mRaw.get() + req->parts[k] * store_format::kIndexPartBytes);
+        return req->good[k] == 1;
+    };
+    mSource.readCoveringAsync(mOffset + first, n, r.stored.get(), std::move(pieces), "index", unpack, cancel,
+                              [req = &r, arrived = std::move(arrived)](std::exception_ptr e) {
+                                  req->failure = e;
+                                  arrived();
+                              });
+}
+
+bool LazyIndex::settleRequest(PartsRequest& r) const {
+    const uint64_t first = mDirectory.offsets[r.parts.front()];
+    bool all = !r.failure;
+    for (size_t k = 0; k < r.parts.size(); ++k) {
+        const uint64_t i = r.parts[k];
+        if (!r.failure && r.good[k] < 0)
+            r.good[k] = store_format::unpackIndexPart(mDirectory, i, r.stored.get() + (mDirectory.offsets[i] - first),
+                                                      mRaw.get() + i * store_format::kIndexPartBytes);
+        all = all && r.good[k] == 1;
+    }
+    {
+        std::lock_guard lock(mLock);
+        for (size_t k = 0; k < r.parts.size(); ++k) {
+            const bool good = !r.failure && r.good[k] == 1;
+            mState[r.parts[k]] = good ? State::Here : State::Missing;
+            if (good) mReady[r.parts[k]].store(true, std::memory_order_release);
+        }
+    }
+    mChanged.notify_all();
+    return all;
+}
+
+void LazyIndex::readInBackground(uint64_t begin, size_t requests) {
     const uint64_t first = mDirectory.partOf(begin);
-    readers = std::max<size_t>(readers, 1);
-    mBackground.emplace_back([this, first, readers] {
-        // `readers` parts in flight at once, each asked for alone (a part is here as soon as
-        // its own answer is), the last part neither here nor on its way first; a source that
+    requests = std::max<size_t>(requests, 1);
+    mBackground.emplace_back([this, first, requests] {
+        // `requests` in flight at once, each of the last part neither here nor on its way, alone
+        // (a part is here as soon as its own answer is: grouped in requests of 1 MB, the parts a
+        // normal view waited for came later, and its views took 1.1-1.2x as long); a source that
         // reads in the background holds no thread while they wait, and this one unpacks them.
-        struct Part {
-            uint64_t i;
-            std::unique_ptr<unsigned char[]> stored;
-            std::atomic<int8_t> good{-1};  // -1: not unpacked yet (a disk cache's check unpacks)
-            std::exception_ptr failure;
-        };
         std::mutex arrivedLock;
         std::condition_variable arrivedChanged;
-        std::vector<Part*> arrived;
+        std::vector<PartsRequest*> arrived;
         size_t inFlight = 0;
         bool failed = false;
         for (;;) {
-            std::vector<std::unique_ptr<Part>> starting;
+            std::vector<std::vector<uint64_t>> starting;
             {
                 // Chosen and claimed at once: a part is never asked for twice.
                 std::lock_guard lock(mLock);
                 uint64_t i = mDirectory.parts();
-                while (!failed && !mStop && inFlight + starting.size() < readers) {
+                while (!failed && !mStop && inFlight + starting.size() < requests) {
                     while (i > first && mState[i - 1] != State::Missing) --i;
                     if (i == first) break;
                     mState[--i] = State::OnItsWay;
-                    starting.push_back(std::make_unique<Part>());
-                    starting.back()->i = i;
+                    starting.push_back({i});
                 }
             }
-            for (std::unique_ptr<Part>& owned : starting) {
-                Part* part = owned.release();  // until it arrives
-                const size_t n = size_t(mDirectory.offsets[part->i + 1] - mDirectory.offsets[part->i]);
-                part->stored = std::make_unique_for_overwrite<unsigned char[]>(n);
+            for (std::vector<uint64_t>& parts : starting) {
+                auto* r = new PartsRequest{std::move(parts), nullptr, nullptr, nullptr};
                 ++inFlight;
-                // A remote disk cache keeps a part once it unpacks (its checksum passes).
-                auto unpack = [this, part](size_t) {
-                    part->good = store_format::unpackIndexPart(mDirectory, part->i, part->stored.get(),
-                                                               mRaw.get() + part->i * store_format::kIndexPartBytes);
-                    return part->good == 1;
-                };
-                mSource.readCoveringAsync(mOffset + mDirectory.offsets[part->i], n, part->stored.get(), {}, "index",
-                                          unpack, &mStop, [&, part](std::exception_ptr e) {
-                                              std::lock_guard lock(arrivedLock);
-                                              part->failure = e;
-                                              arrived.push_back(part);
-                                              arrivedChanged.notify_one();
-                                          });
+                startRequest(*r, &mStop, [&, r] {
+                    std::lock_guard lock(arrivedLock);
+                    arrived.push_back(r);
+                    arrivedChanged.notify_one();
+                });
             }
             if (inFlight == 0) return;
-            std::vector<Part*> landed;
+            std::vector<PartsRequest*> landed;
             {
                 std::unique_lock lock(arrivedLock);
                 arrivedChanged.wait(lock, [&] { return !arrived.empty(); });
                 landed.swap(arrived);
             }
-            for (Part* p : landed) {
-                std::unique_ptr<Part> part(p);
+            for (PartsRequest* p : landed) {
+                std::unique_ptr<PartsRequest> r(p);
                 --inFlight;
-                if (!part->failure && part->good < 0)
-                    part->good = store_format::unpackIndexPart(mDirectory, part->i, part->stored.get(),
-                                                               mRaw.get() + part->i * store_format::kIndexPartBytes);
-                const bool good = !part->failure && part->good == 1;
-                // A part that failed is left Missing, to be read when asked for (and its error met);
-                // the background gives up.
-                failed = failed || !good;
-                {
-                    std::lock_guard lock(mLock);
-                    mState[part->i] = good ? State::Here : State::Missing;
-                    if (good) mReady[part->i].store(true, std::memory_order_release);
-                }
-                mChanged.notify_all();
+                // A part that failed is left Missing, to be read when asked for (and its error
+                // met); the background gives up.
+                failed = !settleRequest(*r) || failed;
             }
         }
     });
 }
 
-bool LazyIndex::fetchParts(const std::vector<uint64_t>& mine, bool background) const {
-    std::vector<std::unique_ptr<unsigned char[]>> stored(mine.size());
-    std::vector<ByteRange> ranges(mine.size());
-    for (size_t k = 0; k < mine.size(); ++k) {
-        const uint64_t i = mine[k];
-        const size_t n = size_t(mDirectory.offsets[i + 1] - mDirectory.offsets[i]);
-        stored[k] = std::make_unique_for_overwrite<unsigned char[]>(n);
-        ranges[k] = {mOffset + mDirectory.offsets[i], n, stored[k].get()};
-    }
-    std::exception_ptr failure;
-    std::vector<char> good(mine.size(), 0), unpacked(mine.size(), 0);
-    auto unpack = [&](size_t k) {
-        const uint64_t i = mine[k];
-        good[k] = store_format::unpackIndexPart(mDirectory, i, stored[k].get(),
-                                               mRaw.get() + i * store_format::kIndexPartBytes);
-        unpacked[k] = 1;
-        return good[k] != 0;
-    };
-    try {
-        // A remote disk cache keeps a part once it unpacks (its checksum passes).
-        // In the background, a transfer in flight ends when the index is closed.
-        mSource.readMany(ranges, "index", unpack, background ? &mStop : nullptr);
-        tbb::parallel_for(size_t(0), mine.size(), [&](size_t k) {
-            if (!unpacked[k]) unpack(k);
+bool LazyIndex::fetchParts(const std::vector<uint64_t>& mine) const {
+    // Every request at once, then waited for.
+    std::vector<std::unique_ptr<PartsRequest>> requests;
+    std::mutex lock;
+    std::condition_variable changed;
+    size_t left = 0;
+    for (std::vector<uint64_t>& parts : requestsFor(mine))
+        requests.push_back(std::make_unique<PartsRequest>(PartsRequest{std::move(parts), nullptr, nullptr, nullptr}));
+    left = requests.size();
+    for (auto& r : requests)
+        startRequest(*r, nullptr, [&] {
+            std::lock_guard hold(lock);
+            if (--left == 0) changed.notify_one();
         });
-    } catch (...) {
-        failure = std::current_exception();
-    }
-    int64_t corrupt = -1;
     {
-        std::lock_guard lock(mLock);
-        for (size_t k = 0; k < mine.size(); ++k) {
-            mState[mine[k]] = good[k] ? State::Here : State::Missing;
-            if (good[k]) mReady[mine[k]].store(true, std::memory_order_release);
-            else if (corrupt < 0 && !failure) corrupt = int64_t(mine[k]);
-        }
+        std::unique_lock hold(lock);
+        changed.wait(hold, [&] { return left == 0; });
     }
-    mChanged.notify_all();
-    if ((failure || corrupt >= 0) && background) return false;
-    if (failure) std::rethrow_exception(failure);
-    if (corrupt >= 0)
-        throwIoError(mSource.name(), "index part " + std::to_string(corrupt) + " of " +
-                                         std::to_string(mDirectory.parts()) +
-                                         " is corrupt (checksum mismatch or bad zstd data)");
+    std::vector<char> good(requests.size());
+    tbb::parallel_for(size_t(0), requests.size(), [&](size_t k) { good[k] = settleRequest(*requests[k]); });
+    for (size_t k = 0; k < requests.size(); ++k) {
+        if (requests[k]->failure) std::rethrow_exception(requests[k]->failure);
+        for (size_t j = 0; j < requests[k]->parts.size(); ++j)
+            if (requests[k]->good[j] != 1)
+                throwIoError(mSource.name(), "index part " + std::to_string(requests[k]->parts[j]) + " of " +
+                                                 std::to_string(mDirectory.parts()) +
+                                                 " is corrupt (checksum mismatch or bad zstd data)");
+    }
     return true;
 }
 
-bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const {
+void LazyIndex::readParts(uint64_t first, uint64_t last) const {
     for (;;) {
         std::vector<uint64_t> mine;
         {
@@ -199,18 +231,17 @@ bool LazyIndex::readParts(uint64_t first, uint64_t last, bool background) const 
                     mine.push_back(i);
                 }
         }
-        if (!mine.empty() && !fetchParts(mine, background)) return false;
+        if (!mine.empty()) fetchParts(mine);
         std::unique_lock lock(mLock);
         auto settled = [&] {
             for (uint64_t i = first; i < last; ++i)
                 if (mState[i] == State::OnItsWay) return false;
             return true;
         };
-        mChanged.wait(lock, [&] { return settled() || (background && mStop.load()); });
-        if (background && mStop) return false;
+        mChanged.wait(lock, settled);
         bool all = true;
         for (uint64_t i = first; i < last; ++i) all = all && mState[i] == State::Here;
-        if (all) return true;
+        if (all) return;
         // Another reader's fetch of a part failed: read it here (and meet its error).
     }
 }

@@ -14,6 +14,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -54,20 +55,31 @@ public:
             if (!mReady[i].load(std::memory_order_acquire)) return load(begin, end);
     }
 
-    // Starts reading every part holding raw bytes from `begin` on, the last part first,
-    // `readers` at once, on one thread of its own that unpacks them (from a source that reads
-    // in the background, no thread waits on a part).
-    void readInBackground(uint64_t begin, size_t readers);
+    // Starts reading every part holding raw bytes from `begin` on, the last part first, one a
+    // request, `requests` at once, on one thread of its own that unpacks them (from a source
+    // that reads in the background, no thread waits on a request).
+    void readInBackground(uint64_t begin, size_t requests);
+
+    // Parts asked for together (need(): the entries at the open) are read in requests of
+    // consecutive parts, up to this many stored bytes each: a 2560^3 store's 19 parts of entries
+    // went in as many requests.
+    static constexpr uint64_t kRequestBytes = uint64_t(1) << 20;
 
 private:
     enum class State : uint8_t { Missing, OnItsWay, Here };
     void load(uint64_t begin, uint64_t end) const;
-    // Reads the parts [first, last) not here, as need() says; `background`: gives up quietly
-    // on a failure (false; the parts are left Missing) and stops when asked to.
-    bool readParts(uint64_t first, uint64_t last, bool background) const;
-    // Reads parts `mine`, claimed (OnItsWay) by the caller, and settles them; false, in the
-    // background, when that failed (else it throws).
-    bool fetchParts(const std::vector<uint64_t>& mine, bool background) const;
+    // Reads the parts [first, last) not here, as need() says, and waits for those on their way.
+    void readParts(uint64_t first, uint64_t last) const;
+    // Reads parts `mine` (ascending), claimed (OnItsWay) by the caller, in requests of
+    // consecutive parts at once, and settles them; throws the first failure, or names a corrupt part.
+    bool fetchParts(const std::vector<uint64_t>& mine) const;
+    struct PartsRequest;
+    // `parts` (ascending) cut into requests: consecutive, up to kRequestBytes stored each.
+    std::vector<std::vector<uint64_t>> requestsFor(const std::vector<uint64_t>& parts) const;
+    // Sends one request of consecutive parts; `arrived` once it has ended (on any thread).
+    void startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived) const;
+    // Unpacks what arrived and marks each part Here or Missing; whether all are here.
+    bool settleRequest(PartsRequest& r) const;
 
     const ByteSource& mSource;
     uint64_t mOffset;
