@@ -25,7 +25,6 @@ void BrickPrefetcher::stop() {
         std::lock_guard lock(mMutex);
         mStop = true;
     }
-    mCancelLoads = true;
     mChanged.notify_all();
     for (std::thread& t : mThreads)
         if (t.joinable()) t.join();
@@ -283,7 +282,7 @@ bool BrickPrefetcher::startLoad(const Run& run) {
         started = mSource.startAcquire(ids, [this, load] {
             std::lock_guard hold(mMutex);
             loadReadyLocked(load);
-        }, &mCancelLoads);
+        }, nullptr);
     } catch (...) {
         // Left for the extraction's own acquire to meet and report, as a failed read is.
     }

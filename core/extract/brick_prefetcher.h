@@ -67,7 +67,9 @@ public:
     // Item i is no longer wanted: it is not loaded if the thread has not got to it yet.
     void cancel(size_t i);
     // Ends the thread at once (loading nothing more) and releases every pin; for an
-    // extraction that has finished early or that will use nothing more it pushed.
+    // extraction that has finished early or that will use nothing more it pushed. Loads in the
+    // background already on their way are waited for and kept in the source (a server's next
+    // frame, from a nearby camera, likely wants them): at most about a round trip.
     void stop();
 
     // Items loaded by the thread and released unused (skipped by consumed, or left at stop).
@@ -127,7 +129,6 @@ private:
     bool mBackground = false;
     size_t mLoading = 0;            // loads started, not yet finished
     std::vector<Load*> mArrived;    // arrived and stored, to finish (owned)
-    std::atomic<bool> mCancelLoads{false};  // set by stop(): the requests in flight end
 };
 
 }  // namespace vdiso
