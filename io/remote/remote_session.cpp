@@ -30,6 +30,7 @@ struct RemoteSession::Impl {
     std::vector<double> firstBytesMs;  // the last kFirstBytesKept, as a ring
     size_t firstBytesNext = 0;
     static constexpr size_t kFirstBytesKept = 64;
+    std::atomic<int64_t> stragglerMs{0};  // from firstBytesMs, at each new one
     pid_t pid = ::getpid();              // the process whose thread runs the transfers
     std::unique_ptr<TransferLoop> loop;  // last: it ends before the share goes
 };
@@ -74,19 +75,15 @@ void RemoteSession::noteFirstByteMs(double ms) {
     std::lock_guard lock(d.firstBytesLock);
     if (d.firstBytesMs.size() < Impl::kFirstBytesKept) d.firstBytesMs.push_back(ms);
     else d.firstBytesMs[d.firstBytesNext++ % Impl::kFirstBytesKept] = ms;
+    if (d.firstBytesMs.size() < kStragglerSamples) return;
+    // The deadline made here, once an answer, not at each of the progress calls that ask for it.
+    std::vector<double> seen = d.firstBytesMs;
+    std::nth_element(seen.begin(), seen.begin() + ptrdiff_t(seen.size() / 2), seen.end());
+    d.stragglerMs.store(std::max<int64_t>(kStragglerFloorMs, int64_t(kStragglerFactor * seen[seen.size() / 2])),
+                        std::memory_order_relaxed);
 }
 
-int64_t RemoteSession::stragglerMs() const {
-    const Impl& d = *mImpl;
-    std::vector<double> seen;
-    {
-        std::lock_guard lock(d.firstBytesLock);
-        if (d.firstBytesMs.size() < kStragglerSamples) return 0;
-        seen = d.firstBytesMs;
-    }
-    std::nth_element(seen.begin(), seen.begin() + ptrdiff_t(seen.size() / 2), seen.end());
-    return std::max<int64_t>(kStragglerFloorMs, int64_t(kStragglerFactor * seen[seen.size() / 2]));
-}
+int64_t RemoteSession::stragglerMs() const { return mImpl->stragglerMs.load(std::memory_order_relaxed); }
 
 S3Location RemoteSession::s3Location(const std::string& s3Url) const {
     std::string bucket, key;
