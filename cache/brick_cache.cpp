@@ -250,27 +250,38 @@ std::unique_ptr<BrickLoad> BrickCache::startAcquire(std::span<const int64_t> ids
         mCounters.misses += claimed.size();
     }
     if (claimed.empty()) return nullptr;
-    // In file order, cut where a brick does not follow the one before.
-    std::sort(claimed.begin(), claimed.end(), [&](size_t a, size_t b) {
-        return mStore.index()[size_t(ids[a])].offset < mStore.index()[size_t(ids[b])].offset;
-    });
-    for (size_t k = 0; k < claimed.size(); ++k) {
-        if (k == 0 || !mStore.readsTogether(ids[claimed[k - 1]], ids[claimed[k]])) load->runs.emplace_back();
-        load->runs.back().push_back(claimed[k]);
+    // Everything the requests need made before the first is sent (nothing can fail after it:
+    // a request started must not outlive the load it writes into).
+    std::vector<std::vector<int64_t>> runIds;
+    std::function<void()> runArrived;
+    try {
+        // In file order, cut where a brick does not follow the one before.
+        std::sort(claimed.begin(), claimed.end(), [&](size_t a, size_t b) {
+            return mStore.index()[size_t(ids[a])].offset < mStore.index()[size_t(ids[b])].offset;
+        });
+        for (size_t k = 0; k < claimed.size(); ++k) {
+            if (k == 0 || !mStore.readsTogether(ids[claimed[k - 1]], ids[claimed[k]])) {
+                load->runs.emplace_back();
+                runIds.emplace_back();
+            }
+            load->runs.back().push_back(claimed[k]);
+            runIds.back().push_back(ids[claimed[k]]);
+        }
+        load->reads.reserve(load->runs.size());
+        // `arrived` once every run's read has.
+        auto left = std::make_shared<std::atomic<size_t>>(load->runs.size());
+        runArrived = [left, arrived = std::move(arrived)] {
+            if (--*left == 0) arrived();
+        };
+    } catch (...) {
+        std::lock_guard lock(mMutex);
+        for (const size_t k : claimed) abandonLocked(load->slotAt[k]);
+        throw;
     }
     load->started = Clock::now();
-    // `arrived` once every run's read has.
-    auto left = std::make_shared<std::atomic<size_t>>(load->runs.size());
-    auto runArrived = [left, arrived = std::move(arrived)] {
-        if (--*left == 0) arrived();
-    };
     ++mLoadsInFlight;
-    for (const std::vector<size_t>& run : load->runs) {
-        std::vector<int64_t> runIds;
-        for (const size_t k : run) runIds.push_back(ids[k]);
-        // (startStoredBricks reports its failures through the read, to finishAcquire.)
-        load->reads.push_back(mStore.startStoredBricks(runIds, runArrived, cancel));
-    }
+    // (startStoredBricks reports its failures through the read, to finishAcquire, not by throwing.)
+    for (const std::vector<int64_t>& run : runIds) load->reads.push_back(mStore.startStoredBricks(run, runArrived, cancel));
     return load;
 }
 
@@ -311,7 +322,7 @@ std::vector<BrickHandle> BrickCache::finishAcquire(BrickLoad& l) {
 
 size_t BrickCache::loadsWanted() const {
     const RemoteFile* remote = mStore.remote();
-    return remote ? remote->wantedInFlight(kLeastLoads, size_t(remote->connections())) : 0;
+    return remote ? remote->wantedInFlight(size_t(remote->connections()), size_t(remote->connections())) : 0;
 }
 
 size_t BrickCache::loadsInFlight() const { return mLoadsInFlight.load(std::memory_order_relaxed); }

@@ -249,6 +249,12 @@ void BrickPrefetcher::runInBackground() {
             mChanged.notify_all();  // the other reader may be waiting for the last arrival
             return;
         }
+        if (mStop) {
+            // Loads on their way are waited for, but not longer than kStopPatience: a server
+            // that stalls would otherwise hold the stop for its whole timeout.
+            if (mChanged.wait_for(lock, kStopPatience) == std::cv_status::timeout) mCancelLoads = true;
+            continue;
+        }
         if (!work) {
             mChanged.wait(lock);
             continue;
@@ -282,7 +288,7 @@ bool BrickPrefetcher::startLoad(const Run& run) {
         started = mSource.startAcquire(ids, [this, load] {
             std::lock_guard hold(mMutex);
             loadReadyLocked(load);
-        }, nullptr);
+        }, &mCancelLoads);
     } catch (...) {
         // Left for the extraction's own acquire to meet and report, as a failed read is.
     }

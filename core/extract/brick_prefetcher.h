@@ -16,6 +16,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -69,7 +70,8 @@ public:
     // Ends the thread at once (loading nothing more) and releases every pin; for an
     // extraction that has finished early or that will use nothing more it pushed. Loads in the
     // background already on their way are waited for and kept in the source (a server's next
-    // frame, from a nearby camera, likely wants them): at most about a round trip.
+    // frame, from a nearby camera, likely wants them): about a round trip, at most a second
+    // (then they are ended).
     void stop();
 
     // Items loaded by the thread and released unused (skipped by consumed, or left at stop).
@@ -128,6 +130,8 @@ private:
     // Loading in the background.
     bool mBackground = false;
     size_t mLoading = 0;            // loads started, not yet finished
+    std::atomic<bool> mCancelLoads{false};  // the loads in flight end (a stop waited too long)
+    static constexpr std::chrono::milliseconds kStopPatience{1000};
     std::vector<Load*> mArrived;    // arrived and stored, to finish (owned)
 };
 

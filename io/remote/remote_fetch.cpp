@@ -33,12 +33,13 @@ struct Transfer {
     std::string contentRange, etag, lastModified, contentEncoding, retryAfter, bucketRegion, errorBody;
     size_t headerBytes = 0;  // the response's headers so far
     bool hugeHeader = false;
-    // A straggler: no answer `session->stragglerMs()` after `start` (asked while waiting, so that
-    // a request sent before the session knew its usual wait is judged too); ended, to be tried
-    // again. No session: no deadline.
+    // A straggler: no answer `session->stragglerMs()` after the transfer began (libcurl's clock:
+    // from when the loop took it, not from when it was submitted, so that a request waiting its
+    // turn behind the session's bound is not judged; asked while waiting, so that a request sent
+    // before the session knew its usual wait is judged too); ended, to be tried again. No
+    // session: no deadline.
     const RemoteSession* session = nullptr;
     int64_t stallMs = 0;
-    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
     int64_t stragglerMs = 0;  // the deadline it was ended at
     bool answered = false, straggler = false;
 };
@@ -90,8 +91,10 @@ int onProgress(void* user, curl_off_t, curl_off_t, curl_off_t, curl_off_t) {
     auto& t = *static_cast<Transfer*>(user);
     if (t.session && !t.answered) {
         const int64_t deadline = t.session->stragglerMs();
+        curl_off_t elapsedUs = 0;
         if (deadline > 0 && deadline < t.stallMs &&
-            std::chrono::steady_clock::now() - t.start > std::chrono::milliseconds(deadline)) {
+            curlLibrary().easy_getinfo(t.curl, CURLINFO_TOTAL_TIME_T, &elapsedUs) == CURLE_OK &&
+            elapsedUs > deadline * 1000) {
             t.stragglerMs = deadline;
             t.straggler = true;
             return 1;
@@ -283,24 +286,30 @@ void RemoteFile::sendTry(const std::shared_ptr<Fetch>& fp) const {
 void RemoteFile::tryEnded(const std::shared_ptr<Fetch>& fp, CURLcode rc) const {
     Fetch& f = *fp;
     Impl& d = *mImpl;
+    // Judged inside the try; what follows (the answer, the next try, the failure) outside it, so
+    // that the callback is called once whatever it does.
+    Answer answer;
+    int64_t pauseMs = 0;
+    std::exception_ptr failure;
+    bool answered = false;
     try {
-        Answer answer;
-        int64_t pauseMs = 0;
-        if (judgeTry(f, rc, answer, pauseMs)) return f.done(&answer, nullptr);
-        if (pauseMs <= 0) return sendTry(fp);
-        if (Fetch::Clock::now() + std::chrono::milliseconds(pauseMs) > f.deadline)
+        answered = judgeTry(f, rc, answer, pauseMs);
+        if (!answered && pauseMs > 0 && Fetch::Clock::now() + std::chrono::milliseconds(pauseMs) > f.deadline)
             throw failFetch(d.failures, d.failureLock, d.failure, mName,
                             f.lastProblem + "; waiting " + std::to_string(pauseMs) + " ms to try again would pass the " +
                                 f.deadlineText + " a read may take (--remote-deadline)");
-        // The pause ends early when the read would end anyway (sendTry then says why).
-        const std::atomic<bool>* stop = d.session->options().stop.get();
-        d.session->loop().after(pauseMs, [this, fp] { sendTry(fp); }, [this, fp, stop] {
-            return mImpl->failures.load() != fp->failuresAtStart || interruptRequested() || (stop && stop->load()) ||
-                   (fp->cancel && fp->cancel->load());
-        });
     } catch (...) {
-        f.done(nullptr, std::current_exception());
+        failure = std::current_exception();
     }
+    if (failure) return f.done(nullptr, failure);
+    if (answered) return f.done(&answer, nullptr);
+    if (pauseMs <= 0) return sendTry(fp);
+    // The pause ends early when the read would end anyway (sendTry then says why).
+    const std::atomic<bool>* stop = d.session->options().stop.get();
+    d.session->loop().after(pauseMs, [this, fp] { sendTry(fp); }, [this, fp, stop] {
+        return mImpl->failures.load() != fp->failuresAtStart || interruptRequested() || (stop && stop->load()) ||
+               (fp->cancel && fp->cancel->load());
+    });
 }
 
 bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseMs) const {

@@ -136,53 +136,62 @@ void RemoteFile::readMany(std::span<const ByteRange> ranges, const RangeCheck& i
 
 void RemoteFile::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
                                    RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const {
+    // `done` is called once, and never from inside the try: a callback that threw would
+    // otherwise be called again from the catch.
+    std::exception_ptr failure;
     try {
-        if (n == 0) return done(nullptr);
-        if (offset > mSize || n > mSize - offset)
-            throwIoError(mName, "has " + std::to_string(mSize) + " bytes: no range " + std::to_string(offset) +
-                                    "-" + std::to_string(offset + n - 1));
         // Without pieces, or for the store's head (kept from the open), the range is one piece.
         const bool whole = pieces.size() < 2 || offset < mHead.size();
         const size_t count = std::max<size_t>(pieces.size(), 1);
         if (whole) pieces.assign(1, ByteRange{offset, n, dst});
-        auto intactPiece = [intact, whole, count](size_t k) {
-            if (!intact) return true;
-            if (!whole) return intact(k);
-            for (size_t j = 0; j < count; ++j)  // the whole range: intact when each piece is
-                if (!intact(j)) return false;
-            return true;
-        };
-        if (offset + n <= mHead.size()) {
-            std::memcpy(dst, mHead.data() + offset, n);
-            intactPiece(0);  // its last call is on what dst holds (RangeCheck)
-            return done(nullptr);
+        if (n == 0 || answeredHere(offset, n, dst, pieces, intact, whole, count)) {
+            done(nullptr);
+            return;
         }
-        if (mDiskCache) {
-            bool held = true;
-            for (size_t k = 0; k < pieces.size() && held; ++k) {
-                held = mDiskCache->read(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
-                if (held && !intactPiece(k)) {
-                    mDiskCache->drop(pieces[k].offset, pieces[k].bytes);  // kept damaged: fetched anew
-                    held = false;
-                }
-            }
-            if (held) return done(nullptr);
-        }
-        fetchAsync(offset, n, dst, false, cancel,
-                   [this, pieces = std::move(pieces), intactPiece, done = std::move(done)](const Answer*,
-                                                                                          std::exception_ptr e) {
-                       if (!e && mDiskCache)
-                           for (size_t k = 0; k < pieces.size(); ++k)
-                               if (intactPiece(k)) mDiskCache->write(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
-                       done(e);
-                   });
+        fetchAsync(offset, n, dst, false, cancel, [this, pieces, intact, whole, count, done](const Answer*, std::exception_ptr e) {
+            if (!e && mDiskCache)
+                for (size_t k = 0; k < pieces.size(); ++k)
+                    if (intactPiece(intact, whole, count, k)) mDiskCache->write(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
+            done(e);
+        });
+        return;
     } catch (...) {
-        done(std::current_exception());
+        failure = std::current_exception();
     }
+    done(failure);
 }
 
-size_t RemoteFile::wantedInFlight(size_t least, size_t most) const {
-    return mImpl->session->loop().wantedInFlight(least, most);
+bool RemoteFile::intactPiece(const RangeCheck& intact, bool whole, size_t count, size_t k) {
+    if (!intact) return true;
+    if (!whole) return intact(k);
+    for (size_t j = 0; j < count; ++j)  // the whole range: intact when each piece is
+        if (!intact(j)) return false;
+    return true;
+}
+
+bool RemoteFile::answeredHere(uint64_t offset, size_t n, void* dst, const std::vector<ByteRange>& pieces,
+                              const RangeCheck& intact, bool whole, size_t count) const {
+    if (offset > mSize || n > mSize - offset)
+        throwIoError(mName, "has " + std::to_string(mSize) + " bytes: no range " + std::to_string(offset) + "-" +
+                                std::to_string(offset + n - 1));
+    if (offset + n <= mHead.size()) {
+        std::memcpy(dst, mHead.data() + offset, n);
+        intactPiece(intact, whole, count, 0);  // its last call is on what dst holds (RangeCheck)
+        return true;
+    }
+    if (!mDiskCache) return false;
+    for (size_t k = 0; k < pieces.size(); ++k) {
+        if (!mDiskCache->read(pieces[k].offset, pieces[k].bytes, pieces[k].dst)) return false;
+        if (!intactPiece(intact, whole, count, k)) {
+            mDiskCache->drop(pieces[k].offset, pieces[k].bytes);  // kept damaged: fetched anew
+            return false;
+        }
+    }
+    return true;
+}
+
+size_t RemoteFile::wantedInFlight(size_t initial, size_t most) const {
+    return mImpl->session->loop().wantedInFlight(initial, most);
 }
 
 size_t RemoteFile::inFlight() const { return mImpl->session->loop().inFlight(); }

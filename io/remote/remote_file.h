@@ -104,8 +104,9 @@ public:
     void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, RangeCheck intact,
                            const std::atomic<bool>* cancel, ReadDone done) const;
     // Requests worth keeping in flight now (TransferLoop::wantedInFlight: twice what the link
-    // carries), within [least, most], and how many are (all of the session's objects').
-    size_t wantedInFlight(size_t least, size_t most) const;
+    // carries; `initial` until it can tell), at most `most`, and how many are (all of the
+    // session's objects').
+    size_t wantedInFlight(size_t initial, size_t most) const;
     size_t inFlight() const;
     // Requests the session runs at once at most (RemoteOptions::connections, clamped).
     int connections() const;
@@ -135,6 +136,14 @@ private:
     // A fetch's steps on the transfer thread: send a try; judge one that ended (an answer, a
     // failure thrown, or the pause before the next try).
     struct Fetch;
+    // readCoveringAsync's answers without a request: from the head kept at the open, or every
+    // piece from the disk cache (checked by `intact` as intactPiece says). Throws for a range
+    // beyond the object.
+    bool answeredHere(uint64_t offset, size_t n, void* dst, const std::vector<ByteRange>& pieces,
+                      const RangeCheck& intact, bool whole, size_t count) const;
+    // Piece k's check: `intact(k)`; for a range read `whole` (one piece standing for `count`),
+    // every one of them.
+    static bool intactPiece(const RangeCheck& intact, bool whole, size_t count, size_t k);
     void sendTry(const std::shared_ptr<Fetch>& f) const;
     void tryEnded(const std::shared_ptr<Fetch>& f, CURLcode rc) const;
     bool judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseMs) const;

@@ -85,24 +85,58 @@ void TransferLoop::noteEnded(const Pending& p, Clock::time_point now) {
     else mEnds[mEndsNext++ % kEndsKept] = end;
 }
 
-size_t TransferLoop::wantedInFlight(size_t least, size_t most) const {
-    least = std::max<size_t>(least, 1);
-    most = std::max(most, least);
-    std::lock_guard lock(mLock);
-    if (mEnds.size() < kEndsToTell) return least;
-    Clock::time_point first = mEnds[0].started, last = mEnds[0].ended;
-    double bytes = 0;
-    for (const End& e : mEnds) {
-        first = std::min(first, e.started);
-        last = std::max(last, e.ended);
-        bytes += e.bytes;
+size_t TransferLoop::wantedInFlight(size_t initial, size_t most) const {
+    constexpr size_t kLeast = 2;
+    most = std::max(most, kLeast);
+    std::vector<End> ends;
+    double leastFirstByte = 0;
+    {
+        std::lock_guard lock(mLock);
+        if (mEnds.size() < kEndsToTell) return std::clamp(initial, kLeast, most);
+        ends = mEnds;
+        leastFirstByte = mLeastFirstByte;
     }
-    const double span = std::chrono::duration<double>(last - first).count();
-    if (span <= 0) return most;
-    const double perRequest = bytes / double(mEnds.size());
-    const double held = bytes / span * mLeastFirstByte / perRequest;  // requests the link holds
-    return std::clamp(size_t(std::ceil(2 * held)) + 2, least, most);
+    // The rate the link delivered: the most over runs of kEndsToTell answers in a row (by when
+    // they ended), as BBR keeps its bandwidth's maximum: a reader that did not keep the link
+    // busy all the while (a traversal between bursts) did not measure the link.
+    std::sort(ends.begin(), ends.end(), [](const End& a, const End& b) { return a.ended < b.ended; });
+    double rate = 0, bytes = 0;
+    Clock::time_point first = ends.front().started;
+    for (const End& e : ends) {
+        bytes += e.bytes;
+        first = std::min(first, e.started);
+    }
+    if (const double span = std::chrono::duration<double>(ends.back().ended - first).count(); span > 0)
+        rate = bytes / span;  // all of them: answers that shared the link and ended together
+    for (size_t k = 0; k + kEndsToTell <= ends.size(); ++k) {
+        Clock::time_point first = ends[k].started;
+        double run = 0;
+        for (size_t j = k; j < k + kEndsToTell; ++j) {
+            first = std::min(first, ends[j].started);
+            run += ends[j].bytes;
+        }
+        const double span = std::chrono::duration<double>(ends[k + kEndsToTell - 1].ended - first).count();
+        if (span > 0) rate = std::max(rate, run / span);
+    }
+    if (rate <= 0) return most;
+    const double perRequest = bytes / double(ends.size());
+    const double held = rate * leastFirstByte / perRequest;  // requests the link holds
+    return std::clamp(size_t(std::ceil(2 * held)) + 2, kLeast, most);
 }
+
+namespace {
+
+// A callback on the loop's thread: one that throws (against its contract) must not end the
+// process with std::terminate, nor the loop that runs every other transfer.
+template <class Fn>
+void call(Fn&& fn) noexcept {
+    try {
+        fn();
+    } catch (...) {
+    }
+}
+
+}  // namespace
 
 void TransferLoop::run() {
     const CurlLibrary& curl = curlLibrary();
@@ -131,7 +165,7 @@ void TransferLoop::run() {
             }
             quit = mQuit;
         }
-        for (auto& fn : due) fn();
+        for (auto& fn : due) call(fn);
         due.clear();
         for (Pending* p : added) {
             p->started = now;
@@ -143,7 +177,7 @@ void TransferLoop::run() {
                     std::lock_guard lock(mLock);
                     --mInFlight;
                 }
-                p->done(CURLE_FAILED_INIT);
+                call([&] { p->done(CURLE_FAILED_INIT); });
                 delete p;
             }
         }
@@ -166,7 +200,7 @@ void TransferLoop::run() {
                 std::lock_guard lock(mLock);
                 --mInFlight;
             }
-            p->done(result);
+            call([&] { p->done(result); });
             delete p;
         }
         // Until a socket is ready, a submission wakes it, a timer is due or the tick (libcurl's

@@ -4,15 +4,18 @@
 //
 // submit(easy, done) starts the handle's transfer and returns at once; done(result) is called on
 // the loop's thread once the handle has left the loop (the handle is the caller's again), and
-// must be quick: it may submit again or set a timer (after), not wait. perform(easy) is
+// must be quick and not throw: it may submit again or set a timer (after), not wait. perform(easy) is
 // curl_easy_perform's contract for a caller on any thread: submit, then wait. The transfers'
 // own callbacks run on the loop's thread too. At most `maxInFlight` transfers run at once; the
 // others wait their turn in the order they came. Progress callbacks are called at least every
 // kTickMs while a transfer waits, for cancellation and straggler checks.
 //
 // The loop measures the link as its transfers find it, as BBR does: the bytes it delivers a
-// second (the last transfers' bytes over the time from the first one's start to the last one's
-// end, so that answers sharing the link and ending together count at its rate), the least time to an answer's first byte (the round trip
+// second (the most of the last 64 answers' bytes and of any 16 of them in a row, each over the
+// time from their first start to their last end: answers that shared the link and ended
+// together count at its rate, and a reader that left the link idle between bursts does not
+// lower it),
+// the least time to an answer's first byte (the round trip
 // without queueing: over the session, so that requests queued behind others do not raise it)
 // and the bytes a request brings. wantedInFlight gives twice the delay-bandwidth product in
 // requests, plus two: a window too small to fill the link finds the rate it delivers grow
@@ -60,9 +63,9 @@ public:
     // sooner() (if given) says true.
     void after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner = {});
 
-    // Requests worth keeping in flight (see above), within [least, most]; `least` until enough
-    // transfers have ended to tell.
-    size_t wantedInFlight(size_t least, size_t most) const;
+    // Requests worth keeping in flight (see above), at most `most` and at least 2; `initial`
+    // (within those) until enough transfers have ended to tell.
+    size_t wantedInFlight(size_t initial, size_t most) const;
     // Transfers submitted and not yet done (running or waiting their turn).
     size_t inFlight() const;
 

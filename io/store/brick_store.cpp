@@ -262,11 +262,13 @@ bool BrickStoreReader::readsInBackground() const { return !mExternal && mSource-
 std::shared_ptr<BrickStoreReader::StoredRead> BrickStoreReader::startStoredBricks(std::span<const int64_t> ids,
                                                                                    std::function<void()> arrived,
                                                                                    const std::atomic<bool>* cancel) const {
-    checkBrickIds(ids, mIndex.size(), mPath);
+    // Every failure goes through the read (to finishStoredBricks) and `arrived`, called once and
+    // outside the try: the caller may have claimed what the read is for.
     auto read = std::make_shared<StoredRead>();
     StoredRead* r = read.get();
-    r->ids.assign(ids.begin(), ids.end());
     try {
+        checkBrickIds(ids, mIndex.size(), mPath);
+        r->ids.assign(ids.begin(), ids.end());
         if (mIndex[size_t(ids[0])].external) throw std::logic_error("startStoredBricks: an indexed array's brick");
         size_t bytes = 0;
         const uint64_t first = coveringRange(ids, bytes);
@@ -278,14 +280,15 @@ std::shared_ptr<BrickStoreReader::StoredRead> BrickStoreReader::startStoredBrick
             return r->intact[k] == 1;
         };
         mSource->readCoveringAsync(first, bytes, dst, r->pieces, "brick data", check, cancel,
-                                   [r, arrived = std::move(arrived)](std::exception_ptr e) {
+                                   [r, arrived](std::exception_ptr e) {
                                        r->error = e;
                                        arrived();
                                    });
+        return read;
     } catch (...) {
         r->error = std::current_exception();
-        arrived();
     }
+    arrived();
     return read;
 }
 

@@ -5,6 +5,7 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 
 #include <tbb/parallel_for.h>
 
@@ -116,6 +117,7 @@ void LazyIndex::startRequest(PartsRequest& r, const std::atomic<bool>* cancel, s
 
 bool LazyIndex::settleRequest(PartsRequest& r) const {
     const uint64_t first = mDirectory.offsets[r.parts.front()];
+    if (!r.good && !r.failure) r.failure = std::make_exception_ptr(std::logic_error("index request not sent"));
     bool all = !r.failure;
     for (size_t k = 0; k < r.parts.size(); ++k) {
         const uint64_t i = r.parts[k];
@@ -165,11 +167,17 @@ void LazyIndex::readInBackground(uint64_t begin, size_t requests) {
             for (std::vector<uint64_t>& parts : starting) {
                 auto* r = new PartsRequest{std::move(parts), nullptr, nullptr, nullptr};
                 ++inFlight;
-                startRequest(*r, &mStop, [&, r] {
+                auto landed = [&, r] {
                     std::lock_guard lock(arrivedLock);
                     arrived.push_back(r);
                     arrivedChanged.notify_one();
-                });
+                };
+                try {
+                    startRequest(*r, &mStop, landed);
+                } catch (...) {  // not sent (it throws only before sending): settled as failed
+                    r->failure = std::current_exception();
+                    landed();
+                }
             }
             if (inFlight == 0) return;
             std::vector<PartsRequest*> landed;
@@ -195,14 +203,30 @@ bool LazyIndex::fetchParts(const std::vector<uint64_t>& mine) const {
     std::mutex lock;
     std::condition_variable changed;
     size_t left = 0;
-    for (std::vector<uint64_t>& parts : requestsFor(mine))
-        requests.push_back(std::make_unique<PartsRequest>(PartsRequest{std::move(parts), nullptr, nullptr, nullptr}));
+    try {
+        for (std::vector<uint64_t>& parts : requestsFor(mine))
+            requests.push_back(std::make_unique<PartsRequest>(PartsRequest{std::move(parts), nullptr, nullptr, nullptr}));
+    } catch (...) {  // nothing sent: the parts go back to Missing
+        {
+            std::lock_guard hold(mLock);
+            for (const uint64_t i : mine) mState[i] = State::Missing;
+        }
+        mChanged.notify_all();
+        throw;
+    }
     left = requests.size();
-    for (auto& r : requests)
-        startRequest(*r, nullptr, [&] {
-            std::lock_guard hold(lock);
-            if (--left == 0) changed.notify_one();
-        });
+    auto landed = [&] {
+        std::lock_guard hold(lock);
+        if (--left == 0) changed.notify_one();
+    };
+    for (auto& r : requests) {
+        try {
+            startRequest(*r, nullptr, landed);
+        } catch (...) {  // not sent (it throws only before sending): settled as failed
+            r->failure = std::current_exception();
+            landed();
+        }
+    }
     {
         std::unique_lock hold(lock);
         changed.wait(hold, [&] { return left == 0; });
