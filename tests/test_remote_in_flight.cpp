@@ -84,37 +84,45 @@ TEST_F(RemoteInFlight, TheWindowFollowsTheLinksDelayAndBandwidth) {
     EXPECT_GE(uncapped, 2 * longDelay) << "short delay " << shortDelay << ", long " << longDelay;
 }
 
-// A SAGE view of a store at a URL with small bricks (a few hundred requests, each held 30 ms):
-// the process's threads stay at the strips', their decoding readers' and the transfer thread's,
-// where a reader thread waited on each request in flight (32 a strip); the mesh is the local one.
+// A SAGE view of a store at a URL with small bricks (a few hundred requests, each held 30 ms),
+// and a full extraction of a coarse level (--level): the process's threads stay at the
+// strips', their decoding readers' and the transfer thread's, where a reader thread waited on
+// each request in flight (32 a strip); the mesh is the local one.
 TEST_F(RemoteInFlight, AViewKeepsItsRequestsInFlightWithoutAThreadEach) {
     test::CommandResult r =
         test::runVdiso("synth " + mDir.file("bkt/fine.vdiso") + " --kind head --size 128 --brick 8 --quiet");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     LoopbackServer nginx = test::startNginx(mDir.file("bkt"), mDir.path().string(), mDir.file("nginx.log"));
     LoopbackServer link = test::startLinkProxy(nginx.port(), 30, 0, mDir.file("link.log"));
-    const std::string view = std::string(VDISO_BINARY) + " extract --iso 600.5 --method sage --threads 2 --size 256x256 ";
+    const std::string view =
+        std::string(VDISO_BINARY) + " extract --iso 600.5 --method sage --threads 2 --size 256x256 --force ";
     const std::string url = "http://127.0.0.1:" + std::to_string(link.port()) + "/fine.vdiso";
-    // The most threads seen, sampled every 2 ms while the view runs.
-    r = test::runCommand("bash -c '" + view + "--stats " + mDir.file("remote.json") + " -o " + mDir.file("remote.ply") +
-                         " " + url + " & pid=$!; most=0; while kill -0 $pid 2>/dev/null; do "
-                         "n=$(ls /proc/$pid/task 2>/dev/null | wc -l); [ $n -gt $most ] && most=$n; sleep 0.002; done; "
-                         "wait $pid || exit 1; echo MOST $most'");
-    ASSERT_EQ(r.exitCode, 0) << r.output;
-    const size_t at = r.output.find("MOST ");
-    ASSERT_NE(at, std::string::npos) << r.output;
-    const int most = std::stoi(r.output.substr(at + 5));
-    // Main, 1 more strip, 2 readers a strip, the transfer thread, the index's background reader,
-    // TBB's and the output's few.
-    EXPECT_LE(most, 14) << r.output;
-    EXPECT_GE(most, 3) << r.output;  // the sampling saw the view run
-    const std::string stats = test::readText(mDir.file("remote.json"));
-    const size_t requests = std::stoul(stats.substr(stats.find("\"remote_requests\": ") + 19));
-    EXPECT_GE(requests, 100u) << stats;
+    // The whole surface, and a coarse level's by its own numbering (core/lod/level_source.h;
+    // a full method's, on one thread, which reads ahead).
+    for (const std::string level : {"", "--level 1 --method octree --threads 1 "}) {
+        SCOPED_TRACE(level);
+        // The most threads seen, sampled every 2 ms while the view runs.
+        r = test::runCommand("bash -c '" + view + level + "--stats " + mDir.file("remote.json") + " -o " +
+                             mDir.file("remote.ply") + " " + url +
+                             " & pid=$!; most=0; while kill -0 $pid 2>/dev/null; do "
+                             "n=$(ls /proc/$pid/task 2>/dev/null | wc -l); [ $n -gt $most ] && most=$n; sleep 0.002; done; "
+                             "wait $pid || exit 1; echo MOST $most'");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        const size_t at = r.output.find("MOST ");
+        ASSERT_NE(at, std::string::npos) << r.output;
+        const int most = std::stoi(r.output.substr(at + 5));
+        // Main, 1 more strip, 2 readers a strip, the transfer thread, the index's background
+        // reader, TBB's and the output's few.
+        EXPECT_LE(most, 14) << r.output;
+        EXPECT_GE(most, 3) << r.output;  // the sampling saw the view run
+        const std::string stats = test::readText(mDir.file("remote.json"));
+        const size_t requests = std::stoul(stats.substr(stats.find("\"remote_requests\": ") + 19));
+        EXPECT_GE(requests, level.empty() ? 100u : 20u) << stats;
 
-    r = test::runCommand(view + "-o " + mDir.file("local.ply") + " " + mDir.file("bkt/fine.vdiso"));
-    ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_EQ(test::readFile(mDir.file("remote.ply")), test::readFile(mDir.file("local.ply")));
+        r = test::runCommand(view + level + "-o " + mDir.file("local.ply") + " " + mDir.file("bkt/fine.vdiso"));
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_EQ(test::readFile(mDir.file("remote.ply")), test::readFile(mDir.file("local.ply")));
+    }
 }
 
 // The cache's background loads (BrickCache::startAcquire) from a store at a URL: bricks held
