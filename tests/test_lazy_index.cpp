@@ -13,6 +13,9 @@
 #include <thread>
 #include <vector>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "io/error.h"
 #include "io/store/byte_source.h"
 #include "io/store/index_parts.h"
@@ -124,6 +127,35 @@ TEST(LazyIndex, PartsAskedForAreReadAndClosingAbandonsTheBackground) {
         ASSERT_EQ(source.mHeld.load(), 2);
     }  // returns only because the held reads are cancelled
     EXPECT_EQ(source.mCancelled.load(), 2);
+}
+
+// A process forked while parts were on their way (Python's multiprocessing forks): those were the
+// parent's requests, so the child asking for them gets an error saying what to do, not a wait for
+// ever.
+TEST(LazyIndex, PartsOnTheirWayAtAForkAreAnErrorInTheChild) {
+    const std::vector<unsigned char> raw = rawIndex(3 * store_format::kIndexPartBytes + 100);  // 4 parts
+    const std::vector<unsigned char> packed = store_format::packIndex(raw);
+    HeldSource source(packed);
+    LazyIndex index(source, 0, packed.size(), raw.size());
+    index.readInBackground(0, 1);  // every part in one request, held
+    for (int k = 0; k < 5000 && source.mHeld.load() < 1; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_EQ(source.mHeld.load(), 1);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        ::alarm(10);  // a wait for ever ends the child with SIGALRM
+        int code = 1;
+        try {
+            index.need(0, raw.size());
+        } catch (const IoError& e) {
+            code = std::string(e.what()).find("fork") != std::string::npos ? 0 : 2;
+        }
+        ::_exit(code);  // no destructors: this process has none of the parent's threads
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFEXITED(status)) << "the child was ended by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 TEST(LazyIndex, TheHeadersCopyOfTheDirectorySparesItsRead) {

@@ -262,6 +262,11 @@ void LazyIndex::readParts(uint64_t first, uint64_t last) const {
                 if (mState[i] == State::OnItsWay) return false;
             return true;
         };
+        // In a process forked from the one that opened the index, parts on their way were the
+        // parent's requests: none will come here.
+        if (inForkedChild(mPid) && !settled())
+            throwIoError(mSource.name(), "its index was being read when the process forked: a remote store opened "
+                                         "before fork() cannot be read in the child process: open it again there");
         mChanged.wait(lock, settled);
         bool all = true;
         for (uint64_t i = first; i < last; ++i) all = all && mState[i] == State::Here;
