@@ -114,26 +114,6 @@ void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<co
     latch.wait();
 }
 
-void RemoteFile::readMany(std::span<const ByteRange> ranges, const RangeCheck& intact,
-                          const std::atomic<bool>* cancel) const {
-    // Every range sent at once (the session runs as many as it allows), then waited for.
-    std::mutex lock;
-    std::condition_variable changed;
-    size_t left = ranges.size();
-    std::exception_ptr first;
-    for (size_t i = 0; i < ranges.size(); ++i)
-        readCoveringAsync(ranges[i].offset, ranges[i].bytes, ranges[i].dst, {},
-                          intact ? RangeCheck([&, i](size_t) { return intact(i); }) : RangeCheck(), cancel,
-                          [&](std::exception_ptr e) {
-                              std::lock_guard hold(lock);
-                              if (e && !first) first = e;
-                              if (--left == 0) changed.notify_one();
-                          });
-    std::unique_lock hold(lock);
-    changed.wait(hold, [&] { return left == 0; });
-    if (first) std::rethrow_exception(first);
-}
-
 void RemoteFile::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
                                    RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const {
     // `done` is called once, and never from inside the try: a callback that threw would

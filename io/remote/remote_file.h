@@ -86,9 +86,6 @@ public:
     // and an IoError saying so is thrown; unlike a failure, it ends no other read.
     void read(uint64_t offset, size_t n, void* dst, const RangeCheck& intact = {},
               const std::atomic<bool>* cancel = nullptr) const;
-    // The ranges at once, as many in flight as the session allows; throws the first error.
-    void readMany(std::span<const ByteRange> ranges, const RangeCheck& intact = {},
-                  const std::atomic<bool>* cancel = nullptr) const;
     // n bytes at `offset` in one GET, of which `pieces` (within dst) are wanted: with a disk
     // cache, each piece is kept and looked up apart, and the GET is sent only when one is missing
     // (or found damaged: `intact(k)` checks piece k).

@@ -38,7 +38,7 @@ public:
     void give(CURL* curl);
     // The session's one thread of transfers (io/remote/transfer_loop.h), where the sockets of
     // every request in flight are waited on together, at most `connections` transfers at once
-    // (the others wait their turn): submit, perform, timers, and the requests worth keeping in
+    // (the others wait their turn): submit, timers, and the requests worth keeping in
     // flight.
     TransferLoop& loop();
 

@@ -42,23 +42,6 @@ void TransferLoop::submit(CURL* easy, Done done) {
     curlLibrary().multi_wakeup(mMulti);
 }
 
-CURLcode TransferLoop::perform(CURL* easy) {
-    std::mutex m;
-    std::condition_variable finished;
-    bool done = false;
-    CURLcode result = CURLE_OK;
-    submit(easy, [&](CURLcode rc) {
-        // Under the lock, so that this caller (whose stack holds m) cannot return before the call.
-        std::lock_guard lock(m);
-        result = rc;
-        done = true;
-        finished.notify_one();
-    });
-    std::unique_lock lock(m);
-    finished.wait(lock, [&] { return done; });
-    return result;
-}
-
 void TransferLoop::after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner) {
     std::lock_guard lock(mLock);
     mTimers.push_back({Clock::now() + std::chrono::milliseconds(std::max<int64_t>(ms, 0)), std::move(fn),

@@ -4,8 +4,7 @@
 //
 // submit(easy, done) starts the handle's transfer and returns at once; done(result) is called on
 // the loop's thread once the handle has left the loop (the handle is the caller's again), and
-// must be quick and not throw: it may submit again or set a timer (after), not wait. perform(easy) is
-// curl_easy_perform's contract for a caller on any thread: submit, then wait. The transfers'
+// must be quick and not throw: it may submit again or set a timer (after), not wait. The transfers'
 // own callbacks run on the loop's thread too. At most `maxInFlight` transfers run at once; the
 // others wait their turn in the order they came. Progress callbacks are called at least every
 // kTickMs while a transfer waits, for cancellation and straggler checks.
@@ -58,7 +57,6 @@ public:
 
     using Done = std::function<void(CURLcode)>;
     void submit(CURL* easy, Done done);
-    CURLcode perform(CURL* easy);
     // Calls fn on the loop's thread once `ms` have passed, or at the first tick at which
     // sooner() (if given) says true.
     void after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner = {});

@@ -11,11 +11,6 @@
 
 namespace vdiso {
 
-void ByteSource::readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck&,
-                          const std::atomic<bool>*) const {
-    for (const ByteRange& r : ranges) read(r.offset, r.bytes, r.dst, what);
-}
-
 void ByteSource::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
                                    const char* what, RangeCheck intact, const std::atomic<bool>*,
                                    ReadDone done) const {
@@ -101,10 +96,6 @@ public:
     const RemoteFile* remote() const override { return &mFile; }
     void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck& intact) const override {
         mFile.read(offset, n, dst, intact);
-    }
-    void readMany(std::span<const ByteRange> ranges, const char*, const RangeCheck& intact,
-                  const std::atomic<bool>* cancel) const override {
-        mFile.readMany(ranges, intact, cancel);
     }
     void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces, const char*,
                       const RangeCheck& intact) const override {

@@ -35,18 +35,13 @@ public:
     virtual const std::string& name() const = 0;
     virtual uint64_t size() const = 0;
     // Exactly n bytes at `offset` into dst (see kByteSourceAlignment). Throws IoError naming the
-    // source, `what` was being read and where. `intact(0)` as for readMany below.
+    // source, `what` was being read and where. `intact(0)` as for readCovering below.
     virtual void read(uint64_t offset, size_t n, void* dst, const char* what, const RangeCheck& intact = {}) const = 0;
-    // The ranges at once where the source can (remote: concurrently), else in turn. `intact(k)`
-    // says whether range k arrived whole and right (its checksum): a remote source's disk cache
-    // keeps only such ranges (io/remote/remote_file.h, RangeCheck); the caller still checks.
-    // Once `cancel` (if given) is set, a remote source ends the transfers in flight and throws
-    // (an owner that stops reading in the background need not wait for them).
-    virtual void readMany(std::span<const ByteRange> ranges, const char* what, const RangeCheck& intact = {},
-                          const std::atomic<bool>* cancel = nullptr) const;
     // n bytes at `offset` into dst, as read() does, in one request; only `pieces` of them (within
     // dst, in order) are wanted, and a remote source's disk cache keeps and finds each apart,
-    // so a piece read in one run is found in the next however it is read there; `intact` as above.
+    // so a piece read in one run is found in the next however it is read there. `intact(k)`
+    // says whether piece k arrived whole and right (its checksum): a remote source's disk cache
+    // keeps only such pieces (io/remote/remote_file.h, RangeCheck); the caller still checks.
     virtual void readCovering(uint64_t offset, size_t n, void* dst, std::span<const ByteRange> pieces,
                               const char* what, const RangeCheck& intact = {}) const {
         (void)pieces;
@@ -56,7 +51,8 @@ public:
     // readCovering without holding this thread while the bytes are on their way: done(error) is
     // called once, with null when dst holds them. A remote source sends the request and returns
     // (RemoteFile::readCoveringAsync: done on its transfer thread, and quick); a local one reads
-    // at once and calls done before returning. dst, `intact`'s targets and `cancel` must live
+    // at once and calls done before returning. Once `cancel` (if given) is set, a remote source ends
+    // the transfer and done gets the error. dst, `intact`'s targets and `cancel` must live
     // until done.
     using ReadDone = std::function<void(std::exception_ptr)>;
     virtual void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
