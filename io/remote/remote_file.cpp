@@ -174,7 +174,6 @@ size_t RemoteFile::wantedInFlight(size_t initial, size_t most) const {
     return mImpl->session->loop().wantedInFlight(initial, most);
 }
 
-size_t RemoteFile::inFlight() const { return mImpl->session->loop().inFlight(); }
 
 int RemoteFile::connections() const { return mImpl->session->options().connections; }
 

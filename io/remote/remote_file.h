@@ -101,10 +101,8 @@ public:
     void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, RangeCheck intact,
                            const std::atomic<bool>* cancel, ReadDone done) const;
     // Requests worth keeping in flight now (TransferLoop::wantedInFlight: twice what the link
-    // carries; `initial` until it can tell), at most `most`, and how many are (all of the
-    // session's objects').
+    // carries, over all of the session's objects; `initial` until it can tell), at most `most`.
     size_t wantedInFlight(size_t initial, size_t most) const;
-    size_t inFlight() const;
     // Requests the session runs at once at most (RemoteOptions::connections, clamped).
     int connections() const;
 

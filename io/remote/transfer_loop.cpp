@@ -38,7 +38,6 @@ void TransferLoop::submit(CURL* easy, Done done) {
     auto* p = new Pending{easy, std::move(done), {}};
     std::lock_guard lock(mLock);
     mSubmitted.push_back(p);
-    ++mInFlight;
     curlLibrary().multi_wakeup(mMulti);
 }
 
@@ -47,11 +46,6 @@ void TransferLoop::after(int64_t ms, std::function<void()> fn, std::function<boo
     mTimers.push_back({Clock::now() + std::chrono::milliseconds(std::max<int64_t>(ms, 0)), std::move(fn),
                        std::move(sooner)});
     curlLibrary().multi_wakeup(mMulti);
-}
-
-size_t TransferLoop::inFlight() const {
-    std::lock_guard lock(mLock);
-    return mInFlight;
 }
 
 void TransferLoop::noteEnded(const Pending& p, Clock::time_point now) {
@@ -92,13 +86,13 @@ size_t TransferLoop::wantedInFlight(size_t initial, size_t most) const {
     if (const double span = std::chrono::duration<double>(ends.back().ended - first).count(); span > 0)
         rate = bytes / span;  // all of them: answers that shared the link and ended together
     for (size_t k = 0; k + kEndsToTell <= ends.size(); ++k) {
-        Clock::time_point first = ends[k].started;
+        Clock::time_point runStart = ends[k].started;
         double run = 0;
         for (size_t j = k; j < k + kEndsToTell; ++j) {
-            first = std::min(first, ends[j].started);
+            runStart = std::min(runStart, ends[j].started);
             run += ends[j].bytes;
         }
-        const double span = std::chrono::duration<double>(ends[k + kEndsToTell - 1].ended - first).count();
+        const double span = std::chrono::duration<double>(ends[k + kEndsToTell - 1].ended - runStart).count();
         if (span > 0) rate = std::max(rate, run / span);
     }
     if (rate <= 0) return most;
@@ -156,10 +150,6 @@ void TransferLoop::run() {
             if (curl.multi_add_handle(mMulti, p->easy) == CURLM_OK) {
                 ++active;
             } else {
-                {
-                    std::lock_guard lock(mLock);
-                    --mInFlight;
-                }
                 call([&] { p->done(CURLE_FAILED_INIT); });
                 delete p;
             }
@@ -179,10 +169,6 @@ void TransferLoop::run() {
             --active;
             auto* p = reinterpret_cast<Pending*>(user);
             noteEnded(*p, Clock::now());
-            {
-                std::lock_guard lock(mLock);
-                --mInFlight;
-            }
             call([&] { p->done(result); });
             delete p;
         }

@@ -64,8 +64,6 @@ public:
     // Requests worth keeping in flight (see above), at most `most` and at least 2; `initial`
     // (within those) until enough transfers have ended to tell.
     size_t wantedInFlight(size_t initial, size_t most) const;
-    // Transfers submitted and not yet done (running or waiting their turn).
-    size_t inFlight() const;
 
 private:
     using Clock = std::chrono::steady_clock;
@@ -88,7 +86,6 @@ private:
     mutable std::mutex mLock;
     std::deque<Pending*> mSubmitted;  // not yet added to the multi handle
     std::vector<Timer> mTimers;       // under mLock
-    size_t mInFlight = 0;             // under mLock: submitted, not done
     // The last kEndsKept answers, as a ring: when each ended and its bytes; the least time to a
     // first byte seen. Under mLock.
     static constexpr size_t kEndsKept = 64, kEndsToTell = 16;
