@@ -218,14 +218,16 @@ TEST(MpiView, SagePictureIsTheSingleProcessOnesByImageAndByObject) {
                                                         << " without";
 }
 
-// The eye inside the volume, in the middle slab, with a view wide enough to see slabs on both
-// sides of it: both coverage scans run (toward each side of the eye's slab).
+// The eye inside the volume, in the middle slab a cell and a half past its cut with the first,
+// with a view wide enough to see slabs on both sides of it: both coverage scans run (toward
+// each side of the eye's slab). (Nothing behind the near plane is made: from the slab's middle,
+// the first slab's surface lay out of view and its rank made only such triangles.)
 TEST(MpiView, ObjectPartitionWithTheEyeInsideTheVolume) {
     test::ScratchDir dir;
     const std::string store = dir.file("h.vdiso"), one = dir.file("one.png"), three = dir.file("three.png"),
                       cam = dir.file("cam.json"), stats = dir.file("s.json");
     ASSERT_EQ(test::runVdiso("synth " + store + " --kind head --size 96 --brick 8 --quiet").exitCode, 0);
-    test::writeFile(cam, std::string(R"({"eye": [47.5, 47.5, 47.5], "target": [57.5, 56.5, 49.5], "up": [0, 0, 1],)"
+    test::writeFile(cam, std::string(R"({"eye": [41.5, 47.5, 47.5], "target": [51.5, 56.5, 49.5], "up": [0, 0, 1],)"
                                      R"( "fov": 110, "width": 400, "height": 400})"));
     const std::string common = "extract " + store + " --iso " + std::to_string(kHeadSkinIso) +
                                " --method sage --lod-error 0 --quiet --camera " + cam + " ";

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include <glm/geometric.hpp>
@@ -22,6 +23,15 @@ namespace {
 
 glm::dvec3 corner(const glm::dvec3& lo, const glm::dvec3& hi, int i) {
     return {i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z};
+}
+
+// BoxProjector::outsideBox(): nothing of the box is in the view frustum.
+bool outside(const ScreenBox& b) { return !b.crossesNearPlane && b.left == std::numeric_limits<double>::infinity(); }
+
+// Whether the point lies in the camera's view frustum (OpenGL clip space, planes included).
+bool inFrustum(const Camera& c, const glm::dvec3& p) {
+    const glm::dvec4 q = c.viewProjection() * glm::dvec4(p, 1.0);
+    return std::abs(q.x) <= q.w && std::abs(q.y) <= q.w && std::abs(q.z) <= q.w;
 }
 
 // A camera around the unit box [0,1]^3, at distances from just outside it to far away.
@@ -145,6 +155,17 @@ TEST(CornerProjection, CellBoxesAreExactAndSharedEdgesPlaceTheSameBits) {
                         const glm::dvec3 cell{double(first[0] + x), double(first[1] + y), double(first[2] + z)};
                         const glm::dvec3 lo = grid.origin + cell * grid.spacing, hi = lo + grid.spacing;
                         const ScreenBox e = world.exactBox(lo, hi), box = a.cellBox(x, y, z);
+                        // Eight corners behind the near plane: the world box is outside too. One
+                        // outside beside the frustum while reaching the near plane: the cell is
+                        // only refined (its corners are not all behind).
+                        if (outside(box)) {
+                            EXPECT_TRUE(outside(e));
+                            continue;
+                        }
+                        if (outside(e)) {
+                            EXPECT_TRUE(box.crossesNearPlane);
+                            continue;
+                        }
                         ASSERT_EQ(box.crossesNearPlane, e.crossesNearPlane);
                         if (e.crossesNearPlane) continue;
                         ++boxes;
@@ -189,7 +210,7 @@ TEST(CornerProjection, CellBoxesAreExactAndSharedEdgesPlaceTheSameBits) {
     EXPECT_GT(points, 30000);
 }
 
-TEST(ScreenBox, BoxesAtOrBehindTheNearPlaneCrossIt) {
+TEST(ScreenBox, BoxesReachingTheNearPlaneCrossItUnlessWhollyOutside) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (int cam = 0; cam < 300; ++cam) {
@@ -198,18 +219,104 @@ TEST(ScreenBox, BoxesAtOrBehindTheNearPlaneCrossIt) {
         const glm::dvec3 f = c.forward();
         const double s = 0.01 + unit(rng);
         const glm::dvec3 half{s * (0.2 + unit(rng)), s * (0.2 + unit(rng)), s * (0.2 + unit(rng))};
-        // Around the eye, straddling the near plane, and wholly behind the eye.
-        const glm::dvec3 centres[3] = {c.eye + 0.1 * (unit(rng) - 0.5) * s * f,
+        // Around the eye reaching past the near plane, and straddling it: refined. Wholly
+        // behind the eye, and around the eye short of the near plane: culled.
+        const glm::dvec3 centres[4] = {c.eye + 0.1 * (unit(rng) - 0.5) * s * f,
                                        c.eye + c.zNear * f + 0.05 * half * (unit(rng) - 0.5),
-                                       c.eye - (3.0 + unit(rng)) * s * f};
-        for (const glm::dvec3& centre : centres) {
-            EXPECT_TRUE(projector.exactBox(centre - half, centre + half).crossesNearPlane);
-            const ScreenBox e = projector.estimateBox(centre - half, centre + half);
-            EXPECT_TRUE(e.crossesNearPlane);
+                                       c.eye - (3.0 + unit(rng)) * s * f, c.eye};
+        const glm::dvec3 halves[4] = {half + 2.0 * c.zNear, half, half, 0.2 * c.zNear * half / s};
+        for (int k = 0; k < 4; ++k) {
+            const ScreenBox x = projector.exactBox(centres[k] - halves[k], centres[k] + halves[k]);
+            const ScreenBox e = projector.estimateBox(centres[k] - halves[k], centres[k] + halves[k]);
+            EXPECT_EQ(x.crossesNearPlane, k < 2) << k;
+            EXPECT_EQ(e.crossesNearPlane, k < 2) << k;
+            EXPECT_EQ(outside(x), k >= 2) << k;
+            EXPECT_EQ(outside(e), k >= 2) << k;
             EXPECT_FALSE(isSubPixel(e));
             EXPECT_FALSE(subPixelPoint(e).has_value());
         }
     }
+}
+
+// A box reaching the near plane is culled only when no point of it lies in the frustum, and
+// boxes beside the frustum or behind the near plane are culled (random boxes around the eye,
+// each point of a 5^3 lattice over it tried).
+TEST(ScreenBox, OnlyBoxesWhollyOutsideTheFrustumAreCulled) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::normal_distribution<double> normal;
+    int culled = 0, refined = 0;
+    for (int cam = 0; cam < 200; ++cam) {
+        const Camera c = randomCamera(rng);
+        const BoxProjector projector(c);
+        for (int b = 0; b < 50; ++b) {
+            const double s = c.zNear * std::pow(10.0, 2.0 * unit(rng));
+            const glm::dvec3 centre = c.eye + 2.0 * s * glm::dvec3(normal(rng), normal(rng), normal(rng));
+            const glm::dvec3 half{s * unit(rng), s * unit(rng), s * unit(rng)};
+            const ScreenBox x = projector.exactBox(centre - half, centre + half);
+            const ScreenBox e = projector.estimateBox(centre - half, centre + half);
+            if (!x.crossesNearPlane && !outside(x)) continue;
+            EXPECT_EQ(outside(x), outside(e));
+            bool seen = false;
+            for (int i = 0; i < 125 && !seen; ++i) {
+                const glm::dvec3 t{(i % 5) / 4.0, (i / 5 % 5) / 4.0, (i / 25) / 4.0};
+                seen = inFrustum(c, centre - half + 2.0 * half * t);
+            }
+            if (seen) {
+                EXPECT_FALSE(outside(x));
+            }
+            culled += outside(x);
+            refined += x.crossesNearPlane;
+        }
+    }
+    EXPECT_GT(culled, 1000);
+    EXPECT_GT(refined, 200);
+}
+
+// A projected meta-cell's cells: wholly behind the near plane, culled (an empty rectangle); in
+// part, refined (no rectangle).
+TEST(CornerProjection, CellsBehindTheNearPlaneAreCulledCellsAcrossItRefined) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    constexpr int M = 8, S = M + 1;
+    uint64_t rows[S * S];
+    std::fill_n(rows, S * S, (uint64_t(1) << S) - 1);
+    int behind = 0, across = 0;
+    for (int cam = 0; cam < 50; ++cam) {
+        const Camera c = randomCamera(rng);
+        VolumeInfo grid;
+        grid.spacing = glm::dvec3(c.zNear * (0.2 + unit(rng)));
+        grid.origin = c.eye - grid.spacing * double(M / 2) + c.forward() * c.zNear * (unit(rng) - 0.5);
+        CornerProjection p(c.viewProjection() * grid.gridToWorld(), c.width, c.height, M);
+        const int64_t first[3] = {0, 0, 0};
+        p.project(first, rows);
+        for (int z = 0; z < M; ++z)
+            for (int y = 0; y < M; ++y)
+                for (int x = 0; x < M; ++x) {
+                    int front = 0, back = 0;
+                    for (int k = 0; k < 8; ++k) {
+                        const glm::dvec3 g{double(x + (k & 1)), double(y + (k >> 1 & 1)), double(z + (k >> 2))};
+                        const glm::dvec4 q = c.viewProjection() * glm::dvec4(grid.origin + g * grid.spacing, 1.0);
+                        front += q.z + q.w > 1e-9 * q.w;
+                        back += q.z + q.w < -1e-9 * std::abs(q.w);
+                    }
+                    if (front + back < 8 || front == 8) continue;  // a hair from the plane, or in front
+                    PixelRect r{};
+                    const bool rect = p.cellRect(x, y, z, r);
+                    if (back == 8) {
+                        ++behind;
+                        EXPECT_TRUE(rect);
+                        EXPECT_TRUE(r.empty());
+                        EXPECT_TRUE(outside(p.cellBox(x, y, z)));
+                    } else {
+                        ++across;
+                        EXPECT_FALSE(rect);
+                        EXPECT_TRUE(p.cellBox(x, y, z).crossesNearPlane);
+                    }
+                }
+    }
+    EXPECT_GT(behind, 1000);
+    EXPECT_GT(across, 100);
 }
 
 TEST(ScreenBox, EstimateIsTightForSmallDistantBoxes) {
@@ -341,7 +448,7 @@ TEST(CornerProjection, EveryPathProjectsTheSameBits) {
                         if (!all) continue;
                         const ScreenBox a = base.cellBox(x, y, z), b = wide.cellBox(x, y, z);
                         ASSERT_EQ(a.crossesNearPlane, b.crossesNearPlane);
-                        behind += a.crossesNearPlane;
+                        behind += a.crossesNearPlane || outside(a);
                         ++boxes;
                         EXPECT_EQ(std::memcmp(&a.left, &b.left, sizeof a.left), 0);
                         EXPECT_EQ(std::memcmp(&a.right, &b.right, sizeof a.right), 0);

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/extract/depth_slabs.h"
+#include "core/extract/extract_full.h"
 #include "core/extract/extract_view.h"
 #include "core/extract/image_strips.h"
 #include "core/view_presets.h"
@@ -164,14 +165,15 @@ TEST_F(ViewParts, DepthSlabsWithCoverageFromTheFrontMakeTheWholePicture) {
 // plane: slabs on both sides show, and each takes coverage only from its own side.
 TEST_F(ViewParts, DepthSlabsWithTheEyeInsideTheVolume) {
     const VolumeInfo& v = source->volume();
-    // The slabs' cuts depend on the view's axis (x here), not on the eye: the eye goes in the
-    // middle of slab 1.
+    // The slabs' cuts depend on the view's axis (x here), not on the eye: the eye goes in slab
+    // 1, a cell and a half past its cut with slab 0, so that the view's edge reaches slab 0's
+    // surface.
     Camera inside = camera;
     inside.target = inside.eye + glm::dvec3(1.0, 0.9, 0.2);
     const DepthSlabs cut = depthSlabs(*source, inside, kHeadSkinIso, 3);
     ASSERT_EQ(cut.axis, 0);
     glm::dvec3 eye = 0.5 * (v.origin + v.worldMax());
-    eye.x = v.origin.x + 0.5 * double(cut.cuts[1] + cut.cuts[2]) * source->layout().brickSize * v.spacing.x;
+    eye.x = v.origin.x + (double(cut.cuts[1]) * source->layout().brickSize + 1.5) * v.spacing.x;
     inside.eye = eye;
     inside.target = eye + glm::dvec3(1.0, 0.9, 0.2);
     inside.fovYDegrees = 110;
@@ -186,6 +188,13 @@ TEST_F(ViewParts, DepthSlabsWithTheEyeInsideTheVolume) {
     std::vector<uint64_t> triangles;
     const Part all = extractBySlabs(*source, inside, 3, true, bricks, &triangles);
     ASSERT_EQ(triangles.size(), 3u);
+    // Nothing behind the eye or the near plane is made, and nothing in view is lost: the
+    // whole surface draws the same picture.
+    Part full;
+    extractOctree(*source, {kHeadSkinIso, 4}, full.mesh);
+    const ImageAgreement f = agreement(full, single, inside);
+    EXPECT_GE(f.agreement(), 0.995) << f.missing << " missing, " << f.differentColour << " off colour";
+    EXPECT_LT(single.stats.triangles, full.mesh.triangleCount() / 2);
     EXPECT_GT(triangles[0], 0u) << "the slab behind the eye's plane shows at the edges";
     EXPECT_GT(triangles[2], 0u);
     const ImageAgreement a = agreement(single, all, inside);

@@ -199,7 +199,13 @@ struct BrickVisit {
                 if (!corners.place(outline[k].corner, outline[k].axis, outline[k].t, v[k])) return false;
             return true;
         });
-        if (!placed) return true;  // marks nothing
+        if (!placed) {
+            // A vertex the camera cannot place: clipped away whole if every vertex lies behind
+            // the near plane, else kept (in part in front: it marks nothing).
+            for (int k = 0; k < count; ++k)
+                if (!corners.behindNearPlane(outline[k].corner, outline[k].axis, outline[k].t)) return true;
+            return false;
+        }
         if (held && cellTests) {  // only its coverage counts
             t.mCoverageTimer(t.mStats.view.coverageSeconds, [&] {
                 t.mCoverage.mark(v, count);

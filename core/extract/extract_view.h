@@ -5,7 +5,9 @@
 // its meta-cells likewise. Each node or meta-cell is tested in turn:
 //   1. range: skipped if its [min, max] cannot hold the isovalue;
 //   2. frustum: skipped if its screen box (SAGE §3.4 estimate, or the exact 8-corner box)
-//      misses the image; a box crossing the near plane counts as visible and is refined;
+//      misses the image; a box crossing the near plane counts as visible and is refined,
+//      unless it lies wholly outside one of the frustum's planes (behind the near plane or the
+//      eye: an eye inside the volume sees none of what lies behind it);
 //   3. occlusion: skipped if every pixel centre in its screen box is already covered in the
 //      occlusion pyramid — bricks are acquired only after passing 1-3, and after one of their
 //      sub-blocks (ranges from the store's index, core/trees/sub_blocks.h) passes 1-3 too, which
@@ -18,9 +20,10 @@
 //      and scan-converted into the bottom of the pyramid, changed tiles propagated upward
 //      after the meta-cell (SAGE §3.1-3.2), and the triangles of the cells that draw something
 //      appended. Its cells are visited front to back too; with cellTests, each is first tested
-//      like a node by its corners' exact box (no pixel centre, or all covered: skipped), so cells
-//      hide cells, and a polygon whose scan conversion covers no new pixel centre keeps no
-//      triangles (nor makes a vertex).
+//      like a node by its corners' exact box (no pixel centre, or all covered, or all eight
+//      corners behind the near plane: skipped), so cells hide cells, and a polygon whose scan
+//      conversion covers no new pixel centre, or whose vertices all lie behind the near plane,
+//      keeps no triangles (nor makes a vertex).
 // WISE = exact boxes, no points, one triangle at a time inserted top-down (Greene's masks).
 // Every SAGE feature is a switch, for the ablations of the paper's Tables 3-4.
 #pragma once

@@ -18,6 +18,7 @@ CornerProjection::CornerProjection(const glm::dmat4& gridToClip, int width, int 
     mClip.resize(corners);
     mPixel.resize(corners);
     mFront.assign(size_t(mSide) * size_t(mSide), 0);
+    mBehind.assign(size_t(mSide) * size_t(mSide), 0);
     mEdgePixel.resize(3 * corners);
     mEdgeStamp.assign(3 * corners, 0);
 }
@@ -41,7 +42,7 @@ void CornerProjection::project(const int64_t first[3], const uint64_t* rows) {
             double base[4];
             for (int r = 0; r < 4; ++r) base[r] = (mRow[r].w + mRow[r].z * gz) + mRow[r].y * gy;
             const __m128d baseXY = _mm_loadu_pd(base), baseZW = _mm_loadu_pd(base + 2);
-            uint64_t inFront = 0;  // of the row's corners projected now (the others keep their bits)
+            uint64_t inFront = 0, behind = 0;  // of the row's corners projected now (the others keep their bits)
             const uint64_t projected = bits;
             double* clip = &mClip[size_t(cornerIndex(0, y, z))].x;
             double* pixel = &mPixel[size_t(cornerIndex(0, y, z))].x;
@@ -54,14 +55,18 @@ void CornerProjection::project(const int64_t first[3], const uint64_t* rows) {
                 _mm_storeu_pd(clip + 4 * x + 2, zw);
                 // In front: w > 0 and z + w > 0 (lanes: z + w, w).
                 const __m128d w = _mm_unpackhi_pd(zw, zw);
-                const int positive = _mm_movemask_pd(_mm_cmpgt_pd(_mm_add_pd(zw, _mm_unpackhi_pd(zw, _mm_setzero_pd())), _mm_setzero_pd()));
+                const __m128d nearW = _mm_add_pd(zw, _mm_unpackhi_pd(zw, _mm_setzero_pd()));
+                const int positive = _mm_movemask_pd(_mm_cmpgt_pd(nearW, _mm_setzero_pd()));
                 inFront |= uint64_t(positive == 3) << x;
+                behind |= uint64_t(_mm_movemask_pd(_mm_cmplt_pd(nearW, _mm_setzero_pd())) & 1) << x;
                 // pixelOf: ((x, y) / w * (0.5, -0.5) + 0.5) * (width, height).
                 const __m128d ndc = _mm_mul_pd(xy, _mm_div_pd(_mm_set1_pd(1.0), w));
                 _mm_storeu_pd(pixel + 2 * x, _mm_mul_pd(_mm_add_pd(_mm_mul_pd(ndc, half), _mm_set1_pd(0.5)), size));
             }
             uint64_t& front = mFront[size_t(z * mSide + y)];
             front = (front & ~projected) | inFront;
+            uint64_t& back = mBehind[size_t(z * mSide + y)];
+            back = (back & ~projected) | behind;
         }
 }
 
@@ -81,7 +86,7 @@ VDISO_TARGET_AVX2 void CornerProjection::projectAvx2(const int64_t first[3], con
             uint64_t bits = rows[z * mSide + y];
             if (bits == 0) continue;
             const __m256d base = _mm256_add_pd(zTerm, _mm256_mul_pd(rowY, _mm256_set1_pd(double(first[1] + y))));
-            uint64_t inFront = 0;
+            uint64_t inFront = 0, behind = 0;
             const uint64_t projected = bits;
             double* clip = &mClip[size_t(cornerIndex(0, y, z))].x;
             double* pixel = &mPixel[size_t(cornerIndex(0, y, z))].x;
@@ -91,13 +96,17 @@ VDISO_TARGET_AVX2 void CornerProjection::projectAvx2(const int64_t first[3], con
                 _mm256_storeu_pd(clip + 4 * x, c);
                 const __m128d xy = _mm256_castpd256_pd128(c), zw = _mm256_extractf128_pd(c, 1);
                 const __m128d w = _mm_unpackhi_pd(zw, zw);
-                const int positive = _mm_movemask_pd(_mm_cmpgt_pd(_mm_add_pd(zw, _mm_unpackhi_pd(zw, zero)), zero));
+                const __m128d nearW = _mm_add_pd(zw, _mm_unpackhi_pd(zw, zero));
+                const int positive = _mm_movemask_pd(_mm_cmpgt_pd(nearW, zero));
                 inFront |= uint64_t(positive == 3) << x;
+                behind |= uint64_t(_mm_movemask_pd(_mm_cmplt_pd(nearW, zero)) & 1) << x;
                 const __m128d ndc = _mm_mul_pd(xy, _mm_div_pd(_mm_set1_pd(1.0), w));
                 _mm_storeu_pd(pixel + 2 * x, _mm_mul_pd(_mm_add_pd(_mm_mul_pd(ndc, half), _mm_set1_pd(0.5)), size));
             }
             uint64_t& front = mFront[size_t(z * mSide + y)];
             front = (front & ~projected) | inFront;
+            uint64_t& back = mBehind[size_t(z * mSide + y)];
+            back = (back & ~projected) | behind;
         }
     }
 }

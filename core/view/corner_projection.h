@@ -55,10 +55,12 @@ public:
     void project(const int64_t first[3], const uint64_t* rows);
 
     // The screen box of the meta-cell's local cell (x, y, z), whose eight corners were projected;
-    // a box crossing the near plane when one of them is not in front of it (w > 0, z + w > 0).
+    // a box crossing the near plane when one of them is not in front of it (w > 0, z + w > 0),
+    // BoxProjector::outsideBox() when all eight lie behind it (z + w < 0: so does every point
+    // of the cell, z + w being linear).
     ScreenBox cellBox(int x, int y, int z) const {
         __m128d lo, hi;
-        if (!cornerBounds(x, y, z, lo, hi)) return BoxProjector::nearPlaneBox();
+        if (!cornerBounds(x, y, z, lo, hi)) return behindNearPlane(x, y, z) ? BoxProjector::outsideBox() : BoxProjector::nearPlaneBox();
         const __m128d slack = _mm_set1_pd(kBoxSlack);
         alignas(16) double l[2], h[2];
         _mm_store_pd(l, _mm_sub_pd(lo, slack));
@@ -66,12 +68,15 @@ public:
         return {l[0], h[0], l[1], h[1], false};
     }
     // The pixel centres of cellBox(x, y, z), rounded as ViewCuller::pixelRect rounds a box and
-    // clamped to the image (empty when none of them is on it); false when the box crosses the
-    // near plane: such a cell is refined, never culled. Inline: asked for every crossed cell of
-    // every visible meta-cell.
+    // clamped to the image (empty when none of them is on it, or when the cell lies behind the
+    // near plane); false when the box crosses the near plane: such a cell is refined, never
+    // culled. Inline: asked for every crossed cell of every visible meta-cell.
     bool cellRect(int x, int y, int z, PixelRect& r) const {
         __m128d lo, hi;
-        if (!cornerBounds(x, y, z, lo, hi)) return false;
+        if (!cornerBounds(x, y, z, lo, hi)) {
+            r = {0, 0, -1, -1};
+            return behindNearPlane(x, y, z);
+        }
         const __m128d slack = _mm_set1_pd(kBoxSlack);
         r = boxCentresOnImage(_mm_sub_pd(lo, slack), _mm_add_pd(hi, slack), mImage);
         return true;
@@ -91,8 +96,23 @@ public:
         return out.x == out.x;
     }
 
+    // Whether the point placed at t along that edge (as place() makes it) lies behind the near
+    // plane (clip z + w < 0): a polygon all of whose points do is clipped away whole.
+    bool behindNearPlane(int corner, int axis, double t) const {
+        const glm::dvec4& p = mClip[size_t(corner)];
+        const glm::dvec4 c = p + t * (mClip[size_t(corner + cornerStride(axis))] - p);
+        return c.z + c.w < 0.0;
+    }
+
 private:
     void projectAvx2(const int64_t first[3], const uint64_t* rows);  // project()'s AVX2 path
+
+    // Whether all eight corners of cell (x, y, z) lie behind the near plane.
+    bool behindNearPlane(int x, int y, int z) const {
+        const size_t row = size_t(z * mSide + y), s = size_t(mSide);
+        const uint64_t back = mBehind[row] & mBehind[row + 1] & mBehind[row + s] & mBehind[row + s + 1];
+        return (back >> x & 3) == 3;
+    }
 
     // The least and greatest (x, y) of cell (x, y, z)'s eight projected corners; false when one
     // of them is not in front of the near plane.
@@ -133,6 +153,7 @@ private:
     std::vector<glm::dvec4> mClip;     // by cornerIndex
     std::vector<glm::dvec2> mPixel;    // pixelOf(mClip), for corners in front
     std::vector<uint64_t> mFront;      // bit x of [z * mSide + y]: corner in front of the near plane
+    std::vector<uint64_t> mBehind;     // likewise: corner behind it (z + w < 0)
     // Edge (cornerIndex * 3 + axis) placed since the last project() when its stamp is mStamp.
     std::vector<glm::dvec2> mEdgePixel;
     std::vector<uint32_t> mEdgeStamp;

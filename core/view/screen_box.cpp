@@ -30,8 +30,19 @@ BoxProjector::BoxProjector(const glm::dmat4& viewProjection, int width, int heig
       mAbsY(glm::abs(glm::dvec3(mRowY))),
       mAbsW(glm::abs(glm::dvec3(mRowW))),
       mAbsNear(glm::abs(glm::dvec3(mRowNear))),
+      mPlane{mRowW + mRowX, mRowW - mRowX, mRowW + mRowY, mRowW - mRowY, mRowNear, mRowW - row(viewProjection, 2)},
       mWidth(width),
       mHeight(height) {}
+
+bool BoxProjector::outsideFrustum(const glm::dvec3& p, const glm::dvec3& d) const {
+    for (const glm::dvec4& plane : mPlane) {
+        const glm::dvec3 a = glm::abs(glm::dvec3(plane));
+        const double most = apply(plane, p) + glm::dot(a, d);
+        const double magnitude = glm::dot(a, glm::abs(p)) + std::abs(plane.w) + glm::dot(a, d);
+        if (most < -1e-12 * magnitude) return true;
+    }
+    return false;
+}
 
 ScreenBox BoxProjector::exactBox(const glm::dvec3& lo, const glm::dvec3& hi) const {
     double xMin = kInf, xMax = -kInf, yMin = kInf, yMax = -kInf;
@@ -39,7 +50,8 @@ ScreenBox BoxProjector::exactBox(const glm::dvec3& lo, const glm::dvec3& hi) con
         const glm::dvec3 p{corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y,
                            corner & 4 ? hi.z : lo.z};
         const double w = apply(mRowW, p);
-        if (!(w > 0.0) || !(apply(mRowNear, p) > 0.0)) return nearPlaneBox();
+        if (!(w > 0.0) || !(apply(mRowNear, p) > 0.0))
+            return outsideFrustum(0.5 * (lo + hi), 0.5 * (hi - lo)) ? outsideBox() : nearPlaneBox();
         const double x = apply(mRowX, p) / w, y = apply(mRowY, p) / w;
         xMin = std::min(xMin, x);
         xMax = std::max(xMax, x);
@@ -51,7 +63,7 @@ ScreenBox BoxProjector::exactBox(const glm::dvec3& lo, const glm::dvec3& hi) con
 
 ScreenBox BoxProjector::estimateBox(const glm::dvec3& lo, const glm::dvec3& hi) const {
     const glm::dvec3 d = 0.5 * (hi - lo);
-    return estimate(0.5 * (lo + hi), glm::dot(mAbsX, d), glm::dot(mAbsY, d), glm::dot(mAbsW, d),
+    return estimate(0.5 * (lo + hi), d, glm::dot(mAbsX, d), glm::dot(mAbsY, d), glm::dot(mAbsW, d),
                     glm::dot(mAbsNear, d));
 }
 

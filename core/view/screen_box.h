@@ -8,7 +8,9 @@
 // A box that reaches the camera's near plane (some corner with clip z < -w, i.e. nearer than
 // zNear, or with clip w <= 0: at or behind the eye) has no meaningful extent: crossesNearPlane
 // is set and the extent is the whole plane (-inf..+inf); the caller treats the node as visible
-// and refines it.
+// and refines it. Unless it lies wholly outside one of the view frustum's six planes (behind
+// the near plane, or beside the frustum while reaching behind the eye): nothing of it is drawn,
+// and it is given as outsideBox(), empty and beyond the image, which every test culls.
 //
 // BoxProjector is built once per camera and frame; it is immutable, so any number of threads
 // may use one.
@@ -60,6 +62,11 @@ public:
         constexpr double inf = std::numeric_limits<double>::infinity();
         return {-inf, inf, -inf, inf, true};
     }
+    // A box nothing of which is in the view frustum: beyond the image's right and bottom edges.
+    static ScreenBox outsideBox() {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        return {inf, inf, inf, inf, false};
+    }
 
 private:
     // NDC y points up, pixel y down: the largest NDC y is the top (smallest pixel y).
@@ -72,10 +79,18 @@ private:
     // plane) and their elementwise absolute values for the half extents.
     glm::dvec4 mRowX, mRowY, mRowW, mRowNear;
     glm::dvec3 mAbsX, mAbsY, mAbsW, mAbsNear;
-    ScreenBox estimate(const glm::dvec3& p, double dmx, double dmy, double dmw, double dmNear) const {
+    // The frustum's planes as rows of clip coordinates, each >= 0 inside: w + x, w - x, w + y,
+    // w - y, w + z (the near plane), w - z.
+    glm::dvec4 mPlane[6];
+    // Whether the box of centre p and half extents d lies wholly outside one of the planes: the
+    // largest value of the plane's row over its corners (linear in the corner) is below zero by
+    // more than the rounding of the sums that make it.
+    bool outsideFrustum(const glm::dvec3& p, const glm::dvec3& d) const;
+    ScreenBox estimate(const glm::dvec3& p, const glm::dvec3& d, double dmx, double dmy, double dmw, double dmNear) const {
         const double pmw = apply(mRowW, p);
         // The smallest w and z + w over the corners, exactly: each is linear in the corner.
-        if (!(pmw - dmw > 0.0) || !(apply(mRowNear, p) - dmNear > 0.0)) return nearPlaneBox();
+        if (!(pmw - dmw > 0.0) || !(apply(mRowNear, p) - dmNear > 0.0))
+            return outsideFrustum(p, d) ? outsideBox() : nearPlaneBox();
         const double fNear = 1.0 / (pmw - dmw), fFar = 1.0 / (pmw + dmw);
         const double pmx = apply(mRowX, p), pmy = apply(mRowY, p);
         // Fig. 6: a positive numerator is farthest from zero over the smallest w, a negative
