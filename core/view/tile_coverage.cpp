@@ -135,6 +135,81 @@ VDISO_TARGET_AVX2 bool coverTileRowAvx2(const TileRow& t, OcclusionPyramid& pyra
 }
 #endif
 
+#if VDISO_HAS_AVX2_PATHS
+// detail::firstCentreAtOrAfter of four lanes (clamped to [-1, hi]), as int32 lanes.
+VDISO_TARGET_AVX2 inline __m128i firstCentresAtOrAfter(__m256d x, __m256d hi) {
+    const __m256d clamped = _mm256_min_pd(_mm256_max_pd(x, _mm256_set1_pd(-1.0)), hi);
+    return _mm256_cvtpd_epi32(_mm256_round_pd(_mm256_sub_pd(clamped, _mm256_set1_pd(0.5)), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
+}
+
+// AVX2, a tile row's eight rows at once, for a tile row where no row crosses more than two edges
+// (every row of a convex outline, most of a marching-cubes polygon's): per edge, the eight
+// rows' crossings in two registers (scanRow's operations in its order: the same bits), kept as
+// the least and the greatest active crossing of each row. A row crossing two edges covers the
+// centres from the first at or after the one to the last before the other (scanRow's single
+// run: the crossings wind opposite ways); a row crossing none covers nothing. Per tile, each
+// row's byte is then two shifts of 0xFF, the eight bytes packed into the tile's word: no work
+// per crossing and tile. Returns false, covering nothing, when a row of [row0, row1] crosses
+// more than two edges (the caller takes coverTileRowAvx2 for that tile row).
+VDISO_TARGET_AVX2 bool coverTileRowSpansAvx2(const TileRow& t, OcclusionPyramid& pyramid, bool& fresh) {
+    const double firstCentre = t.ty * 8 + 0.5;
+    const __m256d ycLo = _mm256_add_pd(_mm256_set1_pd(firstCentre), _mm256_set_pd(3.0, 2.0, 1.0, 0.0));
+    const __m256d ycHi = _mm256_add_pd(ycLo, _mm256_set1_pd(4.0));
+    const __m256d inf = _mm256_set1_pd(INFINITY), minusInf = _mm256_set1_pd(-INFINITY);
+    __m256d leastLo = inf, leastHi = inf, mostLo = minusInf, mostHi = minusInf;
+    __m256i countLo = _mm256_setzero_si256(), countHi = _mm256_setzero_si256();  // minus the edges crossed
+    for (int e = 0; e < t.edgeCount; ++e) {
+        const detail::ScanEdge& edge = t.edges[e];
+        if (edge.yBottom <= firstCentre || edge.yTop > firstCentre + 7.0) continue;  // misses the tile row
+        const __m256d yTop = _mm256_set1_pd(edge.yTop), yBottom = _mm256_set1_pd(edge.yBottom);
+        const __m256d xTop = _mm256_set1_pd(edge.xTop), dx = _mm256_set1_pd(edge.dx), dy = _mm256_set1_pd(edge.dy);
+        const __m256d activeLo = _mm256_and_pd(_mm256_cmp_pd(yTop, ycLo, _CMP_LE_OQ), _mm256_cmp_pd(ycLo, yBottom, _CMP_LT_OQ));
+        const __m256d activeHi = _mm256_and_pd(_mm256_cmp_pd(yTop, ycHi, _CMP_LE_OQ), _mm256_cmp_pd(ycHi, yBottom, _CMP_LT_OQ));
+        const __m256d xLo = _mm256_add_pd(xTop, _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(ycLo, yTop), dx), dy));
+        const __m256d xHi = _mm256_add_pd(xTop, _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(ycHi, yTop), dx), dy));
+        // An inactive lane's quotient may be inf or NaN: it never reaches the least or most.
+        leastLo = _mm256_min_pd(leastLo, _mm256_blendv_pd(inf, xLo, activeLo));
+        leastHi = _mm256_min_pd(leastHi, _mm256_blendv_pd(inf, xHi, activeHi));
+        mostLo = _mm256_max_pd(mostLo, _mm256_blendv_pd(minusInf, xLo, activeLo));
+        mostHi = _mm256_max_pd(mostHi, _mm256_blendv_pd(minusInf, xHi, activeHi));
+        countLo = _mm256_add_epi64(countLo, _mm256_castpd_si256(activeLo));
+        countHi = _mm256_add_epi64(countHi, _mm256_castpd_si256(activeHi));
+    }
+    // Rows of [row0, row1] crossing more than two edges (count below -2).
+    const __m256i minusTwo = _mm256_set1_epi64x(-2);
+    const uint32_t many = uint32_t(_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpgt_epi64(minusTwo, countLo)))) |
+                          uint32_t(_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpgt_epi64(minusTwo, countHi)))) << 4;
+    const uint32_t rows = (0xFFu >> (7 - (t.row1 & 7))) & (0xFFu << (t.row0 & 7));
+    if (many & rows) return false;
+    // firstCentreAtOrAfter of each row's least and greatest crossing (a row crossing nothing:
+    // the width plus one and -1, an empty run), as eight int32 lanes, rows 0..7.
+    const __m256d hi = _mm256_set1_pd(double(t.width) + 1.0);
+    const __m256i first = _mm256_setr_m128i(firstCentresAtOrAfter(leastLo, hi), firstCentresAtOrAfter(leastHi, hi));
+    const __m256i last = _mm256_sub_epi32(_mm256_setr_m128i(firstCentresAtOrAfter(mostLo, hi), firstCentresAtOrAfter(mostHi, hi)),
+                                          _mm256_set1_epi32(1));
+    const __m256i bytes = _mm256_set1_epi32(0xFF), seven = _mm256_set1_epi32(7);
+    // Byte 0 of each int32 lane, gathered into the low eight bytes.
+    const __m256i gather = _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
+                                            0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    const __m256i halves = _mm256_setr_epi32(0, 4, 1, 1, 1, 1, 1, 1);
+    const uint64_t rowBits = OcclusionPyramid::rowsMask(t.row0 & 7, t.row1 & 7);
+    for (int tx = t.tileX0; tx <= t.tileX1; ++tx) {
+        const uint64_t word = pyramid.tileWord(tx, t.ty);
+        if (word == kFull) continue;
+        const __m256i column = _mm256_set1_epi32(tx * 8);
+        // Columns [from, to] of the tile in each row: 0xFF << from & 0xFF >> (7 - to), empty when
+        // from > to (shifts of 32 or more give 0).
+        const __m256i from = _mm256_max_epi32(_mm256_sub_epi32(first, column), _mm256_setzero_si256());
+        const __m256i to = _mm256_min_epi32(_mm256_sub_epi32(last, column), seven);
+        const __m256i row = _mm256_and_si256(_mm256_sllv_epi32(bytes, from), _mm256_srlv_epi32(bytes, _mm256_sub_epi32(seven, to)));
+        const __m256i packed = _mm256_permutevar8x32_epi32(_mm256_shuffle_epi8(row, gather), halves);
+        const uint64_t mask = uint64_t(_mm_cvtsi128_si64(_mm256_castsi256_si128(packed))) & rowBits;
+        if (mask & ~word) fresh |= pyramid.coverTile(tx, t.ty, mask);
+    }
+    return true;
+}
+#endif
+
 // A polygon whose centres lie in one or two rows of one tile (most of them, where cells are a
 // pixel or two; taller ones go four rows at a time in the paths above): each row's crossings made straight from the outline, every edge every row, with no branch on the
 // data. The rows' rules and arithmetic are scanRow's (an edge counts for a row when
@@ -271,7 +346,7 @@ bool coverPolygonTiles(const glm::dvec2* v, int n, const PixelRect& rect, Occlus
         t.row1 = std::min(rect.y1, t.ty * 8 + 7);
 #if VDISO_HAS_AVX2_PATHS
         if (simd == SimdLevel::Avx2) {
-            newCentres |= coverTileRowAvx2(t, pyramid);
+            if (!coverTileRowSpansAvx2(t, pyramid, newCentres)) newCentres |= coverTileRowAvx2(t, pyramid);
             continue;
         }
 #endif

@@ -17,8 +17,10 @@
 // rectangle clamped to the image (PolygonCoverage's box) or a larger one; sets newCentres when
 // a centre not covered before was covered. The caller runs pyramid.propagate() before the next
 // query. `simd` (core/simd.h): the baseline makes each row's crossings and a tile's rows one by
-// one; AVX2 four rows at once, each crossing and each tile's counters in one register. Both
-// give the same bits. Either way, a polygon whose centres lie in one or two rows of one tile
+// one; AVX2 a tile row's eight rows at once where none crosses more than two edges (each row a
+// run between its least and greatest crossing, each tile's eight bytes made by shifts), else
+// four rows at once, each crossing and each tile's counters in one register. All give the same
+// bits. Either way, a polygon whose centres lie in one or two rows of one tile
 // (most, where cells are a pixel or two) takes a path of its own: every edge on every row, no
 // branch on the data (with AVX2 four edges a register, up to 8), the same bits again.
 #pragma once
