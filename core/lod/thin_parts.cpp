@@ -118,35 +118,43 @@ struct CornerPlace {
     glm::dvec3 operator()(int x, int y, int z) const { return first + glm::dvec3(x, y, z) * spacing; }
 };
 
-// The points of a part lost in the coarse corners [lo, hi] (each inclusive), a peak (sign -1) or
-// a trough (+1) whose samples there run from `least` to `most`: at the corners on the lost side
-// of the isovalue, at least halfway from the box's other extreme towards the part, and a ridge
-// (or a valley) across it.
+// The corners of a part lost in the coarse corners [lo, hi] (each inclusive), a peak (sign -1)
+// or a trough (+1) whose samples there run from `least` to `most`, that become points: on the
+// lost side of the isovalue, at least halfway from the box's other extreme towards the part,
+// and a ridge (or a valley) across it.
 template <class T>
-void appendBoxPoints(const CoarseSamples<T>& c, const CornerPlace& place, const int lo[3], const int hi[3], double sign,
-                     double least, double most, double iso, const glm::dvec3& eye, PointSet& out,
-                     const std::function<bool(const glm::dvec3&)>& wanted) {
-    const double halfway = 0.5 * (least + most);
-    for (int z = lo[2]; z <= hi[2]; ++z)
-        for (int y = lo[1]; y <= hi[1]; ++y)
-            for (int x = lo[0]; x <= hi[0]; ++x) {
+void findRidges(const CoarseSamples<T>& c, const LostPart& part, double iso, std::vector<std::array<int16_t, 3>>& corners) {
+    const double halfway = 0.5 * (part.least + part.most), sign = part.sign;
+    for (int z = part.lo[2]; z <= part.hi[2]; ++z)
+        for (int y = part.lo[1]; y <= part.hi[1]; ++y)
+            for (int x = part.lo[0]; x <= part.hi[0]; ++x) {
                 const double v = c.at(x, y, z);
                 if (sign < 0 ? (v < halfway || v > iso) : (v > halfway || v <= iso)) continue;
-                if (!isRidge(c, x, y, z, sign, sign < 0 ? least : most)) continue;
-                const glm::dvec3 p = place(x, y, z);
-                if (wanted && !wanted(p)) continue;
-                glm::dvec3 n = acrossPart(c, x, y, z, place.spacing, sign);
-                const glm::dvec3 toEye = glm::normalize(eye - p);
-                if (n == glm::dvec3(0.0)) n = toEye;
-                if (glm::dot(n, toEye) < 0) n = -n;
-                // Turned to within 75 degrees of the eye: the coarse samples give a thin part's
-                // facing only roughly, and one seen edge on would shade black where the full
-                // surface shows its face.
-                const double facing = glm::dot(n, toEye);
-                if (facing < kLeastFacing) n = glm::normalize(n + toEye * ((kLeastFacing - facing) / (1.0 - kLeastFacing)));
-                out.positions.push_back(glm::vec3(p));
-                out.normals.push_back(glm::vec3(n));
+                if (!isRidge(c, x, y, z, sign, sign < 0 ? part.least : part.most)) continue;
+                corners.push_back({int16_t(x), int16_t(y), int16_t(z)});
             }
+}
+
+// Appends the points of a part's ridge corners that `wanted` takes, each normal across the part
+// and turned to the eye.
+template <class T>
+void appendRidgePoints(const CoarseSamples<T>& c, const CornerPlace& place, const LostPart& part, const glm::dvec3& eye,
+                       PointSet& out, const std::function<bool(const glm::dvec3&)>& wanted) {
+    for (const std::array<int16_t, 3>& r : part.ridges->corners) {
+        const glm::dvec3 p = place(r[0], r[1], r[2]);
+        if (wanted && !wanted(p)) continue;
+        glm::dvec3 n = acrossPart(c, r[0], r[1], r[2], place.spacing, part.sign);
+        const glm::dvec3 toEye = glm::normalize(eye - p);
+        if (n == glm::dvec3(0.0)) n = toEye;
+        if (glm::dot(n, toEye) < 0) n = -n;
+        // Turned to within 75 degrees of the eye: the coarse samples give a thin part's facing
+        // only roughly, and one seen edge on would shade black where the full surface shows its
+        // face.
+        const double facing = glm::dot(n, toEye);
+        if (facing < kLeastFacing) n = glm::normalize(n + toEye * ((kLeastFacing - facing) / (1.0 - kLeastFacing)));
+        out.positions.push_back(glm::vec3(p));
+        out.normals.push_back(glm::vec3(n));
+    }
 }
 
 }  // namespace
@@ -251,7 +259,8 @@ void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* 
         const CoarseSamples<T> c{static_cast<const T*>(samples), cl.side()};
         for (const LostPart& p : parts) {
             if (shows && !shows(place(p.lo[0], p.lo[1], p.lo[2]), place(p.hi[0], p.hi[1], p.hi[2]))) continue;
-            appendBoxPoints(c, place, p.lo, p.hi, p.sign, p.least, p.most, iso, eye, out, wanted);
+            std::call_once(p.ridges->found, [&] { findRidges(c, p, iso, p.ridges->corners); });
+            appendRidgePoints(c, place, p, eye, out, wanted);
         }
     });
 }

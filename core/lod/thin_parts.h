@@ -20,8 +20,11 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -47,11 +50,17 @@ inline bool crossesClearly(const BrickRange& r, double iso) {
 
 // A box of a coarse brick's corners [lo, hi] (inclusive on each axis) where the coarse level
 // lost a part: a peak (sign -1) or a trough (+1), the coarse samples there running from `least`
-// to `most`. What the view does not change: found once for a brick and isovalue, its points
-// made for each camera.
+// to `most`. What the view does not change: found once for a brick and isovalue, with the
+// corners of the box that become points (found the first time the box shows, then kept with
+// it), their normals turned to the eye for each camera.
 struct LostPart {
+    struct Ridges {
+        std::once_flag found;
+        std::vector<std::array<int16_t, 3>> corners;  // z, then y, then x order
+    };
     int lo[3], hi[3];
     double sign, least, most;
+    std::shared_ptr<Ridges> ridges = std::make_shared<Ridges>();
 };
 
 // Lost parts kept across the frames of a camera, by brick and isovalue (core/trees/brick_memo.h).
@@ -64,8 +73,8 @@ std::vector<LostPart> findLostParts(const BrickSource& coarse, int64_t brick, co
 
 // Appends the points of `parts` (findLostParts' for the same brick, samples and isovalue), box
 // by box in their order; `eye` in world units. `shows` (if given) is asked about each box (its
-// world corners) before its samples are looked at, and `wanted` about each point's position
-// before its normal is worked out.
+// world corners) before its corners are looked at, and `wanted` about each point's position
+// before its normal is worked out. Safe from several threads on the same parts.
 void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* samples, std::span<const LostPart> parts,
                           double iso, const glm::dvec3& eye, PointSet& out,
                           const std::function<bool(const glm::dvec3&)>& wanted = nullptr,
