@@ -13,6 +13,7 @@
 
 #include "io/crc32.h"
 #include "io/error.h"
+#include "io/forked_child.h"
 
 namespace vdiso {
 
@@ -56,7 +57,7 @@ std::vector<Entry> listEntries(const fs::path& root) {
 
 RangeDiskCache::RangeDiskCache(const std::string& dir, const std::string& location,
                                const std::string& version, uint64_t maxBytes)
-    : mRoot(dir), mMaxBytes(maxBytes) {
+    : mRoot(dir), mMaxBytes(maxBytes), mPid(::getpid()) {
     const fs::path objectFolder = fs::path(dir) / hashName(location);
     const std::string versionName = hashName(version);
     mFolder = (objectFolder / versionName).string();
@@ -107,7 +108,49 @@ bool RangeDiskCache::read(uint64_t offset, size_t n, void* dst) const {
     return true;
 }
 
+RangeDiskCache::~RangeDiskCache() {
+    if (inForkedChild(mPid)) {
+        if (mWriter.joinable()) abandonThread(mWriter);
+        return;
+    }
+    {
+        std::lock_guard lock(mQueueLock);
+        mStopping = true;
+    }
+    mQueued.notify_one();
+    if (mWriter.joinable()) mWriter.join();
+}
+
 void RangeDiskCache::write(uint64_t offset, size_t n, const void* src) const {
+    {
+        std::lock_guard lock(mQueueLock);
+        if (mStopping || inForkedChild(mPid) || mQueuedBytes + n > kPendingBytes) return;
+        const auto* p = static_cast<const unsigned char*>(src);
+        mQueue.push_back({offset, std::vector<unsigned char>(p, p + n)});
+        mQueuedBytes += n;
+        if (!mWriter.joinable()) mWriter = std::thread([this] { writeWaiting(); });
+    }
+    mQueued.notify_one();
+}
+
+void RangeDiskCache::writeWaiting() const {
+    std::unique_lock lock(mQueueLock);
+    for (;;) {
+        mQueued.wait(lock, [&] { return mStopping || !mQueue.empty(); });
+        if (mQueue.empty()) return;  // stopping, and nothing left to write
+        Pending next = std::move(mQueue.front());
+        mQueue.pop_front();
+        lock.unlock();
+        try {
+            writeNow(next.offset, next.bytes.size(), next.bytes.data());
+        } catch (...) {  // (a file system that fails a sweep's listing): a later miss
+        }
+        lock.lock();
+        mQueuedBytes -= next.bytes.size();
+    }
+}
+
+void RangeDiskCache::writeNow(uint64_t offset, size_t n, const void* src) const {
     const std::string path = entry(offset, n);
     const std::string temporary = mFolder + "/.tmp-" + std::to_string(::getpid()) + "-" +
                                   std::to_string(mWrites.fetch_add(1));

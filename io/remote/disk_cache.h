@@ -10,13 +10,24 @@
 // refreshes) across the whole cache are removed until it holds 90% of it. Processes sharing
 // the folder each keep the bound this way, so it may be passed by what they write between
 // their sweeps; an entry another process removed is only a miss.
+//
+// Entries are written, and the cache swept, by the cache's own thread (started at the first
+// write): write() copies the range and returns, so a remote session's transfer thread, which
+// keeps what it fetched, never waits on the file system. At most kPendingBytes wait to be
+// written; a range beyond that is not kept (a later miss). The destructor writes what waits.
 #pragma once
 
+#include <sys/types.h>
+
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <mutex>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace vdiso {
 
@@ -25,11 +36,17 @@ public:
     // Throws IoError naming the folder when it cannot be made or written.
     RangeDiskCache(const std::string& dir, const std::string& location, const std::string& version,
                    uint64_t maxBytes);
+    ~RangeDiskCache();
+    RangeDiskCache(const RangeDiskCache&) = delete;
+    RangeDiskCache& operator=(const RangeDiskCache&) = delete;
+
+    static constexpr size_t kPendingBytes = size_t(64) << 20;
 
     // The range from the cache into dst; false (a miss) when it holds no whole, intact entry.
     bool read(uint64_t offset, size_t n, void* dst) const;
-    // Keeps the range. A failed write (a full disk) is a later miss, not an error. Callers keep
-    // only what they verified (RemoteFile's RangeCheck).
+    // Keeps the range (a copy of it, written by the cache's thread). A failed write (a full
+    // disk) is a later miss, not an error. Callers keep only what they verified (RemoteFile's
+    // RangeCheck).
     void write(uint64_t offset, size_t n, const void* src) const;
     // Removes the range's entry, found damaged by its reader after read() took it (a hit no more).
     void drop(uint64_t offset, size_t n) const;
@@ -38,7 +55,13 @@ public:
     uint64_t hitBytes() const { return mHitBytes.load(); }
 
 private:
+    struct Pending {
+        uint64_t offset;
+        std::vector<unsigned char> bytes;
+    };
     std::string entry(uint64_t offset, size_t n) const;
+    void writeNow(uint64_t offset, size_t n, const void* src) const;
+    void writeWaiting() const;  // the writer thread
     void sweep() const;
 
     std::string mRoot;    // DIR
@@ -47,6 +70,14 @@ private:
     mutable std::mutex mSweepLock;
     mutable std::atomic<uint64_t> mTotal{0};  // the cache's bytes, as this process knows them
     mutable std::atomic<uint64_t> mHits{0}, mHitBytes{0}, mWrites{0};
+    // Ranges waiting for the writer thread.
+    pid_t mPid;  // the process that made the cache (io/forked_child.h)
+    mutable std::mutex mQueueLock;
+    mutable std::condition_variable mQueued;
+    mutable std::deque<Pending> mQueue;
+    mutable size_t mQueuedBytes = 0;
+    mutable bool mStopping = false;
+    mutable std::thread mWriter;
 };
 
 }  // namespace vdiso

@@ -1,0 +1,64 @@
+// The remote disk cache's own thread (io/remote/disk_cache.h): what write() takes is on disk
+// once the cache is gone, for the next process; a range beyond the bound of what may wait is not
+// kept, and that is only a miss.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "io/remote/disk_cache.h"
+#include "test_util.h"
+
+namespace vdiso {
+namespace {
+
+std::vector<unsigned char> rangeBytes(uint64_t offset, size_t n) {
+    std::vector<unsigned char> bytes(n);
+    for (size_t i = 0; i < n; ++i) bytes[i] = static_cast<unsigned char>((offset + i) * 2654435761u >> 13);
+    return bytes;
+}
+
+TEST(DiskCache, WhatWasWrittenIsKeptForTheNextProcessOnceTheCacheIsGone) {
+    test::ScratchDir dir;
+    const std::string root = dir.file("cache");
+    constexpr int kRanges = 200;
+    constexpr size_t kBytes = 20000;
+    {
+        const RangeDiskCache cache(root, "s3://bucket/key", "etag-1", uint64_t(1) << 30);
+        for (int k = 0; k < kRanges; ++k) {
+            const std::vector<unsigned char> bytes = rangeBytes(uint64_t(k) * kBytes, kBytes);
+            cache.write(uint64_t(k) * kBytes, kBytes, bytes.data());
+        }
+    }  // the writes waiting are made here
+    const RangeDiskCache next(root, "s3://bucket/key", "etag-1", uint64_t(1) << 30);
+    std::vector<unsigned char> got(kBytes);
+    for (int k = 0; k < kRanges; ++k) {
+        ASSERT_TRUE(next.read(uint64_t(k) * kBytes, kBytes, got.data())) << "range " << k;
+        EXPECT_EQ(got, rangeBytes(uint64_t(k) * kBytes, kBytes)) << "range " << k;
+    }
+    EXPECT_EQ(next.hits(), uint64_t(kRanges));
+    // Another version of the object: none of it.
+    const RangeDiskCache changed(root, "s3://bucket/key", "etag-2", uint64_t(1) << 30);
+    EXPECT_FALSE(changed.read(0, kBytes, got.data()));
+}
+
+TEST(DiskCache, ARangeBeyondWhatMayWaitIsNotKept) {
+    test::ScratchDir dir;
+    const std::string root = dir.file("cache");
+    const size_t n = RangeDiskCache::kPendingBytes + 1;
+    {
+        const RangeDiskCache cache(root, "https://host/volume.vdiso", "v", uint64_t(1) << 32);
+        const std::vector<unsigned char> bytes = rangeBytes(0, n);
+        cache.write(0, n, bytes.data());
+        const std::vector<unsigned char> small = rangeBytes(n, 100);
+        cache.write(n, 100, small.data());
+    }
+    const RangeDiskCache next(root, "https://host/volume.vdiso", "v", uint64_t(1) << 32);
+    std::vector<unsigned char> got(n);
+    EXPECT_FALSE(next.read(0, n, got.data()));
+    EXPECT_TRUE(next.read(n, 100, got.data()));
+    EXPECT_EQ(std::vector<unsigned char>(got.begin(), got.begin() + 100), rangeBytes(n, 100));
+}
+
+}  // namespace
+}  // namespace vdiso
