@@ -1,11 +1,14 @@
 #include "io/store/store_format.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <memory>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "core/orientation.h"
 #include "core/trees/sub_blocks.h"
@@ -429,28 +432,36 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
     const uint64_t rawBytes = uint64_t(layout.samplesPerBrick()) * scalarSize(header.volume.type);
     const int64_t externalEnd = firstBrickOfLevel(header, header.externalLevels);
     const uint64_t maxStored = maxStoredBrickBytes(rawBytes);
-    entries.resize(count);
-    for (uint64_t id = 0; id < count; ++id) {
-        uint32_t flags = 0;
-        BrickEntry& e = entries[id] = decodeEntry(bytes + r.at(), flags);
-        r.skip(kEntryBytes);
+    // Whether entry `id` (decoded into e) is valid.
+    auto valid = [&](uint64_t id, const BrickEntry& e, uint32_t flags) {
         // An index's levels that lie in the indexed data, and only those, are external: no bytes here.
-        if (e.external != (id < uint64_t(externalEnd)) || flags > 3)
-            throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
-        if (e.external) {
-            if (e.offset || e.storedBytes || e.checksum || e.compressed || !(e.minValue <= e.maxValue))
-                throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
-            continue;
+        if (e.external != (id < uint64_t(externalEnd)) || flags > 3) return false;
+        if (e.external) return !e.offset && !e.storedBytes && !e.checksum && !e.compressed && e.minValue <= e.maxValue;
+        return e.offset >= kStoreHeaderBytes && e.offset % kStoreAlignment == 0 && e.storedBytes > 0 &&
+               e.storedBytes <= maxStored && e.offset <= header.indexOffset &&
+               e.storedBytes <= header.indexOffset - e.offset && (e.compressed || e.storedBytes == rawBytes) &&
+               (e.compressed == false || header.compression != Compression::None) &&
+               e.minValue <= e.maxValue;  // false for NaN too
+    };
+    // Decoded in blocks on TBB's threads (a 2560^3 store's 585 K entries took 18-21 ms on one, at
+    // every open); an error names the first invalid entry, as one pass in order would.
+    entries.resize(count);
+    const unsigned char* first = bytes + r.at();
+    std::atomic<uint64_t> firstInvalid{count};
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 16384), [&](const tbb::blocked_range<uint64_t>& block) {
+        for (uint64_t id = block.begin(); id < block.end(); ++id) {
+            uint32_t flags = 0;
+            const BrickEntry& e = entries[id] = decodeEntry(first + id * kEntryBytes, flags);
+            if (!valid(id, e, flags)) {
+                uint64_t seen = firstInvalid.load();
+                while (id < seen && !firstInvalid.compare_exchange_weak(seen, id)) {
+                }
+                return;
+            }
         }
-        const bool ok = e.offset >= kStoreHeaderBytes && e.offset % kStoreAlignment == 0 &&
-                        e.storedBytes > 0 && e.storedBytes <= maxStored &&
-                        e.offset <= header.indexOffset &&
-                        e.storedBytes <= header.indexOffset - e.offset &&
-                        (e.compressed || e.storedBytes == rawBytes) &&
-                        (e.compressed == false || header.compression != Compression::None) &&
-                        e.minValue <= e.maxValue;  // false for NaN too
-        if (!ok) throwIoError(path, "index entry of brick " + std::to_string(id) + " is invalid");
-    }
+    });
+    if (firstInvalid < count) throwIoError(path, "index entry of brick " + std::to_string(firstInvalid.load()) + " is invalid");
+    r.skip(size_t(count * kEntryBytes));
     histogram.lo = r.get<double>();
     histogram.hi = r.get<double>();
     if (r.get<uint32_t>() != kHistogramBins || !std::isfinite(histogram.lo) ||
