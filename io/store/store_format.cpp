@@ -448,8 +448,8 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
     entries.resize(count);
     const unsigned char* first = bytes + r.at();
     std::atomic<uint64_t> firstInvalid{count};
-    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 16384), [&](const tbb::blocked_range<uint64_t>& block) {
-        for (uint64_t id = block.begin(); id < block.end(); ++id) {
+    auto decodeBlock = [&](uint64_t begin, uint64_t end) {
+        for (uint64_t id = begin; id < end; ++id) {
             uint32_t flags = 0;
             const BrickEntry& e = entries[id] = decodeEntry(first + id * kEntryBytes, flags);
             if (!valid(id, e, flags)) {
@@ -459,7 +459,13 @@ void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHe
                 return;
             }
         }
-    });
+    };
+    constexpr uint64_t kBlock = 16384;  // a store of fewer bricks is decoded on this thread
+    if (count <= kBlock)
+        decodeBlock(0, count);
+    else
+        tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, kBlock),
+                          [&](const tbb::blocked_range<uint64_t>& block) { decodeBlock(block.begin(), block.end()); });
     if (firstInvalid < count) throwIoError(path, "index entry of brick " + std::to_string(firstInvalid.load()) + " is invalid");
     r.skip(size_t(count * kEntryBytes));
     histogram.lo = r.get<double>();
