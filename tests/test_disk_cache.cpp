@@ -1,9 +1,16 @@
 // The remote disk cache's own thread (io/remote/disk_cache.h): what write() takes is on disk
 // once the cache is gone, for the next process; a range beyond the bound of what may wait is not
-// kept, and that is only a miss.
+// kept, and that is only a miss; a process forked while the thread waits can drop the cache.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cstdint>
+#include <memory>
+#include <thread>
 #include <vector>
 
 #include "io/remote/disk_cache.h"
@@ -58,6 +65,41 @@ TEST(DiskCache, ARangeBeyondWhatMayWaitIsNotKept) {
     EXPECT_FALSE(next.read(0, n, got.data()));
     EXPECT_TRUE(next.read(n, 100, got.data()));
     EXPECT_EQ(std::vector<unsigned char>(got.begin(), got.begin() + 100), rangeBytes(n, 100));
+}
+
+// Python's multiprocessing forks with stores open: the child inherits the cache, with its
+// writer thread waiting (on a condition variable whose waiter the child never has), and must be
+// able to drop it and end. The child here ends by itself within seconds or the test fails.
+TEST(DiskCache, AProcessForkedWhileItsThreadWaitsDropsTheCacheAndEnds) {
+    test::ScratchDir dir;
+    auto cache = std::make_unique<RangeDiskCache>(dir.file("cache"), "s3://bucket/key", "v", uint64_t(1) << 30);
+    const std::vector<unsigned char> bytes = rangeBytes(0, 1000);
+    cache->write(0, bytes.size(), bytes.data());
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // written: the thread waits again
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        cache->write(1000, bytes.size(), bytes.data());  // not kept, and no thread started
+        cache.reset();
+        ::_exit(0);
+    }
+    int status = 0;
+    bool ended = false;
+    for (int k = 0; k < 100 && !ended; ++k) {
+        ended = ::waitpid(child, &status, WNOHANG) == child;
+        if (!ended) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (!ended) {
+        ::kill(child, SIGKILL);
+        ::waitpid(child, &status, 0);
+    }
+    ASSERT_TRUE(ended) << "the forked child hung dropping the disk cache";
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    cache.reset();
+    const RangeDiskCache next(dir.file("cache"), "s3://bucket/key", "v", uint64_t(1) << 30);
+    std::vector<unsigned char> got(bytes.size());
+    EXPECT_TRUE(next.read(0, got.size(), got.data()));
+    EXPECT_FALSE(next.read(1000, got.size(), got.data()));
 }
 
 }  // namespace

@@ -259,7 +259,10 @@ void appendLostPartPoints(const BrickSource& coarse, int64_t brick, const void* 
         const CoarseSamples<T> c{static_cast<const T*>(samples), cl.side()};
         for (const LostPart& p : parts) {
             if (shows && !shows(place(p.lo[0], p.lo[1], p.lo[2]), place(p.hi[0], p.hi[1], p.hi[2]))) continue;
-            std::call_once(p.ridges->found, [&] { findRidges(c, p, iso, p.ridges->corners); });
+            std::call_once(p.ridges->found, [&] {
+                p.ridges->corners.clear();  // a try that threw (no memory) left part of them
+                findRidges(c, p, iso, p.ridges->corners);
+            });
             appendRidgePoints(c, place, p, eye, out, wanted);
         }
     });

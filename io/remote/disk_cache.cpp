@@ -57,7 +57,7 @@ std::vector<Entry> listEntries(const fs::path& root) {
 
 RangeDiskCache::RangeDiskCache(const std::string& dir, const std::string& location,
                                const std::string& version, uint64_t maxBytes)
-    : mRoot(dir), mMaxBytes(maxBytes), mPid(::getpid()) {
+    : mRoot(dir), mMaxBytes(maxBytes), mPid(::getpid()), mWriter(std::make_unique<Writer>()) {
     const fs::path objectFolder = fs::path(dir) / hashName(location);
     const std::string versionName = hashName(version);
     mFolder = (objectFolder / versionName).string();
@@ -109,44 +109,52 @@ bool RangeDiskCache::read(uint64_t offset, size_t n, void* dst) const {
 }
 
 RangeDiskCache::~RangeDiskCache() {
-    if (inForkedChild(mPid)) {
-        if (mWriter.joinable()) abandonThread(mWriter);
+    if (inForkedChild(mPid)) {  // (mWriter's note in the header)
+        if (mWriter->thread.joinable()) abandonThread(mWriter->thread);
+        mWriter.release();
         return;
     }
     {
-        std::lock_guard lock(mQueueLock);
-        mStopping = true;
+        std::lock_guard lock(mWriter->lock);
+        mWriter->stopping = true;
     }
-    mQueued.notify_one();
-    if (mWriter.joinable()) mWriter.join();
+    mWriter->queued.notify_one();
+    if (mWriter->thread.joinable()) mWriter->thread.join();
 }
 
-void RangeDiskCache::write(uint64_t offset, size_t n, const void* src) const {
-    {
-        std::lock_guard lock(mQueueLock);
-        if (mStopping || inForkedChild(mPid) || mQueuedBytes + n > kPendingBytes) return;
+void RangeDiskCache::write(uint64_t offset, size_t n, const void* src) const noexcept {
+    if (inForkedChild(mPid) || n > kPendingBytes) return;
+    Writer& w = *mWriter;
+    try {
         const auto* p = static_cast<const unsigned char*>(src);
-        mQueue.push_back({offset, std::vector<unsigned char>(p, p + n)});
-        mQueuedBytes += n;
-        if (!mWriter.joinable()) mWriter = std::thread([this] { writeWaiting(); });
+        Pending range{offset, std::vector<unsigned char>(p, p + n)};  // copied outside the lock
+        {
+            std::lock_guard lock(w.lock);
+            if (w.stopping || w.queuedBytes + n > kPendingBytes) return;
+            if (!w.thread.joinable()) w.thread = std::thread([this] { writeWaiting(); });
+            w.queue.push_back(std::move(range));
+            w.queuedBytes += n;
+        }
+        w.queued.notify_one();
+    } catch (...) {  // no memory for the copy, or no thread: not kept
     }
-    mQueued.notify_one();
 }
 
 void RangeDiskCache::writeWaiting() const {
-    std::unique_lock lock(mQueueLock);
+    Writer& w = *mWriter;
+    std::unique_lock lock(w.lock);
     for (;;) {
-        mQueued.wait(lock, [&] { return mStopping || !mQueue.empty(); });
-        if (mQueue.empty()) return;  // stopping, and nothing left to write
-        Pending next = std::move(mQueue.front());
-        mQueue.pop_front();
+        w.queued.wait(lock, [&] { return w.stopping || !w.queue.empty(); });
+        if (w.queue.empty()) return;  // stopping, and nothing left to write
+        Pending next = std::move(w.queue.front());
+        w.queue.pop_front();
         lock.unlock();
         try {
             writeNow(next.offset, next.bytes.size(), next.bytes.data());
         } catch (...) {  // (a file system that fails a sweep's listing): a later miss
         }
         lock.lock();
-        mQueuedBytes -= next.bytes.size();
+        w.queuedBytes -= next.bytes.size();
     }
 }
 

@@ -24,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -45,9 +46,10 @@ public:
     // The range from the cache into dst; false (a miss) when it holds no whole, intact entry.
     bool read(uint64_t offset, size_t n, void* dst) const;
     // Keeps the range (a copy of it, written by the cache's thread). A failed write (a full
-    // disk) is a later miss, not an error. Callers keep only what they verified (RemoteFile's
-    // RangeCheck).
-    void write(uint64_t offset, size_t n, const void* src) const;
+    // disk, no memory for the copy, no thread) is a later miss, not an error: it never throws
+    // (it runs on the remote session's transfer thread). Callers keep only what they verified
+    // (RemoteFile's RangeCheck).
+    void write(uint64_t offset, size_t n, const void* src) const noexcept;
     // Removes the range's entry, found damaged by its reader after read() took it (a hit no more).
     void drop(uint64_t offset, size_t n) const;
 
@@ -70,14 +72,19 @@ private:
     mutable std::mutex mSweepLock;
     mutable std::atomic<uint64_t> mTotal{0};  // the cache's bytes, as this process knows them
     mutable std::atomic<uint64_t> mHits{0}, mHitBytes{0}, mWrites{0};
-    // Ranges waiting for the writer thread.
+    // Ranges waiting for the writer thread. On the heap: a process forked while the thread
+    // waited on `queued` inherits a waiter there that will never leave, and destroying the
+    // condition variable would wait for it, so a forked child leaves this block as it is.
+    struct Writer {
+        std::mutex lock;
+        std::condition_variable queued;
+        std::deque<Pending> queue;
+        size_t queuedBytes = 0;
+        bool stopping = false;
+        std::thread thread;
+    };
     pid_t mPid;  // the process that made the cache (io/forked_child.h)
-    mutable std::mutex mQueueLock;
-    mutable std::condition_variable mQueued;
-    mutable std::deque<Pending> mQueue;
-    mutable size_t mQueuedBytes = 0;
-    mutable bool mStopping = false;
-    mutable std::thread mWriter;
+    std::unique_ptr<Writer> mWriter;
 };
 
 }  // namespace vdiso
