@@ -1,6 +1,7 @@
 // The remote disk cache's own thread (io/remote/disk_cache.h): what write() takes is on disk
 // once the cache is gone, for the next process; a range beyond the bound of what may wait is not
-// kept, and that is only a miss; a process forked while the thread waits can drop the cache.
+// kept, and that is only a miss; a process forked while the thread waits can drop the cache;
+// temporaries of writers that ended mid-write go.
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -9,6 +10,8 @@
 
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
+#include <string>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -65,6 +68,21 @@ TEST(DiskCache, ARangeBeyondWhatMayWaitIsNotKept) {
     EXPECT_FALSE(next.read(0, n, got.data()));
     EXPECT_TRUE(next.read(n, 100, got.data()));
     EXPECT_EQ(std::vector<unsigned char>(got.begin(), got.begin() + 100), rangeBytes(n, 100));
+}
+
+// A temporary left by a process that ended mid-write is removed when a cache opens, once it is
+// an hour old; a younger one (a write going on) stays.
+TEST(DiskCache, TemporariesLeftByAnEndedWriterGoWhenACacheOpens) {
+    test::ScratchDir dir;
+    const std::filesystem::path folder = dir.path() / "cache" / "someobject";
+    std::filesystem::create_directories(folder);
+    const std::filesystem::path old = folder / ".tmp-4242-0", young = folder / ".tmp-4242-1";
+    test::writeFile(old.string(), std::string(5000, 'x'));
+    test::writeFile(young.string(), std::string(5000, 'y'));
+    std::filesystem::last_write_time(old, std::filesystem::file_time_type::clock::now() - std::chrono::hours(2));
+    const RangeDiskCache cache(dir.file("cache"), "s3://bucket/key", "v", uint64_t(1) << 30);
+    EXPECT_FALSE(std::filesystem::exists(old));
+    EXPECT_TRUE(std::filesystem::exists(young));
 }
 
 // Python's multiprocessing forks with stores open: the child inherits the cache, with its

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -34,22 +35,36 @@ bool isEntryName(const std::string& name) {
     return !name.empty() && name[0] != '.' && name.find('-') != std::string::npos;
 }
 
-// Every entry under `root` (not the temporaries being written), with its size and time.
+// A temporary this old was left by a process that ended while writing it (a write takes
+// milliseconds): removed when a cache opens, or it would be neither counted nor swept.
+constexpr auto kStaleTemporary = std::chrono::hours(1);
+
+// Every entry under `root` (not the temporaries being written), with its size and time; with
+// `removeStale`, the stale temporaries go.
 struct Entry {
     fs::path path;
     uint64_t bytes;
     fs::file_time_type time;
 };
-std::vector<Entry> listEntries(const fs::path& root) {
-    std::vector<Entry> entries;
+std::vector<Entry> listEntries(const fs::path& root, bool removeStale = false) {
+    std::vector<Entry> entries, stale;
+    const fs::file_time_type now = fs::file_time_type::clock::now();
     std::error_code ec;
     for (fs::recursive_directory_iterator it(root, ec), end; !ec && it != end; it.increment(ec)) {
-        if (!it->is_regular_file(ec) || !isEntryName(it->path().filename().string())) continue;
-        const uint64_t bytes = it->file_size(ec);
+        if (!it->is_regular_file(ec)) continue;
+        const std::string name = it->path().filename().string();
         const fs::file_time_type time = it->last_write_time(ec);
+        if (!isEntryName(name)) {
+            if (removeStale && !ec && name.starts_with(".tmp-") && now - time > kStaleTemporary)
+                stale.push_back({it->path(), 0, time});
+            ec.clear();
+            continue;
+        }
+        const uint64_t bytes = it->file_size(ec);
         if (!ec) entries.push_back({it->path(), bytes, time});
         ec.clear();
     }
+    for (const Entry& e : stale) fs::remove(e.path, ec);
     return entries;
 }
 
@@ -69,7 +84,7 @@ RangeDiskCache::RangeDiskCache(const std::string& dir, const std::string& locati
     for (fs::directory_iterator it(objectFolder, ec), end; !ec && it != end; it.increment(ec))
         if (it->path().filename() != versionName) fs::remove_all(it->path(), ec);
     uint64_t total = 0;
-    for (const Entry& e : listEntries(mRoot)) total += e.bytes;
+    for (const Entry& e : listEntries(mRoot, true)) total += e.bytes;
     mTotal = total;
     if (total > mMaxBytes) sweep();
 }

@@ -9,7 +9,8 @@
 // writes; past the bound, the least recently used entries (by modification time, which a hit
 // refreshes) across the whole cache are removed until it holds 90% of it. Processes sharing
 // the folder each keep the bound this way, so it may be passed by what they write between
-// their sweeps; an entry another process removed is only a miss.
+// their sweeps; an entry another process removed is only a miss. A temporary an hour old (its
+// writer ended mid-write) is removed when a cache opens.
 //
 // Entries are written, and the cache swept, by the cache's own thread (started at the first
 // write): write() copies the range and returns, so a remote session's transfer thread, which
