@@ -99,8 +99,7 @@ public:
     // Whether the point placed at t along that edge (as place() makes it) lies behind the near
     // plane (clip z + w < 0): a polygon all of whose points do is clipped away whole.
     bool behindNearPlane(int corner, int axis, double t) const {
-        const glm::dvec4& p = mClip[size_t(corner)];
-        const glm::dvec4 c = p + t * (mClip[size_t(corner + cornerStride(axis))] - p);
+        const glm::dvec4 c = clipAt(corner, corner + cornerStride(axis), t);
         return c.z + c.w < 0.0;
     }
 
@@ -136,10 +135,14 @@ private:
         const double r = 1.0 / c.w;
         return {(c.x * r * 0.5 + 0.5) * mWidth, (0.5 - c.y * r * 0.5) * mHeight};
     }
+    // The clip coordinates of the point at t from corner a to corner b.
+    glm::dvec4 clipAt(int a, int b, double t) const {
+        const glm::dvec4& p = mClip[size_t(a)];
+        return p + t * (mClip[size_t(b)] - p);
+    }
     // The point at t from corner a to corner b placed, or NaN.
     glm::dvec2 placeNow(int a, int b, double t) const {
-        const glm::dvec4& p = mClip[size_t(a)];
-        const glm::dvec4 c = p + t * (mClip[size_t(b)] - p);
+        const glm::dvec4 c = clipAt(a, b, t);
         if (!(c.w > 0.0) || !(c.z >= -c.w && c.z <= c.w)) return glm::dvec2(std::numeric_limits<double>::quiet_NaN());
         const glm::dvec2 out = pixelOf(c);
         return std::isfinite(out.x) && std::isfinite(out.y) ? out : glm::dvec2(std::numeric_limits<double>::quiet_NaN());

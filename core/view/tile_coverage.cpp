@@ -75,6 +75,12 @@ bool coverTileRowBaseline(const TileRow& t, OcclusionPyramid& pyramid) {
 }
 
 #if VDISO_HAS_AVX2_PATHS
+// detail::firstCentreAtOrAfter of four lanes (clamped to [-1, hi]), as int32 lanes.
+VDISO_TARGET_AVX2 inline __m128i firstCentresAtOrAfter(__m256d x, __m256d hi) {
+    const __m256d clamped = _mm256_min_pd(_mm256_max_pd(x, _mm256_set1_pd(-1.0)), hi);
+    return _mm256_cvtpd_epi32(_mm256_round_pd(_mm256_sub_pd(clamped, _mm256_set1_pd(0.5)), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
+}
+
 // AVX2: a quad of rows (tile rows 0-3 or 4-7) at a time. Per edge, the quad's four crossings in
 // one register (the same operations in the same order as the baseline's, so the same bits:
 // IEEE division, and vroundpd's ceiling is exact), kept as the column of the first centre at or
@@ -88,8 +94,7 @@ VDISO_TARGET_AVX2 bool coverTileRowAvx2(const TileRow& t, OcclusionPyramid& pyra
     __m256i column[2][kTileCoverageEdges];
     int winding[2][kTileCoverageEdges];
     int used[2] = {0, 0};
-    const __m256d lo = _mm256_set1_pd(-1.0), hi = _mm256_set1_pd(double(t.width) + 1.0);
-    const __m256d half = _mm256_set1_pd(0.5);
+    const __m256d hi = _mm256_set1_pd(double(t.width) + 1.0);
     const __m256i far = _mm256_set1_epi64x(int64_t(1) << 40);
     for (int q = quad0; q <= quad1; ++q) {
         const double firstCentre = t.ty * 8 + q * 4 + 0.5;
@@ -103,9 +108,7 @@ VDISO_TARGET_AVX2 bool coverTileRowAvx2(const TileRow& t, OcclusionPyramid& pyra
             const __m256d x = _mm256_add_pd(
                 _mm256_set1_pd(edge.xTop),
                 _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(yc, yTop), _mm256_set1_pd(edge.dx)), _mm256_set1_pd(edge.dy)));
-            const __m256d clamped = _mm256_min_pd(_mm256_max_pd(x, lo), hi);
-            const __m256d ceiling = _mm256_round_pd(_mm256_sub_pd(clamped, half), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-            const __m256i at = _mm256_cvtepi32_epi64(_mm256_cvtpd_epi32(ceiling));
+            const __m256i at = _mm256_cvtepi32_epi64(firstCentresAtOrAfter(x, hi));
             column[q][used[q]] = _mm256_blendv_epi8(far, at, _mm256_castpd_si256(active));
             winding[q][used[q]] = edge.winding;
             ++used[q];
@@ -136,12 +139,6 @@ VDISO_TARGET_AVX2 bool coverTileRowAvx2(const TileRow& t, OcclusionPyramid& pyra
 #endif
 
 #if VDISO_HAS_AVX2_PATHS
-// detail::firstCentreAtOrAfter of four lanes (clamped to [-1, hi]), as int32 lanes.
-VDISO_TARGET_AVX2 inline __m128i firstCentresAtOrAfter(__m256d x, __m256d hi) {
-    const __m256d clamped = _mm256_min_pd(_mm256_max_pd(x, _mm256_set1_pd(-1.0)), hi);
-    return _mm256_cvtpd_epi32(_mm256_round_pd(_mm256_sub_pd(clamped, _mm256_set1_pd(0.5)), _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC));
-}
-
 // AVX2, a tile row's eight rows at once, for a tile row where no row crosses more than two edges
 // (every row of a convex outline, most of a marching-cubes polygon's): per edge, the eight
 // rows' crossings in two registers (scanRow's operations in its order: the same bits), kept as
@@ -276,8 +273,7 @@ VDISO_TARGET_AVX2 bool coverPolygonInTileAvx2(const glm::dvec2* v, int n, const 
     const int tx = rect.x0 >> 3, ty = rect.y0 >> 3;
     const uint64_t word = pyramid.tileWord(tx, ty);
     if (word == kFull) return false;
-    const __m256d lo = _mm256_set1_pd(-1.0), hi = _mm256_set1_pd(double(pyramid.width()) + 1.0);
-    const __m256d half = _mm256_set1_pd(0.5);
+    const __m256d hi = _mm256_set1_pd(double(pyramid.width()) + 1.0);
     const __m256i tileColumn = _mm256_set1_epi64x(int64_t(tx) * 8), ones = _mm256_set1_epi64x(int64_t(kByteOnes));
     uint64_t counters[2] = {kByteZero, kByteZero};
     __m256d notFinite = _mm256_setzero_pd();  // x - x is not 0 for an infinity or a NaN
@@ -302,9 +298,7 @@ VDISO_TARGET_AVX2 bool coverPolygonInTileAvx2(const glm::dvec2* v, int n, const 
             const __m256d active = _mm256_and_pd(_mm256_cmp_pd(yTop, yc, _CMP_LE_OQ), _mm256_cmp_pd(yc, yBottom, _CMP_LT_OQ));
             // An inactive edge's quotient may be inf or NaN: replaced before any rounding.
             const __m256d x = _mm256_and_pd(_mm256_add_pd(xTop, _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(yc, yTop), dx), dy)), active);
-            const __m256d ceiling = _mm256_round_pd(_mm256_sub_pd(_mm256_min_pd(_mm256_max_pd(x, lo), hi), half),
-                                                    _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-            __m256i at = _mm256_sub_epi64(_mm256_cvtepi32_epi64(_mm256_cvtpd_epi32(ceiling)), tileColumn);
+            __m256i at = _mm256_sub_epi64(_mm256_cvtepi32_epi64(firstCentresAtOrAfter(x, hi)), tileColumn);
             at = _mm256_and_si256(at, _mm256_cmpgt_epi64(at, _mm256_setzero_si256()));  // at <= 0: every byte
             __m256i step = _mm256_and_si256(_mm256_sllv_epi64(ones, _mm256_slli_epi64(at, 3)), _mm256_castpd_si256(active));
             step = _mm256_sub_epi64(_mm256_xor_si256(step, up), up);
