@@ -40,7 +40,13 @@ public:
         return mInner.acquire(id);  // released to the inner source, which pins
     }
     bool isResident(int64_t) const override { return resident; }
+    // With `rows`, x-neighbours of a row read together (as a store's file holds them).
+    bool readsTogether(int64_t a, int64_t b) const override {
+        const int64_t nx = mInner.layout().brickCounts[0];
+        return rows && std::abs(a - b) == 1 && a / nx == b / nx;
+    }
     bool resident = false;  // what isResident says of every brick
+    bool rows = false;
     std::vector<int64_t> ids() const {
         std::lock_guard lock(mMutex);
         return mIds;
@@ -196,6 +202,41 @@ TEST(BrickLookAhead, ResidentBricksAreNotReadAhead) {
             EXPECT_EQ(read, 0u);
         else
             EXPECT_GT(read, 0u);
+    }
+}
+
+// Where a read waits a round trip, a brick handed to the readers is read with its neighbours
+// along x that show, before the traversal has found them (it finds one brick ahead here): a row
+// of the visible surface in one read. Every brick read shows, and is read once. A disk's
+// look-ahead reads only bricks it has found.
+TEST(BrickLookAhead, OverTheNetworkABrickIsReadWithItsNeighboursThatShow) {
+    for (const size_t near : {BrickLookAhead::kNearBricks, BrickLookAhead::kNearBricks + 30}) {
+        Scene s;
+        s.source.rows = true;
+        const std::vector<int64_t> order = bricksInOrder(s.tree, s.culler);
+        ASSERT_GT(order.size(), 10u);
+        size_t readBeforeFound = 0;
+        std::vector<int64_t> read;
+        {
+            BrickLookAhead ahead(s.source, s.tree, s.levels, 1, 1, near);
+            for (size_t i = 0; i < order.size(); ++i) {
+                ahead.beforeAcquire(order[i]);  // found so far: order[0 .. i + 1]
+                std::this_thread::sleep_for(std::chrono::milliseconds(3));
+                for (const int64_t b : s.source.ids())
+                    readBeforeFound += std::find(order.begin(), order.begin() + ptrdiff_t(std::min(i + 2, order.size())), b) ==
+                                       order.begin() + ptrdiff_t(std::min(i + 2, order.size()));
+                if (readBeforeFound > 0) break;
+            }
+            read = s.source.ids();
+            ahead.stop();
+        }
+        for (const int64_t b : read) EXPECT_NE(std::find(order.begin(), order.end(), b), order.end()) << b;
+        std::sort(read.begin(), read.end());
+        EXPECT_EQ(std::adjacent_find(read.begin(), read.end()), read.end()) << "a brick read twice";
+        if (near == BrickLookAhead::kNearBricks)
+            EXPECT_EQ(readBeforeFound, 0u);
+        else
+            EXPECT_GT(readBeforeFound, 0u);
     }
 }
 

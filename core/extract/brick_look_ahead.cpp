@@ -6,7 +6,7 @@ namespace vdiso {
 
 BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, const ViewLevels& levels,
                                size_t depth, int readers, size_t near, bool coverageFromElsewhere)
-    : mSource(source), mCursor(tree, levels, levels.culler(0)), mDepth(depth), mNear(near),
+    : mSource(source), mTree(tree), mLevels(levels), mCursor(tree, levels, levels.culler(0)), mDepth(depth), mNear(near),
       mPrefetcher(source, depth, readers), mCoverageFromElsewhere(coverageFromElsewhere),
       mDrawn{0, 0, levels.culler(0).camera().width - 1, levels.culler(0).camera().height - 1} {}
 
@@ -15,7 +15,25 @@ bool BrickLookAhead::findNext() {
     if (mDepth == 0 || !mCursor.nextBrick(step)) return false;
     mAhead.push_back({step.node, step.at, step.at.id, mCursor.culler().pixelRect(step.box),
                       mSource.isResident(step.at.id) ? kResident : kNotPushed});
+    if (mNear > kNearBricks && mAhead.back().item != kResident) findBeside(mAhead.back());
     return true;
+}
+
+void BrickLookAhead::findBeside(AheadBrick& ahead) {
+    const std::span<const MinMaxNode> nodes = mTree.nodes();
+    const int64_t bricksX = mTree.layout().brickCounts[0];
+    for (const int side : {-1, 1}) {
+        const MinMaxNode* from = &nodes[ahead.node];
+        for (int k = 0; k < kBeside; ++k) {
+            const int64_t c[3] = {side < 0 ? int64_t(from->lo[0]) - 1 : int64_t(from->hi[0]), from->lo[1], from->lo[2]};
+            if (c[0] < 0 || c[0] >= bricksX) break;
+            uint32_t node;
+            ViewLevels::Brick at;
+            if (!mLevels.resolve(c, node, at) || at.level != ahead.at.level || !mCursor.stillShows(node, at)) break;
+            ahead.beside[ahead.besideCount++] = at.id;
+            from = &nodes[node];
+        }
+    }
 }
 
 int64_t BrickLookAhead::pixelsOf(const PixelRect& r) const {
@@ -73,8 +91,10 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     // they lie next to in the file.
     if (mNear > kNearBricks) {
         std::vector<int64_t> unsettled;
-        for (const AheadBrick& ahead : mAhead)
+        for (const AheadBrick& ahead : mAhead) {
             if (ahead.item == kNotPushed) unsettled.push_back(ahead.brick);
+            unsettled.insert(unsettled.end(), ahead.beside, ahead.beside + ahead.besideCount);
+        }
         mPrefetcher.offer(std::move(unsettled));
     }
 }

@@ -21,7 +21,11 @@
 // brick, for nothing); if it is evicted before its turn, the traversal reads it itself.
 // Where a read waits a round trip (`near` beyond kNearBricks), the bricks found but not settled
 // are offered to the readers (BrickPrefetcher::offer): read with a run they lie next to in the
-// file, in its request rather than one of their own later.
+// file, in its request rather than one of their own later. So are a found brick's neighbours
+// along x (kBeside on each side, as far as each shows: the traversal extracts it at the same
+// level and it passes tests 1-3 when found), which the traversal's front-to-back walk reaches
+// from another subtree, often many bricks later: a row of the visible surface in one request
+// where it took several.
 // One look-ahead per traversal thread.
 #pragma once
 
@@ -52,6 +56,7 @@ struct RemoteReadAhead {
 class BrickLookAhead {
 public:
     static constexpr size_t kNearBricks = 2;
+    static constexpr int kBeside = 4;
 
     // depth 0: nothing is read ahead (every call does nothing). `near`: the bricks next in
     // turn handed over unsettled (kNearBricks for a disk; more where a read waits a round trip).
@@ -78,12 +83,18 @@ private:
         int64_t brick;  // at.id
         PixelRect rect;
         size_t item = kNotPushed;  // in the prefetcher's list, once handed to it (or kResident)
+        int besideCount = 0;       // where a read waits a round trip: neighbours offered with it
+        int64_t beside[2 * kBeside];
     };
+    // Where a read waits a round trip: the found brick's neighbours that show, into its `beside`.
+    void findBeside(AheadBrick& ahead);
     // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
     bool findNext();
     int64_t pixelsOf(const PixelRect& r) const;
 
     BrickSource& mSource;
+    const MinMaxTree& mTree;
+    const ViewLevels& mLevels;
     TraversalCursor mCursor;  // the traversal's walk, run ahead of it
     size_t mDepth;
     size_t mNear;

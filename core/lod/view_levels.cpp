@@ -68,16 +68,24 @@ bool ViewLevels::holdsIso(const MinMaxNode& node, int l) const {
 }
 
 int ViewLevels::levelAt(const int64_t c[3]) const {
+    uint32_t node;
+    Brick at;
+    return resolve(c, node, at) ? at.level : -1;
+}
+
+bool ViewLevels::resolve(const int64_t c[3], uint32_t& index, Brick& at) const {
     const std::span<const MinMaxNode> nodes = mTree.nodes();
-    uint32_t index = 0;
+    index = 0;
     while (true) {
         const MinMaxNode& node = nodes[index];
-        if (!rangeHoldsIso(node.minValue, node.maxValue, mIso)) return -1;
+        if (!rangeHoldsIso(node.minValue, node.maxValue, mIso)) return false;
         glm::dvec3 a, b;
         culler(0).nodeBox(node, a, b);
         const int level = levelOf(node, a, b);
-        if (level > 0) return level;
-        if (node.isLeaf()) return 0;
+        if (level > 0 || node.isLeaf()) {
+            at = brickOf(node, level);
+            return true;
+        }
         index = mTree.childHolding(index, c);
     }
 }

@@ -66,6 +66,9 @@ public:
     // node on the tree's path down to it that resolves (levelOf > 0, or the leaf); -1 when a
     // node on the way holds no surface at any level. Depends on the camera, not the pyramid.
     int levelAt(const int64_t c[3]) const;
+    // The node on that path that resolves, and its brick: where the traversal extracts level-0
+    // brick c (whether or not it shows); false when a node on the way holds no surface.
+    bool resolve(const int64_t c[3], uint32_t& node, Brick& at) const;
     // The faces of `node`, extracted at `level`, that meet a region extracted at another level
     // (one that holds surface): bit 2a for its low face on axis a, 2a + 1 for its high face.
     // Those are the faces to cap (core/lod/face_cap.h). 0 with one level.
