@@ -122,7 +122,7 @@ TEST(LazyIndex, PartsAskedForAreReadAndClosingAbandonsTheBackground) {
     }
     {
         LazyIndex index(source, 0, packed.size(), raw.size());
-        index.readInBackground(0, 2);
+        index.readInBackground(0, 4);  // the last three parts in one request, the first in another
         for (int k = 0; k < 5000 && source.mHeld.load() < 2; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         ASSERT_EQ(source.mHeld.load(), 2);
     }  // returns only because the held reads are cancelled
@@ -137,7 +137,7 @@ TEST(LazyIndex, PartsOnTheirWayAtAForkAreAnErrorInTheChild) {
     const std::vector<unsigned char> packed = store_format::packIndex(raw);
     HeldSource source(packed);
     LazyIndex index(source, 0, packed.size(), raw.size());
-    index.readInBackground(0, 1);  // every part in one request, held
+    index.readInBackground(0, 1);  // one part at a time: the last, held
     for (int k = 0; k < 5000 && source.mHeld.load() < 1; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     ASSERT_EQ(source.mHeld.load(), 1);
     const pid_t child = ::fork();
