@@ -222,9 +222,16 @@ TEST(BrickLookAhead, OverTheNetworkABrickIsReadWithItsNeighboursThatShow) {
             for (size_t i = 0; i < order.size(); ++i) {
                 ahead.beforeAcquire(order[i]);  // found so far: order[0 .. i + 1]
                 std::this_thread::sleep_for(std::chrono::milliseconds(3));
-                for (const int64_t b : s.source.ids())
-                    readBeforeFound += std::find(order.begin(), order.begin() + ptrdiff_t(std::min(i + 2, order.size())), b) ==
-                                       order.begin() + ptrdiff_t(std::min(i + 2, order.size()));
+                const auto found = order.begin() + ptrdiff_t(std::min(i + 2, order.size()));
+                const int64_t nx = s.source.layout().brickCounts[0];
+                for (const int64_t b : s.source.ids()) {
+                    if (std::find(order.begin(), found, b) != found) continue;
+                    ++readBeforeFound;
+                    // Read beside a brick found already: in its row, at most kBeside away.
+                    EXPECT_TRUE(std::any_of(order.begin(), found, [&](int64_t f) {
+                        return f / nx == b / nx && std::abs(f - b) <= BrickLookAhead::kBeside;
+                    })) << "brick " << b << " read before it was found, beside no brick found";
+                }
                 if (readBeforeFound > 0) break;
             }
             read = s.source.ids();

@@ -13,6 +13,13 @@ BrickLookAhead::BrickLookAhead(BrickSource& source, const MinMaxTree& tree, cons
 bool BrickLookAhead::findNext() {
     TraversalCursor::Step step;
     if (mDepth == 0 || !mCursor.nextBrick(step)) return false;
+    // Found now, it is read in its own turn (or with a run as found bricks are): no brick offers
+    // it beside itself any longer, so that it is never read unpinned ahead of its turn.
+    if (mNear > kNearBricks)
+        for (AheadBrick& ahead : mAhead) {
+            int64_t* end = std::remove(ahead.beside, ahead.beside + ahead.besideCount, step.at.id);
+            ahead.besideCount = int(end - ahead.beside);
+        }
     mAhead.push_back({step.node, step.at, step.at.id, mCursor.culler().pixelRect(step.box),
                       mSource.isResident(step.at.id) ? kResident : kNotPushed});
     if (mNear > kNearBricks && mAhead.back().item != kResident) findBeside(mAhead.back());
@@ -20,16 +27,30 @@ bool BrickLookAhead::findNext() {
 }
 
 void BrickLookAhead::findBeside(AheadBrick& ahead) {
+    // Only the side away from the eye: the tree splits x between two neighbours, and the walk
+    // takes the eye's side first, so a neighbour on the eye's side is decided already (found
+    // ahead, extracted or culled). Each side stops at a neighbour that does not show now, lies
+    // outside the region, is found already, or lies mostly behind this brick on screen (a view
+    // along x: hidden once this one is drawn, it is not read on speculation).
     const std::span<const MinMaxNode> nodes = mTree.nodes();
     const int64_t bricksX = mTree.layout().brickCounts[0];
+    const double eyeX = mCursor.culler().eyeInBricks()[0];
+    const MinMaxNode& self = nodes[ahead.node];
     for (const int side : {-1, 1}) {
-        const MinMaxNode* from = &nodes[ahead.node];
+        if (side < 0 ? eyeX < double(self.lo[0]) : eyeX >= double(self.hi[0])) continue;
+        const MinMaxNode* from = &self;
         for (int k = 0; k < kBeside; ++k) {
             const int64_t c[3] = {side < 0 ? int64_t(from->lo[0]) - 1 : int64_t(from->hi[0]), from->lo[1], from->lo[2]};
             if (c[0] < 0 || c[0] >= bricksX) break;
             uint32_t node;
             ViewLevels::Brick at;
-            if (!mLevels.resolve(c, node, at) || at.level != ahead.at.level || !mCursor.stillShows(node, at)) break;
+            ScreenBox box;
+            if (!mLevels.resolve(c, node, at) || at.level != ahead.at.level || mLevels.outsideRegion(nodes[node]) ||
+                !mCursor.stillShows(node, at, &box))
+                break;
+            if (std::any_of(mAhead.begin(), mAhead.end(), [&](const AheadBrick& a) { return a.brick == at.id; })) break;
+            const PixelRect rect = mCursor.culler().pixelRect(box);
+            if (rect.overlaps(ahead.rect) && 2 * pixelsOf(rect.intersection(ahead.rect)) > pixelsOf(rect)) break;
             ahead.beside[ahead.besideCount++] = at.id;
             from = &nodes[node];
         }

@@ -22,8 +22,9 @@
 // Where a read waits a round trip (`near` beyond kNearBricks), the bricks found but not settled
 // are offered to the readers (BrickPrefetcher::offer): read with a run they lie next to in the
 // file, in its request rather than one of their own later. So are a found brick's neighbours
-// along x (kBeside on each side, as far as each shows: the traversal extracts it at the same
-// level and it passes tests 1-3 when found), which the traversal's front-to-back walk reaches
+// along x on the side away from the eye (up to kBeside, as far as each shows when the brick is
+// found: the traversal extracts it at the same level, it passes tests 1-3 and lies mostly
+// beside this brick on screen, not behind it), which the traversal's front-to-back walk reaches
 // from another subtree, often many bricks later: a row of the visible surface in one request
 // where it took several.
 // One look-ahead per traversal thread.
@@ -84,7 +85,7 @@ private:
         PixelRect rect;
         size_t item = kNotPushed;  // in the prefetcher's list, once handed to it (or kResident)
         int besideCount = 0;       // where a read waits a round trip: neighbours offered with it
-        int64_t beside[2 * kBeside];
+        int64_t beside[2 * kBeside] = {};
     };
     // Where a read waits a round trip: the found brick's neighbours that show, into its `beside`.
     void findBeside(AheadBrick& ahead);

@@ -34,12 +34,12 @@ bool TraversalCursor::step(Step& s) {
     return true;
 }
 
-bool TraversalCursor::stillShows(uint32_t index, const ViewLevels::Brick& at) const {
+bool TraversalCursor::stillShows(uint32_t index, const ViewLevels::Brick& at, ScreenBox* box) const {
     const MinMaxNode& node = mTree.nodes()[index];
     glm::dvec3 a, b;
     mCuller.nodeBox(node, a, b);
-    ScreenBox box;
-    return mCuller.cull({node.minValue, node.maxValue}, a, b, box) == Cull::None && mLevels.shows(at);
+    ScreenBox own;
+    return mCuller.cull({node.minValue, node.maxValue}, a, b, box ? *box : own) == Cull::None && mLevels.shows(at);
 }
 
 }  // namespace vdiso

@@ -52,8 +52,8 @@ public:
         return false;
     }
     // Tests 1-3 again for a node a step showed, and its brick's sub-blocks: whether it shows
-    // with the pyramid as it is now.
-    bool stillShows(uint32_t node, const ViewLevels::Brick& at) const;
+    // with the pyramid as it is now (its screen box into `box` when given).
+    bool stillShows(uint32_t node, const ViewLevels::Brick& at, ScreenBox* box = nullptr) const;
 
     const ViewCuller& culler() const { return mCuller; }
 
