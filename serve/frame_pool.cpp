@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "core/thread_name.h"
+
 namespace vdiso::serve {
 
 FramePool::FramePool(int workers) {
@@ -193,6 +195,7 @@ int FramePool::runFirstPassesHere(Task& host) {
 }
 
 void FramePool::work() {
+    nameThisThread("vdiso-frame");
     std::unique_lock lock(mMutex);
     while (!mStopping) {
         // The due entry the fairness rule picks; else wait for the soonest one not yet due.

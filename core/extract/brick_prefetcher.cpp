@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/thread_name.h"
+
 namespace vdiso {
 
 BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead, int readers)
@@ -11,7 +13,10 @@ BrickPrefetcher::BrickPrefetcher(BrickSource& source, size_t lookahead, int read
     if (mBackground) readers = std::min(readers, kBackgroundReaders);
     try {
         for (int k = 0; k < std::max(readers, 1); ++k)
-            mThreads.emplace_back([this] { mBackground ? runInBackground() : run(); });
+            mThreads.emplace_back([this] {
+                nameThisThread("vdiso-reader");
+                mBackground ? runInBackground() : run();
+            });
     } catch (...) {
         stop();  // the threads already started, joined: no destructor runs after a throw
         throw;

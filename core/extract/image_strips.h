@@ -15,6 +15,7 @@
 #include "core/camera.h"
 #include "core/extract/extract_view.h"
 #include "core/mesh.h"
+#include "core/thread_name.h"
 #include "core/view/occlusion_pyramid.h"
 
 namespace vdiso {
@@ -59,7 +60,11 @@ void runStrips(std::vector<StripOutput>& outputs, Strip&& strip) {
         }
     };
     try {
-        for (size_t k = 1; k < outputs.size(); ++k) threads.emplace_back(run, k);
+        for (size_t k = 1; k < outputs.size(); ++k)
+            threads.emplace_back([&run, k] {
+                nameThisThread("vdiso-strip");
+                run(k);
+            });
     } catch (...) {  // a thread could not start: let the others finish, then report it
         for (std::thread& t : threads) t.join();
         throw;

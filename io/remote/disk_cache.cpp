@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "core/thread_name.h"
 #include "io/crc32.h"
 #include "io/error.h"
 #include "io/forked_child.h"
@@ -156,6 +157,7 @@ void RangeDiskCache::write(uint64_t offset, size_t n, const void* src) const noe
 }
 
 void RangeDiskCache::writeWaiting() const {
+    nameThisThread("vdiso-cache");
     Writer& w = *mWriter;
     std::unique_lock lock(w.lock);
     for (;;) {

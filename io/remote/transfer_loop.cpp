@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include "core/thread_name.h"
 #include "io/error.h"
 #include "io/forked_child.h"
 #include "io/remote/curl_library.h"
@@ -17,7 +18,10 @@ TransferLoop::TransferLoop(long maxConnections, size_t maxInFlight)
     mMulti = curl.multi_init();
     if (!mMulti) throw IoError("libcurl cannot make a multi handle: remote data cannot be read");
     curl.multi_setopt(mMulti, CURLMOPT_MAXCONNECTS, maxConnections);
-    mThread = std::thread([this] { run(); });
+    mThread = std::thread([this] {
+        nameThisThread("vdiso-transfer");
+        run();
+    });
 }
 
 TransferLoop::~TransferLoop() {
