@@ -169,6 +169,7 @@ std::string storeOpenError(const std::string& path, const std::vector<unsigned c
     writeFile(path, bytes.data(), bytes.size());
     try {
         BrickStoreReader store(path);
+        store.subBlockCodes();  // every part of the index (the sub-block codes are read as asked for)
         std::vector<unsigned char> brick(store.brickBytes());
         for (int64_t id = 0; id < store.layout().brickCount(); ++id) store.readBrick(id, brick.data());
     } catch (const IoError& e) {

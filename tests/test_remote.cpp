@@ -127,9 +127,10 @@ TEST_F(RemoteStore, TheBenchLinkPassesAnswersAsSentAfterItsDelay) {
 }
 
 // A store at a URL reads its index's entries at open and its sub-block codes as views need
-// them (io/store/lazy_index.h). A corrupt part of codes: the local open refuses the store, the
-// remote `info` never reads that part, and a view that needs it (a distant one, whose coarse
-// bricks' codes lie in the last part) is an error naming the URL and the part.
+// them (io/store/lazy_index.h). A corrupt part of codes: the local `info`, which reads the whole
+// index, refuses the store, the remote `info` never reads that part, and a view that needs it (a
+// distant one, whose coarse bricks' codes lie in the last part) is an error naming the URL and the
+// part, as it is for the local file.
 TEST_F(RemoteStore, SubBlockCodesAreReadAsViewsNeedThem) {
     // 9,161 bricks of all levels: a raw index of two parts, the second holding codes only.
     test::CommandResult r = test::runVdiso("synth " + file("bkt/fine.vdiso") + " --kind head --size 160 --brick 8 --quiet");
@@ -147,6 +148,9 @@ TEST_F(RemoteStore, SubBlockCodesAreReadAsViewsNeedThem) {
     const std::string view = " extract --iso 600.5 --method sage --lod-error 1 --size 128x128 --view distant -o ";
     r = test::runCommand(std::string(VDISO_BINARY) + view + file("broken.ply") + " '" + url + "broken.vdiso'");
     expectError(r, {url + "broken.vdiso", "index part 1 of 2 is corrupt"});
+    EXPECT_FALSE(std::filesystem::exists(file("broken.ply")));
+    r = test::runCommand(std::string(VDISO_BINARY) + view + file("broken.ply") + " '" + file("bkt/broken.vdiso") + "'");
+    expectError(r, {"broken.vdiso", "index part 1 of 2 is corrupt"});
     EXPECT_FALSE(std::filesystem::exists(file("broken.ply")));
 
     // The intact store gives the local file's mesh, from every part.

@@ -75,6 +75,9 @@ int runInfo(int argc, char** argv) {
     if (path.empty()) throw UsageError("expects FILE.vdiso");
 
     const BrickStoreReader store(path, StoreOpenOptions{ReadMode::Buffered, remote});
+    // A local store's whole index is read and checked, so that info refuses a store with a
+    // corrupt part anywhere; a remote one's codes are not waited for (docs/remote.md).
+    if (!store.remote()) store.subBlockCodes();
     const StoreHeader& h = store.header();
     const VolumeInfo& v = h.volume;
     const BrickLayout& l = store.layout();

@@ -8,8 +8,10 @@
 // histogram of the whole volume. Both are written last: a file whose header or index is
 // incomplete is refused at open.
 //
-// BrickStoreReader opens a store by reading only the header and the index, then returns any
-// brick's (B+3)^3 samples by brick id. It is safe to read bricks from several threads at once.
+// BrickStoreReader opens a store by reading only the header and the index's entries (from
+// format 5 the sub-block codes, three fifths of the index, are read by parts as they are asked
+// for), then returns any brick's (B+3)^3 samples by brick id. It is safe to read bricks from
+// several threads at once.
 //
 // An index (vdiso index: a store whose level 0 stays in the Zarr array it indexes) opens the
 // same way, by its path or by the indexed folder's (whose index is beside it,
@@ -74,9 +76,10 @@ public:
     const std::vector<BrickEntry>& index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
     // The sub-block codes (core/trees/sub_blocks.h): kSubBlocksPerBrick per brick, in brick order.
-    // A remote store fetches them after its open, in the background, coarse levels first
-    // (io/store/lazy_index.h): these may wait for them, and throw IoError if they cannot be read.
-    // Every brick's:
+    // From format 5 they are read and checked by parts as they are asked for (io/store/lazy_index.h;
+    // a remote store also fetches them after its open, in the background, coarse levels first):
+    // these may read or wait for them, and throw IoError if a part cannot be read or is corrupt.
+    // Every brick's (every part read and checked):
     std::span<const SubBlockCode> subBlockCodes() const;
     // Brick `id`'s kSubBlocksPerBrick (waiting only for the part holding them).
     std::span<const SubBlockCode> subBlockCodesOf(int64_t id) const;
@@ -152,7 +155,8 @@ private:
     std::vector<BrickLevel> mLevels;
     std::vector<BrickEntry> mIndex;
     ValueHistogram mHistogram;
-    // The raw index, which mSubBlocks points into: as read (before version 5), or unpacked by parts.
+    // The raw index, which mSubBlocks points into: as read before version 5, else mLazyIndex's,
+    // unpacked by parts as they are asked for.
     std::unique_ptr<unsigned char[]> mRawIndex;
     std::unique_ptr<LazyIndex> mLazyIndex;
     std::unique_ptr<ExternalBricks> mExternal;

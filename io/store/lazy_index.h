@@ -1,10 +1,10 @@
-// A packed index (io/store/index_parts.h) read by parts as they are asked for: how a remote
-// store is opened (a local one reads its index whole). The store reader reads the parts of the
-// bricks' entries at open and leaves the sub-block codes, three fifths of the stored index, for
-// later: they are fetched in the background, last part first (three a request) (the coarse levels' bricks are
-// numbered last, and a distant view wants them first), and a part asked for before it came is
-// fetched at once. So a view waits for the index bytes it looks at, not for the whole index.
-// Internal to io/.
+// A packed index (io/store/index_parts.h) read by parts as they are asked for: how a store of
+// format 5 or later is opened. The store reader reads the parts of the bricks' entries at open
+// and leaves the sub-block codes, three fifths of the stored index, for later: a local store
+// reads and unpacks a part when it is first asked for; a remote one also fetches them in the
+// background, last part first, three a request (the coarse levels' bricks are numbered last,
+// and a distant view wants them first), and a part asked for before it came is fetched at once.
+// So a view waits for the index bytes it looks at, not for the whole index. Internal to io/.
 //
 // Thread-safe: several threads may ask for bytes at once; a part is fetched by one of them and
 // waited for by the others. A part that fails in the background is fetched again when asked
