@@ -26,10 +26,10 @@ namespace vdiso {
 
 namespace {
 
-// A remote store's sub-block code parts read at once in the background (about 130 KB each, up to
-// three a request): as many as half the session's requests (16 of the default 32), leaving the
-// link's bytes to the bricks a view reads.
-size_t codePartsAtOnce(const RemoteOptions& remote) { return size_t(std::clamp(remote.connections / 2, 1, 16)); }
+// A remote store's sub-block code parts read at once in the background (about 130 KB each, one
+// a request): half the session's requests (16 of the default 32), leaving the rest to the bricks
+// a view reads.
+size_t codeRequestsAtOnce(const RemoteOptions& remote) { return size_t(std::clamp(remote.connections / 2, 1, 16)); }
 
 // A local folder of Zarr data opens as the index beside it.
 std::string storePathFor(const std::string& path) {
@@ -90,7 +90,7 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
         mLazyIndex->need(0, mCodesAt);
         raw = mLazyIndex->raw();
         store_format::decodeIndex(raw, size_t(mCodesAt), false, mHeader, mLayout, mPath, mIndex, mHistogram);
-        if (mSource->remote()) mLazyIndex->readInBackground(mCodesAt, codePartsAtOnce(options.remote));
+        if (mSource->remote()) mLazyIndex->readInBackground(mCodesAt, codeRequestsAtOnce(options.remote));
     } else {
         // The index as stored before version 5: raw, whole.
         const size_t indexBytes = size_t(mHeader.indexBytes);

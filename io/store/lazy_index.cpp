@@ -139,22 +139,20 @@ bool LazyIndex::settleRequest(PartsRequest& r) const {
     return all;
 }
 
-void LazyIndex::readInBackground(uint64_t begin, size_t parts) {
+void LazyIndex::readInBackground(uint64_t begin, size_t requests) {
     const uint64_t first = mDirectory.partOf(begin);
-    parts = std::max<size_t>(parts, 1);
-    mBackground.emplace_back([this, first, budget = parts] {
+    requests = std::max<size_t>(requests, 1);
+    mBackground.emplace_back([this, first, requests] {
         nameThisThread("vdiso-index");
-        // `budget` parts in flight at once, the last ones neither here nor on their way, up to
-        // kBackgroundParts of them consecutive in a request. (Grouped in requests of 1 MB with a
-        // request in flight for each part the budget allowed, the parts a normal view waited for
-        // came later, behind the others' bytes, and its views took 1.1-1.2x as long; with the
-        // same parts in flight, three a request, a 2560^3 head's views took 0.94-0.98x as long
-        // in 78 -> 26 requests.) A source that reads in the background holds no thread while
-        // they wait, and this one unpacks them.
+        // `requests` in flight at once, each of the last part neither here nor on its way, alone
+        // (a part is here as soon as its own answer is: grouped in requests of 1 MB, the parts a
+        // normal view waited for came later, and its views took 1.1-1.2x as long; three a
+        // request with as many parts in flight, 1.03-1.07x); a source that reads in the
+        // background holds no thread while they wait, and this one unpacks them.
         std::mutex arrivedLock;
         std::condition_variable arrivedChanged;
         std::vector<PartsRequest*> arrived;
-        size_t inFlight = 0, partsInFlight = 0;
+        size_t inFlight = 0;
         bool failed = false;
         for (;;) {
             std::vector<std::vector<uint64_t>> starting;
@@ -162,18 +160,11 @@ void LazyIndex::readInBackground(uint64_t begin, size_t parts) {
                 // Chosen and claimed at once: a part is never asked for twice.
                 std::lock_guard lock(mLock);
                 uint64_t i = mDirectory.parts();
-                // Whole requests only: a budget of 16 is five requests of three, not a sixth of one.
-                const size_t most = std::min(kBackgroundParts, budget);
-                while (!failed && !mStop && partsInFlight + most <= budget) {
+                while (!failed && !mStop && inFlight + starting.size() < requests) {
                     while (i > first && mState[i - 1] != State::Missing) --i;
                     if (i == first) break;
-                    std::vector<uint64_t> request;  // ascending
-                    do {
-                        mState[--i] = State::OnItsWay;
-                        request.insert(request.begin(), i);
-                    } while (request.size() < most && i > first && mState[i - 1] == State::Missing);
-                    partsInFlight += request.size();
-                    starting.push_back(std::move(request));
+                    mState[--i] = State::OnItsWay;
+                    starting.push_back({i});
                 }
             }
             for (std::vector<uint64_t>& request : starting) {
@@ -201,7 +192,6 @@ void LazyIndex::readInBackground(uint64_t begin, size_t parts) {
             for (PartsRequest* p : landed) {
                 std::unique_ptr<PartsRequest> r(p);
                 --inFlight;
-                partsInFlight -= r->parts.size();
                 // A part that failed is left Missing, to be read when asked for (and its error
                 // met); the background gives up.
                 failed = !settleRequest(*r) || failed;

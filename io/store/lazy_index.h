@@ -2,7 +2,7 @@
 // format 5 or later is opened. The store reader reads the parts of the bricks' entries at open
 // and leaves the sub-block codes, three fifths of the stored index, for later: a local store
 // reads and unpacks a part when it is first asked for; a remote one also fetches them in the
-// background, last part first, three a request (the coarse levels' bricks are numbered last,
+// background, last part first, one a request (the coarse levels' bricks are numbered last,
 // and a distant view wants them first), and a part asked for before it came is fetched at once.
 // So a view waits for the index bytes it looks at, not for the whole index. Internal to io/.
 //
@@ -55,19 +55,15 @@ public:
             if (!mReady[i].load(std::memory_order_acquire)) return load(begin, end);
     }
 
-    // Starts reading every part holding raw bytes from `begin` on, the last part first, up to
-    // kBackgroundParts consecutive ones a request, `parts` in flight at once, on one thread of
-    // its own that unpacks them (from a source that reads in the background, no thread waits on
-    // a request).
-    void readInBackground(uint64_t begin, size_t parts);
+    // Starts reading every part holding raw bytes from `begin` on, the last part first, one a
+    // request, `requests` at once, on one thread of its own that unpacks them (from a source
+    // that reads in the background, no thread waits on a request).
+    void readInBackground(uint64_t begin, size_t requests);
 
     // Parts asked for together (need(): the entries at the open) are read in requests of
     // consecutive parts, up to this many stored bytes each: a 2560^3 store's 19 parts of entries
     // went in as many requests.
     static constexpr uint64_t kRequestBytes = uint64_t(1) << 20;
-    // Parts a background request holds at most: a 2560^3 head's 78 requests of sub-block
-    // codes went in 26.
-    static constexpr size_t kBackgroundParts = 3;
 
 private:
     enum class State : uint8_t { Missing, OnItsWay, Here };
