@@ -51,7 +51,7 @@ namespace vdiso {
 // the background, two readers a strip keeping as many in flight as the link holds
 // (BrickPrefetcher). vdiso extract and vdiso serve both read a remote store so.
 struct RemoteReadAhead {
-    static constexpr int kReaders = 32, kBricks = 128, kNear = 32;
+    static constexpr int kReaders = 32, kBricks = 128, kNear = 64;
 };
 
 class BrickLookAhead {
