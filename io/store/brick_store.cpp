@@ -94,7 +94,7 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     } else {
         // The index as stored before version 5: raw, whole.
         const size_t indexBytes = size_t(mHeader.indexBytes);
-        mRawIndex = std::make_unique_for_overwrite<unsigned char[]>(indexBytes);
+        mRawIndex = std::make_unique_for_overwrite<unsigned char[]>(roomForRead(indexBytes));
         mSource->read(mHeader.indexOffset, indexBytes, mRawIndex.get(), "index");
         raw = mRawIndex.get();
         store_format::decodeIndex(raw, indexBytes, true, mHeader, mLayout, mPath, mIndex, mHistogram);
@@ -104,9 +104,10 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     static_assert(sizeof(SubBlockCode) == 2 && alignof(SubBlockCode) == 1);
     mSubBlocks = {reinterpret_cast<const SubBlockCode*>(raw + mCodesAt), size_t(count) * kSubBlocksPerBrick};
     if (mHeader.externalBytes) {
-        std::vector<unsigned char> record(size_t(mHeader.externalBytes));
-        mSource->read(mHeader.externalOffset, record.size(), record.data(), "record of indexed data");
-        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevels(record.data(), record.size(), mPath),
+        const size_t recordBytes = size_t(mHeader.externalBytes);
+        std::vector<unsigned char> record(roomForRead(recordBytes));
+        mSource->read(mHeader.externalOffset, recordBytes, record.data(), "record of indexed data");
+        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevels(record.data(), recordBytes, mPath),
                                                      options.remote, options.chunkCacheBytes);
     }
 }

@@ -25,8 +25,14 @@ namespace vdiso {
 enum class ReadMode { Buffered, Cold };
 
 // A read's destination must be aligned to this and have room for the read rounded up to it
-// (O_DIRECT reads whole blocks).
+// (O_DIRECT reads whole blocks), or be unaligned (the read then goes through the page cache).
 constexpr size_t kByteSourceAlignment = 4096;
+
+// The bytes a destination of an n-byte read must have: n rounded up to kByteSourceAlignment, so
+// that a buffer the allocator happens to align takes an O_DIRECT read's whole last block.
+constexpr size_t roomForRead(size_t n) {
+    return (n + kByteSourceAlignment - 1) / kByteSourceAlignment * kByteSourceAlignment;
+}
 
 class ByteSource {
 public:

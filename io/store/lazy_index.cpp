@@ -32,10 +32,10 @@ LazyIndex::LazyIndex(const ByteSource& source, uint64_t offset, uint64_t storedB
     std::optional<store_format::IndexDirectory> decoded;
     if (directoryCopy.size() == directoryBytes) decoded = tryDecode(directoryCopy.data());
     if (!decoded) {
-        std::vector<unsigned char> directory(static_cast<size_t>(directoryBytes));
+        std::vector<unsigned char> directory(roomForRead(size_t(directoryBytes)));
         // A remote disk cache keeps the directory once it decodes; what the check decoded last
         // is the directory as read.
-        source.read(offset, directory.size(), directory.data(), "index directory", [&](size_t) {
+        source.read(offset, size_t(directoryBytes), directory.data(), "index directory", [&](size_t) {
             decoded = tryDecode(directory.data());
             return decoded.has_value();
         });
@@ -94,7 +94,7 @@ std::vector<std::vector<uint64_t>> LazyIndex::requestsFor(const std::vector<uint
 void LazyIndex::startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived) const {
     const uint64_t first = mDirectory.offsets[r.parts.front()];
     const size_t n = size_t(mDirectory.offsets[r.parts.back() + 1] - first);
-    r.stored = std::make_unique_for_overwrite<unsigned char[]>(n);
+    r.stored = std::make_unique_for_overwrite<unsigned char[]>(roomForRead(n));
     r.good = std::make_unique<std::atomic<int8_t>[]>(r.parts.size());
     std::vector<ByteRange> pieces;
     for (size_t k = 0; k < r.parts.size(); ++k) {
@@ -268,8 +268,8 @@ void LazyIndex::readParts(uint64_t first, uint64_t last) const {
         // In a process forked from the one that opened the index, parts on their way were the
         // parent's requests: none will come here.
         if (inForkedChild(mPid) && !settled())
-            throwIoError(mSource.name(), "its index was being read when the process forked: a remote store opened "
-                                         "before fork() cannot be read in the child process: open it again there");
+            throwIoError(mSource.name(), "its index was being read when the process forked: a store opened before "
+                                         "fork() cannot be read in the child process: open it again there");
         mChanged.wait(lock, settled);
         bool all = true;
         for (uint64_t i = first; i < last; ++i) all = all && mState[i] == State::Here;
