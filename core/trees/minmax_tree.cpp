@@ -31,6 +31,21 @@ MinMaxTree::MinMaxTree(std::span<const BrickLevel> levels, std::span<const Brick
     build(lo, hi, logSize, ranges);
 }
 
+uint32_t MinMaxTree::leaf(const uint16_t lo[3], std::span<const BrickRange> ranges) {
+    // What build makes of one level-0 brick, without its loop: the brick of level 0.
+    MinMaxNode node{};
+    for (int a = 0; a < 3; ++a) {
+        node.lo[a] = lo[a];
+        node.hi[a] = uint16_t(lo[a] + 1);
+    }
+    const BrickRange& r = ranges[size_t(mLayout.brickId(lo[0], lo[1], lo[2]))];
+    node.minValue = r.minValue;
+    node.maxValue = r.maxValue;
+    node.coarseLevel = node.fineLevel = 0;
+    mNodes.push_back(node);
+    return uint32_t(mNodes.size() - 1);
+}
+
 uint32_t MinMaxTree::build(const uint16_t lo[3], const uint16_t hi[3], int logSize[3],
                            std::span<const BrickRange> ranges) {
     const uint32_t index = uint32_t(mNodes.size());
@@ -65,8 +80,9 @@ uint32_t MinMaxTree::build(const uint16_t lo[3], const uint16_t hi[3], int logSi
         firstHi[axis] = uint16_t(mid);
         secondLo[axis] = uint16_t(mid);
         int firstLog[3] = {logSize[0], logSize[1], logSize[2]}, secondLog[3] = {logSize[0], logSize[1], logSize[2]};
-        const uint32_t first = build(lo, firstHi, firstLog, ranges);
-        const uint32_t second = build(secondLo, hi, secondLog, ranges);
+        const bool leaves = logSize[0] == 0 && logSize[1] == 0 && logSize[2] == 0;
+        const uint32_t first = leaves ? leaf(lo, ranges) : build(lo, firstHi, firstLog, ranges);
+        const uint32_t second = leaves ? leaf(secondLo, ranges) : build(secondLo, hi, secondLog, ranges);
         node.secondChild = second;
         node.splitAxis = uint8_t(axis);
         takeRange({mNodes[first].minValue, mNodes[first].maxValue});

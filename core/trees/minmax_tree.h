@@ -112,6 +112,7 @@ public:
 
 private:
     uint32_t build(const uint16_t lo[3], const uint16_t hi[3], int logSize[3], std::span<const BrickRange> ranges);
+    uint32_t leaf(const uint16_t lo[3], std::span<const BrickRange> ranges);
 
     BrickLayout mLayout;
     std::vector<BrickLevel> mLevels;
