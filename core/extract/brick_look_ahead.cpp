@@ -50,7 +50,7 @@ void BrickLookAhead::findBeside(AheadBrick& ahead) {
                 break;
             if (std::any_of(mAhead.begin(), mAhead.end(), [&](const AheadBrick& a) { return a.brick == at.id; })) break;
             const PixelRect rect = mCursor.culler().pixelRect(box);
-            if (rect.overlaps(ahead.rect) && 2 * pixelsOf(rect.intersection(ahead.rect)) > pixelsOf(rect)) break;
+            if (mostlyBehind(rect, ahead.rect)) break;
             ahead.beside[ahead.besideCount++] = at.id;
             from = &nodes[node];
         }
@@ -62,6 +62,10 @@ int64_t BrickLookAhead::pixelsOf(const PixelRect& r) const {
     const int64_t w = std::min(r.x1, camera.width - 1) - std::max(r.x0, 0) + 1;
     const int64_t h = std::min(r.y1, camera.height - 1) - std::max(r.y0, 0) + 1;
     return w > 0 && h > 0 ? w * h : int64_t(0);
+}
+
+bool BrickLookAhead::mostlyBehind(const PixelRect& a, const PixelRect& b) const {
+    return a.overlaps(b) && 2 * pixelsOf(a.intersection(b)) > pixelsOf(a);
 }
 
 void BrickLookAhead::beforeAcquire(int64_t brick) {
@@ -89,11 +93,6 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
     mDrawn = current;  // what the brick acquired now can draw
     while (mAhead.size() < mDepth && findNext()) {
     }
-    // Most of a brick's box lies in the current brick's: it is likely behind, and hidden once
-    // the current one is drawn (closeups), so it is not read on speculation.
-    auto mostlyBehind = [&](const PixelRect& a, const PixelRect& b) {
-        return a.overlaps(b) && 2 * pixelsOf(a.intersection(b)) > pixelsOf(a);
-    };
     auto harmless = [&](const PixelRect& a, const PixelRect& b) {
         if (!a.overlaps(b)) return true;
         const PixelRect both = a.intersection(b);
@@ -104,6 +103,8 @@ void BrickLookAhead::beforeAcquire(int64_t brick) {
         if (ahead.item != kNotPushed) continue;
         bool settled = harmless(ahead.rect, current);
         for (size_t j = 0; j < k && settled; ++j) settled = harmless(ahead.rect, mAhead[j].rect);
+        // (A brick mostly behind the current one is not read on speculation: hidden once that one
+        // is drawn, in closeups.)
         if (!settled && (k >= mNear || mostlyBehind(ahead.rect, current))) break;
         ahead.item = mPrefetcher.push(ahead.brick);
     }

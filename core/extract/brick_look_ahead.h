@@ -92,6 +92,9 @@ private:
     // Moves the cursor on to the next brick that passes tests 1-3 now; false at the end.
     bool findNext();
     int64_t pixelsOf(const PixelRect& r) const;
+    // Whether most of a's pixels lie in b's: a brick there is likely behind b, hidden once b is
+    // drawn (closeups; a view along x for b's neighbours).
+    bool mostlyBehind(const PixelRect& a, const PixelRect& b) const;
 
     BrickSource& mSource;
     const MinMaxTree& mTree;
