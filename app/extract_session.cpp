@@ -56,7 +56,7 @@ void ExtractSession::reconfigure(ExtractSettings settings) {
     mTreeSeconds = 0;
     if (isViewDependent(mSettings.method) && !mTree) {
         const auto start = Clock::now();
-        mTree.emplace(mCache->levels(), mCache->brickRanges());
+        mTree.emplace(mCache->levels(), mCache->brickRanges(), mSettings.threads > 0 ? mSettings.threads : machineThreads());
         mTreeSeconds = secondsSince(start);
     }
 }

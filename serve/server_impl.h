@@ -66,7 +66,7 @@ struct Server::Impl {
 
     explicit Impl(const ServeOptions& o)
         : options(withDefaults((checkServeOptions(o), o))),
-          stores(o.stores, o.cacheBytes, o.chunkCacheBytes, o.iso, withStop(o.remote, stopReads)), web(o.webRoot),
+          stores(o.stores, o.cacheBytes, o.chunkCacheBytes, o.iso, withStop(o.remote, stopReads), o.threads), web(o.webRoot),
           settings(sessionSettings(o, stores)), pool(frameSlots(stores, settings)),
           token(o.token.empty() ? randomToken() : o.token) {}
 

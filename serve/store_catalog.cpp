@@ -63,7 +63,7 @@ std::string describe(const ServedStore& s) {
 }  // namespace
 
 StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes, uint64_t chunkBytes,
-                           std::optional<double> iso, const RemoteOptions& remote) {
+                           std::optional<double> iso, const RemoteOptions& remote, int threads) {
     if (paths.empty()) throw IoError("no store to serve");
     mStores.reserve(paths.size());
     for (const std::string& location : paths) {
@@ -89,7 +89,7 @@ StoreCatalog::StoreCatalog(const std::vector<std::string>& paths, uint64_t cache
         s.cache = std::make_unique<BrickCache>(*s.reader, cacheBytes / paths.size());
         s.ranges = std::make_unique<MetaCellRangeCache>(s.cache->budgetBytes() / s.reader->brickBytes());
         s.lostParts = std::make_unique<LostPartMemo>(s.cache->budgetBytes() / s.reader->brickBytes());
-        s.tree = std::make_unique<MinMaxTree>(s.cache->levels(), s.cache->brickRanges());
+        s.tree = std::make_unique<MinMaxTree>(s.cache->levels(), s.cache->brickRanges(), threads);
         s.chunks = std::make_unique<SharedChunks>(chunkBytes / paths.size());
         s.description = describe(s);
         mStores.push_back(std::move(s));

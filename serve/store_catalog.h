@@ -38,9 +38,9 @@ class StoreCatalog {
 public:
     // Opens every store, a path or a URL (throws IoError naming the one that fails) and gives each a cache of
     // cacheBytes / stores.size() and shared chunks of chunkBytes / stores.size(). Two stores of the same
-    // name are refused.
+    // name are refused. Each store's min/max tree is built on `threads` threads.
     StoreCatalog(const std::vector<std::string>& paths, uint64_t cacheBytes, uint64_t chunkBytes,
-                 std::optional<double> iso, const RemoteOptions& remote = {});
+                 std::optional<double> iso, const RemoteOptions& remote = {}, int threads = 1);
 
     size_t size() const { return mStores.size(); }
     ServedStore& operator[](size_t i) { return mStores[i]; }

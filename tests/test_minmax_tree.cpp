@@ -1,10 +1,11 @@
 // The min/max tree's layout and ranges (core/trees/minmax_tree.h): depth first with the first
 // child next, every level-0 brick one leaf, each node's box split in two and its range exactly
 // its bricks' (level 0 below it and the levels it is a brick of), on grids whose top splits are
-// far from even.
+// far from even, built on one thread and on several.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -31,8 +32,12 @@ TEST(MinMaxTree, EveryNodeHoldsItsBoxAndItsBricksRangesOnUnevenGrids) {
             const float a = value(rng), b = value(rng);
             r = {std::min(a, b), std::max(a, b)};
         }
-        const MinMaxTree tree(levels, ranges);
+        // Built on three threads (subtrees of MinMaxTree::kParallelBricks bricks apart): the
+        // same nodes, byte for byte, as on one.
+        const MinMaxTree tree(levels, ranges, 3), alone(levels, ranges, 1);
         const std::span<const MinMaxNode> nodes = tree.nodes();
+        ASSERT_EQ(nodes.size(), alone.nodes().size());
+        EXPECT_EQ(std::memcmp(nodes.data(), alone.nodes().data(), nodes.size_bytes()), 0);
         std::vector<int> leaves(size_t(level0.brickCount()), 0);
         // Walks the subtree at `index`; returns the index past it.
         std::function<uint32_t(uint32_t)> check = [&](uint32_t index) -> uint32_t {

@@ -38,8 +38,9 @@ struct MinMaxNode {
     uint8_t splitAxis;       // interior nodes: axis of the split plane
     // The node's box is a brick of every level in [fineLevel, coarseLevel] (of those the tree
     // was given; kNoLevel: of none). A leaf is a brick of level 0 at least; several levels
-    // share a box at the grid's far faces.
-    uint8_t coarseLevel = kNoLevel, fineLevel = kNoLevel;
+    // share a box at the grid's far faces. (No initializers: the tree's array is made without
+    // writing it, so that its pages are first touched by the threads that build it.)
+    uint8_t coarseLevel, fineLevel;
     uint8_t pad[5];
 
     bool isLeaf() const { return secondChild == 0; }
@@ -52,9 +53,12 @@ static_assert(sizeof(MinMaxNode) == 32);
 class MinMaxTree {
 public:
     // Over level 0's bricks, `ranges` indexed by their ids.
-    MinMaxTree(const BrickLayout& layout, std::span<const BrickRange> ranges);
-    // Over `levels` (level 0 first), `ranges` indexed by brick ids through all of them.
-    MinMaxTree(std::span<const BrickLevel> levels, std::span<const BrickRange> ranges);
+    MinMaxTree(const BrickLayout& layout, std::span<const BrickRange> ranges, int threads = 1);
+    // Over `levels` (level 0 first), `ranges` indexed by brick ids through all of them. Built
+    // on `threads` threads (subtrees of kParallelBricks bricks or more apart): the same nodes
+    // however many.
+    MinMaxTree(std::span<const BrickLevel> levels, std::span<const BrickRange> ranges, int threads = 1);
+    static constexpr int64_t kParallelBricks = 4096;
 
     std::span<const MinMaxNode> nodes() const { return mNodes; }
     const BrickLayout& layout() const { return mLayout; }
@@ -111,8 +115,11 @@ public:
     }
 
 private:
-    uint32_t build(const uint16_t lo[3], const uint16_t hi[3], int logSize[3], std::span<const BrickRange> ranges);
-    uint32_t leaf(const uint16_t lo[3], std::span<const BrickRange> ranges);
+    // The subtree over box [lo, hi) (aligned, 2^logSize bricks a side before clipping) into
+    // nodes [index, index + 2 n - 1) for its n level-0 bricks.
+    void build(const uint16_t lo[3], const uint16_t hi[3], int logSize[3], uint32_t index,
+               std::span<const BrickRange> ranges, bool parallel);
+    void leaf(const uint16_t lo[3], uint32_t index, std::span<const BrickRange> ranges);
 
     BrickLayout mLayout;
     std::vector<BrickLevel> mLevels;
