@@ -30,8 +30,10 @@ url=s3://bucket/$name
 number() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 
 bytes=$(stat -c %s "$store")
-echo "| view | local cold s | local MB read | remote s | remote MB fetched | requests | filling a --disk-cache s | again from it s | its requests | whole store at 1 Gbit/s, s |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+# Bytes: a local run's bricks (bytes_read) and all it read from the store (store_bytes: its header
+# and the index's parts too), against what the remote run fetched (all of it: store_bytes).
+echo "| view | local cold s | local MB read: bricks (all) | remote s | remote MB fetched | remote / local, all bytes | requests | filling a --disk-cache s | again from it s | its requests | whole store at 1 Gbit/s, s |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
 # Downloading first: the store's bytes at 1 Gbit/s plus one round trip (loopback is faster).
 download=$(python3 -c "print(round($bytes / 125e6 + $delay / 1000, 2))")
 # The Python test server hashes the whole object once for its ETag (S3 has it stored): done here
@@ -51,9 +53,12 @@ for view in distant normal closeup; do
   drop
   read -r local_s _ < <(measure $vdiso extract "$store" --iso "$iso" --method sage --view $view --size 1024x1024 \
                           --cold --stats "$work/local.json" --quiet --force)
-  printf "| %s | %s | %.1f | %s | %.1f | %s | %s | %s | %s | %s |\n" $view "$local_s" \
-    "$(python3 -c "print($(number "$work/local.json" bytes_read)/1e6)")" "$remote_s" \
-    "$(python3 -c "print($(number "$work/remote.json" remote_bytes)/1e6)")" "$(number "$work/remote.json" remote_requests)" \
+  printf "| %s | %s | %.1f (%.1f) | %s | %.1f | %.2fx | %s | %s | %s | %s | %s |\n" $view "$local_s" \
+    "$(python3 -c "print($(number "$work/local.json" bytes_read)/1e6)")" \
+    "$(python3 -c "print($(number "$work/local.json" store_bytes)/1e6)")" "$remote_s" \
+    "$(python3 -c "print($(number "$work/remote.json" store_bytes)/1e6)")" \
+    "$(python3 -c "print($(number "$work/remote.json" store_bytes)/$(number "$work/local.json" store_bytes))")" \
+    "$(number "$work/remote.json" remote_requests)" \
     "$filling_s" "$cached_s" "$(number "$work/cached.json" remote_requests)" "$download"
 done
 echo "($name with levels, sage, 1 frame, against $endpoint, $(nproc) cores; $cold local runs; remote runs with the file in the page cache)"

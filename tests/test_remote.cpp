@@ -93,6 +93,11 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     EXPECT_LE(number(stats, "remote_bytes"),
               1.3 * number(localStats, "bytes_read") + double(kStoreHeaderBytes + local.header().indexBytes));
     EXPECT_LT(number(stats, "remote_bytes"), double(local.fileBytes()) * 0.9);
+    // store_bytes counts every byte read from the store since the open: a remote run's are the
+    // bytes it fetched; a local run's the header, the index's parts and the bricks it read.
+    EXPECT_EQ(number(stats, "store_bytes"), number(stats, "remote_bytes")) << stats;
+    EXPECT_GE(number(localStats, "store_bytes"), number(localStats, "bytes_read") + double(kStoreHeaderBytes)) << localStats;
+    EXPECT_LE(number(localStats, "store_bytes"), double(local.fileBytes())) << localStats;
 
     // info reads the same header, index and histogram; a query in the URL is not shown.
     const test::CommandResult remoteInfo = test::runVdiso("info --json '" + url + "?X-Amz-Signature=secret'");

@@ -88,6 +88,8 @@ public:
     // "buffered", "direct" (O_DIRECT) or "fadvise" (pages dropped after each read); "http",
     // "https" or "s3" for a remote store.
     const char* readMethod() const { return mSource->method(); }
+    // Bytes read from the store's file or fetched from its URL since the open (ByteSource::bytesRead).
+    uint64_t sourceBytesRead() const { return mSource->bytesRead(); }
     // The remote object a URL opened, or null for a local file.
     const RemoteFile* remote() const { return mSource->remote(); }
     // The indexed array of an index (vdiso index), or null for a store holding its data.

@@ -54,6 +54,7 @@ public:
         if (mMode == ReadMode::Buffered) return "buffered";
         return mDirectFd >= 0 ? "direct" : "fadvise";
     }
+    uint64_t bytesRead() const override { return mBytesRead.load(std::memory_order_relaxed); }
 
     void read(uint64_t offset, size_t n, void* dst, const char* what, const RangeCheck& = {}) const override {
         auto* p = static_cast<char*>(dst);
@@ -74,6 +75,7 @@ public:
                 throwIoError(mPath, std::string("ends inside the ") + what + " (byte offset " +
                                         std::to_string(offset + done) + "): the file is truncated");
             done += size_t(r);
+            mBytesRead.fetch_add(uint64_t(r), std::memory_order_relaxed);
         }
         if (mMode == ReadMode::Cold && !direct) ::posix_fadvise(mFd, off_t(offset), off_t(n), POSIX_FADV_DONTNEED);
     }
@@ -84,6 +86,7 @@ private:
     int mFd = -1;
     int mDirectFd = -1;  // O_DIRECT descriptor in cold mode, when the file system allows it
     uint64_t mSize = 0;
+    mutable std::atomic<uint64_t> mBytesRead{0};
 };
 
 class RemoteSource final : public ByteSource {
@@ -93,6 +96,7 @@ public:
     const std::string& name() const override { return mFile.name(); }
     uint64_t size() const override { return mFile.size(); }
     const char* method() const override { return mFile.scheme(); }
+    uint64_t bytesRead() const override { return mFile.bytesFetched(); }
     const RemoteFile* remote() const override { return &mFile; }
     void read(uint64_t offset, size_t n, void* dst, const char*, const RangeCheck& intact) const override {
         mFile.read(offset, n, dst, intact);
