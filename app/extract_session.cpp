@@ -145,8 +145,9 @@ JsonObject ExtractSession::frameStats(const ExtractFrame& f, bool meshWritten) c
     s.add("extract_s", stats.extractSeconds).add("preprocess_s", stats.preprocessSeconds);
     s.add("io_s", io.readSeconds).add("decode_s", io.decodeSeconds);
     s.add("read_method", store.readMethod());
-    // Everything read from the store since the open, the index's parts as well as the bricks:
-    // what a local run and a remote one compare by.
+    // Everything read from the store's file, or fetched over the network, since the open: the
+    // index's parts as well as the bricks (ByteSource::bytesRead). What a local run and a
+    // remote one compare by.
     s.add("store_bytes", store.sourceBytesRead());
     // A remote store: every request sent (the open's, the index's, retries) and the bytes they
     // brought, from the open on.

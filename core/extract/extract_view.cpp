@@ -471,7 +471,7 @@ ExtractStats extractViewDependent(BrickSource& source, const Camera& camera,
     if (options.tree)
         VDISO_CHECK_EQ(options.tree->levelCount(), source.levelCount());
     else
-        built.emplace(source.levels(), source.brickRanges(), options.threads);
+        built.emplace(source.levels(), source.brickRanges(), strips);
     const MinMaxTree& tree = options.tree ? *options.tree : *built;
     // What is visible scales with the image, not the volume: room for a couple of triangles
     // per pixel saves regrowth copies (untouched reserved pages cost nothing).

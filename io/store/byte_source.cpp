@@ -74,8 +74,9 @@ public:
             if (r == 0)
                 throwIoError(mPath, std::string("ends inside the ") + what + " (byte offset " +
                                         std::to_string(offset + done) + "): the file is truncated");
+            // (Counted as asked for: not the block padding an O_DIRECT read brings beyond n.)
+            mBytesRead.fetch_add(std::min(uint64_t(r), uint64_t(n - done)), std::memory_order_relaxed);
             done += size_t(r);
-            mBytesRead.fetch_add(uint64_t(r), std::memory_order_relaxed);
         }
         if (mMode == ReadMode::Cold && !direct) ::posix_fadvise(mFd, off_t(offset), off_t(n), POSIX_FADV_DONTNEED);
     }

@@ -68,8 +68,9 @@ public:
     virtual bool readsInBackground() const { return false; }
     // "buffered", "direct", "fadvise" (local), "http", "https", "s3" (remote).
     virtual const char* method() const = 0;
-    // The bytes read from the file so far, or fetched from the URL (the answers' bodies): the
-    // header, the index and the bricks alike. 0 where not counted.
+    // The bytes read from the file so far (as asked for: not an O_DIRECT read's block padding),
+    // or fetched over the network from the URL (the answers' bodies; not what a disk cache
+    // gave): the header, the index and the bricks alike. 0 where not counted.
     virtual uint64_t bytesRead() const { return 0; }
     // The remote object behind it, or null for a local file.
     virtual const RemoteFile* remote() const { return nullptr; }
