@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
     options.stream = &taken;
     streamViewDependent(cache, camera, options);
 
-    const std::vector<BrickEntry>& index = store.index();
+    const std::span<const BrickEntry> index = store.index();
     std::vector<int64_t> ids(taken.ids.begin(), taken.ids.end());
     std::sort(ids.begin(), ids.end(), [&](int64_t a, int64_t b) { return index[size_t(a)].offset < index[size_t(b)].offset; });
     uint64_t bytes = 0;

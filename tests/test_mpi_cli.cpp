@@ -105,7 +105,8 @@ TEST(MpiExtract, CorruptBrickOnOneRankFailsTheJobWithoutOutput) {
     uint64_t offset = 0;
     {
         const BrickStoreReader reader(store);
-        const BrickEntry& e = reader.index().at(size_t(first[1]));
+        ASSERT_LT(first[1], reader.index().size());
+        const BrickEntry& e = reader.index()[size_t(first[1])];
         offset = e.offset + e.storedBytes / 2;
     }
     {
@@ -273,7 +274,7 @@ TEST(MpiView, CorruptBrickInOneSlabFailsTheJobNamingItsRank) {
         for (int64_t id = 0; id < layout.brickCount(); ++id) {
             const int64_t c = layout.brickCoord(id)[a];
             if (c < int64_t(first[1]) || c >= int64_t(end[1])) continue;
-            const BrickEntry& e = reader.index().at(size_t(id));
+            const BrickEntry& e = reader.index()[size_t(id)];
             const uint64_t offset = e.offset + e.storedBytes / 2;
             f.seekg(std::streamoff(offset));
             const char byte = char(f.get());

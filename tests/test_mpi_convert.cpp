@@ -77,7 +77,7 @@ void expectSameStore(const std::string& single, const std::string& mpi) {
         ASSERT_EQ(a.subBlockCodes()[k].hi, b.subBlockCodes()[k].hi) << "code " << k;
     }
     // The ranks wrote disjoint regions.
-    std::vector<BrickEntry> entries = b.index();
+    std::vector<BrickEntry> entries(b.index().begin(), b.index().end());
     std::sort(entries.begin(), entries.end(), [](const BrickEntry& x, const BrickEntry& y) { return x.offset < y.offset; });
     for (size_t k = 0; k + 1 < entries.size(); ++k) {
         ASSERT_EQ(entries[k].offset % kStoreAlignment, 0u);

@@ -96,7 +96,7 @@ void downsampleSlice(ScalarType type, const SliceWindow& fine, const Dims3& fine
 // and its sub-block codes.
 struct EncodedBrick {
     std::vector<unsigned char> bytes;
-    BrickEntry entry;
+    BrickEntry entry{};
     SubBlockCode subBlocks[kSubBlocksPerBrick];
 };
 

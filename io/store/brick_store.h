@@ -73,7 +73,7 @@ public:
     // Every level, level 0 first; brick ids run through them (core/brick_levels.h).
     const std::vector<BrickLevel>& levels() const { return mLevels; }
     // Every level's bricks, by brick id.
-    const std::vector<BrickEntry>& index() const { return mIndex; }
+    std::span<const BrickEntry> index() const { return mIndex; }
     const ValueHistogram& histogram() const { return mHistogram; }
     // The sub-block codes (core/trees/sub_blocks.h): kSubBlocksPerBrick per brick, in brick order.
     // From format 5 they are read and checked by parts as they are asked for (io/store/lazy_index.h;
@@ -155,7 +155,7 @@ private:
     StoreHeader mHeader;
     BrickLayout mLayout;
     std::vector<BrickLevel> mLevels;
-    std::vector<BrickEntry> mIndex;
+    BrickIndex mIndex;
     ValueHistogram mHistogram;
     // The raw index, which mSubBlocks points into: as read before version 5, else mLazyIndex's,
     // unpacked by parts as they are asked for.

@@ -371,7 +371,7 @@ void encodeEntry(const BrickEntry& e, unsigned char* out) {
 
 BrickEntry decodeEntry(const unsigned char* in, uint32_t& flags) {
     ByteReader r(in, kEntryBytes);
-    BrickEntry e;
+    BrickEntry e{};
     e.offset = r.get<uint64_t>();
     e.storedBytes = r.get<uint32_t>();
     e.checksum = r.get<uint32_t>();
@@ -414,7 +414,7 @@ uint64_t subBlockCodesAt(uint64_t brickCount) {
 }
 
 void decodeIndex(const unsigned char* bytes, size_t n, bool whole, const StoreHeader& header,
-                 const BrickLayout& layout, const std::string& path, std::vector<BrickEntry>& entries,
+                 const BrickLayout& layout, const std::string& path, BrickIndex& entries,
                  ValueHistogram& histogram) {
     const uint64_t count = uint64_t(totalBricks(header));
     if (n != (whole ? indexBytes(count) : subBlockCodesAt(count)) || std::memcmp(bytes, kIndexMagic, 8) != 0)
