@@ -16,9 +16,14 @@ namespace vdiso::py {
 namespace pyb = pybind11;
 using namespace pybind11::literals;
 
-ArraySlices::ArraySlices(pyb::object source, const VolumeInfo& info, FileScalar type, std::string name,
+ArraySlices::ArraySlices(const pyb::object& source, const VolumeInfo& info, FileScalar type, std::string name,
                          std::vector<int64_t> bounds)
-    : mSource(std::move(source)), mInfo(info), mType(type), mName(std::move(name)), mBounds(std::move(bounds)) {
+    : mInfo(info), mType(type), mName(std::move(name)), mBounds(std::move(bounds)) {
+    {  // made on a thread that may not hold the GIL (inside runReleased): a reference is
+       // Python's to count
+        pyb::gil_scoped_acquire acquire;
+        mSource = source;
+    }
     const size_t sliceBytes = size_t(info.sliceSamples()) * scalarSize(info.type);
     for (size_t k = 0; k + 1 < mBounds.size(); ++k)
         if (size_t(mBounds[k + 1] - mBounds[k]) * sliceBytes > kSlabBytes) mBounds.clear();
@@ -68,13 +73,15 @@ void ArraySlices::readSource(void* dst, int64_t z, int64_t count) {
     const pyb::module_ np = pyb::module_::import("numpy");
     pyb::object got = mSource[pyb::slice(pyb::int_(z), pyb::int_(z + count), pyb::none())];
     const std::string range = "slices " + std::to_string(z) + " to " + std::to_string(z + count);
-    // A Dask slab of the store's own type is computed chunk by chunk into the destination
-    // (Dask's store()): the slab is never concatenated in memory first.
+    // A Dask slab of the store's own type is computed chunk by chunk into an array of its own
+    // (Dask's store()), then copied: the slab is never concatenated in memory first. The array is
+    // Python's, not dst: when one chunk fails, store() raises while other chunks may still be
+    // running, and they must not write into memory the unwinding frees.
     if (fileScalarOf(mInfo.type) == mType && pyb::hasattr(got, "store") && pyb::hasattr(got, "dask")) {
         checkShape(pyb::tuple(got.attr("shape")), count, range);
-        const pyb::array target(dtypeOf(mInfo.type), std::vector<pyb::ssize_t>{count, mInfo.dims[1], mInfo.dims[0]},
-                                dst, pyb::capsule(dst, [](void*) {}));
+        const pyb::array target(dtypeOf(mInfo.type), std::vector<pyb::ssize_t>{count, mInfo.dims[1], mInfo.dims[0]});
         got.attr("store")(target, "lock"_a = false);
+        std::memcpy(dst, target.data(), size_t(target.nbytes()));
         return;
     }
     const pyb::array slab = np.attr("ascontiguousarray")(np.attr("asarray")(got));

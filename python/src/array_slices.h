@@ -23,7 +23,8 @@ public:
     // not chunked). Then whole chunks' slabs are read, so that a chunk is computed or decoded
     // once however the reads cut it, unless a chunk's slab would exceed kSlabBytes (then reads go
     // through as asked, bounded memory first).
-    ArraySlices(pybind11::object source, const VolumeInfo& info, FileScalar type, std::string name,
+    // Safe to make on a thread without the GIL (it takes it to hold `source`).
+    ArraySlices(const pybind11::object& source, const VolumeInfo& info, FileScalar type, std::string name,
                 std::vector<int64_t> bounds);
     static constexpr size_t kSlabBytes = size_t(512) << 20;
     ~ArraySlices() override;

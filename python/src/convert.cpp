@@ -99,7 +99,7 @@ pyb::dict indexData(const std::string& data, const std::string& index, int64_t l
     options.store = storeOptions(brick, levels, "lz4", overwrite);
     const std::string out = indexPathFor(data, index);
     ZarrIndexSummary summary;
-    runReleased([&](const ProgressFn& fraction) { summary = indexZarr(data, out, options, fraction); }, progress, 0.0);
+    runReleased([&](const ProgressFn& fraction) { summary = indexZarr(data, out, options, fraction); }, progress, 1.0);
     pyb::dict d = summaryOf(summary.store);
     d["index"] = out;
     d["chunks"] = summary.chunks;

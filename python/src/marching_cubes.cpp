@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <optional>
 #include <span>
@@ -198,12 +199,25 @@ auto appendValues(const VolumeInfo& info, double level, std::vector<float>& valu
     };
 }
 
-void checkLevelAndSpacing(std::optional<double> level, const std::array<double, 3>& spacing) {
+// An array's shape as (z, y, x); zeros when it is not 3-D (arrayVolumeInfo refuses it, by name).
+std::array<int64_t, 3> zyxOf(const std::vector<int64_t>& shape) {
+    return shape.size() == 3 ? std::array<int64_t, 3>{shape[0], shape[1], shape[2]} : std::array<int64_t, 3>{};
+}
+
+// `shape`: the array's (z, y, x), as `spacing`. The vertices are float32 before they are scaled:
+// a spacing that carries the array's extent beyond float32's range is refused.
+void checkLevelAndSpacing(std::optional<double> level, const std::array<double, 3>& spacing,
+                          const std::array<int64_t, 3>& shape) {
     if (level && !std::isfinite(*level))
         throw std::invalid_argument("level: expects a finite isovalue, not " + std::to_string(*level));
     for (double s : spacing)
         if (!(s > 0 && std::isfinite(s)))
             throw std::invalid_argument("spacing: expects three positive finite numbers, not " + std::to_string(s));
+    for (int a = 0; a < 3; ++a)
+        if (spacing[size_t(a)] * double(std::max<int64_t>(shape[size_t(a)] - 1, 1)) > double(FLT_MAX) / 2)
+            throw std::invalid_argument("spacing: " + pyb::str(pyb::float_(spacing[size_t(a)])).cast<std::string>() + " along axis " +
+                                        std::to_string(a) + " over its " + std::to_string(shape[size_t(a)]) +
+                                        " samples puts vertices beyond float32's range");
 }
 
 // marching_cubes' four arrays over `mesh` (x, y, z in index units times spacing) and `values`:
@@ -246,7 +260,7 @@ pyb::tuple marchingCubes(const pyb::array& volume, std::optional<double> givenLe
                          bool trilinear) {
     // Every check on the arguments and the array's size comes before any pass over its samples.
     const StridedSamples samples = stridedSamplesOf(volume, "volume");
-    checkLevelAndSpacing(givenLevel, spacing);
+    checkLevelAndSpacing(givenLevel, spacing, {samples.dims[2], samples.dims[1], samples.dims[0]});
     const int threadCount = threads ? int(checkedInt("threads", *threads, 1, 256)) : machineThreads();
     // The kernel's x, y, z are NumPy's axes 2, 1, 0.
     const glm::dvec3 xyzSpacing(spacing[2], spacing[1], spacing[0]);
@@ -317,7 +331,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
                                 std::array<double, 3> spacing, std::optional<int64_t> threads,
                                 const std::vector<int64_t>& bounds, pyb::object progress,
                                 std::optional<std::vector<int64_t>> bricks, bool trilinear) {
-    checkLevelAndSpacing(givenLevel, spacing);
+    checkLevelAndSpacing(givenLevel, spacing, zyxOf(shape));
     if (bricks) {
         std::sort(bricks->begin(), bricks->end());
         bricks->erase(std::unique(bricks->begin(), bricks->end()), bricks->end());
@@ -361,7 +375,7 @@ pyb::tuple marchingCubesInSlabs(pyb::object source, const std::string& name, con
 pyb::dict meshSlabPart(pyb::object rows, const std::vector<int64_t>& shape, const pyb::dtype& dtype,
                        int64_t firstLayer, int64_t endLayer, double level, std::array<double, 3> spacing,
                        int64_t threads, bool trilinear) {
-    checkLevelAndSpacing(level, spacing);
+    checkLevelAndSpacing(level, spacing, zyxOf(shape));
     const std::string name = "rows of the array";
     const FileScalar type = fileScalarOfDtype(dtype, name.c_str());
     const VolumeInfo info = arrayVolumeInfo(name, shape, type, spacing, {0.0, 0.0, 0.0});
@@ -415,6 +429,9 @@ pyb::tuple joinSlabPartArrays(const pyb::list& given, double level, std::array<d
         const size_t n = size_t(vals.size());
         if (size_t(positions.size()) != 3 * n || size_t(normals.size()) != 3 * n || keys.size() != numbers.size())
             throw std::invalid_argument("a mesh part: arrays of unequal lengths");
+        if (indices.size() % 3 != 0)
+            throw std::invalid_argument("a mesh part: " + std::to_string(indices.size()) +
+                                        " face indices, not three a triangle");
         TriangleMesh& mesh = parts[p].mesh;
         mesh.positions.resize(n);
         mesh.normals.resize(n);

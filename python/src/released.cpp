@@ -64,7 +64,18 @@ void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object
     clearInterrupt();
     if (pythonError) throw std::move(*pythonError);
     if (failure) std::rethrow_exception(failure);
-    if (!progress.is_none()) progress(total, total);
+    // The last call comes after the work is done (an output is in place): what it raises is
+    // a warning, not a failure of work that did not fail.
+    if (!progress.is_none()) {
+        try {
+            progress(total, total);
+        } catch (pyb::error_already_set& e) {
+            const std::string what = "vdiso: the progress callback raised on its last call, after the work was done: " +
+                                     pyb::str(e.type().attr("__name__")).cast<std::string>() + ": " +
+                                     pyb::str(e.value()).cast<std::string>();
+            if (PyErr_WarnEx(PyExc_RuntimeWarning, what.c_str(), 1) != 0) throw pyb::error_already_set();
+        }
+    }
 }
 
 }  // namespace vdiso::py

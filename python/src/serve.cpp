@@ -3,6 +3,7 @@
 
 #include <climits>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <thread>
 
@@ -28,11 +29,16 @@ public:
     ~Server() { stop(); }
     std::string url() const { return mServer->url(); }
     uint16_t port() const { return mServer->port(); }
-    bool running() const { return mThread.joinable(); }
+    bool running() const {
+        std::lock_guard lock(mStopping);
+        return mThread.joinable();
+    }
+    // From any number of threads at once: the first stops and joins, the others wait for it.
     void stop() {
-        if (!mThread.joinable()) return;
         std::optional<pyb::gil_scoped_release> release;
         if (PyGILState_Check()) release.emplace();
+        std::lock_guard lock(mStopping);
+        if (!mThread.joinable()) return;
         mServer->stop();
         mThread.join();
     }
@@ -40,6 +46,7 @@ public:
 private:
     std::unique_ptr<serve::Server> mServer;
     std::thread mThread;
+    mutable std::mutex mStopping;
 };
 
 }  // namespace

@@ -121,9 +121,10 @@ public:
             const ExtractFrame frame = mSession.extract(c, {}, fraction);
             drawn = renderSurface(frame.mesh, frame.points, c);
         });
-        pyb::array_t<uint8_t> image({size_t(height), size_t(width), size_t(3)});
+        // The camera's size is the picture's (the package refuses a camera of another).
+        pyb::array_t<uint8_t> image({size_t(c.height), size_t(c.width), size_t(3)});
         uint8_t* out = image.mutable_data();
-        for (size_t p = 0; p < size_t(width) * size_t(height); ++p)
+        for (size_t p = 0; p < size_t(c.width) * size_t(c.height); ++p)
             for (int k = 0; k < 3; ++k) out[3 * p + size_t(k)] = drawn.image.rgba[4 * p + size_t(k)];
         return image;
     }
@@ -209,6 +210,13 @@ void bindStore(pyb::module_& m) {
         .def("write",
              [](const Mesh& mesh, const std::filesystem::path& path, bool overwrite, bool compress) {
                  pyb::gil_scoped_release release;
+                 // The arrays are writable views: faces changed in place are checked before a
+                 // writer trusts them.
+                 const size_t n = mesh.mesh.positions.size();
+                 for (size_t k = 0; k < mesh.mesh.indices.size(); ++k)
+                     if (mesh.mesh.indices[k] - mesh.mesh.firstVertex >= n)
+                         throw std::invalid_argument("Mesh.write: faces[" + std::to_string(k / 3) + "] names vertex " +
+                                                     std::to_string(mesh.mesh.indices[k]) + " of " + std::to_string(n));
                  writeMesh(path.string(), mesh.mesh, overwrite, compress, SpaceTransform{});
              },
              "path"_a, pyb::kw_only(), "overwrite"_a = false, "compress"_a = false,

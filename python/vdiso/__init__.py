@@ -62,6 +62,11 @@ def _camera(camera, width, height):
     for name in _CAMERA_FIELDS[:4]:
         if name not in camera:
             raise ValueError(f"camera: {name!r} missing")
+    # The picture's size is the camera's: a dict giving another is refused, not obeyed halfway.
+    given = (camera.get("width", width), camera.get("height", height))
+    if given != (width, height):
+        raise ValueError(f"camera: width and height {given[0]} x {given[1]} differ from size {width} x {height} "
+                         "(give one of them)")
     try:
         return _vdiso._Camera(**{"width": width, "height": height, **camera})
     except TypeError:

@@ -207,8 +207,9 @@ class _SlabView:
         self.wrapped = step > 1 or self.dtype != np.dtype(source.dtype)
         bounds = _z_chunk_bounds(source, [int(n) for n in source.shape])
         # The chunks' first slices in this view's numbering (a chunk holds the samples from its
-        # first multiple of `step`).
+        # first multiple of `step`); a chunk holding none of them is no chunk of the view.
         firsts = sorted({(b + step - 1) // step for b in bounds[:-1]} | {0}) if bounds else []
+        firsts = [f for f in firsts if f < self.shape[0]]
         self.chunks = (tuple(b - a for a, b in zip(firsts, firsts[1:] + [self.shape[0]])),) if firsts else None
 
     def __getitem__(self, key):
