@@ -69,18 +69,6 @@ TEST(OrientedStore, DirectionAndFlagRoundTrip) {
     EXPECT_EQ(unoriented.volume().direction, glm::dmat3(1.0));
 }
 
-// A store rewritten as an older version wrote it: the index raw, the version, the level count
-// (reserved, 0, in version 2), zero bytes after the first checksum, that checksum recomputed.
-std::vector<unsigned char> asVersion(std::vector<unsigned char> bytes, uint32_t version) {
-    bytes = test::rewriteStoreIndex(bytes, [](std::vector<unsigned char>&) {}, false);
-    std::memcpy(bytes.data() + 8, &version, 4);
-    if (version == 2) std::memset(bytes.data() + 108, 0, 4);
-    std::memset(bytes.data() + 164, 0, kStoreHeaderBytes - 164);
-    const uint32_t crc = crc32Of(bytes.data(), 160);
-    std::memcpy(bytes.data() + 160, &crc, 4);
-    return bytes;
-}
-
 TEST(OrientedStore, VersionTwoAndThreeStoresOpenWithoutOrientation) {
     ScratchDir dir;
     test::MemoryVolume volume({21, 13, 12}, ScalarType::U16);
@@ -91,7 +79,7 @@ TEST(OrientedStore, VersionTwoAndThreeStoresOpenWithoutOrientation) {
     const auto current = test::readFile(dir.file("v4.vdiso"));
     for (uint32_t version : {2u, 3u}) {
         SCOPED_TRACE(version);
-        const auto bytes = asVersion(current, version);
+        const auto bytes = test::storeAsVersion(current, version);
         const std::string old = dir.file("old.vdiso");
         test::writeFile(old, bytes.data(), bytes.size());
         const BrickStoreReader store(old);

@@ -224,6 +224,46 @@ TEST_F(RemoteHostile, TheDiskCacheKeepsOnlyVerifiedRanges) {
     EXPECT_GT(mended, 0u) << "no damaged entry was fetched again and kept right";
 }
 
+// Only a range whose check passed is kept in the disk cache: one read without a check is not
+// (the raw index of a store before version 5 and an index's record of its data were read so,
+// and one that arrived corrupt was served from the cache on every later run). The raw index is
+// now read with its CRC as the check: a store of version 3 through the cache.
+TEST_F(RemoteHostile, ARangeReadWithoutACheckIsNotKept) {
+    LoopbackServer server = s3({"--public", "bkt"});
+    const int port = server.port();
+    RemoteOptions options;
+    options.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
+    options.anonymous = true;
+    options.diskCacheDir = file("cache");
+    auto entries = [&] {
+        size_t n = 0;
+        for (const auto& e : std::filesystem::recursive_directory_iterator(file("cache"))) n += e.is_regular_file();
+        return n;
+    };
+    std::vector<unsigned char> got(10000);
+    {
+        const RemoteFile store("s3://bkt/head.vdiso", options, 4096);
+        store.read(100000, got.size(), got.data());                                   // unchecked
+        store.read(200000, got.size(), got.data(), [](size_t) { return true; });     // checked, passes
+        store.read(300000, got.size(), got.data(), [](size_t) { return false; });    // checked, fails
+    }  // the cache's writes are made here
+    EXPECT_EQ(entries(), 1u);
+
+    const std::vector<unsigned char> v3 = test::storeAsVersion(test::readFile(file("bkt/head.vdiso")), 3);
+    test::writeFile(file("bkt/v3.vdiso"), v3.data(), v3.size());
+    const std::string env = test::s3Env(port), cache = "--disk-cache " + file("cache3");
+    ASSERT_EQ(extract("", file("bkt/v3.vdiso"), "local3").exitCode, 0);
+    for (const char* name : {"filled3", "cached3"}) {
+        const test::CommandResult r =
+            extract(env, "s3://bkt/v3.vdiso", name, cache + " --stats " + file(std::string(name) + ".json"));
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        EXPECT_EQ(test::readFile(file(std::string(name) + ".png")), test::readFile(file("local3.png")));
+    }
+    const std::string stats = test::readText(file("cached3.json"));
+    EXPECT_NE(stats.find("\"disk_cache_hits\": "), std::string::npos) << stats;
+    EXPECT_EQ(stats.find("\"disk_cache_hits\": 0,"), std::string::npos) << "the index and bricks came from the cache: " << stats;
+}
+
 // `vdiso serve` on a store whose server drips: a frame whose reads pass the deadline ends with
 // an error to its viewer; Ctrl-C during such a frame stops the server within 2 s.
 TEST_F(RemoteHostile, ServeOnADrippingStoreEndsFramesAndStopsOnCtrlC) {

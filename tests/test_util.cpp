@@ -215,6 +215,16 @@ std::vector<unsigned char> bruteForceLevel(const std::vector<unsigned char>& sam
     return out;
 }
 
+std::vector<unsigned char> storeAsVersion(std::vector<unsigned char> bytes, uint32_t version) {
+    bytes = rewriteStoreIndex(bytes, [](std::vector<unsigned char>&) {}, false);
+    std::memcpy(bytes.data() + 8, &version, 4);
+    if (version == 2) std::memset(bytes.data() + 108, 0, 4);
+    std::memset(bytes.data() + 164, 0, kStoreHeaderBytes - 164);
+    const uint32_t crc = crc32Of(bytes.data(), 160);
+    std::memcpy(bytes.data() + 160, &crc, 4);
+    return bytes;
+}
+
 std::vector<unsigned char> rewriteStoreIndex(std::vector<unsigned char> bytes,
                                              const std::function<void(std::vector<unsigned char>&)>& edit,
                                              bool repack) {

@@ -107,6 +107,11 @@ std::vector<unsigned char> rewriteStoreIndex(std::vector<unsigned char> bytes,
                                              const std::function<void(std::vector<unsigned char>&)>& edit,
                                              bool repack = true);
 
+// A store file's bytes as an older version (2 to 4) wrote them: the index raw, the version, the
+// level count (reserved, 0, in version 2), zero bytes after the header's first checksum, that
+// checksum recomputed.
+std::vector<unsigned char> storeAsVersion(std::vector<unsigned char> bytes, uint32_t version);
+
 // Compares every stored sample of every brick of level `level` (ghosts included, clamped at the
 // borders) with `samples` (the whole level, x fastest), and each brick's index min/max with
 // brute force. Returns "" when all agree, else a description of the first difference.

@@ -129,7 +129,8 @@ void RemoteFile::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::ve
             return;
         }
         fetchAsync(offset, n, dst, false, cancel, [this, pieces, intact, whole, count, done](const Answer*, std::exception_ptr e) {
-            if (!e && mDiskCache)
+            // Only what a check passed is kept: a range read unchecked could be kept corrupt.
+            if (!e && mDiskCache && intact)
                 for (size_t k = 0; k < pieces.size(); ++k)
                     if (intactPiece(intact, whole, count, k)) mDiskCache->write(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
             done(e);

@@ -57,7 +57,8 @@ struct ByteRange {
 
 // Whether the k-th range of a read arrived intact (the store's checksum of it). With a disk cache,
 // a range is kept only once it passes, and a kept range that fails is dropped and fetched again:
-// what arrived corrupt once is never served twice. Empty: every range counts as intact. When it
+// what arrived corrupt once is never served twice. Empty: the range is read unchecked and never
+// kept in a disk cache (one kept corrupt would be served on every later run). When it
 // is called for a range, its last call is on the bytes the read leaves in dst (a caller may
 // keep that answer rather than check again); a read without a disk cache may not call it.
 using RangeCheck = std::function<bool(size_t k)>;

@@ -95,7 +95,13 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
         // The index as stored before version 5: raw, whole.
         const size_t indexBytes = size_t(mHeader.indexBytes);
         mRawIndex = std::make_unique_for_overwrite<unsigned char[]>(roomForRead(indexBytes));
-        mSource->read(mHeader.indexOffset, indexBytes, mRawIndex.get(), "index");
+        // Its CRC, last, is the check a remote read needs to keep it in a disk cache.
+        mSource->read(mHeader.indexOffset, indexBytes, mRawIndex.get(), "index", [&](size_t) {
+            uint32_t stored = 0;
+            if (indexBytes < 4) return false;
+            std::memcpy(&stored, mRawIndex.get() + indexBytes - 4, 4);
+            return stored == crc32Of(mRawIndex.get(), indexBytes - 4);
+        });
         raw = mRawIndex.get();
         store_format::decodeIndex(raw, indexBytes, true, mHeader, mLayout, mPath, mIndex, mHistogram);
     }
@@ -106,7 +112,14 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     if (mHeader.externalBytes) {
         const size_t recordBytes = size_t(mHeader.externalBytes);
         std::vector<unsigned char> record(roomForRead(recordBytes));
-        mSource->read(mHeader.externalOffset, recordBytes, record.data(), "record of indexed data");
+        mSource->read(mHeader.externalOffset, recordBytes, record.data(), "record of indexed data", [&](size_t) {
+            try {  // (its own checks: a disk cache keeps it only when they pass)
+                decodeExternalLevels(record.data(), recordBytes, mPath);
+                return true;
+            } catch (const IoError&) {
+                return false;
+            }
+        });
         mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevels(record.data(), recordBytes, mPath),
                                                      options.remote, options.chunkCacheBytes);
     }
