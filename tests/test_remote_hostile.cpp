@@ -264,6 +264,21 @@ TEST_F(RemoteHostile, ARangeReadWithoutACheckIsNotKept) {
     EXPECT_EQ(stats.find("\"disk_cache_hits\": 0,"), std::string::npos) << "the index and bricks came from the cache: " << stats;
 }
 
+// A server that turns slow after the session has learnt its usual wait: each read is ended as a
+// straggler once, then waits for its answer (it was ended at every try and the run failed with
+// its attempts used up), and the run gives the local picture.
+TEST_F(RemoteHostile, AServerThatTurnsSlowIsWaitedFor) {
+    LoopbackServer server = s3();
+    const int port = server.port();
+    ASSERT_EQ(extract("", file("bkt/head.vdiso"), "local").exitCode, 0);
+    control(port, R"([{"op":"fault","action":"delay","ms":1500,"count":-1,"skip":12}])");
+    const test::CommandResult r = extract(test::s3Env(port), "s3://bkt/head.vdiso", "slow", "--stats " + file("slow.json"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(test::readFile(file("slow.png")), test::readFile(file("local.png")));
+    EXPECT_EQ(test::readText(file("slow.json")).find("\"remote_stragglers\": 0,"), std::string::npos)
+        << "no read was ended as a straggler: the test did not reach what it tests";
+}
+
 // `vdiso serve` on a store whose server drips: a frame whose reads pass the deadline ends with
 // an error to its viewer; Ctrl-C during such a frame stops the server within 2 s.
 TEST_F(RemoteHostile, ServeOnADrippingStoreEndsFramesAndStopsOnCtrlC) {

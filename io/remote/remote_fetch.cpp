@@ -154,6 +154,10 @@ struct RemoteFile::Fetch {
     uint64_t failuresAtStart = 0;  // a failure for good counts once, and ends the object's other transfers
     std::string url;               // where this read goes: the location, or where it was redirected
     int attempt = 0, redirects = 0;
+    // A read is ended as a straggler once: its next try waits up to the stall timeout. (Cut at
+    // every try, a server that turned slow after the session learnt its usual wait used up the
+    // read's attempts on answers that were coming.)
+    bool stragglerEnded = false;
     std::string lastProblem;
     // The try in flight.
     CURL* curl = nullptr;
@@ -239,8 +243,9 @@ void RemoteFile::sendTry(const std::shared_ptr<Fetch>& fp) const {
         t.dst = static_cast<unsigned char*>(f.dst);
         t.capacity = f.n;
         t.opening = f.opening;
-        // Not on the open's request; nor beyond the stall timeout, which ends a transfer anyway.
-        if (!f.opening) t.session = d.session.get();
+        // Not on the open's request, nor on a read ended as a straggler once; nor beyond the stall
+        // timeout, which ends a transfer anyway.
+        if (!f.opening && !f.stragglerEnded) t.session = d.session.get();
         t.stallMs = options.stallTimeoutMs;
         f.headers = nullptr;
         for (const curl_slist* h = d.headers; h; h = h->next) f.headers = curlLibrary().slist_append(f.headers, h->data);
@@ -352,6 +357,7 @@ bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseM
         throw fail("sent more than the " + std::to_string(n) + " bytes of range " + range + " it announced");
     if (rc == CURLE_ABORTED_BY_CALLBACK && t.straggler) {
         ++d.session->stragglers;
+        f.stragglerEnded = true;
         f.lastProblem = "no answer to range " + range + " in " + std::to_string(t.stragglerMs) + " ms, " +
                         std::to_string(RemoteSession::kStragglerFactor) + " times the usual wait (a straggler)";
         ++f.attempt;
