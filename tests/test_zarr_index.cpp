@@ -444,6 +444,15 @@ TEST_F(ZarrIndex, DataAtAUrlIndexedIntoALocalFile) {
         EXPECT_EQ(extract("", path("v2.vdiso"), "v2_index.ply"), extract("", path("v2.store"), "v2_store.ply"));
         r = test::runVdiso("index " + url);
         EXPECT_EQ(r.exitCode, 2) << r.output;  // a URL's index needs --index
+        // Chunks read whole at their open answer from it: no disk cache of their own (each had
+        // made two folders and measured the whole cache).
+        r = test::runVdiso("extract " + path("v2.vdiso") + " --iso 1000.5 --method sage --disk-cache " + path("dc") +
+                           " -o " + path("v2_dc.ply"));
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        size_t folders = 0;
+        if (std::filesystem::exists(path("dc")))
+            for (const auto& e : std::filesystem::recursive_directory_iterator(path("dc"))) folders += e.is_directory();
+        EXPECT_EQ(folders, 0u);
         std::string chunk = test::readText(path("srv/bkt/v2.zarr/1.1.1"));
         chunk[chunk.size() / 2] ^= 0x10;
         test::writeFile(path("srv/bkt/v2.zarr/1.1.1"), chunk);

@@ -16,7 +16,8 @@
 // a broken or truncated transfer and a request without a byte for the stall timeout are tried
 // again, up to RemoteOptions::attempts times with doubling pauses from 100 ms; other 4xx, TLS
 // failures and redirect loops are errors at once. With RemoteOptions::diskCacheDir, ranges are
-// kept on disk for the pinned version (io/remote/disk_cache.h) and read from there when held. Errors are IoErrors naming the URL (without
+// kept on disk for the pinned version (io/remote/disk_cache.h) and read from there when held (an
+// object the open read whole has none: it answers from its head). Errors are IoErrors naming the URL (without
 // its query, which may hold a signature) and what the server said.
 #pragma once
 
