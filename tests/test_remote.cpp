@@ -106,6 +106,10 @@ TEST_F(RemoteStore, NginxServesTheSamePicturesMeshesAndInfo) {
     EXPECT_EQ(remoteInfo.output.find("secret"), std::string::npos) << remoteInfo.output;
     auto withoutFile = [](std::string json) { return json.substr(json.find("\"format_version\"")); };
     EXPECT_EQ(withoutFile(remoteInfo.output), withoutFile(localInfo.output));
+    const test::CommandResult remoteText = test::runVdiso("info '" + url + "?X-Amz-Signature=secret'");
+    ASSERT_EQ(remoteText.exitCode, 0) << remoteText.output;
+    EXPECT_EQ(remoteText.output.find("secret"), std::string::npos) << remoteText.output;
+    EXPECT_NE(remoteText.output.find(url + "\n"), std::string::npos) << remoteText.output;
 
     r = test::runVdiso("info http://127.0.0.1:" + std::to_string(server.port()) + "/missing.vdiso");
     expectError(r, {"/missing.vdiso", "HTTP 404 (Not Found)"});

@@ -92,7 +92,7 @@ int runInfo(int argc, char** argv) {
     const std::optional<ActiveBricks>& active = facts.active;
     // Integer samples have integer quantiles; the histogram's interpolation would suggest more.
     auto quantile = [&](double f) { return storeQuantile(store, f); };
-    std::printf("%s\n", path.c_str());
+    std::printf("%s\n", store.path().c_str());  // a URL without its query or user: as messages name it
     std::printf("  dimensions   %lld x %lld x %lld  %s\n", (long long)v.dims[0], (long long)v.dims[1],
                 (long long)v.dims[2], scalarTypeName(v.type));
     std::printf("  spacing      %g x %g x %g   origin (%g, %g, %g)\n", v.spacing.x, v.spacing.y,
