@@ -125,6 +125,8 @@ TEST_F(RemoteHostile, AnswersAreCheckedAndNamed) {
         // The server's wait, beyond what the read may take: not waited for.
         {R"({"op":"fault","action":"status","status":503,"headers":{"Retry-After":"120"},"count":-1,"skip":1})",
          {"HTTP 503", "Retry-After: 120", "--remote-deadline"}},
+        // A refusal names the range it refused.
+        {R"({"op":"fault","action":"status","status":403,"count":-1,"skip":1})", {"HTTP 403", "for range "}},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.fault);

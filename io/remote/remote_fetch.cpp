@@ -451,7 +451,7 @@ bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseM
         throw fail("was replaced while being read (version " + mVersion + " no longer matches: " + said + ")");
     if (t.status == 416 && opening) throw fail("is empty (" + said + ")");
     if (t.status >= 500 || t.status == 429) {
-        f.lastProblem = said;
+        f.lastProblem = said + " for range " + range;
         // The server's own wait, if it names one and it is longer than ours.
         const int64_t asked = http_answer::retryAfterMs(t.retryAfter);
         pauseMs = std::max(asked, int64_t(100) << std::min(f.attempt, 6));
@@ -463,7 +463,7 @@ bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseM
         IoError e = fail(said);
         throw RemoteNotFound(e.what());
     }
-    throw fail(said + (t.status == 416 ? " for range " + range : std::string()));
+    throw fail(said + " for range " + range);
 }
 
 }  // namespace vdiso
