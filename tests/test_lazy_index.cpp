@@ -49,8 +49,9 @@ public:
         std::memcpy(dst, mBytes.data() + offset, n);
     }
     void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, const char* what,
-                           RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const override {
-        if (!cancel) return ByteSource::readCoveringAsync(offset, n, dst, pieces, what, intact, cancel, done);
+                           RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done,
+                           bool alone) const override {
+        if (!cancel) return ByteSource::readCoveringAsync(offset, n, dst, pieces, what, intact, cancel, done, alone);
         ++mHeld;
         std::lock_guard lock(mLock);
         mHeldReads.emplace_back(cancel, std::move(done));

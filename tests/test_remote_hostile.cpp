@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <future>
 #include <thread>
 #include <string>
 #include <vector>
@@ -279,6 +280,34 @@ TEST_F(RemoteHostile, AServerThatTurnsSlowIsWaitedFor) {
     EXPECT_EQ(test::readFile(file("slow.png")), test::readFile(file("local.png")));
     EXPECT_EQ(test::readText(file("slow.json")).find("\"remote_stragglers\": 0,"), std::string::npos)
         << "no read was ended as a straggler: the test did not reach what it tests";
+}
+
+// A read that fails for good ends the object's other reads in flight (their frame is lost),
+// unless it was read alone (the index's parts read in the background): a 403 on one of those
+// had ended a frame's brick reads.
+TEST_F(RemoteHostile, AReadThatFailsAloneEndsNoOtherRead) {
+    LoopbackServer server = s3({"--public", "bkt"});
+    const int port = server.port();
+    RemoteOptions options;
+    options.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
+    options.anonymous = true;
+    const RemoteFile store("s3://bkt/head.vdiso", options, 4096);
+    for (const bool alone : {true, false}) {
+        SCOPED_TRACE(alone ? "alone" : "a frame's");
+        // The next request waits 600 ms; every one after it is refused.
+        control(port, R"([{"op":"clear_faults"},{"op":"fault","action":"delay","ms":600,"count":1},)"
+                      R"({"op":"fault","action":"status","status":403,"count":-1}])");
+        std::vector<unsigned char> a(10000), b(10000);
+        std::promise<std::exception_ptr> aDone, bDone;
+        store.readCoveringAsync(100000, a.size(), a.data(), {}, {}, nullptr,
+                                [&](std::exception_ptr e) { aDone.set_value(e); });
+        std::this_thread::sleep_for(std::chrono::milliseconds(150));  // a's request is at the server
+        store.readCoveringAsync(200000, b.size(), b.data(), {}, {}, nullptr,
+                                [&](std::exception_ptr e) { bDone.set_value(e); }, alone);
+        EXPECT_TRUE(bDone.get_future().get() != nullptr) << "the refused read succeeded";
+        const std::exception_ptr aError = aDone.get_future().get();
+        EXPECT_EQ(aError == nullptr, alone);
+    }
 }
 
 // `vdiso serve` on a store whose server drips: a frame whose reads pass the deadline ends with

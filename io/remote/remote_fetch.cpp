@@ -147,6 +147,7 @@ struct RemoteFile::Fetch {
     size_t n = 0;
     void* dst = nullptr;
     bool opening = false;
+    bool alone = false;  // its failure for good is its own (failFetch)
     const std::atomic<bool>* cancel = nullptr;
     FetchDone done;
     std::string range, deadlineText;
@@ -180,13 +181,14 @@ RemoteFile::Answer RemoteFile::fetch(uint64_t offset, size_t n, void* dst, bool 
 }
 
 void RemoteFile::fetchAsync(uint64_t offset, size_t n, void* dst, bool opening, const std::atomic<bool>* cancel,
-                            FetchDone done) const {
+                            FetchDone done, bool alone) const {
     const RemoteOptions& options = mImpl->session->options();
     auto f = std::make_shared<Fetch>();
     f->offset = offset;
     f->n = n;
     f->dst = dst;
     f->opening = opening;
+    f->alone = alone;
     f->cancel = cancel;
     f->done = std::move(done);
     f->range = std::to_string(offset) + "-" + std::to_string(offset + n - 1);
@@ -199,8 +201,11 @@ void RemoteFile::fetchAsync(uint64_t offset, size_t n, void* dst, bool opening, 
 
 namespace {
 
-IoError failFetch(std::atomic<uint64_t>& failures, std::mutex& failureLock, std::string& failure,
+// A read's failure for good; unless it is `alone`, counted as the object's, which ends its other
+// reads in flight (their frame is lost).
+IoError failFetch(bool alone, std::atomic<uint64_t>& failures, std::mutex& failureLock, std::string& failure,
                   const std::string& name, const std::string& what) {
+    if (alone) return IoError(name + ": " + what);
     std::lock_guard lock(failureLock);
     failure = name + ": " + what;
     ++failures;
@@ -215,7 +220,7 @@ void RemoteFile::sendTry(const std::shared_ptr<Fetch>& fp) const {
     const RemoteOptions& options = d.session->options();
     using Clock = Fetch::Clock;
     try {
-        auto fail = [&](const std::string& what) { return failFetch(d.failures, d.failureLock, d.failure, mName, what); };
+        auto fail = [&](const std::string& what) { return failFetch(f.alone, d.failures, d.failureLock, d.failure, mName, what); };
         if (f.attempt >= options.attempts)
             throw fail(f.lastProblem + " (tried " + std::to_string(options.attempts) + " times)");
         throwIfInterrupted(mName);
@@ -300,7 +305,7 @@ void RemoteFile::tryEnded(const std::shared_ptr<Fetch>& fp, CURLcode rc) const {
     try {
         answered = judgeTry(f, rc, answer, pauseMs);
         if (!answered && pauseMs > 0 && Fetch::Clock::now() + std::chrono::milliseconds(pauseMs) > f.deadline)
-            throw failFetch(d.failures, d.failureLock, d.failure, mName,
+            throw failFetch(f.alone, d.failures, d.failureLock, d.failure, mName,
                             f.lastProblem + "; waiting " + std::to_string(pauseMs) + " ms to try again would pass the " +
                                 f.deadlineText + " a read may take (--remote-deadline)");
     } catch (...) {
@@ -326,7 +331,7 @@ bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseM
     const bool opening = f.opening;
     const std::string& range = f.range;
     CURL* curl = f.curl;
-    auto fail = [&](const std::string& what) { return failFetch(d.failures, d.failureLock, d.failure, mName, what); };
+    auto fail = [&](const std::string& what) { return failFetch(f.alone, d.failures, d.failureLock, d.failure, mName, what); };
     auto stopping = [&] { return options.stop && options.stop->load(); };
     curlLibrary().easy_getinfo(curl, CURLINFO_RESPONSE_CODE, &t.status);
     curl_off_t firstByteUs = 0;

@@ -118,7 +118,8 @@ void RemoteFile::readCovering(uint64_t offset, size_t n, void* dst, std::span<co
 }
 
 void RemoteFile::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
-                                   RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const {
+                                   RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done,
+                                   bool alone) const {
     // `done` is called once, and never from inside the try: a callback that threw would
     // otherwise be called again from the catch.
     std::exception_ptr failure;
@@ -137,7 +138,7 @@ void RemoteFile::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::ve
                 for (size_t k = 0; k < pieces.size(); ++k)
                     if (intactPiece(intact, whole, count, k)) mDiskCache->write(pieces[k].offset, pieces[k].bytes, pieces[k].dst);
             done(e);
-        });
+        }, alone);
         return;
     } catch (...) {
         failure = std::current_exception();

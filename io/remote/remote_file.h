@@ -100,8 +100,9 @@ public:
     // read fails at once. dst, `cancel` and what `intact` looks at must live until then. The same
     // errors as readCovering, as an exception_ptr.
     using ReadDone = std::function<void(std::exception_ptr)>;
+    // `alone`: its failure for good does not end the object's other reads (ByteSource's).
     void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, RangeCheck intact,
-                           const std::atomic<bool>* cancel, ReadDone done) const;
+                           const std::atomic<bool>* cancel, ReadDone done, bool alone = false) const;
     // Requests worth keeping in flight now (TransferLoop::wantedInFlight: twice what the link
     // carries, over all of the session's objects; `initial` until it can tell), at most `most`.
     size_t wantedInFlight(size_t initial, size_t most) const;
@@ -129,7 +130,7 @@ private:
     using FetchDone = std::function<void(const Answer*, std::exception_ptr)>;
     Answer fetch(uint64_t offset, size_t n, void* dst, bool opening, const std::atomic<bool>* cancel = nullptr) const;
     void fetchAsync(uint64_t offset, size_t n, void* dst, bool opening, const std::atomic<bool>* cancel,
-                    FetchDone done) const;
+                    FetchDone done, bool alone = false) const;
     // A fetch's steps on the transfer thread: send a try; judge one that ended (an answer, a
     // failure thrown, or the pause before the next try).
     struct Fetch;

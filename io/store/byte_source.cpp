@@ -13,7 +13,7 @@ namespace vdiso {
 
 void ByteSource::readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
                                    const char* what, RangeCheck intact, const std::atomic<bool>*,
-                                   ReadDone done) const {
+                                   ReadDone done, bool) const {
     try {
         readCovering(offset, n, dst, pieces, what, intact);
     } catch (...) {
@@ -107,8 +107,9 @@ public:
         mFile.readCovering(offset, n, dst, pieces, intact);
     }
     void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces, const char*,
-                           RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done) const override {
-        mFile.readCoveringAsync(offset, n, dst, std::move(pieces), std::move(intact), cancel, std::move(done));
+                           RangeCheck intact, const std::atomic<bool>* cancel, ReadDone done,
+                           bool alone) const override {
+        mFile.readCoveringAsync(offset, n, dst, std::move(pieces), std::move(intact), cancel, std::move(done), alone);
     }
     bool readsInBackground() const override { return true; }
 

@@ -60,10 +60,13 @@ public:
     // at once and calls done before returning. Once `cancel` (if given) is set, a remote source ends
     // the transfer and done gets the error. dst, `intact`'s targets and `cancel` must live
     // until done.
+    // `alone`: a read nothing else waits on (the index's parts read in the background): its
+    // failure is its own, where a remote read's failure for good ends the object's other reads
+    // (their frame is lost).
     using ReadDone = std::function<void(std::exception_ptr)>;
     virtual void readCoveringAsync(uint64_t offset, size_t n, void* dst, std::vector<ByteRange> pieces,
                                    const char* what, RangeCheck intact, const std::atomic<bool>* cancel,
-                                   ReadDone done) const;
+                                   ReadDone done, bool alone = false) const;
     // Whether readCoveringAsync returns before the bytes come (a remote source).
     virtual bool readsInBackground() const { return false; }
     // "buffered", "direct", "fadvise" (local), "http", "https", "s3" (remote).

@@ -91,7 +91,8 @@ std::vector<std::vector<uint64_t>> LazyIndex::requestsFor(const std::vector<uint
     return requests;
 }
 
-void LazyIndex::startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived) const {
+void LazyIndex::startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived,
+                             bool background) const {
     const uint64_t first = mDirectory.offsets[r.parts.front()];
     const size_t n = size_t(mDirectory.offsets[r.parts.back() + 1] - first);
     r.stored = std::make_unique_for_overwrite<unsigned char[]>(roomForRead(n));
@@ -113,7 +114,8 @@ void LazyIndex::startRequest(PartsRequest& r, const std::atomic<bool>* cancel, s
                               [req = &r, arrived = std::move(arrived)](std::exception_ptr e) {
                                   req->failure = e;
                                   arrived();
-                              });
+                              },
+                              background);
 }
 
 bool LazyIndex::settleRequest(PartsRequest& r) const {
@@ -176,7 +178,7 @@ void LazyIndex::readInBackground(uint64_t begin, size_t requests) {
                     arrivedChanged.notify_one();
                 };
                 try {
-                    startRequest(*r, &mStop, landed);
+                    startRequest(*r, &mStop, landed, true);
                 } catch (...) {  // not sent (it throws only before sending): settled as failed
                     r->failure = std::current_exception();
                     landed();
@@ -224,7 +226,7 @@ bool LazyIndex::fetchParts(const std::vector<uint64_t>& mine) const {
     };
     for (auto& r : requests) {
         try {
-            startRequest(*r, nullptr, landed);
+            startRequest(*r, nullptr, landed, false);
         } catch (...) {  // not sent (it throws only before sending): settled as failed
             r->failure = std::current_exception();
             landed();

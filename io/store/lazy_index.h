@@ -77,7 +77,10 @@ private:
     // `parts` (ascending) cut into requests: consecutive, up to kRequestBytes stored each.
     std::vector<std::vector<uint64_t>> requestsFor(const std::vector<uint64_t>& parts) const;
     // Sends one request of consecutive parts; `arrived` once it has ended (on any thread).
-    void startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived) const;
+    // `background`: a speculative read, whose failure does not end the object's other reads
+    // (ByteSource::readCoveringAsync's `alone`): a part that fails is fetched again when asked for.
+    void startRequest(PartsRequest& r, const std::atomic<bool>* cancel, std::function<void()> arrived,
+                      bool background) const;
     // Unpacks what arrived and marks each part Here or Missing; whether all are here.
     bool settleRequest(PartsRequest& r) const;
 
