@@ -23,6 +23,7 @@
 #include "core/view_presets.h"
 #include "io/crc32.h"
 #include "io/error.h"
+#include "io/remote/http_answer.h"
 #include "io/remote/remote_file.h"
 #include "io/store/brick_store.h"
 #include "io/store/store_format.h"
@@ -308,6 +309,18 @@ TEST_F(RemoteHostile, AReadThatFailsAloneEndsNoOtherRead) {
         const std::exception_ptr aError = aDone.get_future().get();
         EXPECT_EQ(aError == nullptr, alone);
     }
+}
+
+// A Content-Range is three unsigned decimals after the unit, in any case; anything else is no
+// range ("-1" had been read as 2^64 - 1, an object's size at the open).
+TEST(HttpAnswer, AContentRangeIsThreeUnsignedNumbers) {
+    using http_answer::parseContentRange;
+    EXPECT_EQ(parseContentRange("bytes 0-99/1000"), (std::array<uint64_t, 3>{0, 99, 1000}));
+    EXPECT_EQ(parseContentRange("Bytes 5-5/6\r\n"), (std::array<uint64_t, 3>{5, 5, 6}));
+    for (const char* bad : {"bytes 0-99/-1", "bytes -1-99/1000", "bytes 0-99/1000x", "bytes 0 -99/1000",
+                            "bytes 0-99", "bytes */1000", "bytes 10-9/1000", "bytes 0-1000/1000", "items 0-9/10",
+                            "bytes +0-9/10", "bytes 0-99/99999999999999999999999", ""})
+        EXPECT_FALSE(parseContentRange(bad).has_value()) << bad;
 }
 
 // `vdiso serve` on a store whose server drips: a frame whose reads pass the deadline ends with

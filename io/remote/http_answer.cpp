@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cstdio>
 #include <ctime>
 #include <new>
@@ -24,10 +25,27 @@ std::string s3ErrorText(const std::string& body) {
 }
 
 std::optional<std::array<uint64_t, 3>> parseContentRange(const std::string& text) {
+    // The unit in any case (RFC 9110), then three unsigned decimals and nothing else: sscanf's
+    // %lu took "-1" as 2^64 - 1 (an object's size at the open).
+    const char* p = text.data();
+    const char* end = text.data() + text.size();
+    while (end > p && std::isspace(static_cast<unsigned char>(end[-1]))) --end;
+    constexpr char kUnit[] = "bytes ";
+    for (const char* u = kUnit; *u; ++u, ++p)
+        if (p == end || std::tolower(static_cast<unsigned char>(*p)) != *u) return std::nullopt;
     std::array<uint64_t, 3> v{};
-    if (std::sscanf(text.c_str(), "bytes %lu-%lu/%lu", &v[0], &v[1], &v[2]) != 3 || v[1] < v[0] ||
-        v[1] >= v[2])
-        return std::nullopt;
+    constexpr char kAfter[2] = {'-', '/'};
+    for (size_t k = 0; k < 3; ++k) {
+        if (p == end || !std::isdigit(static_cast<unsigned char>(*p))) return std::nullopt;
+        const auto [next, error] = std::from_chars(p, end, v[k]);
+        if (error != std::errc()) return std::nullopt;
+        p = next;
+        if (k < 2) {
+            if (p == end || *p != kAfter[k]) return std::nullopt;
+            ++p;
+        }
+    }
+    if (p != end || v[1] < v[0] || v[1] >= v[2]) return std::nullopt;
     return v;
 }
 

@@ -13,7 +13,8 @@ namespace vdiso::http_answer {
 // ": Code (Message)" of S3's XML error body (<Code>NoSuchKey</Code>...), or "" without one.
 std::string s3ErrorText(const std::string& body);
 
-// "bytes A-B/TOTAL" as {A, B, TOTAL}; nullopt when it is not that (or B < A, or B >= TOTAL).
+// "bytes A-B/TOTAL" as {A, B, TOTAL} (the unit in any case, unsigned decimals); nullopt when it
+// is not that (a sign, another character, B < A, or B >= TOTAL).
 std::optional<std::array<uint64_t, 3>> parseContentRange(const std::string& text);
 
 // " (Not Found)" and the like for the statuses an object store answers, "" for others.
