@@ -7,6 +7,7 @@
 #include <exception>
 #include <filesystem>
 #include <new>
+#include <optional>
 #include <stdexcept>
 
 #include <fcntl.h>
@@ -112,16 +113,21 @@ BrickStoreReader::BrickStoreReader(std::string path, const StoreOpenOptions& opt
     if (mHeader.externalBytes) {
         const size_t recordBytes = size_t(mHeader.externalBytes);
         std::vector<unsigned char> record(roomForRead(recordBytes));
+        // Its decoding is its check (a disk cache keeps it only when that passes); the last
+        // decoding is of what the read left (RangeCheck), and a read without a disk cache, which
+        // asks no check, decodes after it, with the error naming what is wrong.
+        std::optional<std::vector<ExternalLevel>> records;
         mSource->read(mHeader.externalOffset, recordBytes, record.data(), "record of indexed data", [&](size_t) {
-            try {  // (its own checks: a disk cache keeps it only when they pass)
-                decodeExternalLevels(record.data(), recordBytes, mPath);
-                return true;
+            try {
+                records = decodeExternalLevels(record.data(), recordBytes, mPath);
             } catch (const IoError&) {
-                return false;
+                records.reset();
             }
+            return records.has_value();
         });
-        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, decodeExternalLevels(record.data(), recordBytes, mPath),
-                                                     options.remote, options.chunkCacheBytes);
+        if (!records) records = decodeExternalLevels(record.data(), recordBytes, mPath);
+        mExternal = std::make_unique<ExternalBricks>(mPath, mHeader, std::move(*records), options.remote,
+                                                     options.chunkCacheBytes);
     }
 }
 
