@@ -54,6 +54,13 @@ protected:
         return test::startS3(mDir.path().string(), file("s3.log"), extra);
     }
     static void control(int port, const std::string& json) { ASSERT_TRUE(test::controlS3(port, json)); }
+    // Reading the S3 test server's public bucket at `port` without credentials.
+    static RemoteOptions publicBucket(int port) {
+        RemoteOptions options;
+        options.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
+        options.anonymous = true;
+        return options;
+    }
     // The server's count of requests so far.
     static int64_t requestsTo(int port) {
         const test::CommandResult r =
@@ -159,9 +166,7 @@ TEST_F(RemoteHostile, ASmallObjectSentWholeIsTaken) {
     const std::string text = R"({"zarr_format": 2, "note": "read whole"})";
     test::writeFile(file("bkt/small.json"), text);
     control(port, R"([{"op":"fault","action":"ignore_range","count":-1}])");
-    RemoteOptions options;
-    options.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
-    options.anonymous = true;
+    const RemoteOptions options = publicBucket(port);
     const RemoteFile small("s3://bkt/small.json", options, 4096);
     ASSERT_EQ(small.size(), text.size());
     std::string got(text.size(), '\0');
@@ -235,9 +240,7 @@ TEST_F(RemoteHostile, TheDiskCacheKeepsOnlyVerifiedRanges) {
 TEST_F(RemoteHostile, ARangeReadWithoutACheckIsNotKept) {
     LoopbackServer server = s3({"--public", "bkt"});
     const int port = server.port();
-    RemoteOptions options;
-    options.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
-    options.anonymous = true;
+    RemoteOptions options = publicBucket(port);
     options.diskCacheDir = file("cache");
     auto entries = [&] {
         size_t n = 0;
@@ -289,9 +292,7 @@ TEST_F(RemoteHostile, AServerThatTurnsSlowIsWaitedFor) {
 TEST_F(RemoteHostile, AReadThatFailsAloneEndsNoOtherRead) {
     LoopbackServer server = s3({"--public", "bkt"});
     const int port = server.port();
-    RemoteOptions options;
-    options.s3Endpoint = "http://127.0.0.1:" + std::to_string(port);
-    options.anonymous = true;
+    const RemoteOptions options = publicBucket(port);
     const RemoteFile store("s3://bkt/head.vdiso", options, 4096);
     for (const bool alone : {true, false}) {
         SCOPED_TRACE(alone ? "alone" : "a frame's");

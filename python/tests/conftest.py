@@ -32,6 +32,26 @@ def python_child(code, *, env_extra=None, **kw):
                             text=True, env=env, **kw)
 
 
+def at_once(work, threads=4):
+    """Runs work() on `threads` Python threads at once; returns what each returned and what any
+    raised."""
+    import threading
+    results, errors = [], []
+
+    def one():
+        try:
+            results.append(work())
+        except Exception as e:  # noqa: BLE001 (the caller looks at them)
+            errors.append(e)
+
+    started = [threading.Thread(target=one) for _ in range(threads)]
+    for t in started:
+        t.start()
+    for t in started:
+        t.join()
+    return results, errors
+
+
 def interrupt(child):
     """Ctrl-C to a child mid-call: it must end by KeyboardInterrupt before printing "done".
     Returns the seconds it took."""

@@ -1,8 +1,6 @@
 """Calls a demanding user makes by mistake or on a bad day: each is refused by name, or done, and
 never crashes the interpreter (the review of 2026-11-30 found each of these crashing, hanging or
 reporting a finished job as failed)."""
-import os
-import threading
 import time
 import warnings
 
@@ -12,6 +10,7 @@ import pytest
 import zarr
 
 import vdiso
+from conftest import at_once
 from vdiso import _vdiso
 
 
@@ -105,19 +104,7 @@ def test_index_progress_counts_to_one(tmp_path):
 
 def test_a_server_stopped_from_two_threads_at_once_stops_once(store_path):
     server = vdiso.serve(store_path, port=0)
-    errors = []
-
-    def stop():
-        try:
-            server.stop()
-        except Exception as e:  # noqa: BLE001 (what the test looks for)
-            errors.append(e)
-
-    threads = [threading.Thread(target=stop) for _ in range(4)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    _, errors = at_once(server.stop)
     assert errors == []
     assert not server.running
 

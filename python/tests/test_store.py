@@ -10,7 +10,7 @@ import pytest
 import zarr
 
 import vdiso
-from conftest import interrupt, python_child, run
+from conftest import at_once, interrupt, python_child, run
 
 
 def head(shape=(40, 50, 60), dtype=np.uint16):
@@ -404,23 +404,10 @@ def test_a_second_extract_reads_no_brick_the_first_read(volume_and_cli_store):
 def test_threads_extract_and_post_process_at_once(volume_and_cli_store):
     """The GIL is released: Python threads extract at once (one Store runs its extractions one
     at a time over its one cache), post-processing included, and each gets what one alone gets."""
-    import threading
     _, cli = volume_and_cli_store
     store = vdiso.open(cli)
     alone = store.extract(500.5, largest=True, smooth=2)
-    results, errors = [], []
-
-    def work():
-        try:
-            results.append(len(store.extract(500.5, largest=True, smooth=2).faces))
-        except Exception as e:  # noqa: BLE001
-            errors.append(e)
-
-    threads = [threading.Thread(target=work) for _ in range(4)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    results, errors = at_once(lambda: len(store.extract(500.5, largest=True, smooth=2).faces))
     assert not errors and results == [len(alone.faces)] * 4
 
 
