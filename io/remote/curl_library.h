@@ -21,7 +21,7 @@ namespace vdiso {
     X(easy_strerror) X(share_init) X(share_setopt) X(share_cleanup) X(slist_append)               \
     X(slist_free_all) X(url) X(url_set) X(url_get) X(url_cleanup) X(free) X(getdate)               \
     X(multi_init) X(multi_cleanup) X(multi_setopt) X(multi_add_handle) X(multi_remove_handle)      \
-    X(multi_perform) X(multi_poll) X(multi_wakeup) X(multi_info_read)
+    X(multi_socket_action) X(multi_info_read)
 
 struct CurlLibrary {
 #define VDISO_CURL_MEMBER(name) decltype(&::curl_##name) name = nullptr;

@@ -3,7 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include "core/thread_name.h"
 #include "io/error.h"
@@ -15,9 +20,28 @@ namespace vdiso {
 TransferLoop::TransferLoop(long maxConnections, size_t maxInFlight)
     : mPid(::getpid()), mMaxInFlight(std::max<size_t>(maxInFlight, 1)) {
     const CurlLibrary& curl = curlLibrary();
+    mEpollFd = ::epoll_create1(EPOLL_CLOEXEC);
+    mWakeFd = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    epoll_event wakeEvent{};
+    wakeEvent.events = EPOLLIN;
+    wakeEvent.data.fd = mWakeFd;
+    if (mEpollFd < 0 || mWakeFd < 0 || ::epoll_ctl(mEpollFd, EPOLL_CTL_ADD, mWakeFd, &wakeEvent) != 0) {
+        const std::string why = std::strerror(errno);
+        if (mEpollFd >= 0) ::close(mEpollFd);
+        if (mWakeFd >= 0) ::close(mWakeFd);
+        throw IoError("cannot wait on sockets for remote reads (epoll, eventfd): " + why);
+    }
     mMulti = curl.multi_init();
-    if (!mMulti) throw IoError("libcurl cannot make a multi handle: remote data cannot be read");
+    if (!mMulti) {
+        ::close(mEpollFd);
+        ::close(mWakeFd);
+        throw IoError("libcurl cannot make a multi handle: remote data cannot be read");
+    }
     curl.multi_setopt(mMulti, CURLMOPT_MAXCONNECTS, maxConnections);
+    curl.multi_setopt(mMulti, CURLMOPT_SOCKETFUNCTION, &TransferLoop::onSocket);
+    curl.multi_setopt(mMulti, CURLMOPT_SOCKETDATA, static_cast<void*>(this));
+    curl.multi_setopt(mMulti, CURLMOPT_TIMERFUNCTION, &TransferLoop::onTimer);
+    curl.multi_setopt(mMulti, CURLMOPT_TIMERDATA, static_cast<void*>(this));
     mThread = std::thread([this] {
         nameThisThread("vdiso-transfer");
         run();
@@ -32,24 +56,55 @@ TransferLoop::~TransferLoop() {
     {
         std::lock_guard lock(mLock);
         mQuit = true;
-        curlLibrary().multi_wakeup(mMulti);
     }
+    wake();
     mThread.join();
-    curlLibrary().multi_cleanup(mMulti);
+    curlLibrary().multi_cleanup(mMulti);  // may still tell onSocket of sockets closed
+    ::close(mEpollFd);
+    ::close(mWakeFd);
+}
+
+void TransferLoop::wake() {
+    const uint64_t one = 1;
+    // Fails only when the counter is full, and then the loop is awake already.
+    [[maybe_unused]] const ssize_t n = ::write(mWakeFd, &one, sizeof one);
+}
+
+int TransferLoop::onSocket(CURL*, curl_socket_t s, int what, void* loop, void*) {
+    auto& self = *static_cast<TransferLoop*>(loop);
+    if (what == CURL_POLL_REMOVE) {
+        ::epoll_ctl(self.mEpollFd, EPOLL_CTL_DEL, s, nullptr);  // fails if libcurl closed it first: fine
+        std::erase(self.mSockets, s);
+        return 0;
+    }
+    epoll_event e{};
+    e.events = ((what & CURL_POLL_IN) ? EPOLLIN : 0u) | ((what & CURL_POLL_OUT) ? EPOLLOUT : 0u);
+    e.data.fd = s;
+    if (::epoll_ctl(self.mEpollFd, EPOLL_CTL_MOD, s, &e) != 0 && errno == ENOENT) {
+        ::epoll_ctl(self.mEpollFd, EPOLL_CTL_ADD, s, &e);
+        if (std::find(self.mSockets.begin(), self.mSockets.end(), s) == self.mSockets.end()) self.mSockets.push_back(s);
+    }
+    return 0;
+}
+
+int TransferLoop::onTimer(CURLM*, long timeoutMs, void* loop) {
+    auto& self = *static_cast<TransferLoop*>(loop);
+    self.mCurlDue = timeoutMs < 0 ? Clock::time_point::max() : Clock::now() + std::chrono::milliseconds(timeoutMs);
+    return 0;
 }
 
 void TransferLoop::submit(CURL* easy, Done done) {
     auto* p = new Pending{easy, std::move(done), {}};
     std::lock_guard lock(mLock);
     mSubmitted.push_back(p);
-    curlLibrary().multi_wakeup(mMulti);
+    wake();
 }
 
 void TransferLoop::after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner) {
     std::lock_guard lock(mLock);
     mTimers.push_back({Clock::now() + std::chrono::milliseconds(std::max<int64_t>(ms, 0)), std::move(fn),
                        std::move(sooner)});
-    curlLibrary().multi_wakeup(mMulti);
+    wake();
 }
 
 void TransferLoop::noteEnded(const Pending& p, Clock::time_point now) {
@@ -119,15 +174,38 @@ void call(Fn&& fn) noexcept {
 
 }  // namespace
 
+void TransferLoop::act(curl_socket_t s, int bits, size_t& active) {
+    const CurlLibrary& curl = curlLibrary();
+    int running = 0;
+    curl.multi_socket_action(mMulti, s, bits, &running);
+    int left = 0;
+    while (CURLMsg* message = curl.multi_info_read(mMulti, &left)) {
+        if (message->msg != CURLMSG_DONE) continue;
+        CURL* easy = message->easy_handle;
+        const CURLcode result = message->data.result;  // `message` goes with the removal
+        char* user = nullptr;
+        curl.easy_getinfo(easy, CURLINFO_PRIVATE, &user);
+        curl.multi_remove_handle(mMulti, easy);
+        --active;
+        auto* p = reinterpret_cast<Pending*>(user);
+        noteEnded(*p, Clock::now());
+        call([&] { p->done(result); });
+        delete p;
+    }
+}
+
 void TransferLoop::run() {
     const CurlLibrary& curl = curlLibrary();
     std::vector<Pending*> added;
     std::vector<std::function<void()>> due;
+    std::vector<curl_socket_t> sockets;
+    epoll_event events[64];
     size_t active = 0;
+    Clock::time_point nextTick = Clock::now() + std::chrono::milliseconds(kTickMs);
     for (;;) {
         bool quit;
         Clock::time_point now = Clock::now();
-        Clock::time_point nextDue = now + std::chrono::milliseconds(kTickMs);
+        Clock::time_point nextDue = nextTick;
         {
             std::lock_guard lock(mLock);
             while (active + added.size() < mMaxInFlight && !mSubmitted.empty()) {
@@ -160,26 +238,39 @@ void TransferLoop::run() {
         }
         added.clear();
         if (quit && active == 0) return;
-        int running = 0;
-        curl.multi_perform(mMulti, &running);
-        int left = 0;
-        while (CURLMsg* message = curl.multi_info_read(mMulti, &left)) {
-            if (message->msg != CURLMSG_DONE) continue;
-            CURL* easy = message->easy_handle;
-            const CURLcode result = message->data.result;  // `message` goes with the removal
-            char* user = nullptr;
-            curl.easy_getinfo(easy, CURLINFO_PRIVATE, &user);
-            curl.multi_remove_handle(mMulti, easy);
-            --active;
-            auto* p = reinterpret_cast<Pending*>(user);
-            noteEnded(*p, Clock::now());
-            call([&] { p->done(result); });
-            delete p;
+        // libcurl's timeouts (a new transfer's start among them), then every transfer with a
+        // socket once a tick: libcurl looks at the socket itself and calls its progress callback.
+        if (Clock::now() >= mCurlDue) {
+            mCurlDue = Clock::time_point::max();
+            act(CURL_SOCKET_TIMEOUT, 0, active);
         }
-        // Until a socket is ready, a submission wakes it, a timer is due or the tick (libcurl's
-        // own timers shorten it).
-        const auto waitMs = std::chrono::duration_cast<std::chrono::milliseconds>(nextDue - Clock::now()).count();
-        curl.multi_poll(mMulti, nullptr, 0, int(std::clamp<int64_t>(waitMs, 0, kTickMs)), nullptr);
+        if (Clock::now() >= nextTick) {
+            sockets = mSockets;  // act() may change mSockets
+            for (curl_socket_t s : sockets) act(s, 0, active);
+            nextTick = Clock::now() + std::chrono::milliseconds(kTickMs);
+            nextDue = std::min(nextDue, nextTick);
+        }
+        // Until a socket is ready, a submission wakes it, a timer of ours or libcurl's is due, or
+        // the tick.
+        const Clock::time_point until = std::min(nextDue, mCurlDue);
+        const int64_t waitMs = std::clamp<int64_t>(
+            std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now() + std::chrono::microseconds(999))
+                .count(),
+            0, kTickMs);
+        const int n = ::epoll_wait(mEpollFd, events, int(std::size(events)), int(waitMs));
+        for (int k = 0; k < n; ++k) {
+            const int fd = events[k].data.fd;
+            if (fd == mWakeFd) {
+                uint64_t count;
+                [[maybe_unused]] const ssize_t got = ::read(mWakeFd, &count, sizeof count);
+                continue;
+            }
+            const uint32_t e = events[k].events;
+            act(fd,
+                ((e & EPOLLIN) ? CURL_CSELECT_IN : 0) | ((e & EPOLLOUT) ? CURL_CSELECT_OUT : 0) |
+                    ((e & (EPOLLERR | EPOLLHUP)) ? CURL_CSELECT_ERR : 0),
+                active);
+        }
     }
 }
 
