@@ -42,15 +42,24 @@ TransferLoop::TransferLoop(long maxConnections, size_t maxInFlight)
     curl.multi_setopt(mMulti, CURLMOPT_SOCKETDATA, static_cast<void*>(this));
     curl.multi_setopt(mMulti, CURLMOPT_TIMERFUNCTION, &TransferLoop::onTimer);
     curl.multi_setopt(mMulti, CURLMOPT_TIMERDATA, static_cast<void*>(this));
-    mThread = std::thread([this] {
-        nameThisThread("vdiso-transfer");
-        run();
-    });
+    try {
+        mThread = std::thread([this] {
+            nameThisThread("vdiso-transfer");
+            run();
+        });
+    } catch (...) {
+        curl.multi_cleanup(mMulti);
+        ::close(mEpollFd);
+        ::close(mWakeFd);
+        throw;
+    }
 }
 
 TransferLoop::~TransferLoop() {
     if (inForkedChild(mPid)) {  // (io/forked_child.h); the multi handle is the parent's too
         abandonThread(mThread);
+        ::close(mEpollFd);  // the child's own descriptors: the parent's stay open
+        ::close(mWakeFd);
         return;
     }
     {
@@ -72,19 +81,41 @@ void TransferLoop::wake() {
 
 int TransferLoop::onSocket(CURL*, curl_socket_t s, int what, void* loop, void*) {
     auto& self = *static_cast<TransferLoop*>(loop);
+    auto at = std::find_if(self.mSockets.begin(), self.mSockets.end(), [s](const Watched& w) { return w.socket == s; });
     if (what == CURL_POLL_REMOVE) {
-        ::epoll_ctl(self.mEpollFd, EPOLL_CTL_DEL, s, nullptr);  // fails if libcurl closed it first: fine
-        std::erase(self.mSockets, s);
+        if (::epoll_ctl(self.mEpollFd, EPOLL_CTL_DEL, s, nullptr) != 0) self.mStale = true;
+        if (at != self.mSockets.end()) self.mSockets.erase(at);
         return 0;
     }
     epoll_event e{};
     e.events = ((what & CURL_POLL_IN) ? EPOLLIN : 0u) | ((what & CURL_POLL_OUT) ? EPOLLOUT : 0u);
     e.data.fd = s;
-    if (::epoll_ctl(self.mEpollFd, EPOLL_CTL_MOD, s, &e) != 0 && errno == ENOENT) {
+    if (at != self.mSockets.end()) {
+        at->events = e.events;
+        ::epoll_ctl(self.mEpollFd, EPOLL_CTL_MOD, s, &e);
+    } else {
+        self.mSockets.push_back({s, e.events});
+        // Refused (the user's epoll watches used up): the socket is still looked at every tick.
         ::epoll_ctl(self.mEpollFd, EPOLL_CTL_ADD, s, &e);
-        if (std::find(self.mSockets.begin(), self.mSockets.end(), s) == self.mSockets.end()) self.mSockets.push_back(s);
     }
     return 0;
+}
+
+void TransferLoop::renewEpoll() {
+    const int fresh = ::epoll_create1(EPOLL_CLOEXEC);
+    if (fresh < 0) return;  // kept as it is; tried again at the next wait
+    epoll_event e{};
+    e.events = EPOLLIN;
+    e.data.fd = mWakeFd;
+    ::epoll_ctl(fresh, EPOLL_CTL_ADD, mWakeFd, &e);
+    for (const Watched& w : mSockets) {
+        e.events = w.events;
+        e.data.fd = w.socket;
+        ::epoll_ctl(fresh, EPOLL_CTL_ADD, w.socket, &e);
+    }
+    ::close(mEpollFd);
+    mEpollFd = fresh;
+    mStale = false;
 }
 
 int TransferLoop::onTimer(CURLM*, long timeoutMs, void* loop) {
@@ -245,7 +276,8 @@ void TransferLoop::run() {
             act(CURL_SOCKET_TIMEOUT, 0, active);
         }
         if (Clock::now() >= nextTick) {
-            sockets = mSockets;  // act() may change mSockets
+            sockets.clear();  // act() may change mSockets
+            for (const Watched& w : mSockets) sockets.push_back(w.socket);
             for (curl_socket_t s : sockets) act(s, 0, active);
             nextTick = Clock::now() + std::chrono::milliseconds(kTickMs);
             nextDue = std::min(nextDue, nextTick);
@@ -257,12 +289,17 @@ void TransferLoop::run() {
             std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now() + std::chrono::microseconds(999))
                 .count(),
             0, kTickMs);
+        if (mStale) renewEpoll();
         const int n = ::epoll_wait(mEpollFd, events, int(std::size(events)), int(waitMs));
         for (int k = 0; k < n; ++k) {
             const int fd = events[k].data.fd;
             if (fd == mWakeFd) {
                 uint64_t count;
                 [[maybe_unused]] const ssize_t got = ::read(mWakeFd, &count, sizeof count);
+                continue;
+            }
+            if (std::none_of(mSockets.begin(), mSockets.end(), [fd](const Watched& w) { return w.socket == fd; })) {
+                mStale = true;  // a registration left from a socket libcurl closed
                 continue;
             }
             const uint32_t e = events[k].events;

@@ -84,6 +84,8 @@ private:
     void run();
     void noteEnded(const Pending& p, Clock::time_point now);
     void wake();  // ends the loop's wait (mWakeFd)
+    // A fresh epoll of mWakeFd and mSockets, the old one closed (see mStale).
+    void renewEpoll();
     // libcurl's asks (CURLMOPT_SOCKETFUNCTION, CURLMOPT_TIMERFUNCTION), on the loop's thread.
     static int onSocket(CURL* easy, curl_socket_t s, int what, void* loop, void* socketData);
     static int onTimer(CURLM* multi, long timeoutMs, void* loop);
@@ -93,9 +95,19 @@ private:
 
     CURLM* mMulti = nullptr;
     int mEpollFd = -1, mWakeFd = -1;
-    // Loop thread only: the sockets libcurl watches, and when it next wants a timeout call.
-    std::vector<curl_socket_t> mSockets;
+    // Loop thread only: the sockets libcurl watches with the epoll events it wants, and when it
+    // next wants a timeout call.
+    struct Watched {
+        curl_socket_t socket;
+        uint32_t events;
+    };
+    std::vector<Watched> mSockets;
     Clock::time_point mCurlDue = Clock::time_point::max();
+    // The epoll may hold a registration that cannot be removed: libcurl 7.88 closes a socket that
+    // never connected before it says REMOVE, and epoll drops a socket only when its last
+    // descriptor closes, which a forked child may still hold; ready, it would wake every wait.
+    // Set when a REMOVE finds nothing to remove or an event names an unknown socket.
+    bool mStale = false;
     pid_t mPid;  // the process whose thread runs the loop
     size_t mMaxInFlight;
     mutable std::mutex mLock;

@@ -1,0 +1,122 @@
+// io/remote/transfer_loop.h against the kernel's sockets: what the loop's epoll holds after
+// libcurl closes a socket that a forked child still holds.
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+#include <dirent.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "io/remote/curl_library.h"
+#include "io/remote/transfer_loop.h"
+
+namespace vdiso {
+namespace {
+
+// The registrations of every epoll this process has open ("tfd:" lines of their fdinfo).
+int epollRegistrations() {
+    int count = 0;
+    DIR* dir = ::opendir("/proc/self/fd");
+    if (!dir) return -1;
+    while (dirent* entry = ::readdir(dir)) {
+        const std::string fd = entry->d_name;
+        char target[256] = {};
+        if (::readlink(("/proc/self/fd/" + fd).c_str(), target, sizeof target - 1) <= 0) continue;
+        if (std::string(target) != "anon_inode:[eventpoll]") continue;
+        std::ifstream info("/proc/self/fdinfo/" + fd);
+        for (std::string line; std::getline(info, line);) count += line.rfind("tfd:", 0) == 0;
+    }
+    ::closedir(dir);
+    return count;
+}
+
+double processCpuSeconds() {
+    timespec t{};
+    ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
+}
+
+size_t discard(char*, size_t size, size_t count, void*) { return size * count; }
+
+// libcurl 7.88 closes a socket that never connected before it tells the loop to stop watching
+// it, and epoll drops a socket only when its last descriptor closes: with a forked child holding
+// a copy, the registration stayed, and once the child's copy turned ready the loop's every wait
+// returned at once (a core spun until the child exited).
+TEST(TransferLoop, ASocketClosedWhileAForkedChildHoldsItIsNoLongerWatched) {
+    // A listener whose backlog is full, so that the next connect hangs until it is accepted.
+    const int listener = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
+    ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    ASSERT_EQ(::listen(listener, 0), 0);
+    socklen_t length = sizeof address;
+    ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&address), &length), 0);
+    std::vector<int> filling;
+    for (int k = 0; k < 4; ++k) {
+        filling.push_back(::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0));
+        ::connect(filling.back(), reinterpret_cast<sockaddr*>(&address), sizeof address);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+
+    const int before = epollRegistrations();
+    TransferLoop loop(4, 4);
+    const CurlLibrary& curl = curlLibrary();
+    CURL* easy = curl.easy_init();
+    const std::string url = "http://127.0.0.1:" + std::to_string(ntohs(address.sin_port)) + "/x";
+    curl.easy_setopt(easy, CURLOPT_URL, url.c_str());
+    curl.easy_setopt(easy, CURLOPT_NOSIGNAL, 1L);
+    curl.easy_setopt(easy, CURLOPT_WRITEFUNCTION, discard);
+    curl.easy_setopt(easy, CURLOPT_CONNECTTIMEOUT_MS, 600L);
+    std::atomic<bool> done{false};
+    CURLcode result = CURLE_OK;
+    loop.submit(easy, [&](CURLcode rc) {
+        result = rc;
+        done = true;
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const pid_t child = ::fork();  // holds the connecting socket's descriptor
+    if (child == 0) {
+        ::sleep(20);
+        ::_exit(0);
+    }
+    ASSERT_GT(child, 0);
+    while (!done) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    EXPECT_EQ(result, CURLE_OPERATION_TIMEDOUT);
+    curl.easy_cleanup(easy);
+    // The pending connects accepted: the child's copy of the closed socket turns ready.
+    auto acceptAll = [&] {
+        for (int c; (c = ::accept4(listener, nullptr, nullptr, SOCK_NONBLOCK)) >= 0;) ::close(c);
+    };
+    for (int k = 0; k < 6; ++k) {
+        acceptAll();
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));  // past a tick of the loop
+
+    EXPECT_EQ(epollRegistrations() - before, 1) << "only the loop's wake-up descriptor is left";
+    const double cpu0 = processCpuSeconds();
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    acceptAll();
+    EXPECT_LT(processCpuSeconds() - cpu0, 0.2) << "the loop's thread spins on a socket it no longer has";
+
+    ::kill(child, SIGKILL);
+    ::waitpid(child, nullptr, 0);
+    for (int s : filling) ::close(s);
+    ::close(listener);
+}
+
+}  // namespace
+}  // namespace vdiso
