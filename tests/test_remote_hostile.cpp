@@ -115,6 +115,28 @@ TEST_F(RemoteHostile, CredentialsNeverFollowARedirectElsewhere) {
     EXPECT_EQ(within.exitCode, 0) << within.output;
 }
 
+// A permanent redirect (301, 308) is remembered: after the first answer from where it leads,
+// the object's reads go straight there. A temporary one (302, 307) is followed at every read.
+TEST_F(RemoteHostile, APermanentRedirectIsFollowedOnceATemporaryOneEveryTime) {
+    LoopbackServer first = s3({"--public", "bkt"});
+    LoopbackServer second = s3({"--public", "bkt"});
+    const int port = first.port(), other = second.port();
+    for (const char* status : {"301", "308", "307"}) {
+        SCOPED_TRACE(status);
+        control(port, std::string(R"([{"op":"clear_faults"},{"op":"fault","action":"redirect","status":)") + status +
+                          R"(,"count":-1,"location":"http://127.0.0.1:)" + std::to_string(other) +
+                          R"(/bkt/head.vdiso"}])");
+        const int64_t firstBefore = requestsTo(port), secondBefore = requestsTo(other);
+        const test::CommandResult r = extract("", "s3://bkt/head.vdiso", std::string("moved") + status,
+                                              "--no-sign-request --s3-endpoint http://127.0.0.1:" + std::to_string(port));
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+        const int64_t toFirst = requestsTo(port) - firstBefore, toSecond = requestsTo(other) - secondBefore;
+        EXPECT_GT(toSecond, 5);
+        if (std::string(status) == "307") EXPECT_EQ(toFirst, toSecond) << "each read is redirected";
+        else EXPECT_EQ(toFirst, 1) << "only the first read is redirected (" << toSecond << " reads went on)";
+    }
+}
+
 // Answers that are not what was asked: each is an error that says what it is.
 TEST_F(RemoteHostile, AnswersAreCheckedAndNamed) {
     LoopbackServer server = s3();

@@ -155,6 +155,7 @@ struct RemoteFile::Fetch {
     uint64_t failuresAtStart = 0;  // a failure for good counts once, and ends the object's other transfers
     std::string url;               // where this read goes: the location, or where it was redirected
     int attempt = 0, redirects = 0;
+    bool moved = true;  // every redirect so far was permanent (301, 308)
     // A read is ended as a straggler once: its next try waits up to the stall timeout. (Cut at
     // every try, a server that turned slow after the session learnt its usual wait used up the
     // read's attempts on answers that were coming.)
@@ -195,7 +196,7 @@ void RemoteFile::fetchAsync(uint64_t offset, size_t n, void* dst, bool opening, 
     f->deadline = Fetch::Clock::now() + std::chrono::milliseconds(std::max<int64_t>(1, options.deadlineMs));
     f->deadlineText = std::to_string(std::max<int64_t>(1, options.deadlineMs / 1000)) + " s";
     f->failuresAtStart = mImpl->failures.load();
-    f->url = mImpl->url;
+    f->url = mImpl->where();
     sendTry(f);
 }
 
@@ -415,12 +416,18 @@ bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseM
                        (t.bucketRegion.empty() ? std::string()
                                                : " (S3 says the bucket is in region " + t.bucketRegion +
                                                      ": set AWS_REGION or --s3-endpoint for it)"));
+        f.moved = f.moved && (t.status == 301 || t.status == 308);
         f.url = redirectTo;
         return false;
     }
+    // Answered after permanent redirects only: the object's later reads go straight there.
+    auto remember = [&] {
+        if (f.redirects > 0 && f.moved) d.moveTo(f.url);
+    };
     if (t.status == 200 && t.wholeObject) {  // opening, a small object sent whole
         if (t.got > n) throw fail("sent more than the " + std::to_string(n) + " bytes it may be read whole in");
         answer = Answer{t.got, t.got, t.etag, t.lastModified};
+        remember();
         return true;
     }
     if (t.status == 206) {
@@ -448,6 +455,7 @@ bool RemoteFile::judgeTry(Fetch& f, CURLcode rc, Answer& answer, int64_t& pauseM
             throw fail("was replaced since it was opened: range " + range + " came as version " +
                        (t.etag.empty() ? "Last-Modified: " + t.lastModified : t.etag) + ", opened as " + mVersion);
         answer = Answer{(*r)[2], t.got, t.etag, t.lastModified};
+        remember();
         return true;
     }
     const std::string said = "HTTP " + std::to_string(t.status) + http_answer::statusReason(t.status) +

@@ -35,6 +35,20 @@ struct RemoteFile::Impl {
     std::mutex failureLock;
     std::string failure;  // the last one's message, which the reads it ended repeat
 
+    // Where a read starts: `url`, or where a permanent redirect (301, 308) of it led, once an
+    // answer came from there (RFC 9110 15.4.2: the new URI is to be used for future requests;
+    // a temporary one, 302 or 307, is followed again at every read).
+    std::string where() const {
+        std::lock_guard lock(movedLock);
+        return movedTo.empty() ? url : movedTo;
+    }
+    void moveTo(const std::string& to) {
+        std::lock_guard lock(movedLock);
+        movedTo = to;
+    }
+    mutable std::mutex movedLock;
+    std::string movedTo;
+
     ~Impl() { curlLibrary().slist_free_all(headers); }
 };
 
