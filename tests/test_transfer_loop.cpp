@@ -1,5 +1,6 @@
 // io/remote/transfer_loop.h against the kernel's sockets: what the loop's epoll holds after
-// libcurl closes a socket that a forked child still holds.
+// libcurl closes a socket that a forked child still holds; a deadline that counts the time a
+// transfer waited for its turn.
 #include <gtest/gtest.h>
 
 #include <arpa/inet.h>
@@ -115,6 +116,62 @@ TEST(TransferLoop, ASocketClosedWhileAForkedChildHoldsItIsNoLongerWatched) {
     ::kill(child, SIGKILL);
     ::waitpid(child, nullptr, 0);
     for (int s : filling) ::close(s);
+    ::close(listener);
+}
+
+// A transfer's deadline counts from its submission: one that waited its turn behind another (one
+// transfer at a time) past its deadline ends, timed out, as soon as it starts, not after the
+// whole timeout its handle was given.
+TEST(TransferLoop, ADeadlineCountsTheWaitForATurn) {
+    // A server that takes connections (the kernel's backlog) and never answers.
+    const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
+    ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    ASSERT_EQ(::listen(listener, 16), 0);
+    socklen_t length = sizeof address;
+    ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&address), &length), 0);
+    const std::string url = "http://127.0.0.1:" + std::to_string(ntohs(address.sin_port)) + "/x";
+
+    const CurlLibrary& curl = curlLibrary();
+    auto transfer = [&](long timeoutMs) {
+        CURL* easy = curl.easy_init();
+        curl.easy_setopt(easy, CURLOPT_URL, url.c_str());
+        curl.easy_setopt(easy, CURLOPT_NOSIGNAL, 1L);
+        curl.easy_setopt(easy, CURLOPT_WRITEFUNCTION, discard);
+        curl.easy_setopt(easy, CURLOPT_TIMEOUT_MS, timeoutMs);
+        return easy;
+    };
+    using Clock = TransferLoop::Clock;
+    struct Ended {
+        std::atomic<bool> done{false};
+        CURLcode result = CURLE_OK;
+        Clock::time_point at;
+    } first, second;
+    {
+        TransferLoop loop(2, 1);
+        CURL* a = transfer(1500);
+        CURL* b = transfer(20000);
+        const Clock::time_point start = Clock::now();
+        auto note = [](Ended& e) {
+            return [&e](CURLcode rc) {
+                e.result = rc;
+                e.at = Clock::now();
+                e.done = true;
+            };
+        };
+        loop.submit(a, note(first));
+        loop.submit(b, note(second), start + std::chrono::milliseconds(300));
+        while (!first.done || !second.done) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        curl.easy_cleanup(a);
+        curl.easy_cleanup(b);
+    }
+    EXPECT_EQ(first.result, CURLE_OPERATION_TIMEDOUT);
+    EXPECT_EQ(second.result, CURLE_OPERATION_TIMEDOUT);
+    EXPECT_GE(second.at, first.at) << "the second waited for the first's turn";
+    EXPECT_LT(std::chrono::duration<double>(second.at - first.at).count(), 5.0)
+        << "the second ran its own 20 s timeout after its deadline had passed";
     ::close(listener);
 }
 

@@ -284,7 +284,9 @@ void RemoteFile::sendTry(const std::shared_ptr<Fetch>& fp) const {
             curlLibrary().easy_setopt(curl, CURLOPT_USERPWD, d.userPassword.c_str());
         }
         curlLibrary().easy_setopt(curl, CURLOPT_ERRORBUFFER, f.curlError);
-        d.session->loop().submit(curl, [this, fp](CURLcode rc) { tryEnded(fp, rc); });
+        // The deadline's remainder counts from here: a try waiting its turn behind the session's
+        // bound waits within it (the loop sets CURLOPT_TIMEOUT_MS again when it starts).
+        d.session->loop().submit(curl, [this, fp](CURLcode rc) { tryEnded(fp, rc); }, f.deadline);
     } catch (...) {
         if (f.curl) d.session->give(f.curl);
         f.curl = nullptr;

@@ -124,8 +124,8 @@ int TransferLoop::onTimer(CURLM*, long timeoutMs, void* loop) {
     return 0;
 }
 
-void TransferLoop::submit(CURL* easy, Done done) {
-    auto* p = new Pending{easy, std::move(done), {}};
+void TransferLoop::submit(CURL* easy, Done done, Clock::time_point deadline) {
+    auto* p = new Pending{easy, std::move(done), deadline, {}};
     std::lock_guard lock(mLock);
     mSubmitted.push_back(p);
     wake();
@@ -260,6 +260,10 @@ void TransferLoop::run() {
         for (Pending* p : added) {
             p->started = now;
             curl.easy_setopt(p->easy, CURLOPT_PRIVATE, static_cast<void*>(p));
+            if (p->deadline != Clock::time_point::max()) {
+                const int64_t leftMs = std::chrono::duration_cast<std::chrono::milliseconds>(p->deadline - now).count();
+                curl.easy_setopt(p->easy, CURLOPT_TIMEOUT_MS, long(std::max<int64_t>(leftMs, 1)));
+            }
             if (curl.multi_add_handle(mMulti, p->easy) == CURLM_OK) {
                 ++active;
             } else {

@@ -59,8 +59,12 @@ public:
     TransferLoop(const TransferLoop&) = delete;
     TransferLoop& operator=(const TransferLoop&) = delete;
 
+    using Clock = std::chrono::steady_clock;
     using Done = std::function<void(CURLcode)>;
-    void submit(CURL* easy, Done done);
+    // `deadline`: when the transfer must have ended, its time waiting for a turn included; the
+    // handle's CURLOPT_TIMEOUT_MS is set to what is left of it when the transfer starts (at
+    // least 1 ms: one that waited past it ends at once, timed out). None: the handle's own.
+    void submit(CURL* easy, Done done, Clock::time_point deadline = Clock::time_point::max());
     // Calls fn on the loop's thread once `ms` have passed, or at the first tick at which
     // sooner() (if given) says true.
     void after(int64_t ms, std::function<void()> fn, std::function<bool()> sooner = {});
@@ -70,10 +74,10 @@ public:
     size_t wantedInFlight(size_t initial, size_t most) const;
 
 private:
-    using Clock = std::chrono::steady_clock;
     struct Pending {
         CURL* easy = nullptr;
         Done done;
+        Clock::time_point deadline;
         Clock::time_point started;  // added to the multi handle
     };
     struct Timer {
