@@ -21,7 +21,12 @@ void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object
     std::exception_ptr failure;
     std::atomic<double> fraction{-1.0};
     std::optional<pyb::error_already_set> pythonError;  // Ctrl-C or the callable's exception
-    clearInterrupt();
+    // The callable's exception stops this call's work alone (at its next progress report); a
+    // signal (Ctrl-C) asks every loop of the library to stop (core/interrupt.h), as it does in
+    // the command, and is withdrawn by the call that asked once its work has unwound. (The flag
+    // is not cleared at the start: a call starting in another thread would withdraw it.)
+    std::atomic<bool> stopThis{false};
+    bool askedEveryone = false;
     {
         pyb::gil_scoped_release release;
         std::thread worker([&] {
@@ -30,6 +35,7 @@ void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object
                 // report is also where a Ctrl-C seen by the waiting thread stops the work.
                 work([&](double f) {
                     fraction.store(f, std::memory_order_relaxed);
+                    if (stopThis.load(std::memory_order_relaxed)) throw Interrupted("vdiso: interrupted");
                     throwIfInterrupted("vdiso");
                 });
             } catch (...) {
@@ -47,8 +53,12 @@ void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object
             }
             if (pythonError) continue;  // already stopping
             pyb::gil_scoped_acquire acquire;
+            bool signalled = false;
             try {
-                if (PyErr_CheckSignals() != 0) throw pyb::error_already_set();
+                if (PyErr_CheckSignals() != 0) {
+                    signalled = true;
+                    throw pyb::error_already_set();
+                }
                 const double f = fraction.load(std::memory_order_relaxed);
                 if (!progress.is_none() && f >= 0 && f != shown) {
                     shown = f;
@@ -56,12 +66,16 @@ void runReleased(const std::function<void(const ProgressFn&)>& work, pyb::object
                 }
             } catch (pyb::error_already_set& e) {
                 pythonError.emplace(std::move(e));
-                requestInterrupt();
+                stopThis = true;
+                if (signalled) {
+                    requestInterrupt();
+                    askedEveryone = true;
+                }
             }
         }
         worker.join();
     }
-    clearInterrupt();
+    if (askedEveryone) clearInterrupt();
     if (pythonError) throw std::move(*pythonError);
     if (failure) std::rethrow_exception(failure);
     // The last call comes after the work is done (an output is in place): what it raises is

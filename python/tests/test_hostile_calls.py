@@ -94,6 +94,58 @@ def test_a_progress_that_raises_when_the_work_is_done_warns_and_keeps_the_result
     assert calls[-1] == 1.0
 
 
+def test_a_progress_that_raises_stops_its_own_call_and_no_other(tmp_path):
+    # Call A's callable raises while A's work waits on a slow source; calls in another thread,
+    # converting arrays one after another all the while, must each finish as if alone (the stop
+    # was process-wide: they failed "interrupted" while A's work took a slab's read to notice).
+    import threading
+
+    class SlowSource:
+        def __init__(self, array):
+            self.array, self.shape, self.dtype = array, array.shape, array.dtype
+
+        def __getitem__(self, key):
+            time.sleep(0.3)
+            return self.array[key]
+
+    a_done = threading.Event()
+    outcome = {"b": [], "b_errors": []}
+
+    def call_a():
+        calls = []
+
+        def progress(done, total):
+            calls.append(done)
+            if len(calls) == 2:
+                raise RuntimeError("A's callable fails")
+
+        try:
+            vdiso.convert(SlowSource(ball((256, 21, 22))), str(tmp_path / "a.vdiso"), progress=progress)
+        except RuntimeError as e:
+            outcome["a"] = str(e)
+        a_done.set()
+
+    def calls_b():
+        big = ball((256, 256, 256))
+        while not a_done.is_set():
+            try:
+                vdiso.convert(big, str(tmp_path / "b.vdiso"), overwrite=True)
+                outcome["b"].append(vdiso.open(str(tmp_path / "b.vdiso")).shape)
+            except Exception as e:  # noqa: BLE001 (counted below)
+                outcome["b_errors"].append(str(e))
+
+    a = threading.Thread(target=call_a)
+    b = threading.Thread(target=calls_b)
+    a.start()
+    b.start()
+    a.join()
+    b.join()
+    assert outcome.get("a") == "A's callable fails"
+    assert not (tmp_path / "a.vdiso").exists()
+    assert outcome["b_errors"] == []
+    assert len(outcome["b"]) >= 3 and all(shape == (256, 256, 256) for shape in outcome["b"])
+
+
 def test_index_progress_counts_to_one(tmp_path):
     array = zarr.open(str(tmp_path / "a.zarr"), mode="w", shape=(30, 31, 32), chunks=(8, 31, 32), dtype="f4")
     array[:] = ball((30, 31, 32))
