@@ -143,7 +143,7 @@ def test_a_progress_that_raises_stops_its_own_call_and_no_other(tmp_path):
     assert outcome.get("a") == "A's callable fails"
     assert not (tmp_path / "a.vdiso").exists()
     assert outcome["b_errors"] == []
-    assert len(outcome["b"]) >= 3 and all(shape == (256, 256, 256) for shape in outcome["b"])
+    assert outcome["b"] and all(shape == (256, 256, 256) for shape in outcome["b"])
 
 
 def test_index_progress_counts_to_one(tmp_path):
