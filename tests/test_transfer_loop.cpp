@@ -3,7 +3,7 @@
 // transfer waited for its turn.
 #include <gtest/gtest.h>
 
-#include <arpa/inet.h>
+#include <arpa/inet.h>  // htons, ntohs
 #include <dirent.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -51,36 +51,56 @@ double processCpuSeconds() {
 
 size_t discard(char*, size_t size, size_t count, void*) { return size * count; }
 
+// A listening socket on 127.0.0.1 (a port the system chooses) that nobody accepts from.
+struct Listener {
+    int fd = -1;
+    sockaddr_in address{};
+    std::string url;  // http://127.0.0.1:PORT/x
+};
+Listener listenOnLoopback(int backlog, int socketFlags) {
+    Listener l;
+    l.fd = ::socket(AF_INET, SOCK_STREAM | socketFlags, 0);
+    l.address.sin_family = AF_INET;
+    l.address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof l.address;
+    if (::bind(l.fd, reinterpret_cast<sockaddr*>(&l.address), sizeof l.address) != 0 || ::listen(l.fd, backlog) != 0 ||
+        ::getsockname(l.fd, reinterpret_cast<sockaddr*>(&l.address), &length) != 0)
+        ADD_FAILURE() << "cannot listen on 127.0.0.1";
+    l.url = "http://127.0.0.1:" + std::to_string(ntohs(l.address.sin_port)) + "/x";
+    return l;
+}
+
+// A GET of `url` whose body is dropped, ending after timeoutMs (connecting: connectTimeoutMs).
+CURL* easyGet(const std::string& url, long timeoutMs, long connectTimeoutMs = 0) {
+    const CurlLibrary& curl = curlLibrary();
+    CURL* easy = curl.easy_init();
+    curl.easy_setopt(easy, CURLOPT_URL, url.c_str());
+    curl.easy_setopt(easy, CURLOPT_NOSIGNAL, 1L);
+    curl.easy_setopt(easy, CURLOPT_WRITEFUNCTION, discard);
+    curl.easy_setopt(easy, CURLOPT_TIMEOUT_MS, timeoutMs);
+    if (connectTimeoutMs > 0) curl.easy_setopt(easy, CURLOPT_CONNECTTIMEOUT_MS, connectTimeoutMs);
+    return easy;
+}
+
 // libcurl 7.88 closes a socket that never connected before it tells the loop to stop watching
 // it, and epoll drops a socket only when its last descriptor closes: with a forked child holding
 // a copy, the registration stayed, and once the child's copy turned ready the loop's every wait
 // returned at once (a core spun until the child exited).
 TEST(TransferLoop, ASocketClosedWhileAForkedChildHoldsItIsNoLongerWatched) {
     // A listener whose backlog is full, so that the next connect hangs until it is accepted.
-    const int listener = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
-    ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-    ASSERT_EQ(::listen(listener, 0), 0);
-    socklen_t length = sizeof address;
-    ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&address), &length), 0);
+    const Listener listening = listenOnLoopback(0, SOCK_NONBLOCK);
+    const int listener = listening.fd;
     std::vector<int> filling;
     for (int k = 0; k < 4; ++k) {
         filling.push_back(::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0));
-        ::connect(filling.back(), reinterpret_cast<sockaddr*>(&address), sizeof address);
+        ::connect(filling.back(), reinterpret_cast<const sockaddr*>(&listening.address), sizeof listening.address);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
 
     const int before = epollRegistrations();
     TransferLoop loop(4, 4);
     const CurlLibrary& curl = curlLibrary();
-    CURL* easy = curl.easy_init();
-    const std::string url = "http://127.0.0.1:" + std::to_string(ntohs(address.sin_port)) + "/x";
-    curl.easy_setopt(easy, CURLOPT_URL, url.c_str());
-    curl.easy_setopt(easy, CURLOPT_NOSIGNAL, 1L);
-    curl.easy_setopt(easy, CURLOPT_WRITEFUNCTION, discard);
-    curl.easy_setopt(easy, CURLOPT_CONNECTTIMEOUT_MS, 600L);
+    CURL* easy = easyGet(listening.url, 30000, 600);
     std::atomic<bool> done{false};
     CURLcode result = CURLE_OK;
     loop.submit(easy, [&](CURLcode rc) {
@@ -124,25 +144,8 @@ TEST(TransferLoop, ASocketClosedWhileAForkedChildHoldsItIsNoLongerWatched) {
 // whole timeout its handle was given.
 TEST(TransferLoop, ADeadlineCountsTheWaitForATurn) {
     // A server that takes connections (the kernel's backlog) and never answers.
-    const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
-    ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-    ASSERT_EQ(::listen(listener, 16), 0);
-    socklen_t length = sizeof address;
-    ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&address), &length), 0);
-    const std::string url = "http://127.0.0.1:" + std::to_string(ntohs(address.sin_port)) + "/x";
-
+    const Listener listening = listenOnLoopback(16, 0);
     const CurlLibrary& curl = curlLibrary();
-    auto transfer = [&](long timeoutMs) {
-        CURL* easy = curl.easy_init();
-        curl.easy_setopt(easy, CURLOPT_URL, url.c_str());
-        curl.easy_setopt(easy, CURLOPT_NOSIGNAL, 1L);
-        curl.easy_setopt(easy, CURLOPT_WRITEFUNCTION, discard);
-        curl.easy_setopt(easy, CURLOPT_TIMEOUT_MS, timeoutMs);
-        return easy;
-    };
     using Clock = TransferLoop::Clock;
     struct Ended {
         std::atomic<bool> done{false};
@@ -151,8 +154,8 @@ TEST(TransferLoop, ADeadlineCountsTheWaitForATurn) {
     } first, second;
     {
         TransferLoop loop(2, 1);
-        CURL* a = transfer(1500);
-        CURL* b = transfer(20000);
+        CURL* a = easyGet(listening.url, 1500);
+        CURL* b = easyGet(listening.url, 20000);
         const Clock::time_point start = Clock::now();
         auto note = [](Ended& e) {
             return [&e](CURLcode rc) {
@@ -172,7 +175,7 @@ TEST(TransferLoop, ADeadlineCountsTheWaitForATurn) {
     EXPECT_GE(second.at, first.at) << "the second waited for the first's turn";
     EXPECT_LT(std::chrono::duration<double>(second.at - first.at).count(), 5.0)
         << "the second ran its own 20 s timeout after its deadline had passed";
-    ::close(listener);
+    ::close(listening.fd);
 }
 
 }  // namespace

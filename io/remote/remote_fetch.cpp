@@ -267,7 +267,6 @@ void RemoteFile::sendTry(const std::shared_ptr<Fetch>& fp) const {
         curlLibrary().easy_setopt(curl, CURLOPT_NOSIGNAL, 1L);
         curlLibrary().easy_setopt(curl, CURLOPT_HTTP_VERSION, long(CURL_HTTP_VERSION_2TLS));
         curlLibrary().easy_setopt(curl, CURLOPT_CONNECTTIMEOUT_MS, long(std::min(options.connectTimeoutMs, remainingMs)));
-        curlLibrary().easy_setopt(curl, CURLOPT_TIMEOUT_MS, long(remainingMs));
         curlLibrary().easy_setopt(curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
         curlLibrary().easy_setopt(curl, CURLOPT_LOW_SPEED_TIME, long(std::max<int64_t>(1, options.stallTimeoutMs / 1000)));
         curlLibrary().easy_setopt(curl, CURLOPT_HEADERFUNCTION, onHeader);
@@ -285,7 +284,7 @@ void RemoteFile::sendTry(const std::shared_ptr<Fetch>& fp) const {
         }
         curlLibrary().easy_setopt(curl, CURLOPT_ERRORBUFFER, f.curlError);
         // The deadline's remainder counts from here: a try waiting its turn behind the session's
-        // bound waits within it (the loop sets CURLOPT_TIMEOUT_MS again when it starts).
+        // bound waits within it (the loop sets CURLOPT_TIMEOUT_MS from it when the try starts).
         d.session->loop().submit(curl, [this, fp](CURLcode rc) { tryEnded(fp, rc); }, f.deadline);
     } catch (...) {
         if (f.curl) d.session->give(f.curl);
