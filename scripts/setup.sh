@@ -37,9 +37,10 @@ if [ "$profile" != demo ]; then
   )
 fi
 # `scripts/setup.sh bench`: also what the benchmarks compare against (VTK's Flying Edges from
-# Python, for bench/python.sh and bench/real_scans.sh), which the build and tests do not need.
+# Python, for bench/python.sh and bench/real_scans.sh) and count with (valgrind's callgrind, for
+# bench/instructions.sh), which the build and tests do not need.
 if [ "$profile" = bench ]; then
-  packages+=(python3-vtk9)
+  packages+=(python3-vtk9 valgrind)
 fi
 
 missing=()
