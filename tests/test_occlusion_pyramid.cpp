@@ -121,6 +121,7 @@ TEST(OcclusionPyramid, SpansAndQueriesMatchBruteForce) {
                     case 1: x1 = x0, y1 = y0; break;                           // one pixel
                     case 2: x0 = -1000000, x1 = 1000000; break;                // wide
                     case 3: x0 = rand(0, w - 1), x1 = x0 + rand(0, 3); break;  // thin
+                    case 4: case 5: x1 = x0 + rand(0, 8), y1 = y0 + rand(0, 8); break;  // within 2x2 tiles, often across
                     default: break;
                 }
                 const bool want = model.isOccluded(x0, y0, x1, y1);
