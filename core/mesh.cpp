@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -64,15 +65,15 @@ size_t splitVerticesFacingAway(TriangleMesh& mesh, size_t firstTriangle, const g
         const glm::vec3 a = mesh.positions[t[0] - mesh.firstVertex];
         const glm::vec3 face = glm::cross(mesh.positions[t[1] - mesh.firstVertex] - a,
                                           mesh.positions[t[2] - mesh.firstVertex] - a);
-        const float length = glm::length(face);
-        if (!(length > 0.0f)) continue;
+        const float area2 = glm::dot(face, face);  // the length's square: its root only for a copy
+        if (!(area2 > 0.0f)) continue;
         const float side = glm::dot(face, eye - a) >= 0.0f ? 1.0f : -1.0f;  // back: normals turned
         for (int k = 0; k < 3; ++k) {
             const size_t v = t[k] - mesh.firstVertex;
             const glm::vec3 p = mesh.positions[v];
             if (glm::dot(side * mesh.normals[v], eye - p) >= 0.0f) continue;
             mesh.positions.push_back(p);
-            mesh.normals.push_back(face / length);
+            mesh.normals.push_back(face / std::sqrt(area2));
             t[k] = mesh.nextVertex() - 1;
             ++copies;
         }
