@@ -45,7 +45,7 @@ stages = {"coverage": r"vdiso::PolygonCoverage::cover\(", "corners": r"vdiso::Co
           "normals": r"BrickKernel<.*>::edgeNormal\(", "classify": r"BrickKernel<.*>::classifyCorners\(",
           "meta-cells": r"vdiso::extractShownMetaCell<", "traversal": r"ViewTraversal::run\(\)"}
 def counts(name):
-    total, found = 0, {k: 0 for k in stages}
+    total, found, seen = 0, {k: 0 for k in stages}, set()
     for line in open(f"{work}/{name}.functions"):
         m = re.match(r"\s*([\d,]+) \([\s\d.]+%\)\s+(.*)", line)
         if not m:
@@ -56,15 +56,22 @@ def counts(name):
         for k, pattern in stages.items():
             if re.search(pattern, function) and "'" not in function.split("(")[0]:
                 found[k] += n
-    return total, found
-(t1, one), (t2, all_) = counts("one"), counts("all")
+                seen.add(k)
+    return total, found, seen
+(t1, one, _), (t2, all_, seen) = counts("one"), counts("all")
+for k in ("meta-cells", "traversal"):
+    if k not in seen:
+        sys.exit(f"bench/instructions.sh: {binary} has no function for '{k}' ({stages[k]}): not a SAGE run of this build?")
 frames = [json.loads(l) for l in open(f"{work}/all.stats")][1:]
 triangles = sum(f["triangles"] for f in frames)
 d = {k: (all_[k] - one[k]) / triangles for k in stages}
 rest = d["meta-cells"] - d["coverage"] - d["corners"] - d["normals"] - d["classify"]
+# A stage whose function the compiler inlined has no count of its own: its instructions are in
+# the meta-cell rest, and it is said so rather than shown as 0.
+shown = {k: f"{d[k]:.0f}" if k in seen else "inlined (in the rest)" for k in stages}
 print(f"{binary}  {store} {iso} {view}: {len(frames)} warm frames, {triangles / len(frames):.0f} triangles a frame, "
-      f"{(t2 - t1) / triangles:.0f} instructions a kept triangle: coverage {d['coverage']:.0f}, corners {d['corners']:.0f}, "
-      f"normals {d['normals']:.0f}, classify {d['classify']:.0f}, meta-cell rest {rest:.0f}, "
+      f"{(t2 - t1) / triangles:.0f} instructions a kept triangle: coverage {shown['coverage']}, corners {shown['corners']}, "
+      f"normals {shown['normals']}, classify {shown['classify']}, meta-cell rest {rest:.0f}, "
       f"outside meta-cells {d['traversal'] - d['meta-cells']:.0f}")
 PY
 done
